@@ -1,0 +1,1 @@
+//! `sandjumper-sim`: the plant simulator (MODEL.md) and the `sandjumper` CLI.
