@@ -1,7 +1,32 @@
-//! Firmware placeholder; built only for thumbv7em-none-eabihf.
+//! sandjumper firmware: thin glue between a board and `sandjumper-core`.
+//!
+//! - `board-f407` (default): the rig board, RTIC 2 (`app_f407`).
+//! - `board-qemu`: QEMU mps2-an386, lockstep hardware-in-the-loop (`app_qemu`).
+//!
+//! Built only for `thumbv7em-none-eabihf`; a host build is a stub that says so, so that
+//! `cargo test` / `cargo clippy` on the host never link firmware.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(all(target_os = "none", feature = "board-f407", feature = "board-qemu"))]
+compile_error!(
+    "board-f407 and board-qemu are exclusive: use --no-default-features --features board-qemu"
+);
+
+#[cfg_attr(not(target_os = "none"), allow(dead_code))]
+mod drive;
+
+#[cfg(all(target_os = "none", feature = "board-f407"))]
+mod app_f407;
+#[cfg(target_os = "none")]
+mod board;
+#[cfg(all(target_os = "none", feature = "board-f407"))]
+mod fault_f407;
 
 #[cfg(not(target_os = "none"))]
 fn main() {
-    eprintln!("sandjumper-firmware builds only for --target thumbv7em-none-eabihf");
+    eprintln!(
+        "sandjumper-firmware runs on the rig board or QEMU; build it with \
+         `cargo build --release -p sandjumper-firmware --target thumbv7em-none-eabihf` \
+         (add `--no-default-features --features board-qemu` for the emulated board)"
+    );
 }

@@ -1,0 +1,218 @@
+//! The reference rig board: STM32F407VG (STM32F4-Discovery class), Cortex-M4F at 168 MHz from
+//! the external 8 MHz crystal. Every pin and peripheral the firmware uses is assigned here (the
+//! README's wiring table mirrors this module).
+//!
+//! | signal | pin / peripheral | notes |
+//! |---|---|---|
+//! | encoder A / B | PA15 / PB3, TIM2 CH1 / CH2 (AF1) | 32-bit quadrature counter, x4 decoding |
+//! | force command | PA4, DAC channel 1 | 12-bit, 0..3.3 V, mid-point = zero force ([`crate::drive`]) |
+//! | drive enable | PE7, push-pull, active high | low on reset (fit a pull-down), on any fault, panic, HardFault |
+//! | camera trigger | PE9, push-pull, active high | one control tick long, raised in the tick that starts a frame |
+//! | motor current sense | PA1, ADC1 channel 1 | sampled at the end of each tick, read by the next |
+//! | USB host link | PA11 (D-) / PA12 (D+), OTG_FS | CDC-ACM full speed |
+//! | status LEDs | PD12 green (running), PD14 red (fault) | the Discovery board's LEDs |
+//! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
+//! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick |
+
+use stm32f4xx_hal::{
+    adc::{
+        Adc,
+        config::{AdcConfig, SampleTime, Sequence},
+    },
+    dac::{C1, DacExt, DacOut, DacPin},
+    gpio::{Analog, Output, PA1, PD12, PD14, PE7, PE9, PushPull},
+    pac,
+    prelude::*,
+    qei::Qei,
+    rcc::{Config, Rcc},
+    timer::{CounterHz, Event, Flag},
+    watchdog::IndependentWatchdog,
+};
+
+use crate::drive;
+
+/// External crystal, Hz.
+pub const HSE_HZ: u32 = 8_000_000;
+/// Core clock, Hz (PLL from the crystal; 48 MHz for USB also from the PLL).
+pub const SYSCLK_HZ: u32 = 168_000_000;
+/// Control tick rate, Hz (the default; the core's configuration must agree).
+pub const TICK_HZ: u32 = 10_000;
+/// Cycle budget of one control tick before it counts as an overrun: 80 % of the period, so the
+/// lower-priority link and telemetry always get at least a fifth of the CPU.
+pub const TICK_BUDGET_CYCLES: u32 = SYSCLK_HZ / TICK_HZ * 8 / 10;
+/// Independent watchdog timeout, ms: ~100 missed ticks reset the chip (drive enable drops).
+pub const WATCHDOG_MS: u32 = 10;
+
+/// Drive enable: GPIOE pin 7.
+const DRIVE_ENABLE_PIN: u32 = 7;
+
+/// Drive the actuator to a safe state with raw register writes: usable from the panic and
+/// HardFault handlers, whatever state the HAL objects are in. Disables the drive first, then
+/// sets the DAC to the zero-force code.
+pub fn force_safe_state() {
+    // SAFETY: single writes to the GPIOE bit set/reset register and the DAC data register;
+    // both are write-only side-effect-free for other pins/channels, and the handlers that call
+    // this never return to the code that owns those peripherals.
+    unsafe {
+        let gpioe = &*pac::GPIOE::ptr();
+        gpioe.bsrr().write(|w| w.bits(1 << (16 + DRIVE_ENABLE_PIN)));
+        let dac = &*pac::DAC::ptr();
+        dac.dhr12r1()
+            .write(|w| w.daccdhr().bits(drive::ZERO_FORCE_CODE));
+    }
+}
+
+/// The rig's peripherals, owned by the control tick.
+pub struct Rig {
+    encoder: Qei<pac::TIM2>,
+    force_dac: C1,
+    drive_enable: PE7<Output<PushPull>>,
+    camera_trigger: PE9<Output<PushPull>>,
+    current_adc: Adc<pac::ADC1>,
+    _current_pin: PA1<Analog>,
+    running_led: PD12<Output<PushPull>>,
+    fault_led: PD14<Output<PushPull>>,
+    tick_timer: CounterHz<pac::TIM7>,
+    watchdog: IndependentWatchdog,
+}
+
+/// Everything `init` hands on besides the rig: the USB peripheral for the host link.
+pub struct Parts {
+    pub rig: Rig,
+    pub usb: stm32f4xx_hal::otg_fs::USB,
+}
+
+/// Clocks, pins and peripherals. The drive stays disabled at zero force; the tick timer is
+/// configured but not started ([`Rig::start_ticking`]).
+pub fn init(dp: pac::Peripherals) -> Parts {
+    let mut rcc: Rcc = dp.RCC.freeze(
+        Config::hse(HSE_HZ.Hz())
+            .sysclk(SYSCLK_HZ.Hz())
+            .require_pll48clk(),
+    );
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let gpiod = dp.GPIOD.split(&mut rcc);
+    let gpioe = dp.GPIOE.split(&mut rcc);
+
+    // Safe outputs first: drive disabled, zero force.
+    let drive_enable = gpioe
+        .pe7
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+    let mut force_dac = dp.DAC.constrain(gpioa.pa4.into_analog(), &mut rcc);
+    force_dac.set_value(drive::ZERO_FORCE_CODE);
+    force_dac.enable();
+    let camera_trigger = gpioe
+        .pe9
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+
+    // PA15/PB3 leave reset as JTAG pins (AF0); SWD debugging does not need them.
+    let encoder = Qei::new(
+        dp.TIM2,
+        (
+            gpioa.pa15.into_floating_input(),
+            gpiob.pb3.into_floating_input(),
+        ),
+        &mut rcc,
+    );
+
+    let current_pin = gpioa.pa1.into_analog();
+    let mut current_adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
+    current_adc.configure_channel(&current_pin, Sequence::One, SampleTime::Cycles_84);
+    current_adc.enable();
+    current_adc.start_conversion();
+
+    let mut tick_timer = dp.TIM7.counter_hz(&mut rcc);
+    tick_timer.listen(Event::Update);
+
+    let usb = stm32f4xx_hal::otg_fs::USB::new(
+        (dp.OTG_FS_GLOBAL, dp.OTG_FS_DEVICE, dp.OTG_FS_PWRCLK),
+        (gpioa.pa11, gpioa.pa12),
+        &rcc.clocks,
+    );
+
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.stop_on_debug(&dp.DBGMCU, true);
+    watchdog.start(WATCHDOG_MS.millis());
+
+    Parts {
+        rig: Rig {
+            encoder,
+            force_dac,
+            drive_enable,
+            camera_trigger,
+            current_adc,
+            _current_pin: current_pin,
+            running_led: gpiod.pd12.into_push_pull_output(),
+            fault_led: gpiod.pd14.into_push_pull_output(),
+            tick_timer,
+            watchdog,
+        },
+        usb,
+    }
+}
+
+impl Rig {
+    /// Starts the control tick timer at `tick_hz`.
+    pub fn start_ticking(&mut self, tick_hz: u32) {
+        // A rate the timer cannot make is a build-time configuration error: stay disabled.
+        if self.tick_timer.start(tick_hz.Hz()).is_err() {
+            force_safe_state();
+        }
+    }
+
+    /// Acknowledges the tick interrupt.
+    #[inline(always)]
+    pub fn acknowledge_tick(&mut self) {
+        self.tick_timer.clear_flags(Flag::Update);
+    }
+
+    /// The raw 32-bit quadrature count (the core extends it to 64 bits).
+    #[inline(always)]
+    pub fn encoder_count(&self) -> u32 {
+        self.encoder.count()
+    }
+
+    /// The current-sense sample started at the end of the previous tick (raw 12-bit code).
+    #[inline(always)]
+    pub fn current_sense_code(&self) -> u16 {
+        self.current_adc.current_sample()
+    }
+
+    /// Starts the next current-sense conversion (done long before the next tick).
+    #[inline(always)]
+    pub fn start_current_sample(&mut self) {
+        self.current_adc.start_conversion();
+    }
+
+    /// Writes the force command (a DAC code from [`drive::force_to_code`]) and the enable line.
+    #[inline(always)]
+    pub fn set_drive(&mut self, code: u16, enable: bool) {
+        if enable {
+            self.force_dac.set_value(code);
+            self.drive_enable.set_high();
+        } else {
+            self.drive_enable.set_low();
+            self.force_dac.set_value(drive::ZERO_FORCE_CODE);
+        }
+    }
+
+    /// Camera trigger line level.
+    #[inline(always)]
+    pub fn set_camera_trigger(&mut self, high: bool) {
+        self.camera_trigger.set_state(high.into());
+    }
+
+    /// Status LEDs.
+    #[inline(always)]
+    pub fn set_leds(&mut self, running: bool, fault: bool) {
+        self.running_led.set_state(running.into());
+        self.fault_led.set_state(fault.into());
+    }
+
+    /// Feeds the independent watchdog.
+    #[inline(always)]
+    pub fn feed_watchdog(&mut self) {
+        self.watchdog.feed();
+    }
+}
