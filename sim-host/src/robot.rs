@@ -1,0 +1,1 @@
+//! robot (in progress)
