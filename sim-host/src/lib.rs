@@ -7,15 +7,19 @@
 //! trajectories as a prescribed `p(t)`), [`jump`] (one kinematic jump and its metrics),
 //! [`plant`] (force-driven plant for hardware-in-the-loop).
 
+pub mod cli;
 pub mod differentiate;
 pub mod error;
 pub mod ground;
 pub mod hybrid;
 pub mod integrate;
 pub mod jump;
+pub mod output;
 pub mod params;
 pub mod plant;
+pub mod plot;
 pub mod robot;
+pub mod sweep;
 pub mod trajectory;
 
 pub use error::SimError;

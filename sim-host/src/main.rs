@@ -1,1 +1,4 @@
-fn main() {}
+//! The `sandjumper` command line (see [`sandjumper_sim::cli`]).
+fn main() -> std::process::ExitCode {
+    sandjumper_sim::cli::run(std::env::args_os())
+}

@@ -1,0 +1,174 @@
+//! Figures as PNG and SVG, with an embedded font (no system fonts, no fontconfig).
+//!
+//! A figure implements [`Figure`] once, generically over the plotters backend, and
+//! [`save_figure`] renders it to a PNG and, optionally, an SVG of the same layout. Text uses
+//! DejaVu Sans, embedded through the `dejavu` crate and registered with plotters' `ab_glyph`
+//! font backend by [`register_fonts`] (called by [`save_figure`]).
+//!
+//! - [`lines`]: generic line-chart panels ([`lines::LinePanel`], [`lines::LineFigure`]).
+//! - [`jump`]: the lab-notebook figure of one jump (heights, forces, added mass, ground modes).
+//! - [`sweep`]: jump height against forcing frequency and against delay.
+
+pub mod jump;
+pub mod lines;
+pub mod sweep;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Font family every figure uses; registered from embedded bytes.
+pub const FONT: &str = "sans-serif";
+
+/// A figure could not be drawn or written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotError {
+    /// File being written, if known.
+    pub path: Option<PathBuf>,
+    /// What went wrong.
+    pub reason: String,
+}
+
+impl fmt::Display for PlotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.path {
+            Some(p) => write!(f, "cannot draw figure `{}`: {}", p.display(), self.reason),
+            None => write!(f, "cannot draw figure: {}", self.reason),
+        }
+    }
+}
+
+impl std::error::Error for PlotError {}
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for PlotError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        Self {
+            path: None,
+            reason: e.to_string(),
+        }
+    }
+}
+
+/// Result of drawing operations.
+pub type PlotResult<T> = Result<T, PlotError>;
+
+/// Something that can draw itself on any plotters backend.
+pub trait Figure {
+    /// Size in pixels (PNG) or SVG user units.
+    fn size(&self) -> (u32, u32);
+    /// Draw onto the whole area (already filled white).
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult<()>;
+}
+
+static FONTS: Once = Once::new();
+
+/// Register DejaVu Sans (embedded) as the `sans-serif` family in all styles. Idempotent.
+pub fn register_fonts() {
+    FONTS.call_once(|| {
+        let regular = dejavu::sans::regular();
+        let bold = dejavu::sans::bold();
+        let oblique = dejavu::sans::oblique();
+        for (style, bytes) in [
+            (FontStyle::Normal, regular),
+            (FontStyle::Bold, bold),
+            (FontStyle::Italic, oblique),
+            (FontStyle::Oblique, oblique),
+        ] {
+            // The bytes are a valid TrueType font shipped by the `dejavu` crate; a failure
+            // here would only mean missing text, so it is not fatal.
+            let _ = plotters::style::register_font(FONT, style, bytes);
+        }
+    });
+}
+
+fn with_path(path: &Path) -> impl Fn(PlotError) -> PlotError + '_ {
+    move |mut e| {
+        e.path = Some(path.to_path_buf());
+        e
+    }
+}
+
+fn render<DB: DrawingBackend>(fig: &impl Figure, root: DrawingArea<DB, Shift>) -> PlotResult<()> {
+    root.fill(&WHITE)?;
+    fig.draw(&root)?;
+    root.present()?;
+    Ok(())
+}
+
+/// Render `fig` to `png` and, if given, to `svg` (same layout).
+pub fn save_figure(fig: &impl Figure, png: &Path, svg: Option<&Path>) -> PlotResult<()> {
+    register_fonts();
+    let size = fig.size();
+    render(fig, BitMapBackend::new(png, size).into_drawing_area()).map_err(with_path(png))?;
+    if let Some(svg) = svg {
+        render(fig, SVGBackend::new(svg, size).into_drawing_area()).map_err(with_path(svg))?;
+    }
+    Ok(())
+}
+
+/// Ten well-separated colours (the "tab10" cycle), for lines keyed by an index.
+pub const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// Colour number `i` of [`PALETTE`], cycling.
+pub fn palette(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// `(lo, hi)` padded by `pad` of the span; a degenerate or empty span becomes a unit-ish
+/// window around the value so axes are always drawable.
+pub fn padded_range(values: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (lo, hi) = values
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = hi - lo;
+    if span <= f64::EPSILON * lo.abs().max(1.0) {
+        let half = (lo.abs() * 0.1).max(1e-3);
+        return (lo - half, hi + half);
+    }
+    (lo - pad * span, hi + pad * span)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn padded_range_handles_degenerate_inputs() {
+        assert_eq!(padded_range([], 0.05), (0.0, 1.0));
+        let (lo, hi) = padded_range([2.0, 2.0], 0.05);
+        assert!(lo < 2.0 && hi > 2.0);
+        let (lo, hi) = padded_range([0.0, 10.0, f64::NAN], 0.1);
+        assert_eq!((lo, hi), (-1.0, 11.0));
+    }
+
+    #[test]
+    fn embedded_font_measures_text() {
+        register_fonts();
+        let style = TextStyle::from((FONT, 20).into_font());
+        let (w, h) = style
+            .font
+            .box_size("jump height")
+            .expect("the embedded font is registered");
+        assert!(w > 50 && h > 5, "{w}x{h}");
+    }
+}
