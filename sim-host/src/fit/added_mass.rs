@@ -14,9 +14,9 @@ use std::path::Path;
 
 use super::FitError;
 use super::data::read_depth_curve;
-use super::laws::added_mass_kg;
 use super::least_squares::fit_positive;
 use super::report::{FitReport, FittedValue, Override};
+use crate::ground::{DragLaw, GroundLaw, PenetrationLaw, Sand};
 use crate::params::Params;
 
 /// Default fraction of the depth range left out at the deep (slow, singular) end.
@@ -29,7 +29,13 @@ fn model_added_mass(params: &Params, mu: f64, c_m2: f64, s_m: f64) -> f64 {
     let mut p = params.clone();
     p.sand.jamming_front_rate = mu;
     p.sand.added_mass_c_m2 = c_m2;
-    added_mass_kg(&p, s_m)
+    let law = GroundLaw {
+        penetration: PenetrationLaw::Cone,
+        reintrusion: false,
+        anchor: params.model.reintrusion_anchor,
+        drag: DragLaw::AddedMass,
+    };
+    Sand::new(&p, law).added_mass(s_m)
 }
 
 /// Fit `mu` and `C` to the file at `path` (`depth_m,added_mass_kg`).

@@ -17,9 +17,9 @@ use std::path::Path;
 
 use super::FitError;
 use super::data::{DepthCurve, read_depth_curve};
-use super::laws::two_resistance_force;
 use super::least_squares::fit_positive;
 use super::report::{FitReport, FittedValue, Override};
+use crate::ground::{DragLaw, GroundLaw, PenetrationLaw, Sand};
 use crate::params::Params;
 
 /// Fewest points for a first-intrusion fit (three parameters and a residual variance).
@@ -44,6 +44,23 @@ pub enum CurveKind {
 /// Area scaling of stiffnesses: `(R / R_ref)^2`.
 fn area_factor(params: &Params) -> f64 {
     (params.robot.foot_radius_m / params.sand.reference_foot_radius_m).powi(2)
+}
+
+/// The two-resistance sand of `params` (with the re-intrusion overshoot), with the foot's
+/// own stiffnesses `k1`, `k2` (N/m, already scaled to its area) and `delta` replaced.
+fn two_resistance_sand(params: &Params, k1: f64, k2: f64, delta: f64) -> Sand {
+    let mut p = params.clone();
+    let scale = area_factor(params);
+    p.sand.k1_n_m = k1 / scale;
+    p.sand.k2_n_m = k2 / scale;
+    p.sand.delta_m = delta;
+    let law = GroundLaw {
+        penetration: PenetrationLaw::TwoResistance,
+        reintrusion: true,
+        anchor: params.model.reintrusion_anchor,
+        drag: DragLaw::ConstantAlpha,
+    };
+    Sand::new(&p, law)
 }
 
 /// Fit the curve in `path` as `kind` says; `params` gives the foot radius and, for a
@@ -138,9 +155,10 @@ pub fn fit_first_intrusion(curve: &DepthCurve, params: &Params) -> Result<FitRep
         )));
     }
     let model = |x: &[f64]| -> Result<Vec<f64>, String> {
+        let sand = two_resistance_sand(params, x[0], x[1], x[2]);
         Ok(z.iter()
             .zip(f)
-            .map(|(z, f)| two_resistance_force(x[0], x[1], x[2], *z) - f)
+            .map(|(z, f)| sand.penetration_force(*z) - f)
             .collect())
     };
     let fit = fit_positive(&model, &[k1_0, k2_0, delta_0])
@@ -217,7 +235,8 @@ pub fn fit_reintrusion(
             1e3 * z_start_m
         )));
     }
-    let base = |z: f64| two_resistance_force(k1, k2, delta, z);
+    let base_sand = two_resistance_sand(params, k1, k2, delta);
+    let base = |z: f64| base_sand.penetration_force(z);
     let excess: Vec<f64> = used.iter().map(|(z, f)| f - base(*z)).collect();
     if !(excess[0] > 0.0) {
         return Err(FitError::Fit(format!(
@@ -233,10 +252,15 @@ pub fn fit_reintrusion(
         .zip(&excess)
         .find(|(_, e)| **e < excess[0] / core::f64::consts::E)
         .map_or(0.005, |((z, _), _)| (z - z_start_m).max(1e-4));
+    // x = (kappa in N/m for this foot, l_re in m).
     let model = |x: &[f64]| -> Result<Vec<f64>, String> {
+        let mut p = params.clone();
+        p.sand.reintrusion_kappa_per_k1 = x[0] / k1;
+        p.sand.reintrusion_length_m = x[1];
+        let sand = two_resistance_sand(&p, k1, k2, delta);
         Ok(used
             .iter()
-            .map(|(z, f)| base(*z) + x[0] * z_start_m * (-(z - z_start_m) / x[1]).exp() - f)
+            .map(|(z, f)| sand.resisting_force(*z, Some(z_start_m)) - f)
             .collect())
     };
     let fit = fit_positive(&model, &[kappa_0, l_0])

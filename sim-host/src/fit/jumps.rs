@@ -23,7 +23,7 @@ use super::data::{HeightColumn, JumpMeasurement, read_jumps};
 use super::least_squares::fit_positive;
 use super::report::{FitReport, FittedValue, Override};
 use crate::jump::{JumpSpec, SimOptions, simulate_jump};
-use crate::params::{ModelName, Params, ParamsError};
+use crate::params::{ModelName, Params};
 
 /// Which drag parameter a jump fit adjusts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,8 +102,9 @@ pub struct JumpFitSetup<'a> {
     pub height: HeightColumn,
     /// Integration options of the inner simulations.
     pub sim: SimOptions,
-    /// Base parameters for a packing fraction (preset + the user's `--params`).
-    pub base: &'a (dyn Fn(f64) -> Result<Params, ParamsError> + Sync),
+    /// Base parameters for a packing fraction (preset + the user's `--params`), or why there
+    /// are none.
+    pub base: &'a (dyn Fn(f64) -> Result<Params, String> + Sync),
 }
 
 /// Fewest jumps per packing fraction (one parameter plus a residual variance).

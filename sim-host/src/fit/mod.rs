@@ -18,10 +18,10 @@
 //! its `--phi`.
 
 pub mod added_mass;
+pub mod command;
 pub mod data;
 pub mod intrusion;
 pub mod jumps;
-mod laws;
 pub mod least_squares;
 pub mod report;
 
