@@ -7,6 +7,7 @@
 //! trajectories as a prescribed `p(t)`), [`jump`] (one kinematic jump and its metrics),
 //! [`plant`] (force-driven plant for hardware-in-the-loop).
 
+pub mod acqlog;
 pub mod cli;
 pub mod differentiate;
 pub mod error;
@@ -18,6 +19,7 @@ pub mod output;
 pub mod params;
 pub mod plant;
 pub mod plot;
+pub mod replay;
 pub mod robot;
 pub mod sweep;
 pub mod trajectory;
