@@ -12,8 +12,13 @@ compile_error!(
     "board-f407 and board-qemu are exclusive: use --no-default-features --features board-qemu"
 );
 
+#[cfg(any(not(target_os = "none"), feature = "board-f407"))]
 #[cfg_attr(not(target_os = "none"), allow(dead_code))]
 mod drive;
+#[cfg_attr(not(target_os = "none"), allow(dead_code))]
+mod link;
+#[cfg_attr(not(target_os = "none"), allow(dead_code))]
+mod session;
 
 #[cfg(all(target_os = "none", feature = "board-f407"))]
 mod app_f407;
@@ -21,6 +26,19 @@ mod app_f407;
 mod board;
 #[cfg(all(target_os = "none", feature = "board-f407"))]
 mod fault_f407;
+
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod app_qemu;
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod console;
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod selftest;
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod semihosting;
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod tick_cost;
+#[cfg(all(target_os = "none", feature = "board-qemu"))]
+mod transport;
 
 #[cfg(not(target_os = "none"))]
 fn main() {

@@ -16,6 +16,18 @@ const ADP_STOPPED_APPLICATION_EXIT: usize = 0x2_0026;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HostFile(usize);
 
+impl HostFile {
+    /// The host's handle number.
+    pub fn raw(self) -> usize {
+        self.0
+    }
+
+    /// A handle number previously returned by [`HostFile::raw`].
+    pub fn from_raw(handle: usize) -> Self {
+        Self(handle)
+    }
+}
+
 /// How to open a host file (semihosting `SYS_OPEN` modes).
 #[derive(Clone, Copy, Debug)]
 pub enum OpenMode {
@@ -23,8 +35,6 @@ pub enum OpenMode {
     Read,
     /// `"wb"`: write only, created or truncated (a FIFO is simply opened for writing).
     Write,
-    /// `"ab"`: append (on the special path `:tt`, the host's standard error).
-    Append,
 }
 
 /// Opens `path` on the host. A FIFO blocks here until the other side opens it.
@@ -39,7 +49,6 @@ pub fn open(path: &str, mode: OpenMode) -> Option<HostFile> {
     let mode = match mode {
         OpenMode::Read => nr::open::R_BINARY,
         OpenMode::Write => nr::open::W_TRUNC_BINARY,
-        OpenMode::Append => nr::open::W_APPEND_BINARY,
     };
     // SAFETY: the argument block points at a live NUL-terminated buffer for the call's duration.
     let fd = unsafe { syscall(nr::OPEN, &[z.as_ptr() as usize, mode, bytes.len()]) };
@@ -60,7 +69,8 @@ pub fn write_all(file: HostFile, bytes: &[u8]) -> bool {
         return true;
     }
     // SAFETY: the buffer outlives the call and its length is passed with it.
-    let not_written = unsafe { syscall(nr::WRITE, &[file.0, bytes.as_ptr() as usize, bytes.len()]) };
+    let not_written =
+        unsafe { syscall(nr::WRITE, &[file.0, bytes.as_ptr() as usize, bytes.len()]) };
     not_written == 0
 }
 
@@ -81,6 +91,11 @@ pub fn command_line(buf: &mut [u8]) -> Option<&str> {
 pub fn exit(code: u32) -> ! {
     loop {
         // SAFETY: SYS_EXIT_EXTENDED reads the two-word block and does not return under QEMU.
-        unsafe { syscall(SYS_EXIT_EXTENDED, &[ADP_STOPPED_APPLICATION_EXIT, code as usize]) };
+        unsafe {
+            syscall(
+                SYS_EXIT_EXTENDED,
+                &[ADP_STOPPED_APPLICATION_EXIT, code as usize],
+            )
+        };
     }
 }

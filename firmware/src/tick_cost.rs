@@ -56,7 +56,10 @@ mod systick {
             if counts_per_1024 == 0 {
                 return None;
             }
-            let mut counter = Self { counts_per_1024, overhead_counts: 0 };
+            let mut counter = Self {
+                counts_per_1024,
+                overhead_counts: 0,
+            };
             let start = counter.start();
             let empty = counts_between(start, SYST::get_current());
             counter.overhead_counts = empty;
@@ -73,7 +76,8 @@ mod systick {
         /// two reads removed). Valid up to ~10 million instructions (SysTick wraps at 2^24).
         #[inline(always)]
         pub fn instructions_since(&self, start: u32) -> u32 {
-            let counts = counts_between(start, SYST::get_current()).saturating_sub(self.overhead_counts);
+            let counts =
+                counts_between(start, SYST::get_current()).saturating_sub(self.overhead_counts);
             ((u64::from(counts) * 1024 + u64::from(self.counts_per_1024) / 2)
                 / u64::from(self.counts_per_1024)) as u32
         }

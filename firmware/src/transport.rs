@@ -50,7 +50,9 @@ impl ByteLink for SemihostingFifos {
     }
 
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        semihosting::write_all(self.output, bytes).then_some(()).ok_or(LinkError::Write)
+        semihosting::write_all(self.output, bytes)
+            .then_some(())
+            .ok_or(LinkError::Write)
     }
 }
 

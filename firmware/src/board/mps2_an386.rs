@@ -8,8 +8,5 @@
 //!   instruction count: the tick-cost counter (`tick_cost`);
 //! - CMSDK APB UART0 at 0x4000_4000 (QEMU's first `-serial`), the UART link variant.
 
-/// System clock of the MPS2 FPGA images, Hz (QEMU `SYSCLK_FRQ`), which also clocks SysTick.
-pub const SYSCLK_HZ: u32 = 25_000_000;
-
 /// CMSDK APB UART0 base address (AN386 application note; QEMU `hw/arm/mps2.c`).
 pub const UART0_BASE: usize = 0x4000_4000;
