@@ -18,7 +18,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// Font family every figure uses; registered from embedded bytes.
 pub const FONT: &str = "sans-serif";
@@ -109,6 +111,144 @@ pub fn save_figure(fig: &impl Figure, png: &Path, svg: Option<&Path>) -> PlotRes
     Ok(())
 }
 
+/// The symbol of a legend entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LegendMark {
+    /// A line segment, solid or dashed.
+    Line {
+        /// Colour.
+        color: RGBColor,
+        /// Dashed.
+        dashed: bool,
+    },
+    /// A filled patch (for shaded regions).
+    Patch(RGBColor),
+}
+
+/// One entry of a legend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendEntry {
+    /// Text.
+    pub label: String,
+    /// Symbol.
+    pub mark: LegendMark,
+}
+
+impl LegendEntry {
+    /// A solid or dashed line entry.
+    pub fn line(label: impl Into<String>, color: RGBColor, dashed: bool) -> Self {
+        Self {
+            label: label.into(),
+            mark: LegendMark::Line { color, dashed },
+        }
+    }
+
+    /// A shaded-region entry.
+    pub fn patch(label: impl Into<String>, color: RGBColor) -> Self {
+        Self {
+            label: label.into(),
+            mark: LegendMark::Patch(color),
+        }
+    }
+}
+
+/// Row height of legend entries, pixels.
+pub const LEGEND_ROW: i32 = 28;
+
+/// Draw `entries` as a legend column into `area` (typically a strip beside a chart),
+/// starting `top` pixels from its top. Entries never cover data.
+pub fn draw_legend_column<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+    top: i32,
+) -> PlotResult<()> {
+    let font = (FONT, 18).into_font().color(&BLACK);
+    for (i, e) in entries.iter().enumerate() {
+        let y = top + i as i32 * LEGEND_ROW + LEGEND_ROW / 2;
+        match e.mark {
+            LegendMark::Line { color, dashed } => {
+                let style = color.stroke_width(3);
+                if dashed {
+                    for x in [6, 20] {
+                        area.draw(&PathElement::new(vec![(x, y), (x + 9, y)], style))?;
+                    }
+                } else {
+                    area.draw(&PathElement::new(vec![(6, y), (35, y)], style))?;
+                }
+            }
+            LegendMark::Patch(color) => {
+                area.draw(&Rectangle::new([(6, y - 9), (35, y + 9)], color.filled()))?;
+                area.draw(&Rectangle::new(
+                    [(6, y - 9), (35, y + 9)],
+                    RGBColor(150, 150, 150).stroke_width(1),
+                ))?;
+            }
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (44, y),
+            font.clone().pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+    }
+    Ok(())
+}
+
+/// A chart with f64 axes.
+pub type XyChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Split a polyline into pieces that plotters can stroke thickly without artefacts.
+///
+/// plotters joins thick segments with unbounded inner mitres, so a turn sharper than 90
+/// degrees (a force that jumps and returns, an added mass that drops to zero) draws a long
+/// spike. This maps the points to pixels, drops points that fall on the pixel of the previous
+/// one, and starts a new piece (sharing the corner point) wherever the path turns by more than
+/// 90 degrees.
+pub fn stroke_pieces<DB: DrawingBackend>(
+    chart: &XyChart<'_, DB>,
+    points: impl IntoIterator<Item = (f64, f64)>,
+) -> Vec<Vec<(f64, f64)>> {
+    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut piece: Vec<(f64, f64)> = Vec::new();
+    let mut pix: Vec<(i32, i32)> = Vec::new();
+    for p in points {
+        if !(p.0.is_finite() && p.1.is_finite()) {
+            continue;
+        }
+        let c = chart.backend_coord(&p);
+        if pix.last() == Some(&c) {
+            continue;
+        }
+        if let [.., a, b] = pix[..] {
+            let (u, v) = ((b.0 - a.0, b.1 - a.1), (c.0 - b.0, c.1 - b.1));
+            if i64::from(u.0) * i64::from(v.0) + i64::from(u.1) * i64::from(v.1) < 0 {
+                let corner = *piece.last().expect("a piece has as many points as pixels");
+                pieces.push(std::mem::replace(&mut piece, vec![corner]));
+                pix = vec![b];
+            }
+        }
+        piece.push(p);
+        pix.push(c);
+    }
+    if !piece.is_empty() {
+        pieces.push(piece);
+    }
+    pieces
+}
+
+/// Tick label without float noise or needless zeros: `0.1`, `25`, `-2.5`, `1e-5`.
+pub fn tick_label(v: &f64) -> String {
+    let v = *v;
+    if v == 0.0 {
+        return "0".into();
+    }
+    if v.abs() < 1e-3 || v.abs() >= 1e6 {
+        return format!("{v:.2e}");
+    }
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.to_string() }
+}
+
 /// Ten well-separated colours (the "tab10" cycle), for lines keyed by an index.
 pub const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
@@ -159,6 +299,15 @@ mod tests {
         assert!(lo < 2.0 && hi > 2.0);
         let (lo, hi) = padded_range([0.0, 10.0, f64::NAN], 0.1);
         assert_eq!((lo, hi), (-1.0, 11.0));
+    }
+
+    #[test]
+    fn tick_labels_have_no_float_noise() {
+        assert_eq!(tick_label(&0.30000000000000004), "0.3");
+        assert_eq!(tick_label(&25.0), "25");
+        assert_eq!(tick_label(&-2.5), "-2.5");
+        assert_eq!(tick_label(&0.0), "0");
+        assert_eq!(tick_label(&-0.00001), "-1.00e-5");
     }
 
     #[test]

@@ -3,7 +3,10 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{FONT, Figure, PlotResult, padded_range};
+use super::{
+    FONT, Figure, LegendEntry, PlotResult, draw_legend_column, padded_range, stroke_pieces,
+    tick_label,
+};
 
 /// One line of a chart.
 #[derive(Clone, Debug, PartialEq)]
@@ -53,7 +56,8 @@ impl Figure for LineFigure {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult<()> {
         let body = root.titled(&self.title, (FONT, 30).into_font().style(FontStyle::Bold))?;
-        let areas = body.split_evenly((1, self.panels.len().max(1)));
+        let (rows, cols) = grid_shape(self.panels.len());
+        let areas = body.split_evenly((rows, cols));
         for (panel, area) in self.panels.iter().zip(areas.iter()) {
             draw_line_panel(area, panel)?;
         }
@@ -61,7 +65,23 @@ impl Figure for LineFigure {
     }
 }
 
-/// Draw one panel into `area`: axes, grid, lines (markers, dashes) and a legend.
+/// Rows and columns of the panel grid: at most three columns.
+pub fn grid_shape(panels: usize) -> (usize, usize) {
+    let cols = panels.clamp(1, 3);
+    (panels.max(1).div_ceil(cols), cols)
+}
+
+/// Pixel size of a figure of `panels` panels of the default size.
+pub fn grid_size(panels: usize) -> (u32, u32) {
+    let (rows, cols) = grid_shape(panels);
+    (40 + 1050 * cols as u32, 60 + 720 * rows as u32)
+}
+
+/// Width of the legend column right of each panel, pixels.
+pub const PANEL_LEGEND_WIDTH: u32 = 250;
+
+/// Draw one panel into `area`: axes, grid, lines (markers, dashes), and the legend in a
+/// column at the panel's right so it never covers data.
 pub fn draw_line_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &LinePanel,
@@ -80,11 +100,14 @@ pub fn draw_line_panel<DB: DrawingBackend>(
     if panel.y_from_zero && ys.iter().all(|&y| y >= 0.0) {
         y0 = 0.0;
     }
-    let mut chart = ChartBuilder::on(area)
-        .caption(&panel.caption, (FONT, 24))
-        .margin(12)
-        .x_label_area_size(60)
-        .y_label_area_size(85)
+    let area = area.titled(&panel.caption, (FONT, 24))?;
+    let w = area.dim_in_pixel().0;
+    let (plot, legend) = area.split_horizontally(w.saturating_sub(PANEL_LEGEND_WIDTH));
+    let top = 12;
+    let mut chart = ChartBuilder::on(&plot)
+        .margin(top)
+        .x_label_area_size(65)
+        .y_label_area_size(95)
         .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
@@ -92,50 +115,36 @@ pub fn draw_line_panel<DB: DrawingBackend>(
         .y_desc(&panel.y_desc)
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
-        .light_line_style(RGBColor(235, 235, 235))
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
+        .light_line_style(RGBColor(238, 238, 238))
         .bold_line_style(RGBColor(210, 210, 210))
         .draw()?;
-    let mut any_label = false;
+    let mut entries = Vec::new();
     for line in &panel.lines {
-        let color = line.color;
-        let style = color.stroke_width(3);
-        let annotated = if line.dashed {
+        let style = line.color.stroke_width(3);
+        if line.dashed {
             chart.draw_series(DashedLineSeries::new(
                 line.points.iter().copied(),
                 10,
                 6,
                 style,
-            ))?
+            ))?;
         } else {
-            chart.draw_series(LineSeries::new(line.points.iter().copied(), style))?
-        };
-        if !line.label.is_empty() {
-            any_label = true;
-            let dashed = line.dashed;
-            annotated.label(&line.label).legend(move |(x, y)| {
-                if dashed {
-                    PathElement::new(vec![(x, y), (x + 8, y)], color.stroke_width(3))
-                } else {
-                    PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-                }
-            });
+            for piece in stroke_pieces(&chart, line.points.iter().copied()) {
+                chart.draw_series(LineSeries::new(piece, style))?;
+            }
         }
         if line.markers {
             chart.draw_series(
                 line.points
                     .iter()
-                    .map(|&p| Circle::new(p, 4, color.filled())),
+                    .map(|&p| Circle::new(p, 4, line.color.filled())),
             )?;
         }
+        if !line.label.is_empty() {
+            entries.push(LegendEntry::line(&line.label, line.color, line.dashed));
+        }
     }
-    if any_label {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 18))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .draw()?;
-    }
-    Ok(())
+    draw_legend_column(&legend, &entries, top)
 }

@@ -3,7 +3,7 @@
 
 use crate::sweep::SweepRow;
 
-use super::lines::{Line, LineFigure, LinePanel};
+use super::lines::{Line, LineFigure, LinePanel, grid_size};
 use super::palette;
 
 /// Most lines a height-vs-delay panel shows one per (phi, frequency); beyond, one per phi at
@@ -33,6 +33,41 @@ fn is_stutter(kind: &str) -> bool {
     kind == "stutter" || kind == "delayed"
 }
 
+/// Push the jump-height line of `pts` (x from `x`, y in mm, colour `i`) and, for stutters,
+/// the final (push-off) height of the same points dashed.
+fn push_height_lines(
+    lines: &mut Vec<Line>,
+    i: usize,
+    label: String,
+    pts: &[&SweepRow],
+    x: fn(&SweepRow) -> f64,
+    with_final: bool,
+) {
+    lines.push(Line {
+        label,
+        points: pts.iter().map(|r| (x(r), 1e3 * r.jump_height_m)).collect(),
+        color: palette(i),
+        dashed: false,
+        markers: true,
+    });
+    if with_final {
+        lines.push(Line {
+            label: if i == 0 {
+                "dashed: final (push-off) height".into()
+            } else {
+                String::new()
+            },
+            points: pts
+                .iter()
+                .map(|r| (x(r), 1e3 * r.final_jump_height_m))
+                .collect(),
+            color: palette(i),
+            dashed: true,
+            markers: false,
+        });
+    }
+}
+
 /// Jump height (mm) vs forcing frequency: one panel per (kind, model), one line per phi
 /// (and per tau when it varies); stutter panels add the final (push-off) height dashed.
 pub fn height_vs_freq(rows: &[SweepRow], title: &str) -> LineFigure {
@@ -59,32 +94,7 @@ pub fn height_vs_freq(rows: &[SweepRow], title: &str) -> LineFigure {
                 } else {
                     format!("φ = {phi}")
                 };
-                lines.push(Line {
-                    label,
-                    points: pts
-                        .iter()
-                        .map(|r| (r.freq_hz, 1e3 * r.jump_height_m))
-                        .collect(),
-                    color: palette(i),
-                    dashed: false,
-                    markers: true,
-                });
-                if is_stutter(kind) {
-                    lines.push(Line {
-                        label: if i == 0 {
-                            "dashed: final (push-off) height".into()
-                        } else {
-                            String::new()
-                        },
-                        points: pts
-                            .iter()
-                            .map(|r| (r.freq_hz, 1e3 * r.final_jump_height_m))
-                            .collect(),
-                        color: palette(i),
-                        dashed: true,
-                        markers: false,
-                    });
-                }
+                push_height_lines(&mut lines, i, label, &pts, |r| r.freq_hz, is_stutter(kind));
             }
             let tau_note = if kind == "delayed" && taus.len() == 1 {
                 format!(", τ = {} s", f64::from_bits(taus[0]))
@@ -100,11 +110,10 @@ pub fn height_vs_freq(rows: &[SweepRow], title: &str) -> LineFigure {
             }
         })
         .collect::<Vec<_>>();
-    let width = 200 + 800 * panels.len().clamp(1, 3) as u32;
     LineFigure {
         title: title.into(),
+        size: grid_size(panels.len()),
         panels,
-        size: (width, 800),
     }
 }
 
@@ -165,30 +174,8 @@ pub fn height_vs_tau(rows: &[SweepRow], title: &str) -> Option<LineFigure> {
                         .filter(|r| r.phi.to_bits() == phi_b && r.freq_hz.to_bits() == f_b)
                         .collect();
                     let (phi, f) = (f64::from_bits(phi_b), f64::from_bits(f_b));
-                    lines.push(Line {
-                        label: format!("φ = {phi}, f = {f} Hz"),
-                        points: pts
-                            .iter()
-                            .map(|r| (r.tau_s, 1e3 * r.jump_height_m))
-                            .collect(),
-                        color: palette(i),
-                        dashed: false,
-                        markers: true,
-                    });
-                    lines.push(Line {
-                        label: if i == 0 {
-                            "dashed: final (push-off) height".into()
-                        } else {
-                            String::new()
-                        },
-                        points: pts
-                            .iter()
-                            .map(|r| (r.tau_s, 1e3 * r.final_jump_height_m))
-                            .collect(),
-                        color: palette(i),
-                        dashed: true,
-                        markers: false,
-                    });
+                    let label = format!("φ = {phi}, f = {f} Hz");
+                    push_height_lines(&mut lines, i, label, &pts, |r| r.tau_s, true);
                 }
             }
             LinePanel {
@@ -200,10 +187,9 @@ pub fn height_vs_tau(rows: &[SweepRow], title: &str) -> Option<LineFigure> {
             }
         })
         .collect::<Vec<_>>();
-    let width = 200 + 800 * panels.len().clamp(1, 3) as u32;
     Some(LineFigure {
         title: title.into(),
+        size: grid_size(panels.len()),
         panels,
-        size: (width, 800),
     })
 }
