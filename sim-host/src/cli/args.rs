@@ -31,6 +31,14 @@ pub enum Command {
     Merge(MergeArgs),
     /// Print the resolved parameters as TOML (re-readable with --params).
     Params(ParamsArgs),
+    /// Fit the granular model to measurements (intrusion curves, added mass, jump heights);
+    /// writes a params file for --params.
+    Fit(crate::fit::command::FitArgs),
+    /// Regenerate the simulations behind the paper's figures: PNG, SVG and CSV.
+    Figures(crate::figures::command::FiguresArgs),
+    /// Run one jump through the control loop against the simulated rig: the core in-process
+    /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
+    Hil(crate::hil::command::HilArgs),
 }
 
 /// Jump kind as named on the command line.
@@ -176,7 +184,8 @@ pub struct ParamsArgs {
     pub params: Option<PathBuf>,
 }
 
-fn parse_number(s: &str) -> Result<f64, String> {
+/// clap value parser: a finite number.
+pub fn parse_number(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         _ => Err(format!("`{s}` is not a finite number")),
@@ -225,19 +234,23 @@ pub fn check_phi(phi: f64) -> Result<f64, String> {
     }
 }
 
-fn parse_freq(s: &str) -> Result<f64, String> {
+/// clap value parser: a forcing frequency in Hz ([`check_freq`]).
+pub fn parse_freq(s: &str) -> Result<f64, String> {
     check_freq(parse_number(s)?)
 }
 
-fn parse_tau(s: &str) -> Result<f64, String> {
+/// clap value parser: a delay in s ([`check_tau`]).
+pub fn parse_tau(s: &str) -> Result<f64, String> {
     check_tau(parse_number(s)?)
 }
 
-fn parse_phi(s: &str) -> Result<f64, String> {
+/// clap value parser: a packing fraction ([`check_phi`]).
+pub fn parse_phi(s: &str) -> Result<f64, String> {
     check_phi(parse_number(s)?)
 }
 
-fn parse_rtol(s: &str) -> Result<f64, String> {
+/// clap value parser: an integrator relative tolerance, 1e-14 <= rtol < 1.
+pub fn parse_rtol(s: &str) -> Result<f64, String> {
     let r = parse_number(s)?;
     if (1e-14..1.0).contains(&r) {
         Ok(r)
@@ -248,7 +261,8 @@ fn parse_rtol(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_range_checked(
+/// Parse a range and check each of its values with `check`.
+pub fn parse_range_checked(
     s: &str,
     check: fn(f64) -> Result<f64, String>,
 ) -> Result<ValueRange, String> {
@@ -259,19 +273,23 @@ fn parse_range_checked(
     Ok(r)
 }
 
-fn parse_freq_range(s: &str) -> Result<ValueRange, String> {
+/// clap value parser: a frequency range `A:B:STEP`, every value checked.
+pub fn parse_freq_range(s: &str) -> Result<ValueRange, String> {
     parse_range_checked(s, check_freq)
 }
 
-fn parse_tau_range(s: &str) -> Result<ValueRange, String> {
+/// clap value parser: a delay range `A:B:STEP`, every value checked.
+pub fn parse_tau_range(s: &str) -> Result<ValueRange, String> {
     parse_range_checked(s, check_tau)
 }
 
-fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
+/// clap value parser: a packing-fraction range `A:B:STEP`, every value checked.
+pub fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
     parse_range_checked(s, check_phi)
 }
 
-fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+/// clap value parser: a shard `I/N` (1-based).
+pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
     ShardSpec::parse(s).map_err(|e| e.to_string())
 }
 
