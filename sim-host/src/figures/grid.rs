@@ -1,12 +1,14 @@
-//! A figure of line panels on a rows x columns grid (the plot module's [`LineFigure`] puts
-//! its panels side by side; four time-series panels read better as 2 x 2).
+//! A figure of line panels on a chosen rows x columns grid (the plot module's [`LineFigure`]
+//! picks its own grid, at most three columns; four panels read better as 2 x 2), drawn with
+//! the plot module's [`draw_line_panel`].
 //!
 //! [`LineFigure`]: crate::plot::lines::LineFigure
+//! [`draw_line_panel`]: crate::plot::lines::draw_line_panel
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::plot::lines::{LinePanel, draw_line_panel};
+use crate::plot::lines::{LinePanel, draw_line_panel, grid_size};
 use crate::plot::{FONT, Figure, PlotResult};
 
 /// Panels on a grid, filled row by row, under one title.
@@ -28,11 +30,39 @@ impl Figure for GridFigure {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult<()> {
-        let body = root.titled(&self.title, (FONT, 30).into_font().style(FontStyle::Bold))?;
+        // A top margin keeps the title's ascenders inside the picture.
+        let body = root
+            .margin(14, 0, 0, 0)
+            .titled(&self.title, (FONT, 30).into_font().style(FontStyle::Bold))?;
         let areas = body.split_evenly(self.shape);
         for (panel, area) in self.panels.iter().zip(areas.iter()) {
             draw_line_panel(area, panel)?;
         }
         Ok(())
+    }
+}
+
+impl GridFigure {
+    /// Panels side by side in one row, each of the plot module's default size.
+    pub fn row(title: impl Into<String>, panels: Vec<LinePanel>) -> Self {
+        let n = panels.len().max(1);
+        Self {
+            title: title.into(),
+            shape: (1, n),
+            size: grid_size(n),
+            panels,
+        }
+    }
+
+    /// Four panels on a 2 x 2 grid.
+    pub fn square(title: impl Into<String>, panels: Vec<LinePanel>) -> Self {
+        let (w, _) = grid_size(2);
+        let (_, h) = grid_size(4);
+        Self {
+            title: title.into(),
+            shape: (2, 2),
+            size: (w, h + 30),
+            panels,
+        }
     }
 }

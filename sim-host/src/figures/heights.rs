@@ -6,7 +6,7 @@ use sandjumper_core::trajectory::JumpKind;
 use super::grid::GridFigure;
 use super::sweeps::{BestRow, DELAYED_TAU_S, KINDS, LOW_PHI};
 use crate::params::ModelName;
-use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
+use crate::plot::lines::{Line, LinePanel};
 use crate::plot::palette;
 use crate::sweep::{SweepRow, kind_name};
 
@@ -15,7 +15,7 @@ pub fn kind_label(kind: JumpKind) -> String {
     match kind {
         JumpKind::Single => "single".into(),
         JumpKind::Stutter => "stutter".into(),
-        JumpKind::DelayedStutter => format!("delayed stutter (τ = {DELAYED_TAU_S} s)"),
+        JumpKind::DelayedStutter => format!("delayed, τ = {DELAYED_TAU_S} s"),
     }
 }
 
@@ -25,7 +25,7 @@ fn is(row_kind: &str, row_model: &str, kind: JumpKind, model: ModelName) -> bool
 
 /// Figure 1: best jump height against phi, one panel per model, one line per kind; hard
 /// ground dashed at the same colour.
-pub fn height_vs_phi(best: &[BestRow]) -> LineFigure {
+pub fn height_vs_phi(best: &[BestRow]) -> GridFigure {
     let panels = [ModelName::Eq1, ModelName::Eq4]
         .into_iter()
         .map(|model| {
@@ -57,7 +57,7 @@ pub fn height_vs_phi(best: &[BestRow]) -> LineFigure {
                     let y = 1e3 * h.jump_height_m;
                     lines.push(Line {
                         label: if i == 0 {
-                            "hard ground (dashed, same colours)".into()
+                            "dashed: hard ground".into()
                         } else {
                             String::new()
                         },
@@ -77,11 +77,7 @@ pub fn height_vs_phi(best: &[BestRow]) -> LineFigure {
             }
         })
         .collect();
-    LineFigure {
-        title: "Jump height vs packing fraction".into(),
-        panels,
-        size: grid_size(2),
-    }
+    GridFigure::row("Jump height vs packing fraction", panels)
 }
 
 /// Figure 2: height against forcing frequency, panels (eq1, eq4) x (single, stutter), lines
@@ -127,17 +123,12 @@ pub fn height_vs_freq(rows: &[SweepRow], phis: &[f64]) -> GridFigure {
             });
         }
     }
-    GridFigure {
-        title: "Jump height vs forcing frequency".into(),
-        shape: (2, 2),
-        panels,
-        size: (2140, 1500),
-    }
+    GridFigure::square("Jump height vs forcing frequency", panels)
 }
 
 /// Figure 3: the delayed stutter at [`LOW_PHI`] against its delay (at each delay's best
 /// frequency), with the single jump's best height dashed; and the best frequency.
-pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> LineFigure {
+pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> GridFigure {
     let mut heights = Vec::new();
     let mut freqs = Vec::new();
     for (i, model) in [ModelName::Eq1, ModelName::Eq4].into_iter().enumerate() {
@@ -163,7 +154,7 @@ pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> LineFigure {
         ) {
             let y = 1e3 * single.jump_height_m;
             heights.push(Line {
-                label: format!("single jump, {model} (dashed)"),
+                label: format!("single, {model} (dashed)"),
                 points: vec![(t0, y), (t1, y)],
                 color: palette(i),
                 dashed: true,
@@ -178,9 +169,9 @@ pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> LineFigure {
             markers: true,
         });
     }
-    LineFigure {
-        title: format!("Delayed stutter vs delay τ at φ = {LOW_PHI}"),
-        panels: vec![
+    GridFigure::row(
+        format!("Delayed stutter vs delay τ at φ = {LOW_PHI}"),
+        vec![
             LinePanel {
                 caption: "height at each delay's best frequency".into(),
                 x_desc: "delay τ (s)".into(),
@@ -196,6 +187,5 @@ pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> LineFigure {
                 y_from_zero: true,
             },
         ],
-        size: grid_size(2),
-    }
+    )
 }

@@ -3,9 +3,11 @@
 
 use serde::Serialize;
 
+use super::grid::GridFigure;
+
 use crate::ground::{DragLaw, GroundLaw, PenetrationLaw, Sand};
 use crate::params::{Params, ReintrusionAnchor};
-use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
+use crate::plot::lines::{Line, LinePanel};
 use crate::plot::palette;
 
 /// Packing fractions of the `F_p(z)` panel.
@@ -96,7 +98,7 @@ pub fn curves() -> Result<Vec<ForceDepthRow>, String> {
 }
 
 /// The figure: left `F_p(z)` (two-resistance solid, cone dashed), right the re-intrusion.
-pub fn figure(rows: &[ForceDepthRow]) -> LineFigure {
+pub fn figure(rows: &[ForceDepthRow]) -> GridFigure {
     let line = |curve: &str, phi: f64| -> Vec<(f64, f64)> {
         rows.iter()
             .filter(|r| r.curve == curve && (r.phi - phi).abs() < 1e-9)
@@ -127,37 +129,37 @@ pub fn figure(rows: &[ForceDepthRow]) -> LineFigure {
     let phi = LAW_PHIS[0];
     let right = vec![
         Line {
-            label: "two-resistance: intrude, withdraw, re-intrude".into(),
+            label: "two-resistance".into(),
             points: line("two-resistance re-intrusion", phi),
             color: palette(0),
             dashed: false,
             markers: false,
         },
         Line {
-            label: "two-resistance F_p (no overshoot)".into(),
+            label: "two-resist., plain F_p".into(),
             points: line("two-resistance", phi),
             color: palette(0),
             dashed: true,
             markers: false,
         },
         Line {
-            label: "cone: intrude, withdraw, re-intrude".into(),
+            label: "cone".into(),
             points: line("cone re-intrusion", phi),
             color: palette(1),
             dashed: false,
             markers: false,
         },
         Line {
-            label: "cone F_p (no overshoot)".into(),
+            label: "cone, plain F_p".into(),
             points: line("cone", phi),
             color: palette(1),
             dashed: true,
             markers: false,
         },
     ];
-    LineFigure {
-        title: "Quasi-static penetration force F_p(z)".into(),
-        panels: vec![
+    GridFigure::row(
+        "Quasi-static penetration force F_p(z)",
+        vec![
             LinePanel {
                 caption: "two-resistance (solid) and cone (dashed) laws".into(),
                 x_desc: "depth z (mm)".into(),
@@ -176,6 +178,5 @@ pub fn figure(rows: &[ForceDepthRow]) -> LineFigure {
                 y_from_zero: true,
             },
         ],
-        size: grid_size(2),
-    }
+    )
 }

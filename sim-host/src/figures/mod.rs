@@ -172,9 +172,10 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
     w.csv("penetration_force.csv", &law_rows, &laws::HEADER)?;
     w.figure("penetration_force", &laws::figure(&law_rows))?;
 
-    // 5 + 6: one stutter jump at the eq4 stutter's best frequency at phi = 0.57.
+    // 5 + 6: one stutter jump at phi = 0.57, at the frequency where the eq4 stutter's
+    // push-off (final) height is highest: the push-off is where the laws differ.
     let freq = find_best(&best, JumpKind::Stutter, ModelName::Eq4, Some(LOW_PHI))
-        .map(|b| b.best_freq_hz)
+        .map(|b| b.best_final_freq_hz)
         .ok_or_else(|| {
             FiguresError::Internal("no successful eq4 stutter jump at phi = 0.57".into())
         })?;
@@ -267,11 +268,12 @@ fn findings(
                     put(
                         format!("{model}.phi{phi}.{name}"),
                         format!(
-                            "{} at {} Hz (final {} ; best final {})",
+                            "{} at {} Hz (final there {}; best final {} at {} Hz)",
                             mm(b.jump_height_m),
                             b.best_freq_hz,
                             mm(b.final_jump_height_m),
-                            mm(b.best_final_jump_height_m)
+                            mm(b.best_final_jump_height_m),
+                            b.best_final_freq_hz
                         ),
                     );
                 }

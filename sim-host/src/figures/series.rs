@@ -10,7 +10,7 @@ use super::sweeps::LOW_PHI;
 use crate::hybrid::GroundMode;
 use crate::jump::{JumpOutcome, JumpSpec, SeriesRow, SimOptions, simulate_jump};
 use crate::params::{ModelName, Params};
-use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
+use crate::plot::lines::{Line, LinePanel};
 use crate::plot::palette;
 
 /// Spacing of the recorded series, s.
@@ -95,7 +95,7 @@ pub fn csv_rows(model: ModelName, params: &Params, rows: &[SeriesRow]) -> Vec<Se
 }
 
 /// Figure 5: `m_a / m_f` against depth, one line per intrusion episode; and against time.
-pub fn added_mass_figure(rows: &[SeriesCsvRow], freq_hz: f64) -> LineFigure {
+pub fn added_mass_figure(rows: &[SeriesCsvRow], freq_hz: f64) -> GridFigure {
     let mut episodes: Vec<Vec<(f64, f64)>> = Vec::new();
     let mut inside = false;
     let mut starts = Vec::new();
@@ -125,9 +125,9 @@ pub fn added_mass_figure(rows: &[SeriesCsvRow], freq_hz: f64) -> LineFigure {
             markers: false,
         })
         .collect();
-    LineFigure {
-        title: format!("Added mass during a stutter jump (eq4, φ = {LOW_PHI}, f = {freq_hz} Hz)"),
-        panels: vec![
+    GridFigure::row(
+        format!("Added mass during a stutter jump (eq4, φ = {LOW_PHI}, f = {freq_hz} Hz)"),
+        vec![
             LinePanel {
                 caption: "against foot depth, while intruding".into(),
                 x_desc: "foot depth z (mm)".into(),
@@ -149,8 +149,7 @@ pub fn added_mass_figure(rows: &[SeriesCsvRow], freq_hz: f64) -> LineFigure {
                 y_from_zero: true,
             },
         ],
-        size: grid_size(2),
-    }
+    )
 }
 
 /// Figure 6: one stutter jump under eq1 (solid) and eq4 (dashed): positions, spring force,
@@ -178,12 +177,9 @@ pub fn mechanism_figure(eq1: &[SeriesCsvRow], eq4: &[SeriesCsvRow], freq_hz: f64
         lines,
         y_from_zero: false,
     };
-    GridFigure {
-        title: format!(
-            "Stutter jump at φ = {LOW_PHI}, f = {freq_hz} Hz: eq1 (solid) vs eq4 (dashed)"
-        ),
-        shape: (2, 2),
-        panels: vec![
+    GridFigure::square(
+        format!("Stutter jump at φ = {LOW_PHI}, f = {freq_hz} Hz: eq1 (solid) vs eq4 (dashed)"),
+        vec![
             panel(
                 "rod above rest, foot above the surface",
                 "height (mm)",
@@ -205,6 +201,5 @@ pub fn mechanism_figure(eq1: &[SeriesCsvRow], eq4: &[SeriesCsvRow], freq_hz: f64
                 series(|r| r.m_a_over_m_f, 0, ""),
             ),
         ],
-        size: (2140, 1500),
-    }
+    )
 }

@@ -168,14 +168,16 @@ pub struct BestRow {
     pub jump_height_m: f64,
     /// Its final (push-off) height, m.
     pub final_jump_height_m: f64,
-    /// Highest final height over the frequency grid, m (its own optimum).
+    /// Highest final (push-off) height over the frequency grid, m (its own optimum).
     pub best_final_jump_height_m: f64,
+    /// Frequency of that highest final height, Hz.
+    pub best_final_freq_hz: f64,
     /// Deepest foot depth at the best frequency, m.
     pub max_depth_m: f64,
 }
 
 /// Header of the best-row CSV (written even when empty).
-pub const BEST_HEADER: [&str; 9] = [
+pub const BEST_HEADER: [&str; 10] = [
     "kind",
     "model",
     "phi",
@@ -184,6 +186,7 @@ pub const BEST_HEADER: [&str; 9] = [
     "jump_height_m",
     "final_jump_height_m",
     "best_final_jump_height_m",
+    "best_final_freq_hz",
     "max_depth_m",
 ];
 
@@ -204,7 +207,10 @@ pub fn best_rows(rows: &[SweepRow]) -> Vec<BestRow> {
                     b.final_jump_height_m = r.final_jump_height_m;
                     b.max_depth_m = r.max_depth_m;
                 }
-                b.best_final_jump_height_m = b.best_final_jump_height_m.max(r.final_jump_height_m);
+                if r.final_jump_height_m > b.best_final_jump_height_m {
+                    b.best_final_jump_height_m = r.final_jump_height_m;
+                    b.best_final_freq_hz = r.freq_hz;
+                }
             }
             None => out.push(BestRow {
                 kind: r.kind.clone(),
@@ -215,6 +221,7 @@ pub fn best_rows(rows: &[SweepRow]) -> Vec<BestRow> {
                 jump_height_m: r.jump_height_m,
                 final_jump_height_m: r.final_jump_height_m,
                 best_final_jump_height_m: r.final_jump_height_m,
+                best_final_freq_hz: r.freq_hz,
                 max_depth_m: r.max_depth_m,
             }),
         }
