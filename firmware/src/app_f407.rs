@@ -1,87 +1,332 @@
 //! The rig firmware on the STM32F407: RTIC 2.
 //!
 //! Priorities (higher preempts lower):
-//! - 3 `control_tick` (TIM7 at the tick rate): encoder -> core tick -> drive -> camera trigger,
-//!   cycle-counted; owns the core and the rig peripherals outright (no locks).
-//! - 1 `host_link` (OTG_FS interrupt, also pended by the tick): USB CDC, command decoding,
-//!   telemetry draining. It talks to the tick only through lock-free single-producer
-//!   single-consumer queues, so nothing it does can delay the tick.
+//! - 3 `control_tick` (TIM7 at [`board::TICK_HZ`]): at most one host frame from the inbound
+//!   queue, then encoder -> core tick -> DAC + drive enable -> camera trigger, cycle-counted
+//!   with the DWT (the count goes into the next tick's `TickTiming`, so the core latches
+//!   `DeadlineOverrun` past [`board::TICK_BUDGET_CYCLES`]); sample records move to the
+//!   telemetry queue; the watchdog is fed. It owns the core's `Rig` and the peripherals outright.
+//! - 1 `host_link` (OTG_FS interrupt, also pended by the tick): USB CDC, frame decoding,
+//!   replies, telemetry batches. It talks to the tick only through lock-free single-producer
+//!   single-consumer queues, so nothing it does can delay or block the tick.
+//!
+//! Losses are counted: sample records that find the telemetry queue full stay in the core's
+//! queue, whose overflow the core counts (`samples_dropped` in every `Status`, and as gaps in
+//! the sequence numbers); frames the link cannot queue or send are counted and logged.
+//!
+//! Hardware-in-the-loop on the real board: the first `HostMessage::Sensor` frame switches the
+//! tick to lockstep (one core tick per sensor frame, the actuator frame sent back) until reset;
+//! the real drive stays disabled at zero force in that mode.
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
-    use crate::board::f407::{self as board, Rig};
+    use crate::board::f407::{self as board, RigIo};
+    use crate::drive;
+    use crate::link;
     use cortex_m::peripheral::DWT;
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use sandjumper_core::protocol::{FrameDecoder, MAX_FRAME, SAMPLE_BATCH, encode_frame};
+    use sandjumper_core::{
+        CounterWidth, HostMessage, Rig, RigConfig, RigMessage, SampleRecord, TickInput, TickTiming,
+    };
     use stm32f4xx_hal::otg_fs::{UsbBus, UsbBusType};
+    use stm32f4xx_hal::pac::Interrupt;
     use usb_device::prelude::*;
     use usbd_serial::SerialPort;
+
+    /// The core's own sample queue: drained into [`SAMPLES`] every tick, so it only buffers
+    /// while the telemetry queue is full.
+    const CORE_QUEUE: usize = 64;
+    /// Telemetry queue between the tick and the link, records (capacity N - 1): ~50 ms at
+    /// 10 kHz.
+    const SAMPLES: usize = 512;
+    /// Host frames waiting for the tick (capacity N - 1).
+    const INBOUND: usize = 8;
+    /// Messages waiting for the link (capacity N - 1).
+    const OUTBOUND: usize = 8;
+
+    type Serial = SerialPort<'static, UsbBusType, [u8; 256], [u8; 1024]>;
+
+    /// A frame from the host, in arrival order (a burst of rejects latches `LinkCorrupted`).
+    // Fixed-size slots in a static queue: no heap to box into, and the size is what it is.
+    #[allow(clippy::large_enum_variant)]
+    pub enum Inbound {
+        Message(HostMessage),
+        Rejected,
+    }
 
     #[shared]
     struct Shared {}
 
     #[local]
     struct Local {
-        rig: Rig,
+        io: RigIo,
+        rig: Rig<CORE_QUEUE>,
+        inbound_rx: Consumer<'static, Inbound>,
+        outbound_tx: Producer<'static, RigMessage>,
+        samples_tx: Producer<'static, SampleRecord>,
+        inbound_tx: Producer<'static, Inbound>,
+        outbound_rx: Consumer<'static, RigMessage>,
+        samples_rx: Consumer<'static, SampleRecord>,
         usb_dev: UsbDevice<'static, UsbBusType>,
-        usb_serial: SerialPort<'static, UsbBusType>,
+        serial: Serial,
+        decoder: FrameDecoder,
     }
 
     #[init(local = [
         ep_memory: [u32; 1024] = [0; 1024],
         usb_bus: Option<usb_device::bus::UsbBusAllocator<UsbBusType>> = None,
+        inbound: Queue<Inbound, INBOUND> = Queue::new(),
+        outbound: Queue<RigMessage, OUTBOUND> = Queue::new(),
+        samples: Queue<SampleRecord, SAMPLES> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let mut core = cx.core;
         core.DCB.enable_trace();
         core.DWT.enable_cycle_counter();
         let parts = board::init(cx.device);
-        let mut rig = parts.rig;
+        let mut io = parts.io;
+
+        let config = RigConfig {
+            tick_hz: board::TICK_HZ,
+            counter_width: CounterWidth::Bits32,
+            deadline_cycles: board::TICK_BUDGET_CYCLES,
+            ..RigConfig::default()
+        };
+        let rig = match Rig::new(config) {
+            Ok(rig) => rig,
+            // The board's fixed configuration is checked by the core; a bad one is a build
+            // defect: stay safe and say so.
+            Err(e) => {
+                board::force_safe_state();
+                defmt::panic!("rig configuration rejected: {}", e)
+            }
+        };
 
         let usb_bus = cx
             .local
             .usb_bus
             .insert(UsbBus::new(parts.usb, cx.local.ep_memory));
-        let usb_serial = SerialPort::new(usb_bus);
-        let usb_dev = UsbDeviceBuilder::new(usb_bus, UsbVidPid(0x16c0, 0x27dd))
+        let serial = SerialPort::new_with_store(usb_bus, [0; 256], [0; 1024]);
+        let usb_dev = match UsbDeviceBuilder::new(usb_bus, UsbVidPid(0x16c0, 0x27dd))
             .device_class(usbd_serial::USB_CLASS_CDC)
             .strings(&[StringDescriptors::default()
                 .manufacturer("sandjumper")
                 .product("sandjumper rig")
                 .serial_number("F407")])
-            .expect("one string descriptor set")
-            .build();
+        {
+            Ok(builder) => builder.build(),
+            Err(_) => defmt::panic!("USB string descriptors rejected"),
+        };
 
-        rig.start_ticking(board::TICK_HZ);
-        defmt::info!("sandjumper firmware: STM32F407, tick {} Hz", board::TICK_HZ);
+        let (inbound_tx, inbound_rx) = cx.local.inbound.split();
+        let (outbound_tx, outbound_rx) = cx.local.outbound.split();
+        let (samples_tx, samples_rx) = cx.local.samples.split();
+
+        io.start_ticking(board::TICK_HZ);
+        defmt::info!(
+            "sandjumper firmware: STM32F407, tick {} Hz, budget {} cycles",
+            board::TICK_HZ,
+            board::TICK_BUDGET_CYCLES
+        );
         (
             Shared {},
             Local {
+                io,
                 rig,
+                inbound_rx,
+                outbound_tx,
+                samples_tx,
+                inbound_tx,
+                outbound_rx,
+                samples_rx,
                 usb_dev,
-                usb_serial,
+                serial,
+                decoder: FrameDecoder::new(),
             },
         )
     }
 
-    #[task(binds = TIM7, priority = 3, local = [rig])]
+    #[task(binds = TIM7, priority = 3, local = [
+        io, rig, inbound_rx, outbound_tx, samples_tx,
+        timing: TickTiming = TickTiming::Unknown,
+        lockstep: bool = false,
+        dropped_messages: u32 = 0,
+    ])]
     fn control_tick(cx: control_tick::Context) {
         let start = DWT::cycle_count();
-        let rig = cx.local.rig;
-        rig.acknowledge_tick();
-        let _encoder = rig.encoder_count();
-        let _current = rig.current_sense_code();
-        rig.set_drive(crate::drive::ZERO_FORCE_CODE, false);
-        rig.set_camera_trigger(false);
-        rig.start_current_sample();
-        rig.feed_watchdog();
-        let _cycles = DWT::cycle_count().wrapping_sub(start);
-        rtic::pend(stm32f4xx_hal::pac::Interrupt::OTG_FS);
+        let control_tick::LocalResources {
+            io,
+            rig,
+            inbound_rx,
+            outbound_tx,
+            samples_tx,
+            timing,
+            lockstep,
+            dropped_messages,
+            ..
+        } = cx.local;
+        io.acknowledge_tick();
+        let fault_before = rig.fault();
+        // At most one host frame per tick, and only when its answer (plus a fault report) has
+        // room to leave.
+        let mut ticked = false;
+        let room = outbound_tx.capacity() - outbound_tx.len();
+        if room >= 2 {
+            match inbound_rx.dequeue() {
+                None => {}
+                Some(Inbound::Rejected) => rig.note_frame_rejected(),
+                Some(Inbound::Message(HostMessage::Command { id, command })) => {
+                    send(
+                        outbound_tx,
+                        dropped_messages,
+                        link::reply_to(rig, id, &command),
+                    );
+                }
+                Some(Inbound::Message(HostMessage::Sensor(frame))) => {
+                    *lockstep = true;
+                    rig.note_frame_ok();
+                    let actuator = rig.lockstep(&frame, *timing);
+                    send(
+                        outbound_tx,
+                        dropped_messages,
+                        RigMessage::Actuator(actuator),
+                    );
+                    ticked = true;
+                }
+            }
+        }
+
+        if *lockstep {
+            // Hardware-in-the-loop: the simulated plant is driven, never the real motor.
+            io.set_drive(drive::ZERO_FORCE_CODE, false);
+            io.set_camera_trigger(false);
+        } else {
+            let input = TickInput {
+                encoder_raw: io.encoder_count(),
+                current_a: Some(drive::current_from_code(io.current_sense_code())),
+                timing: *timing,
+            };
+            let out = rig.tick(&input);
+            io.set_drive(drive::force_to_code(out.force_n), out.drive_enabled);
+            io.set_camera_trigger(out.camera_trigger);
+            io.start_current_sample();
+            io.set_leds(out.drive_enabled, out.fault.is_some());
+            ticked = true;
+        }
+        if let Some(report) = link::newly_latched(rig, fault_before) {
+            send(outbound_tx, dropped_messages, report);
+        }
+
+        // Telemetry: as many records as the link's queue takes; the rest wait in the core's
+        // queue (whose overflow the core counts).
+        while samples_tx.ready() {
+            let Some(record) = rig.samples().pop() else {
+                break;
+            };
+            // Cannot fail: `ready` checked.
+            let _ = samples_tx.enqueue(record);
+        }
+        io.feed_watchdog();
+        if samples_tx.len() >= SAMPLE_BATCH || !outbound_tx.is_empty() {
+            rtic::pend(Interrupt::OTG_FS);
+        }
+        if ticked {
+            *timing = TickTiming::Cycles(DWT::cycle_count().wrapping_sub(start));
+        }
     }
 
-    #[task(binds = OTG_FS, priority = 1, local = [usb_dev, usb_serial])]
+    /// Queues a message for the link; if the queue is full it is counted as dropped (and the
+    /// count logged), never waited for.
+    fn send(outbound: &mut Producer<'static, RigMessage>, dropped: &mut u32, msg: RigMessage) {
+        if outbound.enqueue(msg).is_err() {
+            *dropped = dropped.wrapping_add(1);
+            defmt::warn!(
+                "control tick: outbound queue full, {} messages dropped",
+                *dropped
+            );
+        }
+    }
+
+    #[task(binds = OTG_FS, priority = 1, local = [
+        usb_dev, serial, decoder, inbound_tx, outbound_rx, samples_rx,
+        tx: heapless::Vec<u8, MAX_FRAME> = heapless::Vec::new(),
+        tx_sent: usize = 0,
+        inbound_dropped: u32 = 0,
+    ])]
     fn host_link(cx: host_link::Context) {
+        let host_link::LocalResources {
+            usb_dev,
+            serial,
+            decoder,
+            inbound_tx,
+            outbound_rx,
+            samples_rx,
+            tx,
+            tx_sent,
+            inbound_dropped,
+            ..
+        } = cx.local;
+        usb_dev.poll(&mut [serial]);
+
+        // Receive: decode, queue for the tick in arrival order.
         let mut buf = [0u8; 64];
-        if cx.local.usb_dev.poll(&mut [cx.local.usb_serial]) {
-            let _ = cx.local.usb_serial.read(&mut buf);
+        while let Ok(n @ 1..) = serial.read(&mut buf) {
+            for &byte in &buf[..n] {
+                let inbound = match decoder.push::<HostMessage>(byte) {
+                    None => continue,
+                    Some(Ok(msg)) => Inbound::Message(msg),
+                    Some(Err(_)) => Inbound::Rejected,
+                };
+                if inbound_tx.enqueue(inbound).is_err() {
+                    *inbound_dropped = inbound_dropped.wrapping_add(1);
+                    defmt::warn!(
+                        "host link: inbound queue full, {} frames dropped",
+                        *inbound_dropped
+                    );
+                }
+            }
+        }
+
+        // Transmit: finish the frame in flight, then replies/faults/actuator frames, then
+        // sample batches; stop when the USB buffer is full.
+        loop {
+            if *tx_sent < tx.len() {
+                match serial.write(&tx[*tx_sent..]) {
+                    Ok(n) => *tx_sent += n,
+                    Err(_) => break,
+                }
+                continue;
+            }
+            let msg = if let Some(msg) = outbound_rx.dequeue() {
+                msg
+            } else if samples_rx.len() >= SAMPLE_BATCH {
+                let mut batch = None;
+                link::send_sample_batches(
+                    || samples_rx.dequeue(),
+                    SAMPLE_BATCH,
+                    false,
+                    |m| batch = Some(m),
+                );
+                match batch {
+                    Some(msg) => msg,
+                    None => break,
+                }
+            } else {
+                break;
+            };
+            tx.clear();
+            *tx_sent = 0;
+            // SAFETY of the unwrap-free path: every RigMessage fits MAX_FRAME by the protocol's
+            // construction; a failure drops that message and is logged.
+            let _ = tx.resize_default(MAX_FRAME);
+            match encode_frame(&msg, tx) {
+                Ok(n) => tx.truncate(n),
+                Err(_) => {
+                    tx.clear();
+                    defmt::warn!("host link: a message did not fit a frame");
+                }
+            }
         }
     }
 }

@@ -41,7 +41,8 @@ pub fn force_to_code(force_n: f32) -> u16 {
     (i32::from(ZERO_FORCE_CODE) + rounded) as u16
 }
 
-/// The force a DAC code commands, N.
+/// The force a DAC code commands, N (the inverse of [`force_to_code`], for the tests).
+#[cfg(test)]
 pub fn code_to_force(code: u16) -> f32 {
     (f32::from(code) - f32::from(ZERO_FORCE_CODE)) * FULL_SCALE_N / f32::from(HALF_RANGE_CODES)
 }

@@ -63,7 +63,7 @@ pub fn force_safe_state() {
 }
 
 /// The rig's peripherals, owned by the control tick.
-pub struct Rig {
+pub struct RigIo {
     encoder: Qei<pac::TIM2>,
     force_dac: C1,
     drive_enable: PE7<Output<PushPull>>,
@@ -78,7 +78,7 @@ pub struct Rig {
 
 /// Everything `init` hands on besides the rig: the USB peripheral for the host link.
 pub struct Parts {
-    pub rig: Rig,
+    pub io: RigIo,
     pub usb: stm32f4xx_hal::otg_fs::USB,
 }
 
@@ -136,7 +136,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     watchdog.start(WATCHDOG_MS.millis());
 
     Parts {
-        rig: Rig {
+        io: RigIo {
             encoder,
             force_dac,
             drive_enable,
@@ -152,7 +152,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     }
 }
 
-impl Rig {
+impl RigIo {
     /// Starts the control tick timer at `tick_hz`.
     pub fn start_ticking(&mut self, tick_hz: u32) {
         // A rate the timer cannot make is a build-time configuration error: stay disabled.
