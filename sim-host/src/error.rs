@@ -49,7 +49,11 @@ impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Params(e) => write!(f, "{e}"),
-            Self::InvalidInput { field, value, allowed } => {
+            Self::InvalidInput {
+                field,
+                value,
+                allowed,
+            } => {
                 write!(f, "invalid {field} = {value} (allowed: {allowed})")
             }
             Self::StepSizeTooSmall { t_s, step_s } => write!(
@@ -66,7 +70,10 @@ impl fmt::Display for SimError {
                 "more than {limit} ground-mode switches at t = {t_s} s (allowed: a consistent hybrid state)"
             ),
             Self::NonFinite { t_s } => {
-                write!(f, "state became NaN or infinite at t = {t_s} s (allowed: finite parameters)")
+                write!(
+                    f,
+                    "state became NaN or infinite at t = {t_s} s (allowed: finite parameters)"
+                )
             }
         }
     }

@@ -29,3 +29,238 @@ impl core::fmt::Display for GroundMode {
         f.write_str(self.as_str())
     }
 }
+
+use crate::ground::Sand;
+use crate::jump::EventKind;
+use crate::robot::Robot;
+
+/// What the ground does to the foot at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FootForces {
+    /// Foot acceleration x_f'', m/s^2.
+    pub accel_m_s2: f64,
+    /// Ground force on the foot F_GM, N (upward).
+    pub ground_force_n: f64,
+    /// Added mass m_a, kg.
+    pub added_mass_kg: f64,
+}
+
+/// A switching condition of the current mode: the mode switches when `value` turns positive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Guard {
+    /// What happens when it fires.
+    pub transition: Transition,
+    /// Guard function, positive once the switch is due.
+    pub value: f64,
+}
+
+/// The mode switches of MODEL.md section 3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transition {
+    /// Aerial foot reaches the stored ground level moving down: `x_level - x_f > 0`.
+    Touchdown,
+    /// Static foot pulled up by the spring: `-F_s - m_f g > 0` (rule 5, Zeno-free).
+    LiftOff,
+    /// Intruding foot's velocity reaches 0: `v > 0` (it becomes static if the sand holds it).
+    Stop,
+    /// Static foot's load exceeds the holding capacity: `L - F_p_re(z) > 0`.
+    Restart,
+}
+
+/// The hybrid state of the foot-ground contact (MODEL.md section 3, rules 1-6).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact {
+    /// Current mode.
+    pub mode: GroundMode,
+    /// Height of the ground under the foot, m: follows the foot while grounded, frozen in
+    /// flight where the foot left it (rule 1).
+    pub ground_level_m: f64,
+    /// Depth z_start where the current intrusion episode began, m.
+    pub episode_start_m: f64,
+    /// Depth the re-intrusion overshoot is anchored at; `None` until the foot has been airborne.
+    pub overshoot_anchor_m: Option<f64>,
+    /// The foot has left the ground at least once (the sand under it is disturbed).
+    pub airborne_once: bool,
+    /// Deepest point reached so far, z_max, m.
+    pub max_depth_m: f64,
+}
+
+/// Force margin of the load guards (restart, lift-off), N: a load must exceed the capacity
+/// by more than this (a micronewton) before the mode switches, so rounding noise of a foot
+/// at rest cannot trigger switches. Physically negligible.
+pub const LOAD_GUARD_MARGIN_N: f64 = 1e-6;
+
+/// Depth below the undisturbed surface of a foot at height `x_f`, m.
+#[inline]
+pub fn depth_of(x_f: f64) -> f64 {
+    -x_f
+}
+
+impl Contact {
+    /// A static foot at height `x_f` (after the initial sink; no overshoot).
+    pub fn at_rest(x_f: f64) -> Self {
+        let z = depth_of(x_f);
+        Self {
+            mode: GroundMode::Static,
+            ground_level_m: x_f,
+            episode_start_m: z,
+            overshoot_anchor_m: None,
+            airborne_once: false,
+            max_depth_m: z.max(0.0),
+        }
+    }
+
+    /// Holding capacity of the sand at depth `z` in the current episode, N (`F_p_re` once
+    /// airborne, plain `F_p` before; infinite for the rigid floor).
+    #[inline]
+    pub fn holding_force(&self, sand: &Sand, z_m: f64) -> f64 {
+        sand.resisting_force(z_m, self.overshoot_anchor_m)
+    }
+
+    /// Foot acceleration and ground force for spring force `f_s` and foot state `(x_f, v_f)`.
+    #[inline]
+    pub fn foot(&self, robot: &Robot, sand: &Sand, x_f: f64, v_f: f64, f_s: f64) -> FootForces {
+        let m_f = robot.foot_mass_kg;
+        let weight = m_f * robot.gravity_m_s2;
+        match self.mode {
+            GroundMode::Aerial => FootForces {
+                accel_m_s2: (-weight - f_s) / m_f,
+                ground_force_n: 0.0,
+                added_mass_kg: 0.0,
+            },
+            GroundMode::Static => FootForces {
+                accel_m_s2: 0.0,
+                ground_force_n: f_s + weight,
+                added_mass_kg: 0.0,
+            },
+            GroundMode::Intruding => {
+                let z = depth_of(x_f);
+                let s = z - self.episode_start_m;
+                let resist = self.holding_force(sand, z) + sand.drag_coefficient(s) * v_f * v_f;
+                let m_a = sand.added_mass(s);
+                // eq4, implicit in the foot's own acceleration: (m_f + m_a) a = -m_f g - F_s + F_p + alpha v^2.
+                let accel = (-weight - f_s + resist) / (m_f + m_a);
+                FootForces {
+                    accel_m_s2: accel,
+                    ground_force_n: resist - m_a * accel,
+                    added_mass_kg: m_a,
+                }
+            }
+        }
+    }
+
+    /// The guards of the current mode (at most two; unused slots have value `-inf`).
+    #[inline]
+    pub fn guards(&self, robot: &Robot, sand: &Sand, x_f: f64, v_f: f64, f_s: f64) -> [Guard; 2] {
+        let never = |transition| Guard {
+            transition,
+            value: f64::NEG_INFINITY,
+        };
+        match self.mode {
+            GroundMode::Aerial => [
+                Guard {
+                    transition: Transition::Touchdown,
+                    value: self.ground_level_m - x_f,
+                },
+                never(Transition::Touchdown),
+            ],
+            GroundMode::Static => {
+                let load = robot.foot_load(f_s);
+                let restart = if sand.law.is_rigid() {
+                    f64::NEG_INFINITY
+                } else {
+                    load - self.holding_force(sand, depth_of(x_f)) - LOAD_GUARD_MARGIN_N
+                };
+                [
+                    Guard {
+                        transition: Transition::LiftOff,
+                        value: -load - LOAD_GUARD_MARGIN_N,
+                    },
+                    Guard {
+                        transition: Transition::Restart,
+                        value: restart,
+                    },
+                ]
+            }
+            GroundMode::Intruding => [
+                Guard {
+                    transition: Transition::Stop,
+                    value: v_f,
+                },
+                never(Transition::Stop),
+            ],
+        }
+    }
+
+    /// Apply `transition` at foot state `(x_f, v_f)` (velocity possibly reset). Returns the
+    /// event to record when the mode changed.
+    pub fn apply(
+        &mut self,
+        transition: Transition,
+        robot: &Robot,
+        sand: &Sand,
+        x_f: f64,
+        v_f: &mut f64,
+        f_s: f64,
+    ) -> Option<EventKind> {
+        let z = depth_of(x_f);
+        match transition {
+            Transition::Touchdown => {
+                self.ground_level_m = x_f;
+                self.episode_start_m = z;
+                if sand.law.is_rigid() {
+                    // Perfectly plastic impact on the rigid floor.
+                    *v_f = 0.0;
+                    self.mode = GroundMode::Static;
+                } else {
+                    // No velocity jump: the foot enters the sand with the active law.
+                    if self.airborne_once {
+                        self.overshoot_anchor_m = Some(z);
+                    }
+                    self.mode = GroundMode::Intruding;
+                }
+                Some(EventKind::Touchdown)
+            }
+            Transition::LiftOff => {
+                self.ground_level_m = x_f;
+                self.airborne_once = true;
+                self.mode = GroundMode::Aerial;
+                Some(EventKind::LiftOff)
+            }
+            Transition::Stop => {
+                *v_f = 0.0;
+                self.ground_level_m = x_f;
+                if robot.foot_load(f_s) <= self.holding_force(sand, z) {
+                    self.mode = GroundMode::Static;
+                    Some(EventKind::Static)
+                } else {
+                    None
+                }
+            }
+            Transition::Restart => {
+                // A new intrusion episode starts here.
+                self.episode_start_m = z;
+                if self.overshoot_anchor_m.is_some()
+                    && sand.law.anchor == crate::params::ReintrusionAnchor::Episode
+                {
+                    self.overshoot_anchor_m = Some(z);
+                }
+                if robot.foot_load(f_s) > self.holding_force(sand, z) {
+                    self.mode = GroundMode::Intruding;
+                    Some(EventKind::Intrusion)
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// Follow the foot while grounded (rule 6): ground level and z_max.
+    #[inline]
+    pub fn track(&mut self, x_f: f64) {
+        if self.mode != GroundMode::Aerial {
+            self.ground_level_m = x_f;
+            self.max_depth_m = self.max_depth_m.max(depth_of(x_f));
+        }
+    }
+}

@@ -3,9 +3,14 @@
 //! by apex events.
 
 use crate::error::SimError;
-use crate::hybrid::GroundMode;
+use crate::ground::{GroundLaw, Sand};
+use crate::hybrid::{Contact, GroundMode};
 use crate::params::{ModelName, Params};
-use sandjumper_core::trajectory::JumpKind;
+use crate::robot::Robot;
+use crate::simulation::{Actuation, Simulation};
+use crate::trajectory::Stroke;
+use nalgebra::Vector4;
+use sandjumper_core::trajectory::{JumpKind, SineJump};
 use serde::Serialize;
 
 /// One jump to simulate.
@@ -164,17 +169,179 @@ pub struct JumpOutcome {
     pub warnings: Vec<String>,
 }
 
+/// Kinematic drive: motor and rod move as one body, `p(t)` prescribed.
+#[derive(Clone, Debug)]
+pub struct Kinematic<S> {
+    /// The prescribed stroke.
+    pub stroke: S,
+}
+
+impl<S: Stroke> Actuation<4> for Kinematic<S> {
+    #[inline]
+    fn rod_accel(
+        &self,
+        robot: &Robot,
+        t: f64,
+        _y: &Vector4<f64>,
+        f_s: f64,
+        _dy: &mut Vector4<f64>,
+    ) -> f64 {
+        robot.rod_accel_kinematic(f_s, self.stroke.eval(t).accel_m_s2)
+    }
+    fn motor_position(&self, t: f64, _y: &Vector4<f64>) -> f64 {
+        self.stroke.eval(t).position_m
+    }
+    fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, rod_accel: f64) -> f64 {
+        robot.motor_force_for(rod_accel + self.stroke.eval(t).accel_m_s2)
+    }
+}
+
+/// A kinematic simulation at rest in static equilibrium at t = 0 (MODEL.md "Initial state"):
+/// `F_s = M g`; on sand the foot has sunk to `z0` with `F_p(z0) = (M + m_f) g`.
+pub fn kinematic_at_rest<S: Stroke>(
+    params: &Params,
+    model: ModelName,
+    stroke: S,
+    opts: &SimOptions,
+) -> Result<Simulation<Kinematic<S>, 4>, SimError> {
+    params.validate()?;
+    check_options(opts)?;
+    let robot = Robot::new(params);
+    let sand = Sand::new(params, GroundLaw::resolve(model, &params.model));
+    let (x_r, x_f) = rest_heights(&robot, &sand);
+    let push_off = stroke.push_off_start_s();
+    Ok(Simulation::new(
+        robot,
+        sand,
+        Contact::at_rest(x_f),
+        Kinematic { stroke },
+        Vector4::new(x_r, 0.0, x_f, 0.0),
+        push_off,
+        opts,
+    ))
+}
+
+/// Rod and foot heights `(x_r, x_f)` of the initial static equilibrium, m: `F_s = M g`, the
+/// foot sunk to `z0` with `F_p(z0) = (M + m_f) g`, nudged down by a few ulps if rounding
+/// left the load above the sand's capacity (so the rest is exactly consistent).
+pub fn rest_heights(robot: &Robot, sand: &Sand) -> (f64, f64) {
+    let load = (robot.motor_rod_mass_kg() + robot.foot_mass_kg) * robot.gravity_m_s2;
+    let mut z0 = sand.initial_sink(load);
+    let rest = robot.rest_rod_above_foot_m();
+    for _ in 0..64 {
+        let (x_f, x_r) = (-z0, -z0 + rest);
+        let actual_load = robot.foot_load(robot.spring_force(x_r, 0.0, x_f, 0.0));
+        if sand.law.is_rigid() || actual_load <= sand.penetration_force(z0) {
+            break;
+        }
+        z0 = z0 + z0 * f64::EPSILON * 4.0;
+    }
+    (-z0 + rest, -z0)
+}
+
+/// Check integration options: tolerances positive and finite.
+pub fn check_options(opts: &SimOptions) -> Result<(), SimError> {
+    let bad = |field, value: f64, allowed: &str| SimError::InvalidInput {
+        field,
+        value: value.to_string(),
+        allowed: allowed.into(),
+    };
+    if !(opts.rtol.is_finite() && opts.rtol > 0.0 && opts.rtol < 1.0) {
+        return Err(bad("rtol", opts.rtol, "0 < rtol < 1"));
+    }
+    if !(opts.atol.is_finite() && opts.atol > 0.0) {
+        return Err(bad("atol", opts.atol, "atol > 0"));
+    }
+    if !(opts.max_step_s.is_finite() && opts.max_step_s > 0.0) {
+        return Err(bad("max_step_s", opts.max_step_s, "max_step_s > 0"));
+    }
+    if opts.record_series && !(opts.series_interval_s.is_finite() && opts.series_interval_s > 0.0) {
+        return Err(bad(
+            "series_interval_s",
+            opts.series_interval_s,
+            "series_interval_s > 0",
+        ));
+    }
+    Ok(())
+}
+
+/// Run-length rule: after the trajectory ends, keep going this long if the robot never lands, s.
+pub const GROUNDED_TAIL_S: f64 = 0.5;
+/// Run-length rule: while airborne, extend the run up to this long after the trajectory's end, s.
+pub const AIRBORNE_TAIL_S: f64 = 3.0;
+
+/// Run a kinematic simulation by MODEL.md's run-length rules: step onto every breakpoint
+/// up to the stroke's end; then end at the first touchdown; if none comes, at end + 0.5 s,
+/// extended while airborne up to end + 3 s.
+pub fn run_kinematic<S: Stroke>(sim: &mut Simulation<Kinematic<S>, 4>) -> Result<(), SimError> {
+    let end = sim.actuation.stroke.end_s();
+    sim.settle()?;
+    for bp in sim.actuation.stroke.breakpoints_s() {
+        if bp > sim.time_s() {
+            sim.advance_to(bp, false)?;
+            sim.discontinuity();
+        }
+    }
+    if sim.time_s() < end {
+        sim.advance_to(end, false)?;
+    }
+    if sim.advance_to(end + GROUNDED_TAIL_S, true)? {
+        return Ok(());
+    }
+    if sim.contact.mode == GroundMode::Aerial {
+        sim.advance_to(end + AIRBORNE_TAIL_S, true)?;
+    }
+    Ok(())
+}
+
 /// Simulate one kinematic jump (MODEL.md, the paper's method).
 pub fn simulate_jump(
     params: &Params,
     spec: &JumpSpec,
     opts: &SimOptions,
 ) -> Result<JumpOutcome, SimError> {
-    let _ = (params, spec, opts);
-    Err(SimError::InvalidInput {
-        field: "simulate_jump",
-        value: "not yet implemented".into(),
-        allowed: "nothing yet".into(),
+    if !(spec.freq_hz.is_finite() && spec.freq_hz > 0.0) {
+        return Err(SimError::InvalidInput {
+            field: "freq_hz",
+            value: spec.freq_hz.to_string(),
+            allowed: "a frequency > 0 Hz".into(),
+        });
+    }
+    if !(spec.tau_s.is_finite() && spec.tau_s >= 0.0) {
+        return Err(SimError::InvalidInput {
+            field: "tau_s",
+            value: spec.tau_s.to_string(),
+            allowed: "a delay >= 0 s".into(),
+        });
+    }
+    let stroke = SineJump::new(
+        spec.kind,
+        params.robot.stroke_amplitude_m,
+        spec.freq_hz,
+        spec.tau_s,
+    )
+    .map_err(|e| SimError::InvalidInput {
+        field: "trajectory",
+        value: format!(
+            "{:?} at {} Hz, tau {} s",
+            spec.kind, spec.freq_hz, spec.tau_s
+        ),
+        allowed: e.to_string(),
+    })?;
+    let mut sim = kinematic_at_rest(params, spec.model, stroke, opts)?;
+    run_kinematic(&mut sim)?;
+    let summary = sim.summary();
+    let mut warnings = Vec::new();
+    if summary.peak_motor_force_n > params.drive.peak_force_n {
+        warnings.push(format!(
+            "the prescribed p(t) needs a motor force of {:.0} N, above F_peak = {:.0} N: the real motor cannot follow it",
+            summary.peak_motor_force_n, params.drive.peak_force_n
+        ));
+    }
+    Ok(JumpOutcome {
+        summary,
+        series: sim.take_series(),
+        warnings,
     })
 }
 
@@ -185,5 +352,8 @@ pub fn simulate_many(
     opts: &SimOptions,
 ) -> Vec<Result<JumpOutcome, SimError>> {
     use rayon::prelude::*;
-    specs.par_iter().map(|s| simulate_jump(params, s, opts)).collect()
+    specs
+        .par_iter()
+        .map(|s| simulate_jump(params, s, opts))
+        .collect()
 }

@@ -21,6 +21,7 @@ pub mod plant;
 pub mod plot;
 pub mod replay;
 pub mod robot;
+pub mod simulation;
 pub mod sweep;
 pub mod trajectory;
 

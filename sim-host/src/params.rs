@@ -296,7 +296,15 @@ const fn row(
     b: f64,
     sigma_cone_mn_m3: f64,
 ) -> PresetRow {
-    PresetRow { phi, k1_kn_m, k2_kn_m, delta_cm, alpha_kg_m, b, sigma_cone_mn_m3 }
+    PresetRow {
+        phi,
+        k1_kn_m,
+        k2_kn_m,
+        delta_cm,
+        alpha_kg_m,
+        b,
+        sigma_cone_mn_m3,
+    }
 }
 
 /// MODEL.md section 3, per-packing presets.
@@ -391,7 +399,10 @@ impl Params {
     /// result is validated.
     pub fn with_overrides_toml(self, toml_text: &str, source: &str) -> Result<Params, ParamsError> {
         let lines = LineIndex::new(toml_text);
-        let err = |key: Option<String>, span: Option<core::ops::Range<usize>>, message: String, allowed: String| {
+        let err = |key: Option<String>,
+                   span: Option<core::ops::Range<usize>>,
+                   message: String,
+                   allowed: String| {
             ParamsError {
                 source: source.to_string(),
                 key,
@@ -401,34 +412,63 @@ impl Params {
             }
         };
         let syntax = |e: toml::de::Error| {
-            err(None, e.span(), format!("not valid TOML: {}", e.message().trim()), "TOML syntax".into())
+            err(
+                None,
+                e.span(),
+                format!("not valid TOML: {}", e.message().trim()),
+                "TOML syntax".into(),
+            )
         };
         let user: toml::Table = toml::from_str(toml_text).map_err(syntax)?;
         let spans = toml::de::DeTable::parse(toml_text).map_err(syntax)?;
         let key_span = |path: &[&str]| key_span(spans.get_ref(), path);
         let mut merged = toml::Table::try_from(&self).map_err(|e| {
-            err(None, None, format!("cannot serialise parameters: {e}"), String::new())
+            err(
+                None,
+                None,
+                format!("cannot serialise parameters: {e}"),
+                String::new(),
+            )
         })?;
         let mut leaves: Vec<Vec<String>> = Vec::new();
         merge(&mut merged, &user, &mut Vec::new(), &mut leaves).map_err(|m| {
             let path: Vec<&str> = m.path.iter().map(String::as_str).collect();
-            err(Some(m.path.join(".")), key_span(&path), m.message, m.allowed)
+            err(
+                Some(m.path.join(".")),
+                key_span(&path),
+                m.message,
+                m.allowed,
+            )
         })?;
         let params: Params = merged.clone().try_into().map_err(|e: toml::de::Error| {
             // Attribute the failure to the first user key that alone makes it fail.
             let culprit = leaves.iter().find(|path| {
                 let mut probe = toml::Table::try_from(&self).expect("serialisable");
                 let mut one = toml::Table::new();
-                set_path(&mut one, path, get_path(&merged, path).expect("merged leaf").clone());
+                set_path(
+                    &mut one,
+                    path,
+                    get_path(&merged, path).expect("merged leaf").clone(),
+                );
                 merge(&mut probe, &one, &mut Vec::new(), &mut Vec::new()).is_ok()
                     && probe.try_into::<Params>().is_err()
             });
             match culprit {
                 Some(path) => {
                     let p: Vec<&str> = path.iter().map(String::as_str).collect();
-                    err(Some(path.join(".")), key_span(&p), format!("invalid value: {}", e.message().trim()), String::new())
+                    err(
+                        Some(path.join(".")),
+                        key_span(&p),
+                        format!("invalid value: {}", e.message().trim()),
+                        String::new(),
+                    )
                 }
-                None => err(None, None, format!("invalid parameters: {}", e.message().trim()), String::new()),
+                None => err(
+                    None,
+                    None,
+                    format!("invalid parameters: {}", e.message().trim()),
+                    String::new(),
+                ),
             }
         })?;
         params.validate().map_err(|mut e| {
@@ -496,20 +536,30 @@ impl Params {
         }
         for (key, v) in [
             ("sand.packing_fraction", s.packing_fraction),
-            ("sand.critical_packing_fraction", s.critical_packing_fraction),
+            (
+                "sand.critical_packing_fraction",
+                s.critical_packing_fraction,
+            ),
         ] {
             if !(v.is_finite() && v > 0.0 && v < 1.0) {
                 return Err(bad(key, v, "0 < phi < 1"));
             }
         }
         if !(s.shear_band_angle_deg > 0.0 && s.shear_band_angle_deg < 90.0) {
-            return Err(bad("sand.shear_band_angle_deg", s.shear_band_angle_deg, "0 < theta < 90 degrees"));
+            return Err(bad(
+                "sand.shear_band_angle_deg",
+                s.shear_band_angle_deg,
+                "0 < theta < 90 degrees",
+            ));
         }
         if r.stroke_amplitude_m > r.stroke_limit_m {
             return Err(bad(
                 "robot.stroke_amplitude_m",
                 r.stroke_amplitude_m,
-                &format!("at most the stroke limit robot.stroke_limit_m = {}", r.stroke_limit_m),
+                &format!(
+                    "at most the stroke limit robot.stroke_limit_m = {}",
+                    r.stroke_limit_m
+                ),
             ));
         }
         Ok(())
@@ -573,7 +623,11 @@ fn merge(
             (slot, value) => {
                 return Err(MergeError {
                     path: here(),
-                    message: format!("expected a {}, found a {}", slot.type_str(), value.type_str()),
+                    message: format!(
+                        "expected a {}, found a {}",
+                        slot.type_str(),
+                        value.type_str()
+                    ),
                     allowed: match slot {
                         toml::Value::Float(_) => "a number".into(),
                         toml::Value::String(_) => "a quoted name".into(),

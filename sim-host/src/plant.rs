@@ -2,9 +2,14 @@
 //! held constant over each control period (zero-order hold), events located inside.
 
 use crate::error::SimError;
+use crate::ground::{GroundLaw, Sand};
+use crate::hybrid::Contact;
 use crate::hybrid::GroundMode;
-use crate::jump::{JumpSummary, SimOptions};
+use crate::jump::{JumpSummary, SimOptions, check_options, rest_heights};
 use crate::params::{DriveParams, ModelName, Params};
+use crate::robot::Robot;
+use crate::simulation::{Actuation, Simulation};
+use nalgebra::Vector6;
 
 /// The motor drive of MODEL.md: `F_m = clamp(K_f i, -F_peak, F_peak)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,41 +71,172 @@ pub struct PlantState {
     pub depth_m: f64,
 }
 
-/// The force-driven plant.
+/// Force-driven actuation: `F_m(t)` = commanded force (clamped to F_peak) held over a
+/// control period, reached through the optional first-order current lag (solved exactly:
+/// `F_m(t) = F_cmd + (F_m(t_k) - F_cmd) exp(-(t - t_k)/tau)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Forced {
+    /// Start of the current control period, s.
+    pub period_start_s: f64,
+    /// Applied force at the start of the period, N.
+    pub force_at_start_n: f64,
+    /// Commanded (clamped) force, N.
+    pub command_n: f64,
+    /// Lag time constant, s (0: none).
+    pub lag_s: f64,
+}
+
+impl Forced {
+    /// Applied motor force at `t`, N.
+    #[inline]
+    pub fn force_n(&self, t: f64) -> f64 {
+        if self.lag_s > 0.0 {
+            self.command_n
+                + (self.force_at_start_n - self.command_n)
+                    * (-(t - self.period_start_s) / self.lag_s).exp()
+        } else {
+            self.command_n
+        }
+    }
+}
+
+impl Actuation<6> for Forced {
+    #[inline]
+    fn rod_accel(
+        &self,
+        robot: &Robot,
+        t: f64,
+        y: &Vector6<f64>,
+        f_s: f64,
+        dy: &mut Vector6<f64>,
+    ) -> f64 {
+        let f_m = self.force_n(t);
+        dy[4] = y[5];
+        dy[5] = robot.motor_accel(f_m);
+        robot.rod_accel_forced(f_s, f_m)
+    }
+    fn motor_position(&self, _t: f64, y: &Vector6<f64>) -> f64 {
+        y[4] - y[0]
+    }
+    fn motor_force(&self, _robot: &Robot, t: f64, _y: &Vector6<f64>, _rod_accel: f64) -> f64 {
+        self.force_n(t)
+    }
+}
+
+/// The force-driven plant: the same robot and ground as kinematic runs, with the motor a
+/// separate body. State `[x_r, v_r, x_f, v_f, x_m, v_m]`.
 #[derive(Clone, Debug)]
 pub struct Plant {
-    _private: (),
+    sim: Simulation<Forced, 6>,
+    drive: MotorDrive,
 }
 
 impl Plant {
-    /// A plant at rest in static equilibrium with `p = initial_p_m`.
+    /// A plant at rest in static equilibrium with `p = initial_p_m`: `F_s = M g`, the motor
+    /// force holding the carriage (`F_m = m_m g`), the foot sunk to `z0` on sand.
     pub fn new(
         params: &Params,
         model: ModelName,
         initial_p_m: f64,
         opts: &SimOptions,
     ) -> Result<Plant, SimError> {
-        let _ = (params, model, initial_p_m, opts);
-        Err(SimError::InvalidInput {
-            field: "Plant",
-            value: "not yet implemented".into(),
-            allowed: "nothing yet".into(),
-        })
+        params.validate()?;
+        check_options(opts)?;
+        let limit = params.robot.stroke_limit_m;
+        if !(initial_p_m.is_finite() && initial_p_m.abs() <= limit) {
+            return Err(SimError::InvalidInput {
+                field: "initial_p_m",
+                value: initial_p_m.to_string(),
+                allowed: format!("|p| <= stroke limit {limit} m"),
+            });
+        }
+        let robot = Robot::new(params);
+        let sand = Sand::new(params, GroundLaw::resolve(model, &params.model));
+        let (x_r, x_f) = rest_heights(&robot, &sand);
+        let hold = robot.motor_mass_kg * robot.gravity_m_s2;
+        let drive = MotorDrive::new(&params.drive);
+        let forced = Forced {
+            period_start_s: 0.0,
+            force_at_start_n: hold,
+            command_n: hold,
+            lag_s: drive.current_lag_s,
+        };
+        let y0 = Vector6::new(x_r, 0.0, x_f, 0.0, x_r + initial_p_m, 0.0);
+        let mut sim = Simulation::new(robot, sand, Contact::at_rest(x_f), forced, y0, 0.0, opts);
+        sim.settle()?;
+        Ok(Plant { sim, drive })
     }
 
-    /// Advance exactly `dt_s` with the commanded motor force held (zero-order hold).
+    /// The motor drive (force constant, F_peak, lag) of this plant.
+    pub fn drive(&self) -> &MotorDrive {
+        &self.drive
+    }
+
+    /// Advance exactly `dt_s` with the commanded motor force held (zero-order hold; clamped to
+    /// ±F_peak; through the current lag if any). Mode switches inside are located exactly.
     pub fn advance(&mut self, dt_s: f64, motor_force_n: f64) -> Result<(), SimError> {
-        let _ = (dt_s, motor_force_n);
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(SimError::InvalidInput {
+                field: "dt_s",
+                value: dt_s.to_string(),
+                allowed: "a control period > 0 s".into(),
+            });
+        }
+        if !motor_force_n.is_finite() {
+            return Err(SimError::InvalidInput {
+                field: "motor_force_n",
+                value: motor_force_n.to_string(),
+                allowed: "a finite force".into(),
+            });
+        }
+        let t = self.sim.time_s();
+        let applied = self.sim.actuation.force_n(t);
+        self.sim.actuation = Forced {
+            period_start_s: t,
+            force_at_start_n: applied,
+            command_n: motor_force_n.clamp(-self.drive.peak_force_n, self.drive.peak_force_n),
+            lag_s: self.drive.current_lag_s,
+        };
+        self.sim.discontinuity();
+        self.sim.advance_to(t + dt_s, false)?;
         Ok(())
+    }
+
+    /// Advance exactly `dt_s` with a current command `i` (A): `F = clamp(K_f i, ±F_peak)`.
+    pub fn advance_current(&mut self, dt_s: f64, current_a: f64) -> Result<(), SimError> {
+        let force = self.drive.force_n(current_a);
+        self.advance(dt_s, force)
     }
 
     /// Current state.
     pub fn state(&self) -> PlantState {
-        unimplemented!()
+        let y = self.sim.state();
+        let t = self.sim.time_s();
+        let f_s = self.sim.spring_force(y);
+        let foot = self
+            .sim
+            .contact
+            .foot(&self.sim.robot, &self.sim.sand, y[2], y[3], f_s);
+        PlantState {
+            t_s: t,
+            x_m: y[4],
+            x_r: y[0],
+            x_f: y[2],
+            v_m: y[5],
+            v_r: y[1],
+            v_f: y[3],
+            p: y[4] - y[0],
+            f_s,
+            f_gm: foot.ground_force_n,
+            f_m: self.sim.actuation.force_n(t),
+            m_a: foot.added_mass_kg,
+            mode: self.sim.contact.mode,
+            depth_m: -y[2],
+        }
     }
 
-    /// Metrics of what has been simulated so far.
+    /// Metrics of what has been simulated so far (heights relative to the initial rod height).
     pub fn summary(&self) -> JumpSummary {
-        JumpSummary::default()
+        self.sim.summary()
     }
 }
