@@ -17,8 +17,11 @@
 
 use crate::acqlog::AcqLog;
 use crate::differentiate::SavitzkyGolay;
+use crate::jump::{JumpOutcome, SeriesRow, SimOptions, kinematic_at_rest, run_kinematic};
+use crate::params::{ModelName, Params};
 use crate::trajectory::Stroke;
 use sandjumper_core::trajectory::Kinematics;
+use serde::Serialize;
 
 /// Default Savitzky-Golay window, s.
 pub const DEFAULT_WINDOW_S: f64 = 3.0e-3;
@@ -138,4 +141,187 @@ impl Stroke for ReplayStroke {
     fn push_off_start_s(&self) -> f64 {
         self.push_off_start_s
     }
+}
+
+/// How the log was turned into a stroke: reported with every replay.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReplayInfo {
+    /// Samples replayed (interpolated ones included).
+    pub samples: usize,
+    /// Samples that were interpolated into gaps (`--allow-gaps`).
+    pub interpolated_samples: u64,
+    /// `rate_hz` from the metadata.
+    pub rate_hz: f64,
+    /// Rate of the replayed grid (least squares over the time column), Hz.
+    pub grid_rate_hz: f64,
+    /// Log time of replay time 0, s.
+    pub log_start_s: f64,
+    /// Replay time of the last sample, s.
+    pub log_end_s: f64,
+    /// Differentiator: `savitzky-golay`.
+    pub differentiator: &'static str,
+    /// Window, samples.
+    pub window_samples: usize,
+    /// Window, s.
+    pub window_s: f64,
+    /// Polynomial order.
+    pub polynomial_order: usize,
+    /// -3 dB frequency of the second derivative, Hz.
+    pub cutoff_hz: f64,
+    /// Largest |p''| of the smoothed stroke, m/s^2.
+    pub peak_accel_m_s2: f64,
+    /// Start of the push-off half (replay time) used for the final jump height, s.
+    pub push_off_start_s: f64,
+}
+
+/// Predicted vs measured, when the log carries measurements.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MeasuredComparison {
+    /// `measured_jump_height_m` from the metadata, m.
+    pub measured_jump_height_m: Option<f64>,
+    /// The replay's jump height, m.
+    pub predicted_jump_height_m: f64,
+    /// `(predicted - measured) / measured`, when both exist and measured > 0.
+    pub jump_height_relative_error: Option<f64>,
+    /// Rows with a measured rod height inside the simulated run.
+    pub rod_height_samples: usize,
+    /// RMS of predicted minus measured rod height over those rows, m.
+    pub rod_height_rms_error_m: Option<f64>,
+    /// Highest measured rod height, m.
+    pub max_measured_rod_height_m: Option<f64>,
+}
+
+/// A replayed log: the simulation's outcome (as `sandjumper jump` reports it), how the stroke
+/// was made, and predicted vs measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReplayOutcome {
+    /// The kinematic run driven by the log.
+    pub outcome: JumpOutcome,
+    /// How the stroke was made.
+    pub info: ReplayInfo,
+    /// Predicted vs measured (None when the log has no measurement).
+    pub measured: Option<MeasuredComparison>,
+}
+
+/// Replays `log` through the kinematic simulation with `model` and `params` (MODEL.md: the
+/// paper's method). Errors are bad input (a log too short for the window, a simulation that
+/// fails): a message saying what and why.
+pub fn replay_log(
+    log: &AcqLog,
+    params: &Params,
+    model: ModelName,
+    window_s: f64,
+    opts: &SimOptions,
+) -> Result<ReplayOutcome, String> {
+    let stroke = ReplayStroke::from_log(log, window_s)?;
+    let info = ReplayInfo {
+        samples: stroke.len(),
+        interpolated_samples: log.interpolated_samples(),
+        rate_hz: log.meta.rate_hz,
+        grid_rate_hz: 1.0 / stroke.period_s(),
+        log_start_s: stroke.log_start_s,
+        log_end_s: stroke.end_s(),
+        differentiator: "savitzky-golay",
+        window_samples: stroke.filter.window_len(),
+        window_s: stroke.filter.window_len() as f64 * stroke.period_s(),
+        polynomial_order: stroke.filter.order(),
+        cutoff_hz: stroke.cutoff_hz,
+        peak_accel_m_s2: stroke.peak_accel_m_s2(),
+        push_off_start_s: stroke.push_off_start_s(),
+    };
+    let has_rod_heights = log.rows.iter().any(|r| r.rod_height_m.is_some());
+    let mut opts = opts.clone();
+    if has_rod_heights && !opts.record_series {
+        opts.record_series = true;
+        opts.series_interval_s = opts.series_interval_s.min(stroke.period_s().max(1e-4));
+    }
+    let mut sim = kinematic_at_rest(params, model, stroke, &opts)
+        .map_err(|e| format!("replay simulation could not start: {e}"))?;
+    run_kinematic(&mut sim).map_err(|e| format!("replay simulation failed: {e}"))?;
+    let summary = sim.summary();
+    let mut warnings = Vec::new();
+    if summary.peak_motor_force_n > params.drive.peak_force_n {
+        warnings.push(format!(
+            "the replayed p(t) needs a motor force of {:.0} N, above F_peak = {:.0} N",
+            summary.peak_motor_force_n, params.drive.peak_force_n
+        ));
+    }
+    if !log.gaps.is_empty() {
+        warnings.push(format!(
+            "{} sample(s) in {} gap(s) of the log were interpolated linearly (--allow-gaps)",
+            log.interpolated_samples(),
+            log.gaps.len()
+        ));
+    }
+    if log.meta.dropped_samples > 0 {
+        warnings.push(format!(
+            "the log's metadata reports {} dropped sample(s)",
+            log.meta.dropped_samples
+        ));
+    }
+    let series = sim.take_series();
+    let measured = compare_with_measurements(log, info.log_start_s, summary.jump_height_m, &series);
+    let series = if opts.record_series {
+        series
+    } else {
+        Vec::new()
+    };
+    Ok(ReplayOutcome {
+        outcome: JumpOutcome {
+            summary,
+            series,
+            warnings,
+        },
+        info,
+        measured,
+    })
+}
+
+/// Predicted vs measured jump height and rod heights (rod height above its rest height,
+/// `x_r(t) - x_r(0)`, interpolated linearly in the recorded series).
+fn compare_with_measurements(
+    log: &AcqLog,
+    log_start_s: f64,
+    predicted_jump_height_m: f64,
+    series: &[SeriesRow],
+) -> Option<MeasuredComparison> {
+    let measured_jump = log.meta.measured_jump_height_m;
+    let rods: Vec<(f64, f64)> = log
+        .rows
+        .iter()
+        .filter_map(|r| r.rod_height_m.map(|h| (r.t_s - log_start_s, h)))
+        .collect();
+    if measured_jump.is_none() && rods.is_empty() {
+        return None;
+    }
+    let rest = series.first().map(|s| s.x_r);
+    let mut sq = 0.0;
+    let mut n = 0;
+    if let Some(rest) = rest {
+        for &(t, h) in &rods {
+            let k = series.partition_point(|s| s.t_s <= t);
+            if k == 0 || k >= series.len() {
+                continue;
+            }
+            let (a, b) = (&series[k - 1], &series[k]);
+            let frac = if b.t_s > a.t_s {
+                (t - a.t_s) / (b.t_s - a.t_s)
+            } else {
+                0.0
+            };
+            let predicted = a.x_r + (b.x_r - a.x_r) * frac - rest;
+            sq += (predicted - h).powi(2);
+            n += 1;
+        }
+    }
+    Some(MeasuredComparison {
+        measured_jump_height_m: measured_jump,
+        predicted_jump_height_m,
+        jump_height_relative_error: measured_jump
+            .filter(|m| *m > 0.0)
+            .map(|m| (predicted_jump_height_m - m) / m),
+        rod_height_samples: n,
+        rod_height_rms_error_m: (n > 0).then(|| (sq / n as f64).sqrt()),
+        max_measured_rod_height_m: rods.iter().map(|r| r.1).reduce(f64::max),
+    })
 }
