@@ -76,6 +76,8 @@ pub enum TrajectoryError {
     },
     /// The trajectory is longer than the tick counter can address at this tick rate.
     TooLong { end_s: f64, max_s: f64 },
+    /// A replay table that is not (or no longer) committed.
+    Replay(crate::replay::ReplayError),
 }
 
 impl fmt::Display for TrajectoryError {
@@ -130,6 +132,7 @@ impl fmt::Display for TrajectoryError {
                 f,
                 "trajectory lasts {end_s} s: longer than the {max_s} s the tick counter addresses"
             ),
+            Self::Replay(e) => write!(f, "replay table: {e}"),
         }
     }
 }
@@ -137,7 +140,7 @@ impl fmt::Display for TrajectoryError {
 impl core::error::Error for TrajectoryError {}
 
 /// A validated one-cycle sine jump (MODEL.md section 2).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SineJump {
     kind: JumpKind,

@@ -1,0 +1,225 @@
+use super::*;
+use crate::command::REPLAY_CHUNK;
+use crate::config::{JumpConfig, TrajectorySpec};
+use crate::controller::GainLowering;
+use crate::rig::Counters;
+use crate::trajectory::JumpKind;
+use proptest::prelude::*;
+
+fn sample_messages() -> [HostMessage; 5] {
+    let mut jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::DelayedStutter,
+        amplitude_m: 0.01875,
+        freq_hz: 12.0,
+        tau_s: 0.75,
+    });
+    jc.gain_lowering = Some(GainLowering {
+        kp_factor: 0.1,
+        kd_factor: 1.0,
+        ramp_s: 0.05,
+    });
+    let chunk: heapless::Vec<f32, REPLAY_CHUNK> =
+        (0..REPLAY_CHUNK).map(|k| k as f32 * 1e-4).collect();
+    [
+        HostMessage::Command {
+            id: 1,
+            command: Command::Configure(jc),
+        },
+        HostMessage::Command {
+            id: 2,
+            command: Command::ReplayChunk {
+                offset: 64,
+                samples: chunk,
+            },
+        },
+        HostMessage::Command {
+            id: 3,
+            command: Command::Arm,
+        },
+        HostMessage::Sensor(SensorFrame {
+            frame: 7,
+            encoder_count: u32::MAX,
+            current_a: Some(1.5),
+            overrun: false,
+        }),
+        HostMessage::Sensor(SensorFrame {
+            frame: 8,
+            encoder_count: 0,
+            current_a: None,
+            overrun: true,
+        }),
+    ]
+}
+
+fn full_batch() -> RigMessage {
+    let rec = SampleRecord {
+        seq: u32::MAX,
+        tick: u32::MAX,
+        encoder_count: i64::MIN,
+        commanded_position_m: -0.025,
+        force_n: 300.0,
+        current_a: Some(-12.5),
+        camera_frame: Some(u32::MAX),
+        flags: u16::MAX,
+    };
+    RigMessage::Samples((0..SAMPLE_BATCH).map(|_| rec).collect())
+}
+
+#[test]
+fn round_trip_through_frames_and_the_streaming_decoder() {
+    let mut dec = FrameDecoder::new();
+    for msg in sample_messages() {
+        let frame = encode_frame_vec(&msg).unwrap();
+        assert_eq!(
+            frame.iter().filter(|b| **b == 0).count(),
+            1,
+            "only the delimiter is 0"
+        );
+        assert_eq!(frame.last(), Some(&0));
+        let mut out = None;
+        for &b in &frame {
+            if let Some(r) = dec.push::<HostMessage>(b) {
+                out = Some(r);
+            }
+        }
+        assert_eq!(out, Some(Ok(msg)));
+    }
+    assert_eq!(dec.stats().ok, 5);
+    assert_eq!(dec.stats().rejected, 0);
+}
+
+#[test]
+fn worst_case_rig_messages_fit_a_frame() {
+    let status = Status {
+        state: RigState::Faulted,
+        phase: crate::profile::Phase::PushOff,
+        fault: Some(FaultCode::LinkLost),
+        fault_tick: u32::MAX,
+        tick: u32::MAX,
+        run_tick: u32::MAX,
+        camera_frames: u32::MAX,
+        configured: true,
+        replay_checksum: Some(u32::MAX),
+        counters: Counters {
+            samples_produced: u32::MAX,
+            samples_dropped: u32::MAX,
+            frames_ok: u32::MAX,
+            frames_rejected: u32::MAX,
+            lockstep_frames_lost: u32::MAX,
+            commands_rejected: u32::MAX,
+            faults_after_latch: u32::MAX,
+            max_tick_cycles: u32::MAX,
+        },
+    };
+    for msg in [
+        full_batch(),
+        RigMessage::Status(status),
+        RigMessage::Reply {
+            id: 9,
+            result: Ok(Reply::Status(status)),
+        },
+        RigMessage::Reply {
+            id: 9,
+            result: Err(Rejection::Replay {
+                actual_checksum: Some(1),
+            }),
+        },
+        RigMessage::Fault(FaultReport {
+            code: FaultCode::TrackingError,
+            tick: 5,
+        }),
+    ] {
+        let mut frame = encode_frame_vec(&msg).unwrap();
+        let n = frame.len() - 1;
+        assert_eq!(decode_frame::<RigMessage>(&mut frame[..n]), Ok(msg));
+    }
+}
+
+#[test]
+fn corrupted_truncated_and_foreign_frames_are_rejected_and_counted() {
+    let msg = &sample_messages()[0];
+    let good = encode_frame_vec(msg).unwrap();
+    let mut dec = FrameDecoder::new();
+    let mut feed = |bytes: &[u8]| -> heapless::Vec<Result<HostMessage, FrameError>, 8> {
+        bytes
+            .iter()
+            .filter_map(|&b| dec.push::<HostMessage>(b))
+            .collect()
+    };
+    // Flip one bit in the middle: CRC (or COBS) rejects it.
+    let mut bad = good.clone();
+    bad[10] ^= 0x10;
+    if bad[10] == 0 {
+        bad[10] = 1;
+    }
+    let r = feed(&bad);
+    assert!(
+        matches!(r.as_slice(), [Err(FrameError::Crc | FrameError::Cobs)]),
+        "{r:?}"
+    );
+    // Truncated: the last 6 bytes lost, delimiter kept.
+    let mut short: heapless::Vec<u8, MAX_FRAME> =
+        heapless::Vec::from_slice(&good[..good.len() - 7]).unwrap();
+    short.push(0).unwrap();
+    assert!(matches!(feed(&short).as_slice(), [Err(_)]));
+    // Another protocol version with a valid CRC.
+    let mut body = [0u8; 16];
+    body[0] = PROTOCOL_VERSION + 1;
+    body[1] = 2; // Command::Arm-ish payload, irrelevant
+    let crc = CRC32.checksum(&body[..2]);
+    body[2..6].copy_from_slice(&crc.to_le_bytes());
+    let mut enc = [0u8; 32];
+    let n = cobs::try_encode(&body[..6], &mut enc).unwrap();
+    assert_eq!(
+        feed(&enc[..=n]).as_slice(),
+        &[Err(FrameError::Version {
+            got: PROTOCOL_VERSION + 1
+        })]
+    );
+    // Too long: MAX_FRAME + 10 non-zero bytes, then a delimiter.
+    let long = [0x55u8; MAX_FRAME + 10];
+    assert!(feed(&long).is_empty());
+    assert_eq!(feed(&[0]).as_slice(), &[Err(FrameError::TooLong)]);
+    // And the decoder is back in sync for a good frame.
+    assert_eq!(feed(&good).as_slice(), &[Ok(msg.clone())]);
+    let s = dec.stats();
+    assert_eq!((s.ok, s.rejected, s.too_long), (1, 4, 1));
+}
+
+proptest! {
+    /// Random bytes never panic the decoder, and every reported frame is counted.
+    #[test]
+    fn random_garbage_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..4000)) {
+        let mut dec = FrameDecoder::new();
+        let mut results = 0u32;
+        for b in bytes {
+            if dec.push::<HostMessage>(b).is_some() {
+                results += 1;
+            }
+        }
+        let s = dec.stats();
+        prop_assert_eq!(s.ok + s.rejected, results);
+    }
+
+    /// Garbage inside a well-formed COBS frame (valid framing, random body) is rejected, not
+    /// misread: without the right CRC nothing decodes.
+    #[test]
+    fn random_bodies_fail_crc(body in proptest::collection::vec(any::<u8>(), 5..600)) {
+        let mut enc = [0u8; MAX_FRAME];
+        let n = cobs::try_encode(&body, &mut enc).unwrap();
+        let crc_ok = CRC32.checksum(&body[..body.len() - 4]).to_le_bytes() == body[body.len() - 4..];
+        let r = decode_frame::<RigMessage>(&mut enc[..n]);
+        if !crc_ok {
+            prop_assert_eq!(r, Err(FrameError::Crc));
+        }
+    }
+
+    /// Sensor frames round-trip bit-exactly.
+    #[test]
+    fn sensor_frames_round_trip(frame in any::<u32>(), count in any::<u32>(), cur in proptest::option::of(-100f32..100.0), overrun in any::<bool>()) {
+        let msg = HostMessage::Sensor(SensorFrame { frame, encoder_count: count, current_a: cur, overrun });
+        let mut f = encode_frame_vec(&msg).unwrap();
+        let n = f.len() - 1;
+        prop_assert_eq!(decode_frame::<HostMessage>(&mut f[..n]), Ok(msg));
+    }
+}

@@ -1,0 +1,341 @@
+//! Replay of a sampled position table `p[k]` (e.g. an encoder log), uploaded in chunks.
+//!
+//! * Fixed capacity [`REPLAY_CAPACITY`] samples of f32 metres (16 KiB), one sample every
+//!   `sample_period_ticks` control ticks (at 10 kHz and a 1 kHz log: 4.096 s).
+//! * Upload: [`ReplayTable::begin`] (length, period), [`ReplayTable::write_chunk`] in order,
+//!   [`ReplayTable::commit`] with the CRC-32 of the whole table ([`replay_checksum`]:
+//!   CRC-32/ISO-HDLC over the samples as little-endian f32 bytes), which the host computes the
+//!   same way. Only a committed table can be replayed.
+//! * Interpolation: Catmull-Rom cubic between samples (position and velocity continuous,
+//!   acceleration piecewise linear: a smoothing second difference). Before the first sample
+//!   it holds `p[0]`; after the last it holds the last.
+
+use core::fmt;
+
+/// Capacity of the replay table, samples.
+pub const REPLAY_CAPACITY: usize = 4096;
+
+/// CRC used for replay checksums (and, in [`crate::protocol`], for frames).
+pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// CRC-32/ISO-HDLC of the samples as little-endian f32 bytes.
+pub fn replay_checksum(samples: &[f32]) -> u32 {
+    let mut d = CRC32.digest();
+    for s in samples {
+        d.update(&s.to_le_bytes());
+    }
+    d.finalize()
+}
+
+/// Why a replay upload or table was refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReplayError {
+    /// Length 0 or above the capacity.
+    Length { len: u32, capacity: u32 },
+    /// Sample period 0 ticks.
+    ZeroPeriod,
+    /// A chunk arrived with no upload in progress (send `ReplayBegin` first).
+    NotUploading,
+    /// Chunks must arrive in order: expected this offset.
+    OutOfOrder { expected: u32, got: u32 },
+    /// The chunk runs past the announced length.
+    PastEnd { end: u32, len: u32 },
+    /// A sample that is NaN/infinite or outside the stroke.
+    BadSample { index: u32, value_m: f32 },
+    /// Commit before all samples arrived.
+    Incomplete { written: u32, len: u32 },
+    /// The host's checksum does not match the uploaded samples.
+    Checksum { expected: u32, actual: u32 },
+    /// Replay requested but no committed table.
+    NotCommitted,
+}
+
+impl fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Length { len, capacity } => {
+                write!(f, "length {len} samples not allowed: 1..={capacity}")
+            }
+            Self::ZeroPeriod => write!(f, "sample period must be at least 1 tick"),
+            Self::NotUploading => write!(f, "chunk without an upload in progress (begin first)"),
+            Self::OutOfOrder { expected, got } => {
+                write!(
+                    f,
+                    "chunk at offset {got}, expected offset {expected} (in order)"
+                )
+            }
+            Self::PastEnd { end, len } => {
+                write!(f, "chunk ends at {end}, past the announced length {len}")
+            }
+            Self::BadSample { index, value_m } => write!(
+                f,
+                "sample {index} = {value_m} m is not finite or outside the stroke"
+            ),
+            Self::Incomplete { written, len } => {
+                write!(f, "commit after {written} of {len} samples")
+            }
+            Self::Checksum { expected, actual } => write!(
+                f,
+                "checksum mismatch: host says {expected:#010x}, table has {actual:#010x}"
+            ),
+            Self::NotCommitted => write!(f, "no committed replay table"),
+        }
+    }
+}
+
+impl core::error::Error for ReplayError {}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum Upload {
+    Empty,
+    Uploading { written: u32 },
+    Committed { crc: u32 },
+}
+
+/// The fixed-capacity replay table.
+#[derive(Clone, Debug)]
+pub struct ReplayTable {
+    samples: [f32; REPLAY_CAPACITY],
+    len: u32,
+    period_ticks: u32,
+    /// `1 / period_ticks`, so the tick path multiplies instead of dividing.
+    inv_period: f32,
+    upload: Upload,
+}
+
+impl Default for ReplayTable {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ReplayTable {
+    /// An empty table.
+    pub const fn new() -> Self {
+        Self {
+            samples: [0.0; REPLAY_CAPACITY],
+            len: 0,
+            period_ticks: 1,
+            inv_period: 1.0,
+            upload: Upload::Empty,
+        }
+    }
+
+    /// Start an upload of `len` samples, one every `period_ticks` control ticks. Discards any
+    /// previous table.
+    pub fn begin(&mut self, len: u32, period_ticks: u32) -> Result<(), ReplayError> {
+        self.upload = Upload::Empty;
+        if len == 0 || len as usize > REPLAY_CAPACITY {
+            return Err(ReplayError::Length {
+                len,
+                capacity: REPLAY_CAPACITY as u32,
+            });
+        }
+        if period_ticks == 0 {
+            return Err(ReplayError::ZeroPeriod);
+        }
+        self.len = len;
+        self.period_ticks = period_ticks;
+        self.inv_period = 1.0 / period_ticks as f32;
+        self.upload = Upload::Uploading { written: 0 };
+        Ok(())
+    }
+
+    /// Append the chunk that starts at sample `offset` (chunks in order).
+    pub fn write_chunk(&mut self, offset: u32, chunk: &[f32]) -> Result<(), ReplayError> {
+        let Upload::Uploading { written } = self.upload else {
+            return Err(ReplayError::NotUploading);
+        };
+        if offset != written {
+            return Err(ReplayError::OutOfOrder {
+                expected: written,
+                got: offset,
+            });
+        }
+        let end = offset.saturating_add(chunk.len() as u32);
+        if end > self.len {
+            return Err(ReplayError::PastEnd { end, len: self.len });
+        }
+        let stroke = crate::trajectory::STROKE_M as f32;
+        for (i, &v) in chunk.iter().enumerate() {
+            if !(v.is_finite() && v.abs() <= stroke) {
+                return Err(ReplayError::BadSample {
+                    index: offset + i as u32,
+                    value_m: v,
+                });
+            }
+        }
+        self.samples[offset as usize..end as usize].copy_from_slice(chunk);
+        self.upload = Upload::Uploading { written: end };
+        Ok(())
+    }
+
+    /// Finish the upload: all samples present and the checksum matches. Returns the checksum.
+    pub fn commit(&mut self, expected_crc: u32) -> Result<u32, ReplayError> {
+        let Upload::Uploading { written } = self.upload else {
+            return Err(ReplayError::NotUploading);
+        };
+        if written != self.len {
+            return Err(ReplayError::Incomplete {
+                written,
+                len: self.len,
+            });
+        }
+        let actual = replay_checksum(self.samples());
+        if actual != expected_crc {
+            return Err(ReplayError::Checksum {
+                expected: expected_crc,
+                actual,
+            });
+        }
+        self.upload = Upload::Committed { crc: actual };
+        Ok(actual)
+    }
+
+    /// Checksum of the committed table, if there is one.
+    pub fn committed_checksum(&self) -> Option<u32> {
+        match self.upload {
+            Upload::Committed { crc } => Some(crc),
+            _ => None,
+        }
+    }
+
+    /// The samples uploaded so far (all of them once committed), m.
+    pub fn samples(&self) -> &[f32] {
+        let n = match self.upload {
+            Upload::Empty => 0,
+            Upload::Uploading { written } => written,
+            Upload::Committed { .. } => self.len,
+        };
+        &self.samples[..n as usize]
+    }
+
+    /// Ticks between samples.
+    pub fn period_ticks(&self) -> u32 {
+        self.period_ticks
+    }
+
+    /// Tick of the last sample (the replay's end), or `None` if not committed.
+    pub fn end_tick(&self) -> Option<u32> {
+        self.committed_checksum()?;
+        (self.len - 1).checked_mul(self.period_ticks)
+    }
+
+    /// Catmull-Rom evaluation at control tick `n` since the start, in sample units:
+    /// `(p, dp/du, d2p/du2)` with `u` = samples. Callers scale by the sample rate.
+    pub(crate) fn eval_samples(&self, n: u32) -> (f32, f32, f32) {
+        let len = self.len as usize;
+        let s = &self.samples[..len.min(REPLAY_CAPACITY)];
+        let Some(&last) = s.last() else {
+            return (0.0, 0.0, 0.0);
+        };
+        let i = (n / self.period_ticks) as usize;
+        if i + 1 >= s.len() {
+            return (last, 0.0, 0.0);
+        }
+        let u = (n % self.period_ticks) as f32 * self.inv_period;
+        let p1 = s[i];
+        let p2 = s[i + 1];
+        let p0 = if i > 0 { s[i - 1] } else { p1 };
+        let p3 = if i + 2 < s.len() { s[i + 2] } else { p2 };
+        let m1 = 0.5 * (p2 - p0);
+        let m2 = 0.5 * (p3 - p1);
+        let (u2, u3) = (u * u, u * u * u);
+        let p = (2.0 * u3 - 3.0 * u2 + 1.0) * p1
+            + (u3 - 2.0 * u2 + u) * m1
+            + (3.0 * u2 - 2.0 * u3) * p2
+            + (u3 - u2) * m2;
+        let v = (6.0 * u2 - 6.0 * u) * (p1 - p2)
+            + (3.0 * u2 - 4.0 * u + 1.0) * m1
+            + (3.0 * u2 - 2.0 * u) * m2;
+        let a = (12.0 * u - 6.0) * (p1 - p2) + (6.0 * u - 4.0) * m1 + (6.0 * u - 2.0) * m2;
+        (p, v, a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn upload(t: &mut ReplayTable, xs: &[f32], period: u32) -> Result<u32, ReplayError> {
+        t.begin(xs.len() as u32, period)?;
+        for (k, c) in xs.chunks(7).enumerate() {
+            t.write_chunk(7 * k as u32, c)?;
+        }
+        t.commit(replay_checksum(xs))
+    }
+
+    #[test]
+    fn upload_in_chunks_and_interpolate() {
+        let xs: heapless::Vec<f32, 50> = (0..50).map(|k| 1e-4 * k as f32).collect();
+        let mut t = ReplayTable::new();
+        upload(&mut t, &xs, 10).unwrap();
+        assert_eq!(t.end_tick(), Some(490));
+        // A straight line is reproduced exactly by Catmull-Rom inside.
+        let (p, v, a) = t.eval_samples(255);
+        assert!((p - 2.55e-3).abs() < 1e-8);
+        assert!((v - 1e-4).abs() < 1e-8);
+        assert!(a.abs() < 1e-6);
+        assert_eq!(t.eval_samples(10_000), (4.9e-3, 0.0, 0.0));
+        // Hits every sample exactly.
+        for k in 0..50 {
+            assert_eq!(t.eval_samples(10 * k).0, xs[k as usize]);
+        }
+    }
+
+    #[test]
+    fn refuses_bad_uploads() {
+        let mut t = ReplayTable::new();
+        assert_eq!(t.write_chunk(0, &[0.0]), Err(ReplayError::NotUploading));
+        assert_eq!(
+            t.begin(0, 1),
+            Err(ReplayError::Length {
+                len: 0,
+                capacity: 4096
+            })
+        );
+        assert_eq!(
+            t.begin(5000, 1),
+            Err(ReplayError::Length {
+                len: 5000,
+                capacity: 4096
+            })
+        );
+        assert_eq!(t.begin(3, 0), Err(ReplayError::ZeroPeriod));
+        t.begin(3, 1).unwrap();
+        assert_eq!(
+            t.write_chunk(1, &[0.0]),
+            Err(ReplayError::OutOfOrder {
+                expected: 0,
+                got: 1
+            })
+        );
+        assert_eq!(
+            t.write_chunk(0, &[0.0; 4]),
+            Err(ReplayError::PastEnd { end: 4, len: 3 })
+        );
+        assert!(matches!(
+            t.write_chunk(0, &[0.0, f32::NAN]),
+            Err(ReplayError::BadSample { index: 1, .. })
+        ));
+        assert!(matches!(
+            t.write_chunk(0, &[0.0, 0.1]),
+            Err(ReplayError::BadSample { index: 1, .. })
+        ));
+        t.write_chunk(0, &[0.0, 0.001]).unwrap();
+        assert_eq!(
+            t.commit(0),
+            Err(ReplayError::Incomplete { written: 2, len: 3 })
+        );
+        t.write_chunk(2, &[0.002]).unwrap();
+        let good = replay_checksum(&[0.0, 0.001, 0.002]);
+        assert!(matches!(
+            t.commit(good ^ 1),
+            Err(ReplayError::Checksum { .. })
+        ));
+        assert_eq!(t.commit(good), Ok(good));
+        assert_eq!(t.committed_checksum(), Some(good));
+    }
+}

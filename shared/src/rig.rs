@@ -1,0 +1,697 @@
+//! The sans-IO control loop: [`Rig::tick`] once per control tick, [`Rig::handle`] for host
+//! commands, and a sample queue to drain for telemetry.
+//!
+//! State machine (only these transitions; any other command is rejected with no change):
+//!
+//! ```text
+//!   Idle --Arm--> Armed --Start--> Running --(trajectory ends)--> Done
+//!    ^              |                 |                            |
+//!    +----Abort-----+------Abort------+-----------Abort------------+
+//!   any --fault--> Faulted --ClearFault--> Idle
+//!   Idle/Done --Configure--> Idle
+//! ```
+//!
+//! Per tick, in order: deadline check, encoder extension (and velocity estimate), host-link
+//! watchdog, setpoint, camera trigger, position controller, stroke and tracking checks, sample
+//! record. Any fault found on a tick makes that same tick's force command exactly 0.
+
+use crate::camera::CameraTrigger;
+use crate::command::{Command, CommandError, CommandKind, Reply};
+use crate::config::{ConfigError, JumpConfig, RigConfig, Trajectory};
+use crate::controller::{GainScale, GainSchedule, Gains, PositionController, VelocityEstimator};
+use crate::encoder::EncoderExtender;
+use crate::fault::FaultCode;
+use crate::profile::{IntrusionTicks, Phase, ReplayTicks, Setpoint, SineTicks, TickProfile};
+use crate::protocol::{ActuatorFrame, SensorFrame};
+use crate::replay::{ReplayError, ReplayTable};
+use crate::sample::{SampleQueue, SampleRecord, flags};
+use crate::trajectory::TrajectoryError;
+
+/// Default sample-queue capacity, records (25 ms at 10 kHz).
+pub const DEFAULT_SAMPLE_QUEUE: usize = 256;
+
+/// Where the rig is in its state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RigState {
+    /// Drive disabled, zero force.
+    Idle,
+    /// Drive enabled, holding the trajectory's start position.
+    Armed,
+    /// Running the trajectory (see [`Phase`]).
+    Running,
+    /// Trajectory over, holding its final position; camera still running.
+    Done,
+    /// A fault is latched: drive disabled, zero force until `ClearFault`.
+    Faulted,
+}
+
+impl RigState {
+    /// The drive is enabled in this state.
+    pub fn drive_enabled(self) -> bool {
+        matches!(self, Self::Armed | Self::Running | Self::Done)
+    }
+}
+
+/// How long the previous tick took, as the glue measured it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TickTiming {
+    /// Not measured.
+    Unknown,
+    /// Cycles (or instructions) of the previous tick; compared with `deadline_cycles`.
+    Cycles(u32),
+    /// The glue detected an overrun itself.
+    Overrun,
+}
+
+/// Inputs of one control tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TickInput {
+    /// Raw hardware encoder counter (wraps; only the low 16 bits for a 16-bit counter).
+    pub encoder_raw: u32,
+    /// Measured motor current, A, if available.
+    pub current_a: Option<f32>,
+    /// Duration of the previous tick.
+    pub timing: TickTiming,
+}
+
+/// Outputs of one control tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TickOutput {
+    /// Force command for the drive, N (exactly 0 unless the drive is enabled).
+    pub force_n: f32,
+    /// Drive enable line.
+    pub drive_enabled: bool,
+    /// Camera trigger line level.
+    pub camera_trigger: bool,
+    /// Camera frame that started on this tick, if any.
+    pub camera_frame: Option<u32>,
+    /// State after this tick.
+    pub state: RigState,
+    /// Trajectory phase of this tick.
+    pub phase: Phase,
+    /// The latched fault, if any.
+    pub fault: Option<FaultCode>,
+    /// This tick's number since start-up.
+    pub tick: u32,
+}
+
+/// Counters reported in telemetry: nothing is lost silently.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Counters {
+    /// Sample records produced (= next sequence number).
+    pub samples_produced: u32,
+    /// Sample records dropped because the queue was full.
+    pub samples_dropped: u32,
+    /// Frames received and decoded.
+    pub frames_ok: u32,
+    /// Frames rejected (malformed, truncated, bad CRC, wrong version).
+    pub frames_rejected: u32,
+    /// Lockstep sensor frames missing (gaps in the frame counter).
+    pub lockstep_frames_lost: u32,
+    /// Commands rejected.
+    pub commands_rejected: u32,
+    /// Faults detected while another was already latched.
+    pub faults_after_latch: u32,
+    /// Longest tick reported by the glue, cycles.
+    pub max_tick_cycles: u32,
+}
+
+/// A snapshot of the rig for the host.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// State machine.
+    pub state: RigState,
+    /// Trajectory phase.
+    pub phase: Phase,
+    /// Latched fault.
+    pub fault: Option<FaultCode>,
+    /// Tick the fault was latched on.
+    pub fault_tick: u32,
+    /// Ticks since start-up.
+    pub tick: u32,
+    /// Ticks since the trajectory started.
+    pub run_tick: u32,
+    /// Camera frames triggered in this run.
+    pub camera_frames: u32,
+    /// A jump configuration is loaded.
+    pub configured: bool,
+    /// Checksum of the committed replay table.
+    pub replay_checksum: Option<u32>,
+    /// Counters.
+    pub counters: Counters,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct LoadedJump {
+    config: JumpConfig,
+    profile: TickProfile,
+    schedule: Option<GainSchedule>,
+}
+
+/// The control loop. `Q` is the sample-queue capacity.
+#[derive(Debug)]
+pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
+    config: RigConfig,
+    watchdog_ticks: u32,
+    state: RigState,
+    fault: Option<FaultCode>,
+    fault_tick: u32,
+    tick: u32,
+    run_tick: u32,
+    phase: Phase,
+    hold: Setpoint,
+    ticks_since_host: u32,
+    consecutive_rejected: u32,
+    last_lockstep_frame: Option<u32>,
+    encoder: EncoderExtender,
+    velocity: VelocityEstimator,
+    controller: PositionController,
+    camera: CameraTrigger,
+    jump: Option<LoadedJump>,
+    replay: ReplayTable,
+    samples: SampleQueue<Q>,
+    counters: Counters,
+}
+
+impl<const Q: usize> Rig<Q> {
+    /// A rig in Idle with nothing configured.
+    pub fn new(config: RigConfig) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(Self {
+            config,
+            watchdog_ticks: config.watchdog_ticks(),
+            state: RigState::Idle,
+            fault: None,
+            fault_tick: 0,
+            tick: 0,
+            run_tick: 0,
+            phase: Phase::None,
+            hold: Setpoint::default(),
+            ticks_since_host: 0,
+            consecutive_rejected: 0,
+            last_lockstep_frame: None,
+            encoder: EncoderExtender::new(config.counter_width, config.max_counts_per_tick),
+            velocity: VelocityEstimator::new(
+                config.metres_per_count,
+                config.tick_hz,
+                config.velocity_cutoff_hz,
+            ),
+            controller: PositionController::new(
+                Gains::default(),
+                config.drive_limit_n,
+                config.tick_hz,
+            ),
+            camera: CameraTrigger::new(0, config.tick_hz, 1),
+            jump: None,
+            replay: ReplayTable::new(),
+            samples: SampleQueue::new(),
+            counters: Counters::default(),
+        })
+    }
+
+    /// The rig's fixed configuration.
+    pub fn config(&self) -> &RigConfig {
+        &self.config
+    }
+    /// Current state.
+    pub fn state(&self) -> RigState {
+        self.state
+    }
+    /// The latched fault, if any.
+    pub fn fault(&self) -> Option<FaultCode> {
+        self.fault
+    }
+    /// The loaded jump configuration, if any.
+    pub fn jump_config(&self) -> Option<&JumpConfig> {
+        self.jump.as_ref().map(|j| &j.config)
+    }
+    /// The replay table.
+    pub fn replay_table(&self) -> &ReplayTable {
+        &self.replay
+    }
+    /// The sample queue (drain it for telemetry).
+    pub fn samples(&mut self) -> &mut SampleQueue<Q> {
+        &mut self.samples
+    }
+    /// Wrap-free encoder count.
+    pub fn encoder_count(&self) -> i64 {
+        self.encoder.count()
+    }
+
+    /// Counters, with the sample queue's figures filled in.
+    pub fn counters(&self) -> Counters {
+        Counters {
+            samples_produced: self.samples.produced(),
+            samples_dropped: self.samples.dropped(),
+            ..self.counters
+        }
+    }
+
+    /// A snapshot for the host.
+    pub fn status(&self) -> Status {
+        Status {
+            state: self.state,
+            phase: self.phase,
+            fault: self.fault,
+            fault_tick: self.fault_tick,
+            tick: self.tick,
+            run_tick: self.run_tick,
+            camera_frames: self.camera.frames(),
+            configured: self.jump.is_some(),
+            replay_checksum: self.replay.committed_checksum(),
+            counters: self.counters(),
+        }
+    }
+
+    /// Latch `code` (the first fault wins; later ones are counted). Zero force from the current
+    /// tick on; use for faults found outside the core (e.g. `LinkLost` from a link timeout).
+    pub fn raise_fault(&mut self, code: FaultCode) {
+        if self.state == RigState::Faulted {
+            self.counters.faults_after_latch = self.counters.faults_after_latch.wrapping_add(1);
+            return;
+        }
+        self.state = RigState::Faulted;
+        self.fault = Some(code);
+        self.fault_tick = self.tick;
+        self.camera.stop();
+        self.controller.reset();
+    }
+
+    /// A valid frame arrived from the host: counts it and feeds the watchdog.
+    pub fn note_frame_ok(&mut self) {
+        self.counters.frames_ok = self.counters.frames_ok.wrapping_add(1);
+        self.consecutive_rejected = 0;
+        self.ticks_since_host = 0;
+    }
+
+    /// A frame from the host was rejected by the decoder: counted; a burst of
+    /// `corrupted_frame_limit` in a row latches `LinkCorrupted`.
+    pub fn note_frame_rejected(&mut self) {
+        self.counters.frames_rejected = self.counters.frames_rejected.wrapping_add(1);
+        self.consecutive_rejected = self.consecutive_rejected.saturating_add(1);
+        let limit = self.config.corrupted_frame_limit;
+        if limit > 0 && self.consecutive_rejected >= limit {
+            self.raise_fault(FaultCode::LinkCorrupted);
+        }
+    }
+
+    /// One control tick.
+    pub fn tick(&mut self, input: &TickInput) -> TickOutput {
+        let tick = self.tick;
+        self.tick = tick.wrapping_add(1);
+
+        match input.timing {
+            TickTiming::Unknown => {}
+            TickTiming::Cycles(c) => {
+                self.counters.max_tick_cycles = self.counters.max_tick_cycles.max(c);
+                if self.config.deadline_cycles > 0 && c > self.config.deadline_cycles {
+                    self.fault_at(FaultCode::DeadlineOverrun, tick);
+                }
+            }
+            TickTiming::Overrun => self.fault_at(FaultCode::DeadlineOverrun, tick),
+        }
+
+        let before = self.encoder.count();
+        let count = match self.encoder.update(input.encoder_raw) {
+            Ok(c) => {
+                let delta = (c - before).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+                self.velocity.update(delta);
+                c
+            }
+            Err(_) => {
+                self.fault_at(FaultCode::EncoderFault, tick);
+                before
+            }
+        };
+        let count_i32 = count.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        let position_m = count_i32 as f32 * self.config.metres_per_count;
+
+        if self.state.drive_enabled() {
+            self.ticks_since_host = self.ticks_since_host.saturating_add(1);
+            if self.watchdog_ticks > 0 && self.ticks_since_host > self.watchdog_ticks {
+                self.fault_at(FaultCode::CommandWatchdog, tick);
+            }
+        }
+
+        // Setpoint for this tick.
+        let mut scale = GainScale::FULL;
+        let mut setpoint = self.hold;
+        let mut tracking_limit = f32::INFINITY;
+        if let Some(j) = &self.jump {
+            tracking_limit = j.config.tracking_error_limit_m;
+            match self.state {
+                RigState::Running => {
+                    let (sp, phase) = j.profile.eval(self.run_tick, &self.replay);
+                    if let Some(s) = &j.schedule {
+                        scale = s.scale(self.run_tick);
+                    }
+                    setpoint = sp;
+                    self.phase = phase;
+                    self.run_tick = self.run_tick.saturating_add(1);
+                    if phase == Phase::Finished {
+                        self.state = RigState::Done;
+                        self.hold = Setpoint {
+                            velocity_m_s: 0.0,
+                            accel_m_s2: 0.0,
+                            ..sp
+                        };
+                    }
+                }
+                RigState::Done => self.phase = Phase::Finished,
+                _ => {}
+            }
+        }
+
+        let trigger = if matches!(self.state, RigState::Running | RigState::Done) {
+            self.camera.tick()
+        } else {
+            crate::camera::TriggerTick {
+                level: false,
+                frame: None,
+            }
+        };
+
+        let mut force_n = 0.0;
+        let mut record_flags = 0u16;
+        if self.state.drive_enabled() {
+            let out =
+                self.controller
+                    .update(&setpoint, position_m, self.velocity.velocity_m_s(), scale);
+            if position_m.abs() > self.config.stroke_limit_m {
+                self.fault_at(FaultCode::StrokeLimit, tick);
+            } else if out.error_m.abs() > tracking_limit {
+                self.fault_at(FaultCode::TrackingError, tick);
+            }
+            force_n = out.force_n;
+            if out.saturated {
+                record_flags |= flags::SATURATED;
+            }
+            if out.integrator_held {
+                record_flags |= flags::INTEGRATOR_HELD;
+            }
+            if scale.position < 1.0 || scale.velocity < 1.0 {
+                record_flags |= flags::GAINS_LOWERED;
+            }
+        }
+
+        let drive_enabled = self.state.drive_enabled();
+        if !drive_enabled {
+            // Faulted (possibly on this very tick), Idle: exactly zero.
+            force_n = 0.0;
+        }
+        let camera_trigger = trigger.level && drive_enabled;
+        let camera_frame = if drive_enabled { trigger.frame } else { None };
+
+        record_flags |= match self.state {
+            RigState::Idle => 0,
+            RigState::Armed => flags::ARMED,
+            RigState::Running => flags::RUNNING,
+            RigState::Done => flags::DONE,
+            RigState::Faulted => flags::FAULTED,
+        };
+        if drive_enabled {
+            record_flags |= flags::DRIVE_ENABLED;
+        }
+        if camera_trigger {
+            record_flags |= flags::CAMERA_HIGH;
+        }
+        match self.phase {
+            Phase::Delay => record_flags |= flags::DELAY,
+            Phase::PushOff => record_flags |= flags::PUSH_OFF,
+            _ => {}
+        }
+        self.samples.push(SampleRecord {
+            seq: 0,
+            tick,
+            encoder_count: count,
+            commanded_position_m: setpoint.position_m,
+            force_n,
+            current_a: input.current_a,
+            camera_frame,
+            flags: record_flags,
+        });
+
+        TickOutput {
+            force_n,
+            drive_enabled,
+            camera_trigger,
+            camera_frame,
+            state: self.state,
+            phase: self.phase,
+            fault: self.fault,
+            tick,
+        }
+    }
+
+    /// Latch a fault found during tick `tick` (the tick counter has already advanced).
+    fn fault_at(&mut self, code: FaultCode, tick: u32) {
+        let was = self.state;
+        self.raise_fault(code);
+        if was != RigState::Faulted {
+            self.fault_tick = tick;
+        }
+    }
+
+    /// One lockstep hardware-in-the-loop step: a sensor frame in, an actuator frame out. Feeds
+    /// the watchdog, counts gaps in the frame counter as lost frames, then runs [`Self::tick`].
+    /// `timing` is the glue's own measurement; the frame's `overrun` flag (fault injection)
+    /// also counts as an overrun.
+    pub fn lockstep(&mut self, frame: &SensorFrame, timing: TickTiming) -> ActuatorFrame {
+        if let Some(last) = self.last_lockstep_frame {
+            let gap = frame.frame.wrapping_sub(last.wrapping_add(1));
+            if gap != 0 {
+                let lost = if gap < (1 << 31) { gap } else { 1 };
+                self.counters.lockstep_frames_lost =
+                    self.counters.lockstep_frames_lost.wrapping_add(lost);
+            }
+        }
+        self.last_lockstep_frame = Some(frame.frame);
+        self.ticks_since_host = 0;
+        let timing = if frame.overrun {
+            TickTiming::Overrun
+        } else {
+            timing
+        };
+        let out = self.tick(&TickInput {
+            encoder_raw: frame.encoder_count,
+            current_a: frame.current_a,
+            timing,
+        });
+        ActuatorFrame {
+            frame: frame.frame,
+            force_n: out.force_n,
+            trigger: out.camera_trigger,
+            drive_enabled: out.drive_enabled,
+            camera_frame: out.camera_frame,
+            state: out.state,
+            fault: out.fault,
+        }
+    }
+
+    /// Handle one host command. Feeds the watchdog. A rejected command changes nothing (except
+    /// that an invalid configuration latches `InvalidConfiguration`).
+    pub fn handle(&mut self, cmd: &Command) -> Result<Reply, CommandError> {
+        self.ticks_since_host = 0;
+        let result = self.handle_inner(cmd);
+        if result.is_err() {
+            self.counters.commands_rejected = self.counters.commands_rejected.wrapping_add(1);
+        }
+        result
+    }
+
+    fn illegal(&self, cmd: &Command) -> CommandError {
+        CommandError::IllegalInState {
+            command: cmd.kind(),
+            state: self.state,
+        }
+    }
+
+    fn handle_inner(&mut self, cmd: &Command) -> Result<Reply, CommandError> {
+        use RigState::*;
+        match (cmd, self.state) {
+            (Command::StatusQuery, _) => Ok(Reply::Status(self.status())),
+            (Command::Heartbeat, _) => Ok(Reply::Ack),
+            (Command::Configure(jc), Idle | Done) => match self.load(jc) {
+                Ok(j) => {
+                    self.jump = Some(j);
+                    self.stop_motion();
+                    Ok(Reply::Ack)
+                }
+                Err(e) => {
+                    self.jump = None;
+                    self.raise_fault(FaultCode::InvalidConfiguration);
+                    Err(CommandError::InvalidConfiguration(e))
+                }
+            },
+            (Command::Arm, Idle) => {
+                let Some(j) = self.jump else {
+                    return Err(CommandError::NotConfigured);
+                };
+                // A replay table re-uploaded since Configure makes the jump stale.
+                if let TickProfile::Replay(r) = j.profile
+                    && self.replay.committed_checksum() != Some(r.checksum())
+                {
+                    self.jump = None;
+                    self.raise_fault(FaultCode::InvalidConfiguration);
+                    return Err(CommandError::InvalidConfiguration(ConfigError::Trajectory(
+                        TrajectoryError::Replay(ReplayError::NotCommitted),
+                    )));
+                }
+                self.controller.set_gains(j.config.gains);
+                self.controller.reset();
+                self.velocity.reset();
+                self.hold = j.profile.start_setpoint(&self.replay);
+                self.run_tick = 0;
+                self.phase = Phase::None;
+                self.state = Armed;
+                Ok(Reply::Ack)
+            }
+            (Command::Start, Armed) => {
+                let Some(j) = &self.jump else {
+                    return Err(CommandError::NotConfigured);
+                };
+                self.camera = CameraTrigger::new(
+                    j.config.camera_fps,
+                    self.config.tick_hz,
+                    j.config.camera_pulse_ticks,
+                );
+                self.camera.start();
+                self.run_tick = 0;
+                self.state = Running;
+                Ok(Reply::Ack)
+            }
+            (Command::Abort, Idle | Armed | Running | Done) => {
+                self.stop_motion();
+                Ok(Reply::Ack)
+            }
+            (Command::ClearFault, Faulted) => {
+                self.fault = None;
+                self.stop_motion();
+                Ok(Reply::Ack)
+            }
+            (Command::ReplayBegin { len, period_ticks }, Idle | Done | Faulted) => {
+                self.replay
+                    .begin(*len, *period_ticks)
+                    .map_err(CommandError::Replay)?;
+                Ok(Reply::Ack)
+            }
+            (Command::ReplayChunk { offset, samples }, Idle | Done | Faulted) => {
+                self.replay
+                    .write_chunk(*offset, samples)
+                    .map_err(CommandError::Replay)?;
+                Ok(Reply::Ack)
+            }
+            (Command::ReplayCommit { checksum }, Idle | Done | Faulted) => {
+                self.replay
+                    .commit(*checksum)
+                    .map_err(CommandError::Replay)?;
+                Ok(Reply::Ack)
+            }
+            (Command::SetGains(g), Idle | Armed | Done) => {
+                let Some(j) = &mut self.jump else {
+                    return Err(CommandError::NotConfigured);
+                };
+                g.validate().map_err(CommandError::InvalidConfiguration)?;
+                j.config.gains = *g;
+                if self.state == Armed || self.state == Done {
+                    self.controller.set_gains(*g);
+                }
+                Ok(Reply::Ack)
+            }
+            _ => Err(self.illegal(cmd)),
+        }
+    }
+
+    /// To Idle: zero force, drive disabled, camera off.
+    fn stop_motion(&mut self) {
+        self.state = RigState::Idle;
+        self.phase = Phase::None;
+        self.camera.stop();
+        self.controller.reset();
+    }
+
+    fn load(&self, jc: &JumpConfig) -> Result<LoadedJump, ConfigError> {
+        let tick_hz = self.config.tick_hz;
+        jc.validate(tick_hz)?;
+        let (profile, delay) = match jc.trajectory.build()? {
+            Trajectory::Sine(s) => {
+                let ticks = SineTicks::new(&s, tick_hz)?;
+                (TickProfile::Sine(ticks), ticks.delay_ticks())
+            }
+            Trajectory::SlowIntrusion(p) => (
+                TickProfile::SlowIntrusion(IntrusionTicks::new(&p, tick_hz)?),
+                None,
+            ),
+            Trajectory::Replay { checksum } => {
+                let r = ReplayTicks::new(&self.replay, tick_hz)?;
+                if r.checksum() != checksum {
+                    return Err(TrajectoryError::Replay(ReplayError::Checksum {
+                        expected: checksum,
+                        actual: r.checksum(),
+                    })
+                    .into());
+                }
+                (TickProfile::Replay(r), None)
+            }
+        };
+        let schedule = match (jc.gain_lowering, delay) {
+            (Some(g), Some((n0, n1))) => Some(GainSchedule::new(&g, n0, n1, tick_hz)),
+            _ => None,
+        };
+        Ok(LoadedJump {
+            config: *jc,
+            profile,
+            schedule,
+        })
+    }
+
+    /// Commands that are legal in the current state (for hosts and tests).
+    pub fn legal_commands(&self) -> &'static [CommandKind] {
+        use CommandKind as K;
+        match self.state {
+            RigState::Idle => &[
+                K::Configure,
+                K::Arm,
+                K::Abort,
+                K::ReplayBegin,
+                K::ReplayChunk,
+                K::ReplayCommit,
+                K::SetGains,
+                K::StatusQuery,
+                K::Heartbeat,
+            ],
+            RigState::Armed => &[
+                K::Start,
+                K::Abort,
+                K::SetGains,
+                K::StatusQuery,
+                K::Heartbeat,
+            ],
+            RigState::Running => &[K::Abort, K::StatusQuery, K::Heartbeat],
+            RigState::Done => &[
+                K::Configure,
+                K::Abort,
+                K::ReplayBegin,
+                K::ReplayChunk,
+                K::ReplayCommit,
+                K::SetGains,
+                K::StatusQuery,
+                K::Heartbeat,
+            ],
+            RigState::Faulted => &[
+                K::ClearFault,
+                K::ReplayBegin,
+                K::ReplayChunk,
+                K::ReplayCommit,
+                K::StatusQuery,
+                K::Heartbeat,
+            ],
+        }
+    }
+}
