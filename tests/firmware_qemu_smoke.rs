@@ -66,9 +66,10 @@ fn firmware_elf() -> &'static Path {
 }
 
 fn boot(args: &[&str], timeout_s: u32) -> (Output, Duration) {
+    let elf = firmware_elf();
     let start = Instant::now();
     let out = Command::new(workspace().join("firmware/qemu-run.sh"))
-        .arg(firmware_elf())
+        .arg(elf)
         .args(args)
         .env("SANDJUMPER_QEMU_TIMEOUT", timeout_s.to_string())
         .output()
@@ -142,4 +143,222 @@ fn a_hung_emulated_firmware_is_killed_within_seconds() {
         text(&out)
     );
     assert!(elapsed < Duration::from_secs(10), "took {elapsed:?}");
+}
+
+/// The host end of one lockstep session over the semihosting FIFOs (the contract in
+/// `firmware/src/app_qemu.rs`).
+struct Session {
+    child: std::process::Child,
+    to_firmware: Option<std::fs::File>,
+    from_firmware: std::fs::File,
+    decoder: sandjumper_core::FrameDecoder,
+    pending: std::collections::VecDeque<u8>,
+}
+
+impl Session {
+    fn start(name: &str) -> Self {
+        let dir = workspace()
+            .join(FIRMWARE_TARGET_DIR)
+            .join(format!("session-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("session directory");
+        let (input, output) = (dir.join("sensor.fifo"), dir.join("actuator.fifo"));
+        let made = Command::new("mkfifo")
+            .arg(&input)
+            .arg(&output)
+            .status()
+            .expect("running mkfifo");
+        assert!(made.success(), "mkfifo failed");
+        let child = Command::new(workspace().join("firmware/qemu-run.sh"))
+            .arg(firmware_elf())
+            .arg("fifo")
+            .arg(&input)
+            .arg(&output)
+            .env("SANDJUMPER_QEMU_TIMEOUT", "60")
+            .spawn()
+            .expect("starting firmware/qemu-run.sh");
+        // The firmware opens the sensor FIFO first, then the actuator FIFO: same order here.
+        let to_firmware = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&input)
+            .expect("open sensor FIFO");
+        let from_firmware = std::fs::File::open(&output).expect("open actuator FIFO");
+        Self {
+            child,
+            to_firmware: Some(to_firmware),
+            from_firmware,
+            decoder: Default::default(),
+            pending: Default::default(),
+        }
+    }
+
+    fn send(&mut self, msg: &sandjumper_core::HostMessage) {
+        use std::io::Write;
+        let frame = sandjumper_core::protocol::encode_frame_vec(msg).expect("encodable");
+        self.to_firmware
+            .as_mut()
+            .expect("open")
+            .write_all(&frame)
+            .expect("write to the firmware");
+    }
+
+    /// The next message, or `None` at end of file.
+    fn next(&mut self) -> Option<sandjumper_core::RigMessage> {
+        use std::io::Read;
+        loop {
+            while let Some(byte) = self.pending.pop_front() {
+                if let Some(decoded) = self.decoder.push::<sandjumper_core::RigMessage>(byte) {
+                    return Some(decoded.expect("the firmware sends valid frames"));
+                }
+            }
+            let mut buf = [0u8; 4096];
+            let n = self
+                .from_firmware
+                .read(&mut buf)
+                .expect("read from the firmware");
+            if n == 0 {
+                return None;
+            }
+            self.pending.extend(&buf[..n]);
+        }
+    }
+}
+
+#[test]
+fn a_lockstep_session_over_fifos_answers_every_sensor_frame_and_ends_cleanly() {
+    use sandjumper_core::config::TrajectorySpec;
+    use sandjumper_core::{
+        Command, HostMessage, JumpConfig, JumpKind, Reply, RigMessage, RigState, SensorFrame,
+        SineJump,
+    };
+    if !qemu_available() {
+        return;
+    }
+    let mut s = Session::start("clean");
+    let Some(RigMessage::Status(hello)) = s.next() else {
+        panic!("the firmware greets with its status")
+    };
+    assert_eq!(hello.state, RigState::Idle);
+
+    let (kind, amplitude_m, freq_hz, tau_s) = (JumpKind::Single, 0.01875, 10.0, 0.0);
+    let spec = TrajectorySpec::Sine {
+        kind,
+        amplitude_m,
+        freq_hz,
+        tau_s,
+    };
+    let commands = [
+        Command::Configure(JumpConfig::new(spec)),
+        Command::Arm,
+        Command::Start,
+    ];
+    for (id, command) in (1..).zip(commands) {
+        s.send(&HostMessage::Command { id, command });
+        assert_eq!(
+            s.next(),
+            Some(RigMessage::Reply {
+                id,
+                result: Ok(Reply::Ack)
+            })
+        );
+    }
+    // The plant tracks the commanded position exactly (1 um per count).
+    let sine = SineJump::new(kind, amplitude_m, freq_hz, tau_s).expect("valid jump");
+    let ticks = 1500u32; // 0.1 s jump + 0.05 s holding the end
+    let mut samples = Vec::new();
+    for frame in 0..ticks {
+        let p = sine.eval(f64::from(frame) / 10_000.0).position_m;
+        let encoder_count = (p * 1e6).round() as i32 as u32;
+        s.send(&HostMessage::Sensor(SensorFrame {
+            frame,
+            encoder_count,
+            current_a: None,
+            overrun: false,
+        }));
+        loop {
+            match s.next() {
+                Some(RigMessage::Actuator(a)) => {
+                    assert_eq!(a.frame, frame);
+                    assert_eq!(a.fault, None, "frame {frame}");
+                    assert!(a.drive_enabled);
+                    break;
+                }
+                Some(RigMessage::Samples(batch)) => samples.extend(batch.iter().map(|r| r.seq)),
+                other => panic!("unexpected {other:?} before actuator frame {frame}"),
+            }
+        }
+    }
+    s.to_firmware = None; // EOF: end of session
+    let mut last_status = None;
+    while let Some(msg) = s.next() {
+        match msg {
+            RigMessage::Samples(batch) => samples.extend(batch.iter().map(|r| r.seq)),
+            RigMessage::Status(status) => last_status = Some(status),
+            other => panic!("unexpected {other:?} after the end"),
+        }
+    }
+    let status = last_status.expect("a final status");
+    assert_eq!(status.state, RigState::Done);
+    assert_eq!(status.counters.samples_dropped, 0);
+    assert_eq!(status.counters.lockstep_frames_lost, 0);
+    assert!(
+        status.counters.max_tick_cycles > 0,
+        "the tick cost is measured"
+    );
+    // Every tick's record arrived, in order (the armed ticks before Start produce none here).
+    assert_eq!(
+        samples,
+        (0..status.counters.samples_produced).collect::<Vec<_>>()
+    );
+    assert_eq!(samples.len(), ticks as usize);
+    assert_eq!(s.child.wait().expect("QEMU exits").code(), Some(0));
+}
+
+#[test]
+fn closing_the_link_mid_jump_latches_link_lost_and_exits_with_its_code() {
+    use sandjumper_core::config::TrajectorySpec;
+    use sandjumper_core::protocol::FaultReport;
+    use sandjumper_core::{
+        Command, FaultCode, HostMessage, JumpConfig, JumpKind, RigMessage, SensorFrame,
+    };
+    if !qemu_available() {
+        return;
+    }
+    let mut s = Session::start("lost");
+    assert!(matches!(s.next(), Some(RigMessage::Status(_))));
+    let spec = TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 10.0,
+        tau_s: 0.0,
+    };
+    for (id, command) in (1..).zip([Command::Configure(JumpConfig::new(spec)), Command::Arm]) {
+        s.send(&HostMessage::Command { id, command });
+        assert!(matches!(
+            s.next(),
+            Some(RigMessage::Reply { result: Ok(_), .. })
+        ));
+    }
+    // Armed at the start position (-A for a single jump), then the host goes away.
+    let encoder_count = (-0.01875e6f64).round() as i32 as u32;
+    s.send(&HostMessage::Sensor(SensorFrame {
+        frame: 0,
+        encoder_count,
+        current_a: None,
+        overrun: false,
+    }));
+    assert!(matches!(s.next(), Some(RigMessage::Actuator(a)) if a.fault.is_none()));
+    s.to_firmware = None;
+    let rest: Vec<RigMessage> = std::iter::from_fn(|| s.next()).collect();
+    assert!(
+        rest.iter().any(|m| matches!(
+            m,
+            RigMessage::Fault(FaultReport {
+                code: FaultCode::LinkLost,
+                ..
+            })
+        )),
+        "{rest:?}"
+    );
+    assert_eq!(s.child.wait().expect("QEMU exits").code(), Some(16 + 8));
 }
