@@ -12,6 +12,7 @@ pub mod cli;
 pub mod differentiate;
 pub mod error;
 pub mod ground;
+pub mod hil;
 pub mod hybrid;
 pub mod integrate;
 pub mod jump;

@@ -31,6 +31,9 @@ pub enum Command {
     Merge(MergeArgs),
     /// Print the resolved parameters as TOML (re-readable with --params).
     Params(ParamsArgs),
+    /// Run one jump through the control loop against the simulated rig: the core in-process
+    /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
+    Hil(crate::hil::command::HilArgs),
 }
 
 /// Jump kind as named on the command line.
