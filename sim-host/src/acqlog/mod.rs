@@ -44,6 +44,7 @@
 //! Position of the motor relative to the rod: `p = encoder_sign * encoder_counts /
 //! counts_per_m + position_offset_m` (MODEL.md `p = x_m - x_r`).
 
+pub mod binary;
 pub mod columns;
 pub mod error;
 pub mod metadata;
@@ -51,6 +52,7 @@ pub mod reader;
 pub mod summary;
 pub mod writer;
 
+pub use binary::{BinaryLogWriter, ConvertReport, SampleLogBuilder, convert_binary};
 pub use columns::{Column, ColumnSet, LogRow};
 pub use error::{AcqLogError, AcqLogErrorKind};
 pub use metadata::{JumpConfig, LogMetadata};

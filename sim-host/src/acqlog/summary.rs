@@ -1,6 +1,7 @@
 //! What `sandjumper log check` reports about a log.
 
 use super::AcqLog;
+use sandjumper_core::sample::flags::FAULTED;
 use serde::Serialize;
 use std::fmt;
 
@@ -23,6 +24,10 @@ pub struct LogSummary {
     pub dropped_samples: u64,
     /// Rows with a nonzero `flags` value.
     pub flagged_samples: usize,
+    /// Rows with the core's `FAULTED` flag set (a latched fault).
+    pub faulted_samples: usize,
+    /// Time of the first row with a latched fault, s.
+    pub first_fault_t_s: Option<f64>,
     /// Distinct nonzero `flags` values with the time each first appeared, s.
     pub flag_values: Vec<FlagFirstSeen>,
     /// Rows with a camera frame number.
@@ -53,6 +58,8 @@ impl LogSummary {
     pub fn of(log: &AcqLog) -> Self {
         let mut flag_values: Vec<FlagFirstSeen> = Vec::new();
         let mut flagged = 0;
+        let mut faulted = 0;
+        let mut first_fault = None;
         let mut frames = 0;
         let mut frame_range: Option<(u64, u64)> = None;
         let mut rod = 0;
@@ -62,6 +69,10 @@ impl LogSummary {
         for row in &log.rows {
             if let Some(f) = row.flags.filter(|f| *f != 0) {
                 flagged += 1;
+                if f & u32::from(FAULTED) != 0 {
+                    faulted += 1;
+                    first_fault.get_or_insert(row.t_s);
+                }
                 if !flag_values.iter().any(|v| v.flags == f) {
                     flag_values.push(FlagFirstSeen {
                         flags: f,
@@ -98,6 +109,8 @@ impl LogSummary {
             interpolated_samples: log.interpolated_samples(),
             dropped_samples: log.meta.dropped_samples,
             flagged_samples: flagged,
+            faulted_samples: faulted,
+            first_fault_t_s: first_fault,
             flag_values,
             camera_frames: frames,
             camera_frames_missing,
@@ -133,6 +146,14 @@ impl fmt::Display for LogSummary {
             self.dropped_samples
         )?;
         writeln!(f, "flagged samples:    {}", self.flagged_samples)?;
+        match self.first_fault_t_s {
+            Some(t) => writeln!(
+                f,
+                "faults:             {} samples with a latched fault, first at t = {t:.6} s",
+                self.faulted_samples
+            )?,
+            None => writeln!(f, "faults:             none")?,
+        }
         for v in &self.flag_values {
             writeln!(
                 f,
