@@ -16,19 +16,55 @@ fn workspace() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
+}
+
+/// QEMU and the firmware toolchain (flip-link, the thumbv7em target) are there; if not, the
+/// test is skipped with a message, except in CI where that is a failure.
 fn qemu_available() -> bool {
-    let found = Command::new("qemu-system-arm")
-        .arg("--version")
+    let target_installed = Command::new("rustc")
+        .args([
+            "--print",
+            "target-libdir",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ])
         .output()
-        .is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "qemu-system-arm is required in CI (apt-get install -y --no-install-recommends qemu-system-arm)"
-        );
-        eprintln!("SKIPPED: qemu-system-arm not found; install it to boot the emulated firmware");
+        .is_ok_and(|o| {
+            o.status.success() && Path::new(String::from_utf8_lossy(&o.stdout).trim()).is_dir()
+        });
+    let missing: Vec<&str> = [
+        (
+            "qemu-system-arm (apt-get install -y --no-install-recommends qemu-system-arm)",
+            on_path("qemu-system-arm"),
+        ),
+        (
+            "flip-link (cargo install flip-link --locked)",
+            on_path("flip-link"),
+        ),
+        (
+            "the thumbv7em-none-eabihf target (rustup target add thumbv7em-none-eabihf)",
+            target_installed,
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(what, there)| (!there).then_some(what))
+    .collect();
+    if missing.is_empty() {
+        return true;
     }
-    found
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have: {}",
+        missing.join(", ")
+    );
+    eprintln!(
+        "SKIPPED: booting the emulated firmware needs {}",
+        missing.join(", ")
+    );
+    false
 }
 
 /// Builds the emulated-board firmware once per test run and returns the ELF.
