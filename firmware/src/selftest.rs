@@ -16,7 +16,7 @@ use crate::session::{ExitStatus, Injection};
 use crate::tick_cost::InstructionCounter;
 use sandjumper_core::config::{Trajectory, TrajectorySpec};
 use sandjumper_core::{
-    Command, GainLowering, JumpConfig, JumpKind, Phase, Rig, RigConfig, RigState, TickInput,
+    Command, GainLowering, Gains, JumpConfig, JumpKind, Phase, Rig, RigConfig, RigState, TickInput,
     TickTiming,
 };
 
@@ -46,7 +46,13 @@ pub fn run(counter: &InstructionCounter, ticks: u32, inject: Option<Injection>) 
         console!("selftest: FAILED: default rig configuration rejected");
         return ExitStatus::SelfTestFailed;
     };
+    // The integrator on too, so its anti-windup path is part of the measured cost.
+    let gains = Gains {
+        ki_n_per_m_s: 50_000.0,
+        ..Gains::default()
+    };
     let jump = JumpConfig {
+        gains,
         gain_lowering: Some(GainLowering {
             kp_factor: 0.1,
             kd_factor: 0.3,
