@@ -118,8 +118,10 @@ impl StagedDir {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        fs::create_dir_all(&parent).map_err(|e| {
-            OutputError::io(&parent, "create the parent of the output directory", &e)
+        fs::create_dir_all(&parent).map_err(|e| OutputError {
+            path: target.to_path_buf(),
+            action: "create the output directory".into(),
+            reason: format!("its parent `{}` cannot be created: {e}", parent.display()),
         })?;
         let staging = tempfile::Builder::new()
             .prefix(&format!(".{name}.partial-"))

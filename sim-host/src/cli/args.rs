@@ -101,16 +101,16 @@ pub struct JumpArgs {
     #[arg(long, value_enum)]
     pub kind: KindArg,
     /// Forcing frequency f of the one-cycle sine, Hz.
-    #[arg(long, value_name = "HZ", value_parser = parse_freq)]
+    #[arg(long, value_name = "HZ", value_parser = parse_freq, allow_negative_numbers = true)]
     pub freq: f64,
     /// Delay of the delayed stutter between its halves, s (required with --kind delayed).
-    #[arg(long, value_name = "S", value_parser = parse_tau, required_if_eq("kind", "delayed"))]
+    #[arg(long, value_name = "S", value_parser = parse_tau, required_if_eq("kind", "delayed"), allow_negative_numbers = true)]
     pub tau: Option<f64>,
     /// Ground model.
     #[arg(long, value_enum, default_value = "eq4")]
     pub model: ModelArg,
     /// Packing fraction phi of the sand (presets 0.57..=0.62).
-    #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi)]
+    #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi, allow_negative_numbers = true)]
     pub phi: f64,
     /// Parameters and integration.
     #[command(flatten)]
@@ -131,13 +131,13 @@ pub struct SweepArgs {
     #[arg(long, value_enum, value_delimiter = ',', required = true)]
     pub kind: Vec<KindArg>,
     /// Forcing frequencies: A:B:STEP (inclusive) or a single value, Hz.
-    #[arg(long, value_name = "A:B:STEP", value_parser = parse_freq_range)]
+    #[arg(long, value_name = "A:B:STEP", value_parser = parse_freq_range, allow_hyphen_values = true)]
     pub freq: ValueRange,
     /// Packing fractions: A:B:STEP or a single value.
-    #[arg(long, value_name = "A:B:STEP", default_value = "0.57", value_parser = parse_phi_range)]
+    #[arg(long, value_name = "A:B:STEP", default_value = "0.57", value_parser = parse_phi_range, allow_hyphen_values = true)]
     pub phi: ValueRange,
     /// Delays of the delayed stutter: A:B:STEP or a single value, s (other kinds use 0).
-    #[arg(long, value_name = "A:B:STEP", default_value = "0", value_parser = parse_tau_range)]
+    #[arg(long, value_name = "A:B:STEP", default_value = "0", value_parser = parse_tau_range, allow_hyphen_values = true)]
     pub tau: ValueRange,
     /// Ground models, comma-separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "eq4")]
@@ -172,7 +172,7 @@ pub struct MergeArgs {
 #[derive(Debug, Clone, Args)]
 pub struct ParamsArgs {
     /// Packing fraction phi of the sand (presets 0.57..=0.62).
-    #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi)]
+    #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi, allow_negative_numbers = true)]
     pub phi: f64,
     /// TOML file overriding any parameter.
     #[arg(long, value_name = "FILE.toml")]
