@@ -15,7 +15,8 @@ pub struct FiguresArgs {
     /// Output directory (created, or replaced if it holds an earlier sandjumper output).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Coarse grids (1 Hz, phi by 0.01, tau by 0.125 s): a quick look in well under a minute.
+    /// Coarse grids (0.5 Hz, phi by 0.01, tau by 0.125 s) instead of the full set (0.1 Hz, phi by
+    /// 0.0025, tau by 10 ms).
     #[arg(long)]
     pub quick: bool,
     /// Worker threads (default: one per core).

@@ -36,19 +36,19 @@ fn steps(a: f64, b: f64, step: f64) -> Vec<f64> {
 }
 
 impl Grids {
-    /// The full set: 1..=20 Hz by 0.25 Hz, phi 0.57..=0.62 by 0.005, tau 0..=0.75 s by 25 ms.
+    /// The full set: 1..=20 Hz by 0.1 Hz, phi 0.57..=0.62 by 0.0025, tau 0..=0.75 s by 10 ms.
     pub fn full() -> Self {
         Self {
-            freqs_hz: steps(1.0, 20.0, 0.25),
-            phis: steps(0.57, 0.62, 0.005),
-            taus_s: steps(0.0, 0.75, 0.025),
+            freqs_hz: steps(1.0, 20.0, 0.1),
+            phis: steps(0.57, 0.62, 0.0025),
+            taus_s: steps(0.0, 0.75, 0.01),
         }
     }
 
-    /// `--quick`: 2..=16 Hz by 1 Hz, phi by 0.01, tau by 0.125 s.
+    /// `--quick`: 1..=20 Hz by 0.5 Hz, phi by 0.01, tau by 0.125 s.
     pub fn quick() -> Self {
         Self {
-            freqs_hz: steps(2.0, 16.0, 1.0),
+            freqs_hz: steps(1.0, 20.0, 0.5),
             phis: steps(0.57, 0.62, 0.01),
             taus_s: steps(0.0, 0.75, 0.125),
         }
