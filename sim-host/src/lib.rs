@@ -11,6 +11,8 @@ pub mod acqlog;
 pub mod cli;
 pub mod differentiate;
 pub mod error;
+pub mod figures;
+pub mod fit;
 pub mod ground;
 pub mod hil;
 pub mod hybrid;

@@ -31,6 +31,11 @@ pub enum Command {
     Merge(MergeArgs),
     /// Print the resolved parameters as TOML (re-readable with --params).
     Params(ParamsArgs),
+    /// Fit the granular model to measurements (intrusion curves, added mass, jump heights);
+    /// writes a params file for --params.
+    Fit(crate::fit::command::FitArgs),
+    /// Regenerate the simulations behind the paper's figures: PNG, SVG and CSV.
+    Figures(crate::figures::command::FiguresArgs),
     /// Run one jump through the control loop against the simulated rig: the core in-process
     /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
     Hil(crate::hil::command::HilArgs),
