@@ -191,8 +191,10 @@ impl<S: Stroke> Actuation<4> for Kinematic<S> {
     fn motor_position(&self, t: f64, _y: &Vector4<f64>) -> f64 {
         self.stroke.eval(t).position_m
     }
-    fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, rod_accel: f64) -> f64 {
-        robot.motor_force_for(rod_accel + self.stroke.eval(t).accel_m_s2)
+    fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, f_s: f64) -> f64 {
+        // F_m = m_m (x_r'' + p'' + g), the motor's own acceleration being x_r'' + p''.
+        let p_accel = self.stroke.eval(t).accel_m_s2;
+        robot.motor_force_for(robot.rod_accel_kinematic(f_s, p_accel) + p_accel)
     }
 }
 

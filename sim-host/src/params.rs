@@ -11,7 +11,7 @@ use core::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 /// The named ground models of MODEL.md section 3 (the names the CLI and presets use).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ModelName {
     /// Rigid floor at z = 0; perfectly plastic impact.
@@ -21,6 +21,7 @@ pub enum ModelName {
     /// Two-resistance `F_p`, re-intrusion overshoot, constant alpha.
     Eq1,
     /// Cone `F_p`, re-intrusion overshoot, added mass (the paper's final model, the default).
+    #[default]
     Eq4,
 }
 
@@ -36,12 +37,6 @@ impl ModelName {
             Self::Eq1 => "eq1",
             Self::Eq4 => "eq4",
         }
-    }
-}
-
-impl Default for ModelName {
-    fn default() -> Self {
-        Self::Eq4
     }
 }
 

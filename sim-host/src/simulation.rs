@@ -5,7 +5,7 @@
 
 use crate::error::SimError;
 use crate::ground::Sand;
-use crate::hybrid::{Contact, GroundMode, Transition};
+use crate::hybrid::{Contact, GroundMode, Guard, Transition};
 use crate::integrate::{DenseStep, DormandPrince, StepFailure, locate_crossing};
 use crate::jump::{Event, EventKind, JumpSummary, SeriesRow, SimOptions};
 use crate::robot::Robot;
@@ -32,8 +32,8 @@ pub trait Actuation<const N: usize> {
     ) -> f64;
     /// Motor position relative to the rod, `p = x_m - x_r`, m.
     fn motor_position(&self, t: f64, y: &SVector<f64, N>) -> f64;
-    /// Motor force F_m, N, given the rod's acceleration.
-    fn motor_force(&self, robot: &Robot, t: f64, y: &SVector<f64, N>, rod_accel: f64) -> f64;
+    /// Motor force F_m, N, at spring force `f_s`.
+    fn motor_force(&self, robot: &Robot, t: f64, y: &SVector<f64, N>, f_s: f64) -> f64;
 }
 
 /// Metrics accumulated while running.
@@ -72,6 +72,7 @@ pub struct Simulation<A, const N: usize> {
     series_interval_s: f64,
     next_sample_s: f64,
     max_steps: u64,
+    start_guards: [Guard; 2],
 }
 
 impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
@@ -101,7 +102,12 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             series_interval_s: opts.series_interval_s,
             next_sample_s: 0.0,
             max_steps: opts.max_steps,
+            start_guards: [Guard {
+                transition: Transition::Stop,
+                value: f64::NEG_INFINITY,
+            }; 2],
         };
+        sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
         sim.observe(0.0, &y0);
         sim.sample(0.0, &y0);
@@ -196,6 +202,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.y = y_new;
             self.contact.track(self.y[2]);
             self.observe(self.t, &self.y.clone());
+            self.refresh_guards();
             if let Some((_, transition)) = switch {
                 let touched = self.switch(transition)?;
                 if touched && stop_at_touchdown {
@@ -213,7 +220,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.contact
                 .guards(&self.robot, &self.sand, y[2], y[3], f_s)
         };
-        let start = guards(&self.y);
+        let start = self.start_guards;
         let t_mid = 0.5 * (step.t0 + step.t1);
         let (mid, end) = (guards(&step.eval(t_mid)), guards(&step.end_state()));
         let mut best: Option<(f64, Transition)> = None;
@@ -236,6 +243,14 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             }
         }
         best
+    }
+
+    /// Guards at the current state (cached for the next step's start).
+    fn refresh_guards(&mut self) {
+        let f_s = self.spring_force(&self.y);
+        self.start_guards = self
+            .contact
+            .guards(&self.robot, &self.sand, self.y[2], self.y[3], f_s);
     }
 
     /// Apply a transition and any that are due at the same instant.
@@ -276,6 +291,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             }
         }
         self.dp.discontinuity();
+        self.refresh_guards();
         self.sample(self.t, &self.y.clone());
         Ok(touched)
     }
@@ -333,12 +349,13 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     /// Metrics at a step end or event.
     fn observe(&mut self, t: f64, y: &SVector<f64, N>) {
         let f_s = self.spring_force(y);
-        let foot = self.contact.foot(&self.robot, &self.sand, y[2], y[3], f_s);
-        let mut dy = SVector::<f64, N>::zeros();
-        let a_r = self.actuation.rod_accel(&self.robot, t, y, f_s, &mut dy);
-        let f_m = self.actuation.motor_force(&self.robot, t, y, a_r);
+        if self.contact.mode == GroundMode::Intruding {
+            let foot = self.contact.foot(&self.robot, &self.sand, y[2], y[3], f_s);
+            let m = &mut self.metrics;
+            m.peak_added_mass_kg = m.peak_added_mass_kg.max(foot.added_mass_kg);
+        }
+        let f_m = self.actuation.motor_force(&self.robot, t, y, f_s);
         let m = &mut self.metrics;
-        m.peak_added_mass_kg = m.peak_added_mass_kg.max(foot.added_mass_kg);
         m.peak_motor_force_n = m.peak_motor_force_n.max(f_m.abs());
     }
 

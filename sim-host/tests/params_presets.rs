@@ -94,7 +94,8 @@ fn override_errors_name_the_key_and_line() {
 fn validation_rejects_unphysical_values() {
     let ok = Params::preset(0.6).unwrap();
     ok.validate().unwrap();
-    let cases: [(&str, fn(&mut Params)); 5] = [
+    type Breaker = fn(&mut Params);
+    let cases: [(&str, Breaker); 5] = [
         ("robot.spring_stiffness_n_m", |p| {
             p.robot.spring_stiffness_n_m = -3300.0
         }),
