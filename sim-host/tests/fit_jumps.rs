@@ -85,7 +85,9 @@ fn drag_alpha_per_phi_is_recovered_from_single_jump_heights() {
     let truth = |phi: f64| if phi < 0.59 { 85.0 } else { 120.0 };
     let jumps: Vec<_> = [0.58, 0.60]
         .into_iter()
-        .flat_map(|phi| [6.0, 7.5, 9.0, 10.5, 12.0, 13.5, 15.0, 16.5].map(|f| (phi, JumpKind::Single, f, 0.0)))
+        .flat_map(|phi| {
+            [6.0, 7.5, 9.0, 10.5, 12.0, 13.5, 15.0, 16.5].map(|f| (phi, JumpKind::Single, f, 0.0))
+        })
         .chain([(0.58, JumpKind::Stutter, 8.0, 0.0)]) // not a single jump: left out
         .collect();
     let params = |phi: f64| {

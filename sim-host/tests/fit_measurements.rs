@@ -361,4 +361,3 @@ fn added_mass_exclusion_that_leaves_too_few_points_is_refused() {
         "{err}"
     );
 }
-

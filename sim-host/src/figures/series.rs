@@ -105,10 +105,8 @@ pub fn added_mass_figure(rows: &[SeriesCsvRow], freq_hz: f64) -> GridFigure {
             episodes.push(Vec::new());
             starts.push(r.t_s);
         }
-        if intruding {
-            if let Some(e) = episodes.last_mut() {
-                e.push((-1e3 * r.x_f_m, r.m_a_over_m_f));
-            }
+        if intruding && let Some(e) = episodes.last_mut() {
+            e.push((-1e3 * r.x_f_m, r.m_a_over_m_f));
         }
         inside = intruding;
     }

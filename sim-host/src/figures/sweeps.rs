@@ -230,12 +230,12 @@ pub fn best_rows(rows: &[SweepRow]) -> Vec<BestRow> {
 }
 
 /// The best row of `kind` under `model` at `phi` (`None` for hard ground) and delay `tau_s`.
-pub fn find_best<'a>(
-    best: &'a [BestRow],
+pub fn find_best(
+    best: &[BestRow],
     kind: JumpKind,
     model: ModelName,
     phi: Option<f64>,
-) -> Option<&'a BestRow> {
+) -> Option<&BestRow> {
     let tau = if kind == JumpKind::DelayedStutter {
         DELAYED_TAU_S
     } else {

@@ -145,12 +145,12 @@ pub fn run(a: &FitArgs) -> Result<(), CliError> {
                 (_, true) => CurveKind::First,
                 _ => CurveKind::Auto,
             };
-            if let Some(z) = i.z_start {
-                if !(z.is_finite() && z > 0.0) {
-                    return Err(CliError::input(format!(
-                        "--z-start {z}: allowed a depth > 0 in m"
-                    )));
-                }
+            if let Some(z) = i.z_start
+                && !(z.is_finite() && z > 0.0)
+            {
+                return Err(CliError::input(format!(
+                    "--z-start {z}: allowed a depth > 0 in m"
+                )));
             }
             (
                 fit_intrusion_file(&i.file, kind, &params, i.z_start),

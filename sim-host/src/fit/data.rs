@@ -187,17 +187,17 @@ pub fn read_depth_curve(
                 ),
             ));
         }
-        if let Some(&previous) = curve.depth_m.last() {
-            if depth <= previous {
-                return Err(DataError::new(
-                    path,
-                    Some(*line),
-                    format!(
-                        "depth_m = {depth} does not increase (previous row {previous}); \
+        if let Some(&previous) = curve.depth_m.last()
+            && depth <= previous
+        {
+            return Err(DataError::new(
+                path,
+                Some(*line),
+                format!(
+                    "depth_m = {depth} does not increase (previous row {previous}); \
                          allowed: one intrusion stroke with strictly increasing depth"
-                    ),
-                ));
-            }
+                ),
+            ));
         }
         curve.depth_m.push(depth);
         curve.value.push(value);

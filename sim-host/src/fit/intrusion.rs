@@ -148,7 +148,7 @@ pub fn fit_first_intrusion(curve: &DepthCurve, params: &Params) -> Result<FitRep
     } else {
         (k1_0.abs().max(1.0), mid)
     };
-    if !(k1_0 > 0.0) {
+    if k1_0.is_nan() || k1_0 <= 0.0 {
         return Err(FitError::Fit(format!(
             "the force does not rise with depth near the surface (initial slope {k1_0:.3e} N/m); \
              allowed: a penetration force that grows with depth"
@@ -215,7 +215,7 @@ pub fn fit_reintrusion(
     let scale = area_factor(params);
     let s = &params.sand;
     let (k1, k2, delta) = (s.k1_n_m * scale, s.k2_n_m * scale, s.delta_m);
-    if !(z_start_m > 0.0) {
+    if z_start_m.is_nan() || z_start_m <= 0.0 {
         return Err(FitError::Fit(format!(
             "re-intrusion start depth z_start = {z_start_m} m; allowed: > 0 (the overshoot is kappa z_start)"
         )));
@@ -238,7 +238,7 @@ pub fn fit_reintrusion(
     let base_sand = two_resistance_sand(params, k1, k2, delta);
     let base = |z: f64| base_sand.penetration_force(z);
     let excess: Vec<f64> = used.iter().map(|(z, f)| f - base(*z)).collect();
-    if !(excess[0] > 0.0) {
+    if excess[0].is_nan() || excess[0] <= 0.0 {
         return Err(FitError::Fit(format!(
             "no overshoot: at z_start the force is {:.3} N, not above the base F_p = {:.3} N \
              (allowed: a re-intrusion curve that starts above the first-intrusion law; check --params/--phi)",

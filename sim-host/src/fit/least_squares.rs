@@ -135,7 +135,7 @@ fn standard_errors(j: &DMatrix<f64>, s2: f64) -> Result<Vec<f64>, LeastSquaresEr
     let corr = DMatrix::from_fn(n, n, |a, b| jtj[(a, b)] / (d[a] * d[b]));
     let svd = corr.clone().svd(false, false);
     let (min_sv, max_sv) = (svd.singular_values.min(), svd.singular_values.max());
-    if !(min_sv > 1e-12 * max_sv) {
+    if min_sv.is_nan() || min_sv <= 1e-12 * max_sv {
         // Report the parameter with the largest weight in the null direction.
         let eig = corr.symmetric_eigen();
         let k = eig.eigenvalues.imin();
