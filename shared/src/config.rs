@@ -46,7 +46,8 @@ impl From<TrajectoryError> for ConfigError {
     }
 }
 
-fn field(
+/// `Ok` if `ok`, else a [`ConfigError::Field`] naming the value and what is allowed.
+pub(crate) fn field(
     what: &'static str,
     value: f32,
     ok: bool,

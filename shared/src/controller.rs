@@ -20,7 +20,7 @@
 //! `metres_per_count * tick_hz`, through a first-order low-pass
 //! `v += alpha (v_raw - v)`, `alpha = 1 - exp(-2 pi f_c / tick_hz)` (default `f_c` 500 Hz).
 
-use crate::config::ConfigError;
+use crate::config::{ConfigError, field as check};
 
 /// Controller gains (part of a jump's configuration).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -50,23 +50,6 @@ impl Default for Gains {
             integral_limit_n: 20.0,
             feedforward_mass_kg: 0.1125,
         }
-    }
-}
-
-fn check(
-    what: &'static str,
-    value: f32,
-    ok: bool,
-    allowed: &'static str,
-) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError::Field {
-            what,
-            value,
-            allowed,
-        })
     }
 }
 

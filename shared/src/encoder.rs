@@ -54,6 +54,11 @@ impl EncoderExtender {
         }
     }
 
+    /// A first reading has been taken (before it, there is no delta to speak of).
+    pub fn is_started(&self) -> bool {
+        self.started
+    }
+
     /// The extended count, counts (0 before the first reading).
     pub fn count(&self) -> i64 {
         self.count

@@ -17,6 +17,9 @@
 //! * [`config`], [`command`], [`protocol`]: configuration, commands, wire format.
 #![no_std]
 
+#[cfg(test)]
+extern crate std;
+
 pub mod camera;
 pub mod command;
 pub mod config;

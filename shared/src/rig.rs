@@ -318,10 +318,14 @@ impl<const Q: usize> Rig<Q> {
         }
 
         let before = self.encoder.count();
+        let started = self.encoder.is_started();
         let count = match self.encoder.update(input.encoder_raw) {
             Ok(c) => {
-                let delta = (c - before).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
-                self.velocity.update(delta);
+                // The first reading sets the count; it is not a movement.
+                if started {
+                    let delta = (c - before).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+                    self.velocity.update(delta);
+                }
                 c
             }
             Err(_) => {
@@ -695,3 +699,6 @@ impl<const Q: usize> Rig<Q> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;
