@@ -192,27 +192,37 @@ struct Session {
 }
 
 impl Session {
-    fn start(name: &str) -> Self {
+    /// `uart`: the CMSDK UART variant through QEMU's `-serial pipe:` (PATH.in / PATH.out);
+    /// otherwise the semihosting FIFOs.
+    fn start(name: &str, uart: bool) -> Self {
         let dir = workspace()
             .join(FIRMWARE_TARGET_DIR)
             .join(format!("session-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("session directory");
-        let (input, output) = (dir.join("sensor.fifo"), dir.join("actuator.fifo"));
+        let (input, output) = if uart {
+            (dir.join("uart.in"), dir.join("uart.out"))
+        } else {
+            (dir.join("sensor.fifo"), dir.join("actuator.fifo"))
+        };
         let made = Command::new("mkfifo")
             .arg(&input)
             .arg(&output)
             .status()
             .expect("running mkfifo");
         assert!(made.success(), "mkfifo failed");
-        let child = Command::new(workspace().join("firmware/qemu-run.sh"))
-            .arg(firmware_elf())
-            .arg("fifo")
-            .arg(&input)
-            .arg(&output)
-            .env("SANDJUMPER_QEMU_TIMEOUT", "60")
-            .spawn()
-            .expect("starting firmware/qemu-run.sh");
+        let mut qemu = Command::new(workspace().join("firmware/qemu-run.sh"));
+        qemu.arg(firmware_elf())
+            .env("SANDJUMPER_QEMU_TIMEOUT", "60");
+        if uart {
+            qemu.arg("uart").env(
+                "SANDJUMPER_QEMU_SERIAL",
+                format!("pipe:{}", dir.join("uart").display()),
+            );
+        } else {
+            qemu.arg("fifo").arg(&input).arg(&output);
+        }
+        let child = qemu.spawn().expect("starting firmware/qemu-run.sh");
         // The firmware opens the sensor FIFO first, then the actuator FIFO: same order here.
         let to_firmware = std::fs::OpenOptions::new()
             .write(true)
@@ -270,7 +280,7 @@ fn a_lockstep_session_over_fifos_answers_every_sensor_frame_and_ends_cleanly() {
     if !qemu_available() {
         return;
     }
-    let mut s = Session::start("clean");
+    let mut s = Session::start("clean", false);
     let Some(RigMessage::Status(hello)) = s.next() else {
         panic!("the firmware greets with its status")
     };
@@ -360,7 +370,7 @@ fn closing_the_link_mid_jump_latches_link_lost_and_exits_with_its_code() {
     if !qemu_available() {
         return;
     }
-    let mut s = Session::start("lost");
+    let mut s = Session::start("lost", false);
     assert!(matches!(s.next(), Some(RigMessage::Status(_))));
     let spec = TrajectorySpec::Sine {
         kind: JumpKind::Single,
@@ -397,4 +407,30 @@ fn closing_the_link_mid_jump_latches_link_lost_and_exits_with_its_code() {
         "{rest:?}"
     );
     assert_eq!(s.child.wait().expect("QEMU exits").code(), Some(16 + 8));
+}
+
+#[test]
+fn the_uart_variant_speaks_the_same_protocol() {
+    use sandjumper_core::{Command, HostMessage, Reply, RigMessage, RigState};
+    if !qemu_available() {
+        return;
+    }
+    let mut s = Session::start("uart", true);
+    assert!(matches!(s.next(), Some(RigMessage::Status(st)) if st.state == RigState::Idle));
+    s.send(&HostMessage::Command {
+        id: 9,
+        command: Command::StatusQuery,
+    });
+    assert!(matches!(
+        s.next(),
+        Some(RigMessage::Reply { id: 9, result: Ok(Reply::Status(st)) }) if st.counters.frames_ok == 1
+    ));
+    // A UART has no end of file: the host stops the emulator (SIGTERM reaches QEMU through
+    // timeout(1); QEMU then exits 0, so over the UART the final StatusQuery is the verdict).
+    let stopped = std::process::Command::new("kill")
+        .arg(s.child.id().to_string())
+        .status()
+        .expect("kill");
+    assert!(stopped.success());
+    assert!(s.child.wait().expect("QEMU exits").code().is_some());
 }
