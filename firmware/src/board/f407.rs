@@ -35,8 +35,40 @@ use crate::drive;
 pub const HSE_HZ: u32 = 8_000_000;
 /// Core clock, Hz (PLL from the crystal; 48 MHz for USB also from the PLL).
 pub const SYSCLK_HZ: u32 = 168_000_000;
-/// Control tick rate, Hz (the default; the core's configuration must agree).
-pub const TICK_HZ: u32 = 10_000;
+/// Control tick rate, Hz: 10 kHz, or `SANDJUMPER_TICK_HZ` at build time (the core accepts
+/// 1,000..=100,000; TIM7 at 84 MHz makes any rate that divides it exactly).
+pub const TICK_HZ: u32 = match option_env!("SANDJUMPER_TICK_HZ") {
+    Some(text) => parse_hz(text),
+    None => 10_000,
+};
+
+/// Decimal digits to Hz at compile time; anything else stops the build with a message.
+const fn parse_hz(text: &str) -> u32 {
+    let bytes = text.as_bytes();
+    assert!(
+        !bytes.is_empty(),
+        "SANDJUMPER_TICK_HZ is empty: give the tick rate in Hz, e.g. 10000"
+    );
+    let mut hz: u32 = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        let digit = bytes[i];
+        assert!(
+            digit.is_ascii_digit(),
+            "SANDJUMPER_TICK_HZ must be decimal digits (Hz), e.g. 10000"
+        );
+        hz = match hz.checked_mul(10) {
+            Some(v) => v + (digit - b'0') as u32,
+            None => panic!("SANDJUMPER_TICK_HZ is too large"),
+        };
+        i += 1;
+    }
+    assert!(
+        hz >= 1_000 && hz <= 100_000,
+        "SANDJUMPER_TICK_HZ must be 1000..=100000 Hz"
+    );
+    hz
+}
 /// Cycle budget of one control tick before it counts as an overrun: 80 % of the period, so the
 /// lower-priority link and telemetry always get at least a fifth of the CPU.
 pub const TICK_BUDGET_CYCLES: u32 = SYSCLK_HZ / TICK_HZ * 8 / 10;
