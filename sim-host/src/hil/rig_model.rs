@@ -118,6 +118,7 @@ pub struct RigModel {
     period: u64,
     rod_rest_m: f64,
     applied_command_n: f64,
+    state: PlantState,
 }
 
 impl RigModel {
@@ -163,7 +164,8 @@ impl RigModel {
             ));
         }
         let plant = Plant::new(params, model, initial_p_m, opts)?;
-        let rod_rest_m = plant.state().x_r;
+        let state = plant.state();
+        let rod_rest_m = state.x_r;
         Ok(Self {
             plant,
             config,
@@ -176,6 +178,7 @@ impl RigModel {
             period: 0,
             rod_rest_m,
             applied_command_n: 0.0,
+            state,
         })
     }
 
@@ -186,7 +189,7 @@ impl RigModel {
 
     /// The plant's state now.
     pub fn state(&self) -> PlantState {
-        self.plant.state()
+        self.state
     }
 
     /// The configuration.
@@ -206,7 +209,7 @@ impl RigModel {
 
     /// Rod height above its rest height now, m.
     pub fn rod_height_m(&self) -> f64 {
-        self.plant.state().x_r - self.rod_rest_m
+        self.state.x_r - self.rod_rest_m
     }
 
     /// Camera frames taken so far.
@@ -228,7 +231,7 @@ impl RigModel {
     }
 
     fn true_count(&self) -> i64 {
-        (self.plant.state().p / self.config.metres_per_count).round() as i64
+        (self.state.p / self.config.metres_per_count).round() as i64
     }
 
     fn noise_counts(&mut self) -> i64 {
@@ -257,7 +260,7 @@ impl RigModel {
     pub fn sense(&mut self, frame: u32) -> SensorFrame {
         let count = self.encoder_count();
         let k_f = self.plant.drive().force_constant_n_a;
-        let current_a = (k_f > 0.0).then(|| (self.plant.state().f_m / k_f) as f32);
+        let current_a = (k_f > 0.0).then(|| (self.state.f_m / k_f) as f32);
         SensorFrame {
             frame,
             encoder_count: count as i32 as u32,
@@ -282,18 +285,18 @@ impl RigModel {
         };
         self.applied_command_n = command;
         if trigger && !self.trigger_was_high {
-            let state = self.plant.state();
             self.frames.push(CameraFrame {
                 frame: self.frames.len() as u32,
                 period: self.period,
-                t_s: state.t_s,
-                rod_height_m: state.x_r - self.rod_rest_m,
+                t_s: self.state.t_s,
+                rod_height_m: self.state.x_r - self.rod_rest_m,
             });
         }
         self.trigger_was_high = trigger;
         let k_f = self.plant.drive().force_constant_n_a;
         self.plant.advance_current(self.period_s, command / k_f)?;
         self.period += 1;
+        self.state = self.plant.state();
         Ok(())
     }
 
@@ -303,6 +306,7 @@ impl RigModel {
         self.plant
             .advance_current(self.period_s, self.applied_command_n / k_f)?;
         self.period += 1;
+        self.state = self.plant.state();
         Ok(())
     }
 }
