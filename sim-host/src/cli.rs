@@ -108,7 +108,6 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Sweep(a) => sweep_cmd::run(&a),
         args::Command::Merge(a) => merge_cmd::run(&a),
         args::Command::Params(a) => params_cmd::run(&a),
-        args::Command::Hil(a) => crate::hil::command::run(&a),
         args::Command::Fit(a) => crate::fit::command::run(&a),
         args::Command::Figures(a) => crate::figures::command::run(&a),
         args::Command::Hil(a) => crate::hil::command::run(&a),

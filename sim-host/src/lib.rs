@@ -23,6 +23,7 @@ pub mod params;
 pub mod plant;
 pub mod plot;
 pub mod replay;
+pub mod replay_cmd;
 pub mod robot;
 pub mod simulation;
 pub mod sweep;
