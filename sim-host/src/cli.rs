@@ -12,7 +12,7 @@
 //! parsers), [`resolve`] (parameters from `--phi` and `--params`).
 
 pub mod args;
-mod jump_cmd;
+pub(crate) mod jump_cmd;
 mod merge_cmd;
 mod params_cmd;
 pub mod resolve;
@@ -111,5 +111,7 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Fit(a) => crate::fit::command::run(&a),
         args::Command::Figures(a) => crate::figures::command::run(&a),
         args::Command::Hil(a) => crate::hil::command::run(&a),
+        args::Command::Replay(a) => crate::replay_cmd::run(&a),
+        args::Command::Log(a) => crate::acqlog::command::run(&a),
     }
 }

@@ -73,8 +73,8 @@ impl SavitzkyGolay {
         Ok(filter)
     }
 
-    /// A cubic filter whose window spans about `window_s` at `rate_hz` (rounded to an odd
-    /// number of samples, at least 7).
+    /// A cubic filter of `2 m + 1` samples with `m = round(window_s * rate_hz / 2)`, at least
+    /// 7 samples (3 ms at 10 kHz: 31 samples).
     pub fn for_window(rate_hz: f64, window_s: f64) -> Result<Self, String> {
         if !(window_s.is_finite() && window_s > 0.0) {
             return Err(format!(
@@ -87,7 +87,7 @@ impl SavitzkyGolay {
                 "differentiator window {window_s} s is {samples:.0} samples at {rate_hz} Hz: at most {MAX_WINDOW}"
             ));
         }
-        let half_width = ((samples - 1.0) / 2.0).round().max(3.0) as usize;
+        let half_width = (samples / 2.0).round().max(3.0) as usize;
         Self::new(half_width, 3)
     }
 

@@ -100,7 +100,7 @@ fn push_off_start_in_log(log: &AcqLog) -> Option<f64> {
     match jump.kind.as_str() {
         "single" => Some(0.0),
         "stutter" => Some(half),
-        "delayed-stutter" | "delayed_stutter" => Some(half + jump.tau_s.unwrap_or(0.0)),
+        "delayed" | "delayed-stutter" | "delayed_stutter" => Some(half + jump.tau_s.unwrap_or(0.0)),
         _ => None,
     }
 }

@@ -18,8 +18,8 @@ fn record(seq: u32, tick: u32) -> SampleRecord {
         encoder_count: -18_750 + i64::from(seq) * 3 - 7 * i64::from(seq % 5),
         commanded_position_m: 0.01875 * (t * 62.8).cos(),
         force_n: 13.0 + 1.0e-3 * seq as f32 / 3.0,
-        current_a: (seq % 2 == 0).then_some(0.1 + seq as f32 * 1e-5),
-        camera_frame: (tick % 50 == 0).then_some(tick / 50),
+        current_a: seq.is_multiple_of(2).then_some(0.1 + seq as f32 * 1e-5),
+        camera_frame: tick.is_multiple_of(50).then_some(tick / 50),
         flags: (seq as u16) & 0x7ff,
     }
 }

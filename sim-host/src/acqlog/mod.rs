@@ -46,6 +46,7 @@
 
 pub mod binary;
 pub mod columns;
+pub mod command;
 pub mod error;
 pub mod metadata;
 pub mod reader;

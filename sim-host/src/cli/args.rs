@@ -39,6 +39,11 @@ pub enum Command {
     /// Run one jump through the control loop against the simulated rig: the core in-process
     /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
     Hil(crate::hil::command::HilArgs),
+    /// Replay an acquisition log's encoder record in the simulator (the paper's method):
+    /// reports what `jump` reports, and predicted vs measured if the log has measurements.
+    Replay(crate::replay_cmd::ReplayArgs),
+    /// Check (validate and summarise) or convert acquisition logs.
+    Log(crate::acqlog::command::LogArgs),
 }
 
 /// Jump kind as named on the command line.

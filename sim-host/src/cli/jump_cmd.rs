@@ -49,7 +49,7 @@ pub fn jump_title(spec: &JumpSpec, phi: f64) -> String {
     )
 }
 
-fn human_summary(title: &str, out: &JumpOutcome) -> String {
+pub(crate) fn human_summary(title: &str, out: &JumpOutcome) -> String {
     let s = &out.summary;
     let mut t = format!("{title}\n");
     let mm = |v: f64| format!("{:.2} mm", 1e3 * v);
@@ -89,6 +89,31 @@ fn human_summary(title: &str, out: &JumpOutcome) -> String {
         s.rhs_evaluations, s.steps_accepted, s.steps_rejected, s.end_time_s
     );
     t
+}
+
+/// Write a jump's files into a staged output directory: trajectory.csv, params.toml,
+/// summary.json (`json`), jump.png and jump.svg (also used by `replay`).
+pub(crate) fn write_jump_files(
+    staged: &StagedDir,
+    title: &str,
+    params: &crate::params::Params,
+    json: &str,
+    outcome: &JumpOutcome,
+) -> Result<(), CliError> {
+    write_series_csv(&staged.file("trajectory.csv"), &outcome.series)?;
+    staged.write_text("params.toml", &params.to_toml())?;
+    staged.write_text("summary.json", &format!("{json}\n"))?;
+    let fig = JumpFigure {
+        title: title.to_string(),
+        rows: &outcome.series,
+        summary: &outcome.summary,
+    };
+    save_figure(
+        &fig,
+        &staged.file("jump.png"),
+        Some(&staged.file("jump.svg")),
+    )?;
+    Ok(())
 }
 
 /// Run `jump`.
@@ -133,19 +158,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
     let title = jump_title(&spec, phi);
     if let Some(staged) = staged {
-        write_series_csv(&staged.file("trajectory.csv"), &outcome.series)?;
-        staged.write_text("params.toml", &params.to_toml())?;
-        staged.write_text("summary.json", &format!("{json}\n"))?;
-        let fig = JumpFigure {
-            title: title.clone(),
-            rows: &outcome.series,
-            summary: &outcome.summary,
-        };
-        save_figure(
-            &fig,
-            &staged.file("jump.png"),
-            Some(&staged.file("jump.svg")),
-        )?;
+        write_jump_files(&staged, &title, &params, &json, &outcome)?;
         let dir = staged.commit()?;
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
