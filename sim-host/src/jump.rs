@@ -10,7 +10,7 @@ use crate::robot::Robot;
 use crate::simulation::{Actuation, Simulation};
 use crate::trajectory::Stroke;
 use nalgebra::Vector4;
-use sandjumper_core::trajectory::{JumpKind, SineJump};
+use sandjumper_core::trajectory::{JumpKind, Kinematics, SineJump};
 use serde::Serialize;
 
 /// One jump to simulate.
@@ -174,6 +174,32 @@ pub struct JumpOutcome {
 pub struct Kinematic<S> {
     /// The prescribed stroke.
     pub stroke: S,
+    /// The last evaluation `(t, p(t))`: a Dormand-Prince step evaluates its end time twice
+    /// and the metrics once more.
+    last: core::cell::Cell<(f64, Kinematics)>,
+}
+
+impl<S: Stroke> Kinematic<S> {
+    /// Drive by `stroke`.
+    pub fn new(stroke: S) -> Self {
+        let first = stroke.eval(f64::NAN);
+        Self {
+            stroke,
+            last: core::cell::Cell::new((f64::NAN, first)),
+        }
+    }
+
+    /// `p(t)` with its derivatives (memoised for a repeated `t`).
+    #[inline]
+    pub fn eval(&self, t: f64) -> Kinematics {
+        let (t_last, k) = self.last.get();
+        if t_last == t {
+            return k;
+        }
+        let k = self.stroke.eval(t);
+        self.last.set((t, k));
+        k
+    }
 }
 
 impl<S: Stroke> Actuation<4> for Kinematic<S> {
@@ -186,14 +212,14 @@ impl<S: Stroke> Actuation<4> for Kinematic<S> {
         f_s: f64,
         _dy: &mut Vector4<f64>,
     ) -> f64 {
-        robot.rod_accel_kinematic(f_s, self.stroke.eval(t).accel_m_s2)
+        robot.rod_accel_kinematic(f_s, self.eval(t).accel_m_s2)
     }
     fn motor_position(&self, t: f64, _y: &Vector4<f64>) -> f64 {
-        self.stroke.eval(t).position_m
+        self.eval(t).position_m
     }
     fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, f_s: f64) -> f64 {
         // F_m = m_m (x_r'' + p'' + g), the motor's own acceleration being x_r'' + p''.
-        let p_accel = self.stroke.eval(t).accel_m_s2;
+        let p_accel = self.eval(t).accel_m_s2;
         robot.motor_force_for(robot.rod_accel_kinematic(f_s, p_accel) + p_accel)
     }
 }
@@ -216,7 +242,7 @@ pub fn kinematic_at_rest<S: Stroke>(
         robot,
         sand,
         Contact::at_rest(x_f),
-        Kinematic { stroke },
+        Kinematic::new(stroke),
         Vector4::new(x_r, 0.0, x_f, 0.0),
         push_off,
         opts,

@@ -181,7 +181,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                         StepFailure::NonFinite { t } => SimError::NonFinite { t_s: t },
                     })?
             };
-            let switch = self.first_switch(&step);
+            let (switch, end_guards) = self.first_switch(&step);
             let t_new = switch.map_or(step.t1, |(t, _)| t);
             let mut y_new = if t_new >= step.t1 {
                 step.end_state()
@@ -202,7 +202,11 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.y = y_new;
             self.contact.track(self.y[2]);
             self.observe(self.t, &self.y.clone());
-            self.refresh_guards();
+            match switch {
+                // The end-of-step guards were computed in first_switch (static foot state unchanged).
+                None if self.contact.mode != GroundMode::Static => self.start_guards = end_guards,
+                _ => self.refresh_guards(),
+            }
             if let Some((_, transition)) = switch {
                 let touched = self.switch(transition)?;
                 if touched && stop_at_touchdown {
@@ -214,7 +218,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     }
 
     /// The earliest guard crossing inside the step, located on the dense output.
-    fn first_switch(&self, step: &DenseStep<N>) -> Option<(f64, Transition)> {
+    fn first_switch(&self, step: &DenseStep<N>) -> (Option<(f64, Transition)>, [Guard; 2]) {
         let guards = |y: &SVector<f64, N>| {
             let f_s = self.robot.spring_force(y[0], y[1], y[2], y[3]);
             self.contact
@@ -242,7 +246,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                 }
             }
         }
-        best
+        (best, end)
     }
 
     /// Guards at the current state (cached for the next step's start).

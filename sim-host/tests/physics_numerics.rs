@@ -38,9 +38,7 @@ fn airborne(
         robot,
         sand,
         contact,
-        Kinematic {
-            stroke: HoldStroke { position_m: 0.0 },
-        },
+        Kinematic::new(HoldStroke { position_m: 0.0 }),
         y0,
         0.0,
         o,
