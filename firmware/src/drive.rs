@@ -21,6 +21,8 @@ pub const HALF_RANGE_CODES: u16 = 2047;
 /// Force at full scale (+-10 V at the drive input), N: the drive's peak force `F_peak`
 /// (MODEL.md section 1).
 pub const FULL_SCALE_N: f32 = 300.0;
+/// Current-sense ADC code for 0 A: the mid-point of the 12-bit range (1.65 V).
+pub const ZERO_CURRENT_CODE: u16 = 2048;
 /// Motor current at full scale of the current monitor, A.
 pub const CURRENT_FULL_SCALE_A: f32 = 10.0;
 
@@ -49,7 +51,7 @@ pub fn code_to_force(code: u16) -> f32 {
 
 /// Motor current from a 12-bit current-sense ADC code, A (2048 = 0 A).
 pub fn current_from_code(code: u16) -> f32 {
-    (f32::from(code & 0x0FFF) - f32::from(ZERO_FORCE_CODE)) * CURRENT_FULL_SCALE_A
+    (f32::from(code & 0x0FFF) - f32::from(ZERO_CURRENT_CODE)) * CURRENT_FULL_SCALE_A
         / f32::from(HALF_RANGE_CODES)
 }
 
