@@ -302,6 +302,31 @@ mod tests {
     }
 
     #[test]
+    fn thick_lines_are_split_at_sharp_turns_only() {
+        register_fonts();
+        let mut buf = vec![0u8; 200 * 200 * 3];
+        let root = BitMapBackend::with_buffer(&mut buf, (200, 200)).into_drawing_area();
+        let chart = ChartBuilder::on(&root)
+            .build_cartesian_2d(0.0..10.0, 0.0..10.0)
+            .unwrap();
+        // A spike up and straight back down: two pieces sharing the apex.
+        let spike = stroke_pieces(&chart, [(0.0, 0.0), (5.0, 10.0), (5.2, 0.0), (10.0, 0.0)]);
+        assert_eq!(spike.len(), 2, "{spike:?}");
+        assert_eq!(spike[0].last(), spike[1].first());
+        // A gentle curve, with repeated points on the same pixel: one piece, repeats dropped.
+        let smooth: Vec<_> = (0..=100)
+            .map(|i| (i as f64 / 10.0, (i as f64 / 10.0).sqrt()))
+            .collect();
+        let with_repeats = smooth.iter().flat_map(|&p| [p, p]);
+        let pieces = stroke_pieces(&chart, with_repeats);
+        assert_eq!(pieces.len(), 1);
+        assert!(pieces[0].len() <= smooth.len());
+        // Non-finite points are skipped, not drawn.
+        let gaps = stroke_pieces(&chart, [(0.0, 0.0), (1.0, f64::NAN), (2.0, 2.0)]);
+        assert_eq!(gaps, vec![vec![(0.0, 0.0), (2.0, 2.0)]]);
+    }
+
+    #[test]
     fn tick_labels_have_no_float_noise() {
         assert_eq!(tick_label(&0.30000000000000004), "0.3");
         assert_eq!(tick_label(&25.0), "25");

@@ -204,7 +204,11 @@ impl JumpFigure<'_> {
         let brown = RGBColor(120, 95, 60);
         let mut extra = Vec::new();
         if show_surface {
-            extra.push(LegendEntry::line("sand surface (foot scale)", brown, true));
+            extra.push(LegendEntry::line(
+                "undisturbed surface (foot scale)",
+                brown,
+                true,
+            ));
         }
         extra.push(LegendEntry::line("", WHITE, false));
         extra.extend(

@@ -55,6 +55,7 @@ impl Figure for LineFigure {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult<()> {
+        let root = root.margin(12, 8, 8, 8);
         let body = root.titled(&self.title, (FONT, 30).into_font().style(FontStyle::Bold))?;
         let (rows, cols) = grid_shape(self.panels.len());
         let areas = body.split_evenly((rows, cols));
@@ -78,7 +79,7 @@ pub fn grid_size(panels: usize) -> (u32, u32) {
 }
 
 /// Width of the legend column right of each panel, pixels.
-pub const PANEL_LEGEND_WIDTH: u32 = 250;
+pub const PANEL_LEGEND_WIDTH: u32 = 270;
 
 /// Draw one panel into `area`: axes, grid, lines (markers, dashes), and the legend in a
 /// column at the panel's right so it never covers data.
@@ -117,8 +118,8 @@ pub fn draw_line_panel<DB: DrawingBackend>(
         .label_style((FONT, 18))
         .x_label_formatter(&tick_label)
         .y_label_formatter(&tick_label)
-        .light_line_style(RGBColor(238, 238, 238))
-        .bold_line_style(RGBColor(210, 210, 210))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(222, 222, 222))
         .draw()?;
     let mut entries = Vec::new();
     for line in &panel.lines {

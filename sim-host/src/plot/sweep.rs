@@ -1,6 +1,8 @@
 //! Sweep figures: jump height against forcing frequency (one line per packing fraction) and,
 //! when the delay varies, against the delay of the delayed stutter.
 
+use plotters::style::RGBColor;
+
 use crate::sweep::SweepRow;
 
 use super::lines::{Line, LineFigure, LinePanel, grid_size};
@@ -52,11 +54,7 @@ fn push_height_lines(
     });
     if with_final {
         lines.push(Line {
-            label: if i == 0 {
-                "dashed: final (push-off) height".into()
-            } else {
-                String::new()
-            },
+            label: String::new(),
             points: pts
                 .iter()
                 .map(|r| (x(r), 1e3 * r.final_jump_height_m))
@@ -65,6 +63,17 @@ fn push_height_lines(
             dashed: true,
             markers: false,
         });
+    }
+}
+
+/// A legend-only entry explaining the dashed lines (no points).
+fn final_height_key() -> Line {
+    Line {
+        label: "final (push-off) height".into(),
+        points: Vec::new(),
+        color: RGBColor(110, 110, 110),
+        dashed: true,
+        markers: false,
     }
 }
 
@@ -95,6 +104,9 @@ pub fn height_vs_freq(rows: &[SweepRow], title: &str) -> LineFigure {
                     format!("φ = {phi}")
                 };
                 push_height_lines(&mut lines, i, label, &pts, |r| r.freq_hz, is_stutter(kind));
+            }
+            if is_stutter(kind) {
+                lines.push(final_height_key());
             }
             let tau_note = if kind == "delayed" && taus.len() == 1 {
                 format!(", τ = {} s", f64::from_bits(taus[0]))
@@ -177,6 +189,7 @@ pub fn height_vs_tau(rows: &[SweepRow], title: &str) -> Option<LineFigure> {
                     let label = format!("φ = {phi}, f = {f} Hz");
                     push_height_lines(&mut lines, i, label, &pts, |r| r.tau_s, true);
                 }
+                lines.push(final_height_key());
             }
             LinePanel {
                 caption: format!("delayed stutter, model {model}"),
