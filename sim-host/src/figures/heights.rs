@@ -86,23 +86,40 @@ pub fn height_vs_freq(rows: &[SweepRow], phis: &[f64]) -> GridFigure {
     let mut panels = Vec::new();
     for model in [ModelName::Eq1, ModelName::Eq4] {
         for kind in [JumpKind::Single, JumpKind::Stutter] {
+            let points = |phi: f64, height: fn(&SweepRow) -> f64| -> Vec<(f64, f64)> {
+                rows.iter()
+                    .filter(|r| is(&r.kind, &r.model, kind, model) && (r.phi - phi).abs() < 1e-9)
+                    .map(|r| (r.freq_hz, 1e3 * height(r)))
+                    .collect()
+            };
             let mut lines: Vec<Line> = phis
                 .iter()
                 .enumerate()
                 .map(|(i, &phi)| Line {
                     label: format!("φ = {phi}"),
-                    points: rows
-                        .iter()
-                        .filter(|r| {
-                            is(&r.kind, &r.model, kind, model) && (r.phi - phi).abs() < 1e-9
-                        })
-                        .map(|r| (r.freq_hz, 1e3 * r.jump_height_m))
-                        .collect(),
+                    points: points(phi, |r| r.jump_height_m),
                     color: palette(i),
                     dashed: false,
                     markers: false,
                 })
                 .collect();
+            if kind == JumpKind::Stutter {
+                // The stutter's jump height includes its preliminary hop; the push-off
+                // (final) height is where the ground laws differ.
+                for (i, &phi) in phis.iter().enumerate() {
+                    lines.push(Line {
+                        label: if i == 0 {
+                            "dashed: final (push-off)".into()
+                        } else {
+                            String::new()
+                        },
+                        points: points(phi, |r| r.final_jump_height_m),
+                        color: palette(i),
+                        dashed: true,
+                        markers: false,
+                    });
+                }
+            }
             lines.push(Line {
                 label: "hard ground".into(),
                 points: rows
