@@ -109,7 +109,15 @@ fn run_session<const Q: usize>(
         for &byte in &chunk[..n] {
             match decoder.push::<HostMessage>(byte) {
                 None => {}
-                Some(Err(_)) => rig.note_frame_rejected(),
+                Some(Err(_)) => {
+                    // A burst of rejected frames latches LinkCorrupted: report it like any
+                    // fault latched on a tick.
+                    let fault_before = rig.fault();
+                    rig.note_frame_rejected();
+                    if let Some(report) = link::newly_latched(rig, fault_before) {
+                        send(link, &report)?;
+                    }
+                }
                 Some(Ok(HostMessage::Command { id, command })) => {
                     send(link, &link::reply_to(rig, id, &command))?;
                 }

@@ -15,7 +15,7 @@ use super::run::{HilOutcome, HilSpec, rig_config, run_jump};
 use super::sil::SilLink;
 use super::{log, pil, serial};
 use crate::cli::CliError;
-use crate::cli::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
+use crate::cli::args::{KindArg, ModelArg, check_freq, check_phi, check_tau};
 use crate::cli::resolve::{ParamsFile, resolve_params};
 use crate::jump::JumpSummary;
 use crate::output::StagedDir;
@@ -85,6 +85,16 @@ fn parse_noise(s: &str) -> Result<f64, String> {
         ))
     }
 }
+fn parse_rtol(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if (1e-12..=1e-3).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "plant rtol {v} out of range (allowed: 1e-12..=1e-3)"
+        ))
+    }
+}
 fn parse_fps(s: &str) -> Result<u32, String> {
     match s.trim().parse::<u32>() {
         Ok(v) if v <= 5000 => Ok(v),
@@ -127,9 +137,14 @@ pub struct HilArgs {
     /// Packing fraction phi of the sand (presets 0.57..=0.62).
     #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi)]
     pub phi: f64,
-    /// Parameters and integration.
-    #[command(flatten)]
-    pub source: ParamSource,
+    /// TOML file overriding any parameter (as for `sandjumper jump --params`), applied on top
+    /// of the --phi preset.
+    #[arg(long, value_name = "FILE.toml")]
+    pub params: Option<PathBuf>,
+    /// Relative tolerance of the plant's integration inside each control period (default
+    /// 1e-6: a few hundredths of an encoder count).
+    #[arg(long, value_name = "X", value_parser = parse_rtol)]
+    pub rtol: Option<f64>,
     /// Camera frame rate, frames/s (200 rod tracking, 500 PIV; 0 none).
     #[arg(long, value_name = "FPS", default_value = "200", value_parser = parse_fps)]
     pub camera_fps: u32,
@@ -230,6 +245,7 @@ fn spec_of(a: &HilArgs) -> HilSpec {
     let mut spec = HilSpec::new(kind, a.freq, a.tau.unwrap_or(0.0), model);
     spec.gain_lowering = a.gain_lowering.map(HilSpec::gain_lowering_factor);
     spec.camera_fps = a.camera_fps;
+    spec.rtol = a.rtol.unwrap_or(spec.rtol);
     spec
 }
 
@@ -250,7 +266,7 @@ fn one_run(
 
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    let file = ParamsFile::read_opt(a.params.as_deref())?;
     let params = resolve_params(a.phi, file.as_ref())?;
     let spec = spec_of(a);
     if spec.kind != JumpKind::DelayedStutter && a.gain_lowering.is_some() {
