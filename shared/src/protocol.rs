@@ -155,11 +155,27 @@ impl core::error::Error for FrameError {}
 /// Encode `msg` as one complete frame (delimiter included) into `out`. Returns its length.
 pub fn encode_frame<M: Serialize>(msg: &M, out: &mut [u8]) -> Result<usize, FrameError> {
     let mut body = [0u8; MAX_BODY];
-    body[0] = PROTOCOL_VERSION;
     let used = postcard::to_slice(msg, &mut body[1..MAX_BODY - 4])
         .map_err(|_| FrameError::BufferTooSmall)?
         .len();
-    let n = 1 + used;
+    seal(&mut body, 1 + used, out)
+}
+
+/// Frame already-serialized payload bytes (version, CRC, COBS, delimiter) into `out`. For
+/// tests and fuzzing (arbitrary payloads that pass the CRC) and for relaying.
+pub fn encode_payload_frame(payload: &[u8], out: &mut [u8]) -> Result<usize, FrameError> {
+    let mut body = [0u8; MAX_BODY];
+    let dst = body
+        .get_mut(1..1 + payload.len())
+        .filter(|_| payload.len() + 5 <= MAX_BODY);
+    dst.ok_or(FrameError::BufferTooSmall)?
+        .copy_from_slice(payload);
+    seal(&mut body, 1 + payload.len(), out)
+}
+
+/// `body[1..n]` holds the payload: add the version and CRC, COBS-encode into `out`, delimit.
+fn seal(body: &mut [u8; MAX_BODY], n: usize, out: &mut [u8]) -> Result<usize, FrameError> {
+    body[0] = PROTOCOL_VERSION;
     let crc = CRC32.checksum(&body[..n]);
     body[n..n + 4].copy_from_slice(&crc.to_le_bytes());
     let encoded = cobs::try_encode(&body[..n + 4], out).map_err(|_| FrameError::BufferTooSmall)?;

@@ -1,9 +1,10 @@
 //! Fuzz the frame decoder: arbitrary bytes, streamed and as one frame, in both directions'
-//! message types. It must never panic, and every completed frame must be counted.
+//! message types, and as payloads behind a valid CRC. It must never panic, and every completed
+//! frame must be counted.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use sandjumper_core::protocol::{FrameDecoder, decode_frame};
+use sandjumper_core::protocol::{FrameDecoder, MAX_FRAME, decode_frame, encode_payload_frame};
 use sandjumper_core::{HostMessage, RigMessage};
 
 fuzz_target!(|data: &[u8]| {
@@ -21,4 +22,12 @@ fuzz_target!(|data: &[u8]| {
     let _ = decode_frame::<HostMessage>(&mut buf);
     let mut buf = data.to_vec();
     let _ = decode_frame::<RigMessage>(&mut buf);
+
+    // The same bytes as a payload behind a valid CRC: exercises the message deserializer.
+    let mut frame = [0u8; MAX_FRAME];
+    if let Ok(n) = encode_payload_frame(data, &mut frame) {
+        let _ = decode_frame::<HostMessage>(&mut frame[..n - 1]);
+        let n = encode_payload_frame(data, &mut frame).unwrap_or(1);
+        let _ = decode_frame::<RigMessage>(&mut frame[..n - 1]);
+    }
 });
