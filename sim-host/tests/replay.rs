@@ -143,16 +143,24 @@ fn the_stroke_follows_the_trajectory_and_holds_outside_the_log() {
     assert!((stroke.end_s() - 0.15).abs() < 1e-9);
     assert_eq!(stroke.breakpoints_s(), vec![0.0, stroke.end_s()]);
     let peak = jump.eval(0.0).accel_m_s2.abs();
-    // Away from the ends of the cycle (where p'' steps), p'' within 1 % of its peak: 1 um
-    // quantization, averaged over the 3 ms window, leaves a few 0.1 m/s^2 (largest near the
-    // turning point, where the counts stand still for many samples).
-    for k in 1..60 {
-        let t = 0.005 + k as f64 * 0.0015;
+    // p follows the curve within the 1 um quantization everywhere. p'' carries the
+    // quantization noise the short window lets through (a few m/s^2 per sample; harmless, the
+    // plant responds to its double integral, ~1 um), but over any 5 ms it averages to the exact
+    // p'' within 1 % of its peak.
+    let block = 0.005;
+    // (The last block before the end of the cycle at 0.1 s is left out: p'' steps there.)
+    for k in 0..19 {
+        let (a, b) = (k as f64 * block, (k + 1) as f64 * block);
+        let mean = |f: &dyn Fn(f64) -> f64| {
+            (0..500).map(|i| f(a + (i as f64 + 0.5) * block / 500.0)).sum::<f64>() / 500.0
+        };
+        let got = mean(&|t| stroke.eval(t).accel_m_s2);
+        let want = mean(&|t| jump.eval(t).accel_m_s2);
+        assert!((got - want).abs() < 1e-2 * peak, "mean p'' over [{a}, {b}]: {got} vs {want}");
+    }
+    for k in 0..1500 {
+        let t = k as f64 * 1e-4;
         let (got, want) = (stroke.eval(t), jump.eval(t));
-        assert!(
-            (got.accel_m_s2 - want.accel_m_s2).abs() < 1e-2 * peak,
-            "p'' at {t}"
-        );
         assert!((got.position_m - want.position_m).abs() < 1e-6, "p at {t}");
     }
     let before = stroke.eval(-1.0);
