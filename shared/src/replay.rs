@@ -258,6 +258,35 @@ impl ReplayTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Interpolation passes through every sample, and position and velocity are
+        /// continuous across the knots (the step over one tick is bounded by the local slope).
+        #[test]
+        fn catmull_rom_is_c1_through_the_samples(
+            xs in proptest::collection::vec(-0.02f32..0.02, 2..60),
+            period in 1u32..40,
+        ) {
+            let mut t = ReplayTable::new();
+            upload(&mut t, &xs, period).unwrap();
+            for (k, x) in xs.iter().enumerate() {
+                prop_assert_eq!(t.eval_samples(k as u32 * period).0, *x);
+            }
+            let max_dx = xs.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f32::max);
+            for k in 1..xs.len() as u32 - 1 {
+                let n = k * period;
+                let (pl, vl, _) = if period > 1 { t.eval_samples(n - 1) } else { (0.0, 0.0, 0.0) };
+                let (p0, v0, _) = t.eval_samples(n);
+                if period > 1 {
+                    // One tick is 1/period of a sample. With |p1 - p2|, |m1|, |m2| <= max_dx the
+                    // Hermite basis bounds |dp/du| <= 3.5 max_dx and |d2p/du2| <= 14 max_dx.
+                    prop_assert!((p0 - pl).abs() <= 3.5 * max_dx / period as f32 + 1e-7);
+                    prop_assert!((v0 - vl).abs() <= 14.0 * max_dx / period as f32 + 1e-6);
+                }
+            }
+        }
+    }
 
     fn upload(t: &mut ReplayTable, xs: &[f32], period: u32) -> Result<u32, ReplayError> {
         t.begin(xs.len() as u32, period)?;
