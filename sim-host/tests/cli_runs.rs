@@ -221,14 +221,15 @@ const SWEEP: &[&str] = &[
     "0:0.2:0.2",
     "--model",
     "eq1-linear,eq4",
-    "--threads",
-    "2",
 ];
 
 fn sweep(out: &Path, extra: &[&str]) {
     let mut args = SWEEP.to_vec();
     args.extend(["--out", s(out)]);
     args.extend(extra);
+    if !extra.contains(&"--threads") {
+        args.extend(["--threads", "2"]);
+    }
     ok(&args);
 }
 
