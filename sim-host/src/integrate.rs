@@ -104,7 +104,8 @@ pub struct DormandPrince<const N: usize> {
     pub max_step: f64,
     h: f64,
     fsal: Option<SVector<f64, N>>,
-    err_old: f64,
+    /// `err_old^beta` of the PI controller.
+    err_old_pow: f64,
     /// Right-hand-side evaluations so far.
     pub rhs_evaluations: u64,
     /// Accepted steps so far.
@@ -122,7 +123,7 @@ impl<const N: usize> DormandPrince<N> {
             max_step,
             h: initial_step.min(max_step),
             fsal: None,
-            err_old: 1e-4,
+            err_old_pow: 1e-4f64.powf(0.04),
             rhs_evaluations: 0,
             accepted: 0,
             rejected: 0,
@@ -201,8 +202,8 @@ impl<const N: usize> DormandPrince<N> {
             if err <= 1.0 {
                 // PI controller (Hairer's beta = 0.04).
                 const BETA: f64 = 0.04;
-                let fac = 0.9 * err.max(1e-10).powf(-(0.2 - 0.75 * BETA)) * self.err_old.powf(BETA);
-                self.err_old = err.max(1e-4);
+                let fac = 0.9 * err.max(1e-10).powf(-(0.2 - 0.75 * BETA)) * self.err_old_pow;
+                self.err_old_pow = err.max(1e-4).powf(BETA);
                 let h_next = h * fac.clamp(0.2, 10.0);
                 // A step cut short by t_limit keeps its own proposal for the next step.
                 self.h = if t1 == t_limit {

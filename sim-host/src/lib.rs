@@ -24,7 +24,7 @@
 //! - **Peak motor force** (kinematic runs) is sampled at every step end and event, not located.
 //! - **`hard`** ignores the `[model]` overrides (no sand); an intruding foot whose velocity
 //!   reaches 0 while its load still exceeds `F_p` keeps intruding (with v = 0).
-//! - **Drive** (force-driven): `K_f` = 10 N/A [chosen, no number in MODEL.md]; the 0.2 ms
+//! - **Drive** (force-driven): `K_f` = 10 N/A (chosen, no number in MODEL.md); the 0.2 ms
 //!   current lag is on by default (`drive.current_lag_s = 0` disables it) and solved exactly
 //!   inside each zero-order-hold period; the stroke limit is not an end stop (not modelled).
 //! - **Spring rest length** L0 = 0.1 m (only differences of heights are reported).

@@ -93,11 +93,11 @@ pub struct RobotParams {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriveParams {
-    /// K_f: force constant, N/A [chosen].
+    /// K_f: force constant, N/A (chosen).
     pub force_constant_n_a: f64,
-    /// F_peak: largest force the motor gives, N [chosen].
+    /// F_peak: largest force the motor gives, N (chosen).
     pub peak_force_n: f64,
-    /// Time constant of the first-order current lag, s; 0 disables the lag [chosen].
+    /// Time constant of the first-order current lag, s; 0 disables the lag (chosen).
     pub current_lag_s: f64,
 }
 
