@@ -155,3 +155,27 @@ impl From<&CommandError> for Rejection {
         }
     }
 }
+
+/// The commands that upload `samples` (m, one every `period_ticks` control ticks) to the rig's
+/// replay table: `ReplayBegin`, the chunks in order, `ReplayCommit` with the table's checksum.
+/// Follow with `Configure` of `TrajectorySpec::Replay { checksum: replay_checksum(samples) }`.
+pub fn replay_upload(samples: &[f32], period_ticks: u32) -> impl Iterator<Item = Command> + '_ {
+    let begin = Command::ReplayBegin {
+        len: samples.len() as u32,
+        period_ticks,
+    };
+    let chunks = samples
+        .chunks(REPLAY_CHUNK)
+        .enumerate()
+        .map(|(k, c)| Command::ReplayChunk {
+            offset: (k * REPLAY_CHUNK) as u32,
+            // `chunks(REPLAY_CHUNK)` never yields more than the capacity.
+            samples: heapless::Vec::from_slice(c).unwrap_or_default(),
+        });
+    let commit = Command::ReplayCommit {
+        checksum: crate::replay::replay_checksum(samples),
+    };
+    core::iter::once(begin)
+        .chain(chunks)
+        .chain(core::iter::once(commit))
+}

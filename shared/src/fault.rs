@@ -7,7 +7,7 @@
 //! | 3 | `EncoderFault` | encoder count moved more in one tick than physically possible | `ClearFault` |
 //! | 4 | `CommandWatchdog` | host link silent longer than the watchdog while the drive is enabled | `ClearFault` |
 //! | 5 | `DeadlineOverrun` | a control tick took longer than its budget (or the glue flagged an overrun) | `ClearFault` |
-//! | 6 | `InvalidConfiguration` | a jump configuration failed validation (or none was loaded at arm/start) | `ClearFault` |
+//! | 6 | `InvalidConfiguration` | a jump configuration failed validation, or a replay jump is armed after its table was re-uploaded | `ClearFault` |
 //! | 7 | `LinkCorrupted` | too many consecutive corrupted frames on the host link | `ClearFault` |
 //! | 8 | `LinkLost` | lockstep sensor frames stopped (reported by the glue's link timeout) | `ClearFault` |
 //!
@@ -31,7 +31,7 @@ pub enum FaultCode {
     CommandWatchdog = 4,
     /// A control tick exceeded its deadline.
     DeadlineOverrun = 5,
-    /// A configuration failed validation, or arm/start without a valid configuration.
+    /// A configuration failed validation, or a replay jump was armed after its table changed.
     InvalidConfiguration = 6,
     /// A burst of corrupted frames beyond the configured limit.
     LinkCorrupted = 7,

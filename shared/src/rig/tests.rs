@@ -478,6 +478,17 @@ fn replay_uploaded_in_chunks_is_followed() {
 }
 
 #[test]
+fn replay_upload_helper_commits_the_table() {
+    let xs: std::vec::Vec<f32> = (0..1000).map(|k| 1e-5 * k as f32).collect();
+    let mut r = rig();
+    for cmd in crate::command::replay_upload(&xs, 10) {
+        r.handle(&cmd).unwrap();
+    }
+    assert_eq!(r.status().replay_checksum, Some(replay_checksum(&xs)));
+    assert_eq!(r.replay_table().samples(), &xs[..]);
+}
+
+#[test]
 fn stale_replay_configuration_is_refused_at_arm() {
     let mut r = rig();
     let xs = [0.0f32, 0.001, 0.002];
