@@ -1,0 +1,125 @@
+//! `sandjumper hil` from the command line (in-process): `--out` writes the acquisition log in
+//! the logs' format (it reads back, one row per tick, rod heights on camera rows), the
+//! parameters, the summary and the figure; bad input is an error with exit status 2.
+
+use clap::Parser;
+use sandjumper_sim::acqlog::{AcqLog, ReadOptions};
+use sandjumper_sim::cli::{Cli, EXIT_BAD_INPUT, execute};
+
+fn run(args: &[&str]) -> Result<(), (u8, String)> {
+    let mut all = vec!["sandjumper", "hil"];
+    all.extend_from_slice(args);
+    let cli = Cli::try_parse_from(all).map_err(|e| (e.exit_code() as u8, e.to_string()))?;
+    execute(cli).map_err(|e| (e.exit, e.message))
+}
+
+#[test]
+fn out_writes_a_readable_acquisition_log_and_a_figure() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("hil");
+    let out_s = out.to_str().expect("utf-8 path");
+    run(&[
+        "--link", "sil", "--kind", "single", "--freq", "10", "--model", "eq4", "--phi", "0.6",
+        "--out", out_s, "--json",
+    ])
+    .expect("hil runs");
+    for f in [
+        "acquisition.csv",
+        "params.toml",
+        "summary.json",
+        "hil.png",
+        "hil.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let log = AcqLog::read_file(&out.join("acquisition.csv"), &ReadOptions::default())
+        .expect("log reads");
+    assert_eq!(log.meta.rate_hz, 10_000.0);
+    assert_eq!(log.meta.counts_per_m, 1e6);
+    assert_eq!(log.meta.dropped_samples, 0);
+    assert!(log.rows.len() > 3000, "{} rows", log.rows.len());
+    let frames: Vec<_> = log
+        .rows
+        .iter()
+        .filter(|r| r.camera_frame.is_some())
+        .collect();
+    assert!(frames.len() > 10);
+    assert!(
+        frames.iter().all(|r| r.rod_height_m.is_some()),
+        "every camera row has its rod height"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+            .expect("json");
+    for key in [
+        "jump_height_m",
+        "ticks",
+        "frames_lost",
+        "faults",
+        "camera_frames",
+        "wall_time_s",
+        "realtime_factor",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    assert_eq!(summary["camera_frames"].as_u64(), Some(frames.len() as u64));
+}
+
+#[test]
+fn bad_input_is_refused_with_status_2() {
+    for (args, says) in [
+        (
+            vec!["--link", "usb", "--kind", "single", "--freq", "10"],
+            "unknown link",
+        ),
+        (
+            vec!["--link", "serial:", "--kind", "single", "--freq", "10"],
+            "unknown link",
+        ),
+        (
+            vec!["--kind", "single", "--freq", "10", "--gain-lowering", "0"],
+            "gain-lowering factor",
+        ),
+        (
+            vec!["--kind", "single", "--freq", "10", "--gain-lowering", "1.5"],
+            "gain-lowering factor",
+        ),
+        (vec!["--kind", "single", "--freq", "100"], "frequency"),
+        (vec!["--kind", "delayed", "--freq", "10"], "--tau"),
+        (
+            vec!["--kind", "single", "--freq", "10", "--rtol", "1"],
+            "rtol",
+        ),
+        (
+            vec![
+                "--link",
+                "pil",
+                "--firmware",
+                "/nonexistent/elf",
+                "--kind",
+                "single",
+                "--freq",
+                "10",
+            ],
+            "not found",
+        ),
+        (
+            vec![
+                "--link",
+                "serial:/nonexistent/tty",
+                "--kind",
+                "single",
+                "--freq",
+                "10",
+            ],
+            "serial port",
+        ),
+    ] {
+        let (code, message) = run(&args).expect_err("must fail");
+        assert_eq!(code, EXIT_BAD_INPUT, "{args:?}: {message}");
+        assert!(
+            message.contains(says),
+            "{args:?}: `{message}` should mention `{says}`"
+        );
+    }
+}
