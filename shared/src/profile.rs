@@ -4,7 +4,7 @@
 //! indices of every breakpoint, the phase step of the sine in `u64` fixed point (`2^64` = one
 //! turn, so after any number of ticks the phase is exact to ~`2^-53` of the cycles elapsed),
 //! and f32 coefficients. The tick itself does integer arithmetic, one
-//! [`sin_cos_turns`](crate::turns::sin_cos_turns) and a few f32 multiplies: no f64, no division.
+//! [`sin_cos_turns`] and a few f32 multiplies: no f64, no division.
 //!
 //! Tick `n` (counted from the start of the trajectory) is time `t = n / tick_hz`. A breakpoint
 //! at time `b` belongs to the first tick with `n / tick_hz >= b`. Accuracy against the exact f64
