@@ -126,16 +126,3 @@ fn added_mass_brings_the_stutter_push_off_down_at_low_phi() {
     eprintln!("phi 0.57 stutter final height: eq1 {eq1_best:.4} m, eq4 {eq4_best:.4} m");
     assert!(eq4_best < eq1_best, "eq4 {eq4_best} vs eq1 {eq1_best}");
 }
-
-#[test]
-fn intrusion_at_low_phi_rings_near_5_hz() {
-    // k1 in series with k_s: sqrt(k_s k1 / (k_s + k1) / M) / 2 pi.
-    let p = Params::preset(0.57).unwrap();
-    let (ks, k1, m) = (
-        p.robot.spring_stiffness_n_m,
-        p.sand.k1_n_m,
-        p.motor_rod_mass_kg(),
-    );
-    let f = (ks * k1 / (ks + k1) / m).sqrt() / core::f64::consts::TAU;
-    assert!((4.0..6.0).contains(&f), "series-spring frequency {f} Hz");
-}

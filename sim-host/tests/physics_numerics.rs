@@ -309,3 +309,45 @@ fn plant_driven_by_force_intrudes_and_clamps_at_f_peak() {
     assert!(plant.state().f_m <= p.drive.peak_force_n + 1e-9);
     assert!(plant.advance(0.0, 1.0).is_err());
 }
+
+#[test]
+fn intrusion_at_low_phi_rings_near_5_hz() {
+    // Kick the rod down from rest on phi = 0.57 sand (F_p = k1 z): spring and sand act as
+    // springs in series, so the foot stops (the rod at its lowest point) a quarter period of
+    // the ~5 Hz series oscillation after the kick (8.18 Hz on the rigid floor, tested above).
+    let p = Params::preset(0.57).unwrap();
+    let mut sim = kinematic_at_rest(
+        &p,
+        ModelName::Eq1Linear,
+        HoldStroke { position_m: 0.0 },
+        &opts(1e-10),
+    )
+    .unwrap();
+    let mut y = *sim.state();
+    y[1] = -0.3;
+    let c = sim.contact;
+    sim = Simulation::new(
+        sim.robot,
+        sim.sand,
+        c,
+        sim.actuation.clone(),
+        y,
+        0.0,
+        &opts(1e-10),
+    );
+    sim.settle().unwrap();
+    sim.advance_to(0.5, false).unwrap();
+    let ev = sim.events();
+    assert_eq!(ev[0].kind, EventKind::Intrusion);
+    let stop = ev.iter().find(|e| e.kind == EventKind::Static).unwrap().t_s;
+    let f = 1.0 / (4.0 * stop);
+    let (ks, k1, m) = (
+        p.robot.spring_stiffness_n_m,
+        p.sand.k1_n_m,
+        p.motor_rod_mass_kg(),
+    );
+    let series = (ks * k1 / (ks + k1) / m).sqrt() / core::f64::consts::TAU;
+    eprintln!("ringing on sand {f:.2} Hz (springs in series: {series:.2} Hz)");
+    assert!((4.0..6.0).contains(&f), "sand ringing {f} Hz");
+    assert!((f - series).abs() < 0.1 * series);
+}
