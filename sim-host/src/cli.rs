@@ -113,5 +113,6 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Hil(a) => crate::hil::command::run(&a),
         args::Command::Replay(a) => crate::replay_cmd::run(&a),
         args::Command::Log(a) => crate::acqlog::command::run(&a),
+        args::Command::Rig(a) => crate::rig_tool::run(&a),
     }
 }

@@ -47,6 +47,7 @@ pub mod plant;
 pub mod plot;
 pub mod replay;
 pub mod replay_cmd;
+pub mod rig_tool;
 pub mod robot;
 pub mod simulation;
 pub mod sweep;

@@ -44,6 +44,9 @@ pub enum Command {
     Replay(crate::replay_cmd::ReplayArgs),
     /// Check (validate and summarise) or convert acquisition logs.
     Log(crate::acqlog::command::LogArgs),
+    /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
+    /// rig (--link sil|pil): flash, status, jump, intrude, replay.
+    Rig(crate::rig_tool::RigArgs),
 }
 
 /// Jump kind as named on the command line.
