@@ -55,7 +55,7 @@ impl Grids {
     }
 }
 
-/// The parameters of a combination: the preset of its phi (hard ground: of [`HARD_PHI`]).
+/// The parameters of a combination: the preset of its phi (hard ground: the phi = 0.57 robot).
 pub fn params_for(model: ModelName, phi: f64) -> Result<Params, String> {
     Params::preset(if model == ModelName::Hard {
         HARD_PHI
