@@ -104,7 +104,8 @@ pub struct Event {
 pub struct JumpSummary {
     /// Max over the run of `x_r(t) - x_r(0)`, m (apex events, exact).
     pub jump_height_m: f64,
-    /// The same maximum taken only after the push-off half begins, m.
+    /// The highest rod apex (`x_r - x_r(0)`) after the push-off half begins, m; negative
+    /// when the push-off hop peaks below the rest height (single jump: equals `jump_height_m`).
     pub final_jump_height_m: f64,
     /// Deepest foot depth below the undisturbed surface, m.
     pub max_depth_m: f64,

@@ -109,6 +109,14 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         };
         sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
+        // The final jump height is the highest rod apex once the push-off half has begun.
+        // The rest height at t = 0 is a candidate only when the push-off starts at 0
+        // (single jump); for a stutter the rod is still falling from its preliminary hop at
+        // the push-off start, and that tail is not the push-off's height. A push-off hop
+        // that peaks below the rest height gives a negative final height, reported as is.
+        if push_off_start_s > 0.0 {
+            sim.metrics.final_height_m = f64::NEG_INFINITY;
+        }
         sim.observe(0.0, &y0);
         sim.sample(0.0, &y0);
         sim
