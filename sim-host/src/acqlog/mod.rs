@@ -109,7 +109,8 @@ impl AcqLog {
         read_log(BufReader::new(file), opts)
     }
 
-    /// Writes the log as CSV (metadata, header, rows) with [`LogWriter`].
+    /// Writes the log as CSV (metadata, header, rows) with [`LogWriter`]. Rows interpolated
+    /// into gaps are written like any other row (check [`AcqLog::gaps`] first if that matters).
     pub fn write_csv<W: std::io::Write>(&self, out: W) -> Result<W, AcqLogError> {
         let mut writer = LogWriter::new(out, &self.meta, self.columns)?;
         for row in &self.rows {
