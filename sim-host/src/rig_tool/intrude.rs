@@ -58,23 +58,23 @@ pub struct IntrudeArgs {
           value_parser = metres("start position (m)", -0.025, 0.025))]
     pub start: f64,
     /// First intrusion depth below the surface, m.
-    #[arg(long, value_name = "M", default_value = "0.02", value_parser = metres("depth (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.02", value_parser = metres("depth (m)", 0.0, 0.05))]
     pub depth: f64,
     /// How far the rod is pulled back up after the first hold, m.
-    #[arg(long, value_name = "M", default_value = "0.005", value_parser = metres("withdrawal (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.005", value_parser = metres("withdrawal (m)", 0.0, 0.05))]
     pub withdraw: f64,
     /// Depth the re-intrusion goes to, m.
-    #[arg(long, value_name = "M", default_value = "0.03", value_parser = metres("re-intrusion depth (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.03", value_parser = metres("re-intrusion depth (m)", 0.0, 0.05))]
     pub reintrusion_depth: f64,
     /// Intrusion speed, m/s.
-    #[arg(long, value_name = "M/S", default_value = "0.01",
+    #[arg(long, value_name = "M/S", allow_negative_numbers = true, default_value = "0.01",
           value_parser = metres("speed (m/s)", 0.0, MAX_INTRUSION_SPEED_M_S))]
     pub speed: f64,
     /// Each hold, s.
-    #[arg(long, value_name = "S", default_value = "0.5", value_parser = metres("hold (s)", 0.0, MAX_HOLD_S))]
+    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value = "0.5", value_parser = metres("hold (s)", 0.0, MAX_HOLD_S))]
     pub hold: f64,
     /// Depth bin of the force-vs-depth curves, m.
-    #[arg(long, value_name = "M", default_value = "0.00025", value_parser = metres("bin (m)", 1e-6, 0.005))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.00025", value_parser = metres("bin (m)", 1e-6, 0.005))]
     pub bin: f64,
     /// Simulated rig and parameters (masses and force constant to interpret the current).
     #[command(flatten)]

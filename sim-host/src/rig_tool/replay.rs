@@ -79,10 +79,10 @@ pub struct ReplayArgs {
     #[command(flatten)]
     pub target: TargetArgs,
     /// Multiply the positions by X (about mid-stroke p = 0).
-    #[arg(long, value_name = "X", default_value = "1", value_parser = factor("scale"))]
+    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = factor("scale"))]
     pub scale: f64,
     /// Stretch time by X (above 1: slower).
-    #[arg(long, value_name = "X", default_value = "1", value_parser = factor("time stretch"))]
+    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = factor("time stretch"))]
     pub time_stretch: f64,
     /// Replay only START:END, seconds from the log's first sample (before stretching).
     #[arg(long, value_name = "START:END", value_parser = parse_clip)]
