@@ -25,6 +25,7 @@ use crate::differentiate::SavitzkyGolay;
 use crate::jump::{JumpOutcome, SeriesRow, SimOptions, kinematic_at_rest, run_kinematic};
 use crate::params::{ModelName, Params};
 use crate::trajectory::Stroke;
+use sandjumper_core::sample::flags;
 use sandjumper_core::trajectory::Kinematics;
 use serde::Serialize;
 
@@ -97,17 +98,36 @@ impl ReplayStroke {
     }
 }
 
-/// Start of the push-off half in log time, from the `jump_*` metadata when it describes a
-/// one-cycle sine: 0 for a single jump, `T/2` for a stutter, `T/2 + tau` for a delayed stutter.
+/// Start of the push-off half in log time. From the controller's flags when the log has them:
+/// the first sample flagged `PUSH_OFF`. Otherwise from the `jump_*` metadata of a one-cycle
+/// sine (0 for a single jump, `T/2` for a stutter, `T/2 + tau` for a delayed stutter), counted
+/// from the first sample flagged `RUNNING`, else from log time `t_s = 0` if the log spans it
+/// (a log whose time axis is the trajectory's), else from the log's first sample.
 fn push_off_start_in_log(log: &AcqLog) -> Option<f64> {
+    let first_flagged = |bit: u16| {
+        log.rows
+            .iter()
+            .find(|r| r.flags.is_some_and(|f| f & u32::from(bit) != 0))
+            .map(|r| r.t_s)
+    };
+    if let Some(t) = first_flagged(flags::PUSH_OFF) {
+        return Some(t);
+    }
     let jump = log.meta.jump.as_ref()?;
     let half = 0.5 / jump.freq_hz.filter(|f| *f > 0.0)?;
-    match jump.kind.as_str() {
-        "single" => Some(0.0),
-        "stutter" => Some(half),
-        "delayed" | "delayed-stutter" | "delayed_stutter" => Some(half + jump.tau_s.unwrap_or(0.0)),
-        _ => None,
-    }
+    let offset = match jump.kind.as_str() {
+        "single" => 0.0,
+        "stutter" => half,
+        "delayed" | "delayed-stutter" | "delayed_stutter" => half + jump.tau_s.unwrap_or(0.0),
+        _ => return None,
+    };
+    let (first, last) = (log.rows.first()?.t_s, log.rows.last()?.t_s);
+    let start = first_flagged(flags::RUNNING).unwrap_or(if (first..=last).contains(&0.0) {
+        0.0
+    } else {
+        first
+    });
+    Some(start + offset)
 }
 
 impl Stroke for ReplayStroke {
