@@ -314,7 +314,7 @@ fn bad_input_exits_2_with_a_message() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x");
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["rig", "status"], "--port"),
+        (vec!["rig", "status"], "--link"),
         (
             vec!["rig", "status", "--link", "sil", "--port", "/dev/ttyACM9"],
             "cannot be used with",

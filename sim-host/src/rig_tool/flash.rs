@@ -38,7 +38,7 @@ fn on_path(exe: &Path) -> bool {
 
 /// Run `rig flash`.
 pub fn run(a: &FlashArgs) -> Result<(), CliError> {
-    if let Some(link) = a.target.link {
+    if let Some(link) = a.target.controller.link {
         let what = match link {
             SimLink::Sil => "--link sil runs the core's controller in this process",
             SimLink::Pil => "--link pil: QEMU loads the firmware ELF (--firmware) at every start",
@@ -99,7 +99,7 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
         "reset",
     )?;
     println!("flashed {} to the {CHIP}", elf.display());
-    if let Some(port) = &a.target.port {
+    if let Some(port) = &a.target.controller.port {
         println!("the board talks on {port}: try `sandjumper rig status --port {port}`");
     }
     Ok(())

@@ -70,20 +70,24 @@ pub enum SimLink {
     Pil,
 }
 
-/// Which controller: a board on a serial port, or a simulated one.
+/// Which controller: a board on a serial port, or a simulated one (exactly one of the two).
 #[derive(Debug, Clone, Args)]
-pub struct TargetArgs {
+#[group(id = "controller", required = true, multiple = false)]
+pub struct ControllerArgs {
     /// The board's USB serial port (e.g. /dev/ttyACM0): the real rig.
-    #[arg(
-        long,
-        value_name = "PATH",
-        conflicts_with = "link",
-        required_unless_present = "link"
-    )]
+    #[arg(long, value_name = "PATH")]
     pub port: Option<String>,
     /// A simulated controller against a simulated rig instead of a board.
     #[arg(long, value_enum)]
     pub link: Option<SimLink>,
+}
+
+/// The controller and its firmware.
+#[derive(Debug, Clone, Args)]
+pub struct TargetArgs {
+    /// `--port PATH` or `--link sil|pil`.
+    #[command(flatten)]
+    pub controller: ControllerArgs,
     /// Firmware ELF: for --link pil the QEMU build (--features board-qemu); for `flash` the
     /// F407 build.
     #[arg(long, value_name = "ELF")]
@@ -96,7 +100,7 @@ pub const DEFAULT_QEMU_ELF: &str = "target/thumbv7em-none-eabihf/release/sandjum
 impl TargetArgs {
     /// The link argument of `sandjumper hil` this target is.
     pub fn link_arg(&self) -> LinkArg {
-        match (&self.port, self.link) {
+        match (&self.controller.port, self.controller.link) {
             (Some(p), _) => LinkArg::Serial(p.clone()),
             (None, Some(SimLink::Pil)) => LinkArg::Pil,
             _ => LinkArg::Sil,
@@ -105,7 +109,7 @@ impl TargetArgs {
 
     /// True when the host plays the rig (sil/pil).
     pub fn is_simulated(&self) -> bool {
-        self.port.is_none()
+        self.controller.port.is_none()
     }
 
     /// Open the link (as `sandjumper hil` does).
