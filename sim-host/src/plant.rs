@@ -197,7 +197,12 @@ impl Plant {
             command_n: motor_force_n.clamp(-self.drive.peak_force_n, self.drive.peak_force_n),
             lag_s: self.drive.current_lag_s,
         };
-        self.sim.discontinuity();
+        // With a current lag the applied force is continuous across the period boundary (only
+        // its slope changes), so the right-hand side at `t` is unchanged and the integrator's
+        // last stage stays valid (one evaluation fewer per period); without a lag it steps.
+        if self.drive.current_lag_s <= 0.0 {
+            self.sim.discontinuity();
+        }
         self.sim.advance_to(t + dt_s, false)?;
         Ok(())
     }
