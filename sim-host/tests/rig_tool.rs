@@ -606,3 +606,74 @@ fn status_and_jump_through_pil_match_sil() {
     );
     assert!((hp / hq - 1.0).abs() < 0.005, "PIL {hp} m vs SIL {hq} m");
 }
+
+// --- The replay plan's checks, at their boundaries -----------------------------------------
+
+/// A one-cycle cosine `p = -A cos(2 pi f t)` sampled at 10 kHz for one period.
+fn cosine_record(amplitude_m: f64, freq_hz: f64) -> Vec<(f64, f64)> {
+    (0..=(10_000.0 / freq_hz) as usize)
+        .map(|k| {
+            let t = k as f64 / 10_000.0;
+            (
+                t,
+                -amplitude_m * (std::f64::consts::TAU * freq_hz * t).cos(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_replay_plan_refuses_exactly_beyond_the_drives_force_and_the_stroke() {
+    use sandjumper_sim::rig_tool::replay::plan;
+    let (m_m, g, peak): (f64, f64, f64) = (1.125, 9.81, 300.0);
+    // Peak force m_m (A w^2 + g): the frequency where it equals 300 N at A = 18.75 mm.
+    let a: f64 = 0.01875;
+    let f_limit = ((peak / m_m - g) / a).sqrt() / std::f64::consts::TAU;
+    let below = plan(
+        &cosine_record(a, 0.97 * f_limit),
+        1000,
+        10_000,
+        m_m,
+        g,
+        peak,
+    )
+    .unwrap();
+    assert!(below.peak_force_n < peak && below.peak_force_n > 0.9 * peak);
+    assert_eq!(below.period_ticks, 10);
+    // The table hits the record at its own sample times (every 10th 10 kHz sample).
+    let rec = cosine_record(a, 0.97 * f_limit);
+    for (k, p) in below.samples.iter().enumerate() {
+        assert!((f64::from(*p) - rec[10 * k].1).abs() < 1e-9);
+    }
+    let above = plan(
+        &cosine_record(a, 1.03 * f_limit),
+        1000,
+        10_000,
+        m_m,
+        g,
+        peak,
+    );
+    let msg = above.unwrap_err().message;
+    assert!(msg.contains("of motor force"), "{msg}");
+    // Stroke: 25 mm is allowed, 25.1 mm is not.
+    assert!(plan(&cosine_record(0.025, 5.0), 1000, 10_000, m_m, g, peak).is_ok());
+    let msg = plan(&cosine_record(0.0251, 5.0), 1000, 10_000, m_m, g, peak)
+        .unwrap_err()
+        .message;
+    assert!(msg.contains("outside the stroke"), "{msg}");
+    // Buffer: 4096 samples fit, 4097 do not.
+    let long = |n: usize| -> Vec<(f64, f64)> { (0..n).map(|k| (k as f64 / 1000.0, 0.0)).collect() };
+    assert_eq!(
+        plan(&long(4096), 1000, 10_000, m_m, g, peak)
+            .unwrap()
+            .samples
+            .len(),
+        4096
+    );
+    let msg = plan(&long(4097), 1000, 10_000, m_m, g, peak)
+        .unwrap_err()
+        .message;
+    assert!(msg.contains("buffer holds 4096"), "{msg}");
+    // A table rate that does not divide the control rate.
+    assert!(plan(&long(10), 3000, 10_000, m_m, g, peak).is_err());
+}
