@@ -202,6 +202,12 @@ fn missing_or_malformed_metadata_is_refused() {
         "encoder_sign",
     );
     refused(
+        &format!("{HEAD}# firmware: a\rb\nt_s,encoder_counts\n0,0\n"),
+        Kind::MalformedMetadata,
+        Some(3),
+        "control character U+000D",
+    );
+    refused(
         &format!("{HEAD}t_s,encoder_counts\n0,0\n# late: 1\n"),
         Kind::MalformedMetadata,
         Some(5),

@@ -105,8 +105,10 @@ impl LogMetadata {
             }
         }
         for (key, value) in self.free_text() {
-            if value.contains(['\n', '\r']) {
-                return Err(bad_meta(format!("{key} must fit on one line")));
+            if value.chars().any(|c| c.is_control() && c != '\t') {
+                return Err(bad_meta(format!(
+                    "{key} must fit on one line, without control characters"
+                )));
             }
         }
         for (key, _) in &self.extra {
@@ -265,6 +267,12 @@ impl MetadataBuilder {
                 ),
             )
         };
+        if let Some(c) = body.chars().find(|c| c.is_control() && *c != '\t') {
+            return Err(malformed(&format!(
+                "control character U+{:04X} in a metadata line",
+                u32::from(c)
+            )));
+        }
         let Some((key, value)) = body.split_once(':') else {
             if body.contains('=') {
                 return Err(malformed("`=` used where `:` is expected"));
