@@ -6,7 +6,12 @@ fn region(text: &str, name: &str) -> Option<(u64, u64)> {
         .lines()
         .map(str::trim)
         .find(|l| l.split_whitespace().next() == Some(name))?;
-    let origin = line.split("ORIGIN").nth(1)?.split(['=', ',']).nth(1)?.trim();
+    let origin = line
+        .split("ORIGIN")
+        .nth(1)?
+        .split(['=', ','])
+        .nth(1)?
+        .trim();
     let length = line.split("LENGTH").nth(1)?.split('=').nth(1)?.trim();
     let origin = u64::from_str_radix(origin.trim_start_matches("0x"), 16).ok()?;
     let length = match length.strip_suffix('K') {
