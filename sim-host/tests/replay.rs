@@ -152,11 +152,17 @@ fn the_stroke_follows_the_trajectory_and_holds_outside_the_log() {
     for k in 0..19 {
         let (a, b) = (k as f64 * block, (k + 1) as f64 * block);
         let mean = |f: &dyn Fn(f64) -> f64| {
-            (0..500).map(|i| f(a + (i as f64 + 0.5) * block / 500.0)).sum::<f64>() / 500.0
+            (0..500)
+                .map(|i| f(a + (i as f64 + 0.5) * block / 500.0))
+                .sum::<f64>()
+                / 500.0
         };
         let got = mean(&|t| stroke.eval(t).accel_m_s2);
         let want = mean(&|t| jump.eval(t).accel_m_s2);
-        assert!((got - want).abs() < 1e-2 * peak, "mean p'' over [{a}, {b}]: {got} vs {want}");
+        assert!(
+            (got - want).abs() < 1e-2 * peak,
+            "mean p'' over [{a}, {b}]: {got} vs {want}"
+        );
     }
     for k in 0..1500 {
         let t = k as f64 * 1e-4;
