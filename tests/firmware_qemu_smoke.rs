@@ -7,51 +7,21 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
+
+use sandjumper_sim::hil::emulated_firmware;
 use std::time::{Duration, Instant};
 
 /// Own target directory: the outer `cargo test` holds the lock on `target/`'s host build.
-const FIRMWARE_TARGET_DIR: &str = "target/firmware";
+const FIRMWARE_TARGET_DIR: &str = emulated_firmware::EMULATED_TARGET_DIR;
 
 fn workspace() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn on_path(program: &str) -> bool {
-    std::env::var_os("PATH")
-        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
-}
-
 /// QEMU and the firmware toolchain (flip-link, the thumbv7em target) are there; if not, the
 /// test is skipped with a message, except in CI where that is a failure.
 fn qemu_available() -> bool {
-    let target_installed = Command::new("rustc")
-        .args([
-            "--print",
-            "target-libdir",
-            "--target",
-            "thumbv7em-none-eabihf",
-        ])
-        .output()
-        .is_ok_and(|o| {
-            o.status.success() && Path::new(String::from_utf8_lossy(&o.stdout).trim()).is_dir()
-        });
-    let missing: Vec<&str> = [
-        (
-            "qemu-system-arm (apt-get install -y --no-install-recommends qemu-system-arm)",
-            on_path("qemu-system-arm"),
-        ),
-        (
-            "flip-link (cargo install flip-link --locked)",
-            on_path("flip-link"),
-        ),
-        (
-            "the thumbv7em-none-eabihf target (rustup target add thumbv7em-none-eabihf)",
-            target_installed,
-        ),
-    ]
-    .into_iter()
-    .filter_map(|(what, there)| (!there).then_some(what))
-    .collect();
+    let missing = emulated_firmware::missing_prerequisites();
     if missing.is_empty() {
         return true;
     }
@@ -70,35 +40,7 @@ fn qemu_available() -> bool {
 /// Builds the emulated-board firmware once per test run and returns the ELF.
 fn firmware_elf() -> &'static Path {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let out = Command::new(cargo)
-            .current_dir(workspace())
-            .env_remove("RUSTFLAGS")
-            .args([
-                "build",
-                "-p",
-                "sandjumper-firmware",
-                "--target",
-                "thumbv7em-none-eabihf",
-                "--release",
-                "--no-default-features",
-                "--features",
-                "board-qemu",
-                "--target-dir",
-                FIRMWARE_TARGET_DIR,
-            ])
-            .output()
-            .expect("running cargo build for the firmware");
-        assert!(
-            out.status.success(),
-            "building the emulated firmware failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        workspace()
-            .join(FIRMWARE_TARGET_DIR)
-            .join("thumbv7em-none-eabihf/release/sandjumper-firmware")
-    })
+    ELF.get_or_init(|| emulated_firmware::build(workspace()).unwrap_or_else(|e| panic!("{e}")))
 }
 
 fn boot(args: &[&str], timeout_s: u32) -> (Output, Duration) {

@@ -9,72 +9,45 @@
 mod hil_common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use hil_common::{delayed, params, sil};
 use sandjumper_core::FaultCode;
 use sandjumper_sim::ModelName;
+use sandjumper_sim::hil::emulated_firmware;
 use sandjumper_sim::hil::pil::{self, PilConfig};
 use sandjumper_sim::hil::{
     HilOutcome, HilSpec, InjectedFault, Injection, LinkError, RigModelConfig, run_jump,
 };
 
-/// Own target directory (the outer `cargo test` holds the lock on `target/`); shared with
-/// the firmware's smoke test so the ELF is built once.
-const FIRMWARE_TARGET_DIR: &str = "target/firmware";
-
 fn workspace() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// QEMU and the firmware toolchain are there; if not, skip with a message (fail in CI).
 fn qemu_available() -> bool {
-    let found = Command::new("qemu-system-arm")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "qemu-system-arm is required in CI (apt-get install -y --no-install-recommends qemu-system-arm)"
-        );
-        eprintln!(
-            "SKIPPED: qemu-system-arm not found; install it to run the processor-in-the-loop tests"
-        );
+    let missing = emulated_firmware::missing_prerequisites();
+    if missing.is_empty() {
+        return true;
     }
-    found
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have: {}",
+        missing.join(", ")
+    );
+    eprintln!(
+        "SKIPPED: the processor-in-the-loop tests need {}",
+        missing.join(", ")
+    );
+    false
 }
 
+/// Builds the emulated-board firmware once per test run (shared target dir with the
+/// firmware's smoke test) and returns the ELF.
 fn firmware_elf() -> &'static Path {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let out = Command::new(cargo)
-            .current_dir(workspace())
-            .env_remove("RUSTFLAGS")
-            .args([
-                "build",
-                "-p",
-                "sandjumper-firmware",
-                "--target",
-                "thumbv7em-none-eabihf",
-                "--release",
-                "--no-default-features",
-                "--features",
-                "board-qemu",
-                "--target-dir",
-                FIRMWARE_TARGET_DIR,
-            ])
-            .output()
-            .expect("running cargo build for the firmware");
-        assert!(
-            out.status.success(),
-            "building the emulated firmware failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        PilConfig::elf_in(&workspace().join(FIRMWARE_TARGET_DIR))
-    })
+    ELF.get_or_init(|| emulated_firmware::build(workspace()).unwrap_or_else(|e| panic!("{e}")))
 }
 
 fn pil(spec: &HilSpec) -> HilOutcome {

@@ -12,6 +12,7 @@
 //!   1.5 mm at every tick and 0.5 mm RMS (each run tracks its command within ~1 mm; the
 //!   table is the original encoder record resampled at 1 kHz).
 
+use sandjumper_sim::hil::emulated_firmware;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -465,9 +466,6 @@ fn flash_is_a_no_op_for_sil_and_says_what_is_missing_for_a_board() {
 
 // --- PIL: the real firmware in QEMU ---------------------------------------------------------
 
-/// The firmware tests' own target directory (they build the ELF there too).
-const FIRMWARE_TARGET_DIR: &str = "target/firmware";
-
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -475,21 +473,10 @@ fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
-fn on_path(program: &str) -> bool {
-    std::env::var_os("PATH")
-        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(program).is_file()))
-}
-
 /// Build the emulated board's firmware; `None` (skip, or fail in CI) when QEMU or the
-/// firmware toolchain is missing.
+/// firmware toolchain is missing or the firmware does not build here.
 fn qemu_firmware() -> Option<PathBuf> {
-    let missing: Vec<&str> = [
-        ("qemu-system-arm", on_path("qemu-system-arm")),
-        ("flip-link", on_path("flip-link")),
-    ]
-    .into_iter()
-    .filter_map(|(what, there)| (!there).then_some(what))
-    .collect();
+    let missing = emulated_firmware::missing_prerequisites();
     if !missing.is_empty() {
         assert!(
             std::env::var_os("CI").is_none(),
@@ -499,39 +486,14 @@ fn qemu_firmware() -> Option<PathBuf> {
         eprintln!("SKIPPED: rig through PIL needs {}", missing.join(", "));
         return None;
     }
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let built = Command::new(cargo)
-        .current_dir(workspace())
-        .env_remove("RUSTFLAGS")
-        .args([
-            "build",
-            "-p",
-            "sandjumper-firmware",
-            "--target",
-            "thumbv7em-none-eabihf",
-            "--release",
-            "--no-default-features",
-            "--features",
-            "board-qemu",
-            "--target-dir",
-            FIRMWARE_TARGET_DIR,
-        ])
-        .output()
-        .expect("running cargo build for the firmware");
-    if !built.status.success() {
-        let msg = stderr(&built);
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "firmware build failed:\n{msg}"
-        );
-        eprintln!("SKIPPED: rig through PIL: the firmware does not build here:\n{msg}");
-        return None;
+    match emulated_firmware::build(&workspace()) {
+        Ok(elf) => Some(elf),
+        Err(msg) => {
+            assert!(std::env::var_os("CI").is_none(), "{msg}");
+            eprintln!("SKIPPED: rig through PIL: {msg}");
+            None
+        }
     }
-    Some(
-        workspace()
-            .join(FIRMWARE_TARGET_DIR)
-            .join("thumbv7em-none-eabihf/release/sandjumper-firmware"),
-    )
 }
 
 /// Run with a deadline: a hung firmware fails the test instead of hanging it.

@@ -10,6 +10,7 @@
 //!   [`command`]: `sandjumper hil`.
 
 pub mod command;
+pub mod emulated_firmware;
 pub mod framed;
 pub mod link;
 pub mod log;
