@@ -1,7 +1,8 @@
 //! Adaptive Dormand-Prince 5(4) with dense output and event location.
 //!
 //! The step is the classic DOPRI5 tableau (FSAL), error control with the weighted max norm
-//! `max_i |err_i| / (atol + rtol max(|y0_i|, |y1_i|))` (as MATLAB's ode45) and a PI step-size
+//! `max_i |err_i| / (atol + rtol max(|y0_i - o_i|, |y1_i - o_i|))` (as MATLAB's ode45, with
+//! an origin `o` for the relative part: [`DormandPrince::origin`]) and a PI step-size
 //! controller. Dense output is the standard 4th-order continuous extension of Dormand-Prince
 //! (Hairer, Norsett & Wanner, `dopri5` `contd5`). Events are located on the dense output
 //! by the Illinois variant of regula falsi. Deterministic: no clocks, no randomness.
@@ -102,6 +103,9 @@ pub struct DormandPrince<const N: usize> {
     pub atol: f64,
     /// Largest step, s.
     pub max_step: f64,
+    /// Origin of the relative tolerance: component `i` is weighted by
+    /// `atol + rtol |y_i - origin_i|`.
+    pub origin: SVector<f64, N>,
     h: f64,
     fsal: Option<SVector<f64, N>>,
     /// `err_old^beta` of the PI controller.
@@ -121,6 +125,7 @@ impl<const N: usize> DormandPrince<N> {
             rtol,
             atol,
             max_step,
+            origin: SVector::zeros(),
             h: initial_step.min(max_step),
             fsal: None,
             err_old_pow: 1e-4f64.powf(0.04),
@@ -188,7 +193,8 @@ impl<const N: usize> DormandPrince<N> {
             // Max norm over components (as MATLAB's ode45): every component meets its tolerance.
             let mut err: f64 = 0.0;
             for i in 0..N {
-                let sk = self.atol + self.rtol * y[i].abs().max(y1[i].abs());
+                let o = self.origin[i];
+                let sk = self.atol + self.rtol * (y[i] - o).abs().max((y1[i] - o).abs());
                 err = err.max((err_vec[i] / sk).abs());
             }
             if !err.is_finite() {

@@ -107,6 +107,11 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                 value: f64::NEG_INFINITY,
             }; 2],
         };
+        // Heights are reported from the start: positions (even components) are weighed by
+        // their displacement from the initial state, velocities by their size.
+        for i in (0..N).step_by(2) {
+            sim.dp.origin[i] = y0[i];
+        }
         sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
         // The final jump height is the highest rod apex once the push-off half has begun.
