@@ -262,7 +262,7 @@ fn heights_converge_as_rtol_shrinks() {
 /// crawling onto the breakpoint (before the fix: 10-14 % of the steps were rejected; now ~4 %,
 /// the rejections of ordinary step-size control).
 #[test]
-fn breakpoints_cost_no_rejected_steps() {
+fn breakpoints_cause_no_rejected_step_crawl() {
     let p = Params::preset(0.57).unwrap();
     for model in ModelName::ALL {
         for (kind, tau) in [
