@@ -149,9 +149,33 @@ impl Contact {
         }
     }
 
+    /// Added mass m_a of a foot at height `x_f`, kg (the `added_mass_kg` of
+    /// [`foot`](Self::foot); 0 unless intruding).
+    #[inline]
+    pub fn added_mass(&self, sand: &Sand, x_f: f64) -> f64 {
+        match self.mode {
+            GroundMode::Intruding => sand.added_mass(depth_of(x_f) - self.episode_start_m),
+            GroundMode::Aerial | GroundMode::Static => 0.0,
+        }
+    }
+
     /// The guards of the current mode (at most two; unused slots have value `-inf`).
     #[inline]
     pub fn guards(&self, robot: &Robot, sand: &Sand, x_f: f64, v_f: f64, f_s: f64) -> [Guard; 2] {
+        self.guards_with(robot, sand, x_f, v_f, || f_s)
+    }
+
+    /// [`guards`](Self::guards) with the spring force `f_s()`, N, computed only by the modes
+    /// whose guards depend on it.
+    #[inline]
+    pub fn guards_with(
+        &self,
+        robot: &Robot,
+        sand: &Sand,
+        x_f: f64,
+        v_f: f64,
+        f_s: impl FnOnce() -> f64,
+    ) -> [Guard; 2] {
         let never = |transition| Guard {
             transition,
             value: f64::NEG_INFINITY,
@@ -165,7 +189,7 @@ impl Contact {
                 never(Transition::Touchdown),
             ],
             GroundMode::Static => {
-                let load = robot.foot_load(f_s);
+                let load = robot.foot_load(f_s());
                 let restart = if sand.law.is_rigid() {
                     f64::NEG_INFINITY
                 } else {

@@ -7,6 +7,7 @@
 //! (Hairer, Norsett & Wanner, `dopri5` `contd5`). Events are located on the dense output
 //! by the Illinois variant of regula falsi. Deterministic: no clocks, no randomness.
 
+use core::array::from_fn;
 use nalgebra::SVector;
 
 /// Dense output of one accepted step: `y(t)` for `t` in `[t0, t0 + h]`.
@@ -17,24 +18,63 @@ pub struct DenseStep<const N: usize> {
     /// End of the step, s (exactly the requested limit when the step was cut to it).
     pub t1: f64,
     h: f64,
-    rc: [SVector<f64, N>; 5],
+    rc: [[f64; N]; 5],
+    /// `rc[0] + rc[1]`: the state at `t1` (the continuous extension's value there).
+    end: [f64; N],
+}
+
+/// The dense output at one time: components evaluated on demand.
+#[derive(Clone, Copy, Debug)]
+pub struct DensePoint<'a, const N: usize> {
+    step: &'a DenseStep<N>,
+    /// `(theta, 1 - theta)` inside the step; `None` at or after its end.
+    theta: Option<(f64, f64)>,
+}
+
+impl<const N: usize> DensePoint<'_, N> {
+    /// Component `i` of the state.
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        let s = self.step;
+        match self.theta {
+            None => s.end[i],
+            Some((th, th1)) => {
+                s.rc[0][i]
+                    + (s.rc[1][i] + (s.rc[2][i] + (s.rc[3][i] + s.rc[4][i] * th1) * th) * th1) * th
+            }
+        }
+    }
+
+    /// The whole state.
+    #[inline]
+    pub fn state(&self) -> SVector<f64, N> {
+        SVector::from_fn(|i, _| self.get(i))
+    }
 }
 
 impl<const N: usize> DenseStep<N> {
+    /// The dense output at `t` (4th-order continuous extension; exact at both ends).
+    #[inline]
+    pub fn at(&self, t: f64) -> DensePoint<'_, N> {
+        let theta = if t >= self.t1 {
+            None
+        } else {
+            let th = (t - self.t0) / self.h;
+            Some((th, 1.0 - th))
+        };
+        DensePoint { step: self, theta }
+    }
+
     /// State at `t` (4th-order continuous extension; exact at both ends).
     #[inline]
     pub fn eval(&self, t: f64) -> SVector<f64, N> {
-        if t >= self.t1 {
-            return self.rc[0] + self.rc[1];
-        }
-        let th = (t - self.t0) / self.h;
-        let th1 = 1.0 - th;
-        self.rc[0] + (self.rc[1] + (self.rc[2] + (self.rc[3] + self.rc[4] * th1) * th) * th1) * th
+        self.at(t).state()
     }
 
     /// State at the end of the step.
+    #[inline]
     pub fn end_state(&self) -> SVector<f64, N> {
-        self.rc[0] + self.rc[1]
+        SVector::from(self.end)
     }
 }
 
@@ -107,7 +147,9 @@ pub struct DormandPrince<const N: usize> {
     /// `atol + rtol |y_i - origin_i|`.
     pub origin: SVector<f64, N>,
     h: f64,
-    fsal: Option<SVector<f64, N>>,
+    fsal: Option<[f64; N]>,
+    /// Dense output of the last accepted step.
+    dense: DenseStep<N>,
     /// `err_old^beta` of the PI controller.
     err_old_pow: f64,
     /// Right-hand-side evaluations so far.
@@ -128,6 +170,13 @@ impl<const N: usize> DormandPrince<N> {
             origin: SVector::zeros(),
             h: initial_step.min(max_step),
             fsal: None,
+            dense: DenseStep {
+                t0: 0.0,
+                t1: 0.0,
+                h: 0.0,
+                rc: [[0.0; N]; 5],
+                end: [0.0; N],
+            },
             err_old_pow: step_control_pow(1e-4, 0.04),
             rhs_evaluations: 0,
             accepted: 0,
@@ -141,22 +190,28 @@ impl<const N: usize> DormandPrince<N> {
     }
 
     /// Take one accepted step from `(t, y)`, never past `t_limit` (a step reaching it ends
-    /// exactly on it). `f(t, y)` is the right-hand side.
+    /// exactly on it). `f(t, y)` is the right-hand side. The step's dense output is then
+    /// [`dense`](Self::dense).
+    ///
+    /// The stages are combined component by component in plain arrays (the same operations
+    /// in the same order as the vector form `y + (k1 a1 + k2 a2 + ..) h`).
     pub fn step<F>(
         &mut self,
         f: &mut F,
         t: f64,
         y: &SVector<f64, N>,
         t_limit: f64,
-    ) -> Result<DenseStep<N>, StepFailure>
+    ) -> Result<(), StepFailure>
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
+        let mut rhs = |t: f64, y: [f64; N]| -> [f64; N] { f(t, &SVector::from(y)).into() };
+        let y0: [f64; N] = (*y).into();
         let k1 = match self.fsal {
             Some(k) => k,
             None => {
                 self.rhs_evaluations += 1;
-                f(t, y)
+                rhs(t, y0)
             }
         };
         let min_h = 16.0 * f64::EPSILON * t.abs().max(1e-3);
@@ -175,27 +230,41 @@ impl<const N: usize> DormandPrince<N> {
             if h < min_h {
                 return Err(StepFailure::StepSizeTooSmall { t, h });
             }
-            let k2 = f(t + C2 * h, &(y + k1 * (A21 * h)));
-            let k3 = f(t + C3 * h, &(y + (k1 * A31 + k2 * A32) * h));
-            let k4 = f(t + C4 * h, &(y + (k1 * A41 + k2 * A42 + k3 * A43) * h));
-            let k5 = f(
+            let a21h = A21 * h;
+            let k2 = rhs(t + C2 * h, from_fn(|i| y0[i] + k1[i] * a21h));
+            let k3 = rhs(
+                t + C3 * h,
+                from_fn(|i| y0[i] + (k1[i] * A31 + k2[i] * A32) * h),
+            );
+            let k4 = rhs(
+                t + C4 * h,
+                from_fn(|i| y0[i] + (k1[i] * A41 + k2[i] * A42 + k3[i] * A43) * h),
+            );
+            let k5 = rhs(
                 t + C5 * h,
-                &(y + (k1 * A51 + k2 * A52 + k3 * A53 + k4 * A54) * h),
+                from_fn(|i| y0[i] + (k1[i] * A51 + k2[i] * A52 + k3[i] * A53 + k4[i] * A54) * h),
             );
-            let k6 = f(
+            let k6 = rhs(
                 t1,
-                &(y + (k1 * A61 + k2 * A62 + k3 * A63 + k4 * A64 + k5 * A65) * h),
+                from_fn(|i| {
+                    y0[i]
+                        + (k1[i] * A61 + k2[i] * A62 + k3[i] * A63 + k4[i] * A64 + k5[i] * A65) * h
+                }),
             );
-            let y1 = y + (k1 * A71 + k3 * A73 + k4 * A74 + k5 * A75 + k6 * A76) * h;
-            let k7 = f(t1, &y1);
+            let y1: [f64; N] = from_fn(|i| {
+                y0[i] + (k1[i] * A71 + k3[i] * A73 + k4[i] * A74 + k5[i] * A75 + k6[i] * A76) * h
+            });
+            let k7 = rhs(t1, y1);
             self.rhs_evaluations += 6;
-            let err_vec = (k1 * E1 + k3 * E3 + k4 * E4 + k5 * E5 + k6 * E6 + k7 * E7) * h;
             // Max norm over components (as MATLAB's ode45): every component meets its tolerance.
             let mut err: f64 = 0.0;
             for i in 0..N {
+                let err_i =
+                    (k1[i] * E1 + k3[i] * E3 + k4[i] * E4 + k5[i] * E5 + k6[i] * E6 + k7[i] * E7)
+                        * h;
                 let o = self.origin[i];
-                let sk = self.atol + self.rtol * (y[i] - o).abs().max((y1[i] - o).abs());
-                err = err.max((err_vec[i] / sk).abs());
+                let sk = self.atol + self.rtol * (y0[i] - o).abs().max((y1[i] - o).abs());
+                err = err.max((err_i / sk).abs());
             }
             if !err.is_finite() {
                 self.rejected += 1;
@@ -220,20 +289,37 @@ impl<const N: usize> DormandPrince<N> {
                 };
                 self.fsal = Some(k7);
                 self.accepted += 1;
-                let rc2 = y1 - y;
-                let rc3 = k1 * h - rc2;
-                let rc4 = rc2 - k7 * h - rc3;
-                let rc5 = (k1 * D1 + k3 * D3 + k4 * D4 + k5 * D5 + k6 * D6 + k7 * D7) * h;
-                return Ok(DenseStep {
-                    t0: t,
-                    t1,
-                    h: t1 - t,
-                    rc: [*y, rc2, rc3, rc4, rc5],
-                });
+                let d = &mut self.dense;
+                d.t0 = t;
+                d.t1 = t1;
+                d.h = t1 - t;
+                for i in 0..N {
+                    let rc2 = y1[i] - y0[i];
+                    let rc3 = k1[i] * h - rc2;
+                    d.rc[0][i] = y0[i];
+                    d.rc[1][i] = rc2;
+                    d.rc[2][i] = rc3;
+                    d.rc[3][i] = rc2 - k7[i] * h - rc3;
+                    d.rc[4][i] = (k1[i] * D1
+                        + k3[i] * D3
+                        + k4[i] * D4
+                        + k5[i] * D5
+                        + k6[i] * D6
+                        + k7[i] * D7)
+                        * h;
+                    d.end[i] = y0[i] + rc2;
+                }
+                return Ok(());
             }
             self.rejected += 1;
             self.h = h * (0.9 * step_control_pow(err, -0.2)).max(0.2);
         }
+    }
+
+    /// Dense output of the last accepted step.
+    #[inline]
+    pub fn dense(&self) -> &DenseStep<N> {
+        &self.dense
     }
 }
 
@@ -297,7 +383,8 @@ mod tests {
         let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
         let mut worst: f64 = 0.0;
         while t < 10.0 {
-            let s = dp.step(&mut f, t, &y, 10.0).unwrap();
+            dp.step(&mut f, t, &y, 10.0).unwrap();
+            let s = dp.dense();
             for k in 1..4 {
                 let tm = s.t0 + (s.t1 - s.t0) * k as f64 / 4.0;
                 worst = worst.max((s.eval(tm)[0] - tm.cos()).abs());

@@ -180,7 +180,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                     limit: self.max_steps,
                 });
             }
-            let step = {
+            {
                 let (robot, sand, contact, act) =
                     (&self.robot, &self.sand, &self.contact, &self.actuation);
                 let mut f =
@@ -192,20 +192,27 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                             SimError::StepSizeTooSmall { t_s: t, step_s: h }
                         }
                         StepFailure::NonFinite { t } => SimError::NonFinite { t_s: t },
-                    })?
-            };
-            let (switch, end_guards) = self.first_switch(&step);
+                    })?;
+            }
+            let step = self.dp.dense();
+            let (switch, end_guards) = self.first_switch(step);
             let t_new = switch.map_or(step.t1, |(t, _)| t);
-            let mut y_new = if t_new >= step.t1 {
-                step.end_state()
-            } else {
-                step.eval(t_new)
-            };
+            let mut y_new = step.eval(t_new);
             if !y_new.iter().all(|v| v.is_finite()) {
                 return Err(SimError::NonFinite { t_s: t_new });
             }
-            self.find_apex(&step, t_new);
-            self.sample_until(&step, t_new);
+            let apexes = apexes(step, self.y[1], t_new, y_new[1]);
+            for (te, x_r) in apexes.into_iter().flatten() {
+                self.events.push(Event {
+                    t_s: te,
+                    kind: EventKind::Apex,
+                });
+                self.consider_height(te, x_r - self.x_r0);
+            }
+            if self.series.is_some() {
+                let step = *self.dp.dense();
+                self.sample_until(&step, t_new);
+            }
             if self.contact.mode == GroundMode::Static {
                 // A static foot does not move (its velocity is held at 0).
                 y_new[2] = self.y[2];
@@ -214,7 +221,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.t = t_new;
             self.y = y_new;
             self.contact.track(self.y[2]);
-            self.observe(self.t, &self.y.clone());
+            self.observe_step_end();
             match switch {
                 // The end-of-step guards were computed in first_switch (static foot state unchanged).
                 None if self.contact.mode != GroundMode::Static => self.start_guards = end_guards,
@@ -232,14 +239,17 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
 
     /// The earliest guard crossing inside the step, located on the dense output.
     fn first_switch(&self, step: &DenseStep<N>) -> (Option<(f64, Transition)>, [Guard; 2]) {
-        let guards = |y: &SVector<f64, N>| {
-            let f_s = self.robot.spring_force(y[0], y[1], y[2], y[3]);
+        let guards = |t: f64| {
+            let y = step.at(t);
             self.contact
-                .guards(&self.robot, &self.sand, y[2], y[3], f_s)
+                .guards_with(&self.robot, &self.sand, y.get(2), y.get(3), || {
+                    self.robot
+                        .spring_force(y.get(0), y.get(1), y.get(2), y.get(3))
+                })
         };
         let start = self.start_guards;
         let t_mid = 0.5 * (step.t0 + step.t1);
-        let (mid, end) = (guards(&step.eval(t_mid)), guards(&step.end_state()));
+        let (mid, end) = (guards(t_mid), guards(step.t1));
         let mut best: Option<(f64, Transition)> = None;
         for i in 0..2 {
             let samples = [
@@ -250,7 +260,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             for w in samples.windows(2) {
                 let ((ta, ga), (tb, gb)) = (w[0], w[1]);
                 if ga <= 0.0 && gb > 0.0 {
-                    let g = |t: f64| guards(&step.eval(t))[i].value;
+                    let g = |t: f64| guards(t)[i].value;
                     let te = locate_crossing(g, ta, ga, tb, gb, EVENT_TOLERANCE_S);
                     if best.is_none_or(|(tb, _)| te < tb) {
                         best = Some((te, start[i].transition));
@@ -326,31 +336,6 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         }
     }
 
-    /// Rod apexes (`x_r'` crossing 0 downward) in `[t0, t_new]`, located exactly.
-    fn find_apex(&mut self, step: &DenseStep<N>, t_new: f64) {
-        let t0 = step.t0;
-        let t_mid = 0.5 * (t0 + t_new);
-        let g = |t: f64| -step.eval(t)[1];
-        let samples = [(t0, -self.y[1]), (t_mid, g(t_mid)), (t_new, g(t_new))];
-        for w in samples.windows(2) {
-            let ((ta, ga), (tb, gb)) = (w[0], w[1]);
-            // The rod must have been rising faster than APEX_MIN_SPEED: no apexes from rounding noise at rest.
-            if ga < -APEX_MIN_SPEED_M_S && gb >= 0.0 {
-                let te = if gb == 0.0 {
-                    tb
-                } else {
-                    locate_crossing(g, ta, ga, tb, gb, EVENT_TOLERANCE_S)
-                };
-                let height = step.eval(te)[0] - self.x_r0;
-                self.events.push(Event {
-                    t_s: te,
-                    kind: EventKind::Apex,
-                });
-                self.consider_height(te, height);
-            }
-        }
-    }
-
     fn consider_height(&mut self, t: f64, height: f64) {
         let m = &mut self.metrics;
         if height > m.best_height_m {
@@ -366,14 +351,17 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     /// Metrics at a step end or event.
     fn observe(&mut self, t: f64, y: &SVector<f64, N>) {
         let f_s = self.spring_force(y);
-        if self.contact.mode == GroundMode::Intruding {
-            let foot = self.contact.foot(&self.robot, &self.sand, y[2], y[3], f_s);
-            let m = &mut self.metrics;
-            m.peak_added_mass_kg = m.peak_added_mass_kg.max(foot.added_mass_kg);
-        }
+        let m_a = self.contact.added_mass(&self.sand, y[2]);
         let f_m = self.actuation.motor_force(&self.robot, t, y, f_s);
         let m = &mut self.metrics;
+        m.peak_added_mass_kg = m.peak_added_mass_kg.max(m_a);
         m.peak_motor_force_n = m.peak_motor_force_n.max(f_m.abs());
+    }
+
+    /// [`observe`](Self::observe) the current state.
+    fn observe_step_end(&mut self) {
+        let (t, y) = (self.t, self.y);
+        self.observe(t, &y);
     }
 
     fn sample_until(&mut self, step: &DenseStep<N>, t_new: f64) {
@@ -441,6 +429,35 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             end_time_s: self.t,
         }
     }
+}
+
+/// Rod apexes (`x_r'` crossing 0 downward) in `[step.t0, t_new]`, located exactly on the
+/// dense output: `(t, x_r)` of each (at most one per half of the interval). `v_r0` and
+/// `v_r_new` are the rod velocities at both ends (as the dense output gives them).
+fn apexes<const N: usize>(
+    step: &DenseStep<N>,
+    v_r0: f64,
+    t_new: f64,
+    v_r_new: f64,
+) -> [Option<(f64, f64)>; 2] {
+    let t0 = step.t0;
+    let t_mid = 0.5 * (t0 + t_new);
+    let g = |t: f64| -step.at(t).get(1);
+    let samples = [(t0, -v_r0), (t_mid, g(t_mid)), (t_new, -v_r_new)];
+    let mut found = [None; 2];
+    for (w, slot) in samples.windows(2).zip(&mut found) {
+        let ((ta, ga), (tb, gb)) = (w[0], w[1]);
+        // The rod must have been rising faster than APEX_MIN_SPEED: no apexes from rounding noise at rest.
+        if ga < -APEX_MIN_SPEED_M_S && gb >= 0.0 {
+            let te = if gb == 0.0 {
+                tb
+            } else {
+                locate_crossing(g, ta, ga, tb, gb, EVENT_TOLERANCE_S)
+            };
+            *slot = Some((te, step.at(te).get(0)));
+        }
+    }
+    found
 }
 
 /// The right-hand side: `[x_r', v_r', x_f', v_f', ..]` in the current ground mode.
