@@ -264,7 +264,11 @@ impl<const N: usize> DormandPrince<N> {
                         * h;
                 let o = self.origin[i];
                 let sk = self.atol + self.rtol * (y0[i] - o).abs().max((y1[i] - o).abs());
-                err = err.max((err_i / sk).abs());
+                let ratio = (err_i / sk).abs();
+                // NaN-propagating max (`f64::max` would drop a NaN component).
+                if ratio.is_nan() || ratio > err {
+                    err = ratio;
+                }
             }
             if !err.is_finite() {
                 self.rejected += 1;
@@ -399,6 +403,29 @@ mod tests {
             (y[0] - 10f64.cos()).abs()
         );
         assert!(worst < 1e-7, "dense output error {worst}");
+    }
+
+    #[test]
+    fn a_step_with_a_nan_component_is_never_accepted() {
+        // The second component turns NaN past t = 0.5: no accepted step may carry it.
+        let mut dp = DormandPrince::<2>::new(1e-8, 1e-11, 0.1, 1e-3);
+        let mut f =
+            |t: f64, y: &Vector2<f64>| Vector2::new(y[1], if t > 0.5 { f64::NAN } else { -y[0] });
+        let (mut t, mut y) = (0.0, Vector2::new(1.0, 0.0));
+        loop {
+            match dp.step(&mut f, t, &y, 1.0) {
+                Ok(()) => {
+                    let d = dp.dense();
+                    y = d.end_state();
+                    t = d.t1;
+                    assert!(y.iter().all(|v| v.is_finite()), "accepted {y:?} at t = {t}");
+                }
+                Err(e) => {
+                    assert!(t <= 0.5, "failed at {t}: {e:?}");
+                    break;
+                }
+            }
+        }
     }
 
     #[test]
