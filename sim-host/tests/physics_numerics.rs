@@ -221,40 +221,49 @@ fn after_a_jump_the_robot_settles_without_chattering() {
 #[test]
 fn heights_converge_as_rtol_shrinks() {
     let p = Params::preset(0.57).unwrap();
-    for model in ModelName::ALL {
-        for (kind, tau) in [
-            (JumpKind::Single, 0.0),
-            (JumpKind::Stutter, 0.0),
-            (JumpKind::DelayedStutter, 0.3),
-            (JumpKind::DelayedStutter, 0.75),
-        ] {
-            for f in [6.0, 9.0, 14.0, 16.0] {
-                let spec = JumpSpec {
-                    kind,
-                    freq_hz: f,
-                    tau_s: tau,
-                    model,
-                };
-                let reference = simulate_jump(&p, &spec, &opts(1e-10)).unwrap().summary;
-                for (rtol, bound) in [(1e-6, 1e-6), (1e-8, 1e-8)] {
-                    let s = simulate_jump(&p, &spec, &opts(rtol)).unwrap().summary;
-                    for (a, b, what) in [
-                        (s.jump_height_m, reference.jump_height_m, "height"),
-                        (
-                            s.final_jump_height_m,
-                            reference.final_jump_height_m,
-                            "final height",
-                        ),
-                    ] {
-                        assert!(
-                            (a - b).abs() < bound,
-                            "{model} {kind:?} tau {tau} {f} Hz {what} at rtol {rtol}: {a} vs {b}"
-                        );
-                    }
-                }
+    let kinds = [
+        (JumpKind::Single, 0.0),
+        (JumpKind::Stutter, 0.0),
+        (JumpKind::DelayedStutter, 0.3),
+        (JumpKind::DelayedStutter, 0.75),
+    ];
+    for spec in jump_specs(&kinds, &[6.0, 9.0, 14.0, 16.0]) {
+        let reference = simulate_jump(&p, &spec, &opts(1e-10)).unwrap().summary;
+        for (rtol, bound) in [(1e-6, 1e-6), (1e-8, 1e-8)] {
+            let s = simulate_jump(&p, &spec, &opts(rtol)).unwrap().summary;
+            for (a, b, what) in [
+                (s.jump_height_m, reference.jump_height_m, "height"),
+                (
+                    s.final_jump_height_m,
+                    reference.final_jump_height_m,
+                    "final height",
+                ),
+            ] {
+                assert!(
+                    (a - b).abs() < bound,
+                    "{spec:?} {what} at rtol {rtol}: {a} vs {b}"
+                );
             }
         }
     }
+}
+
+/// Every model with every `(kind, tau)` at every frequency, Hz.
+fn jump_specs(kinds: &[(JumpKind, f64)], freqs_hz: &[f64]) -> Vec<JumpSpec> {
+    let mut specs = Vec::new();
+    for model in ModelName::ALL {
+        for &(kind, tau_s) in kinds {
+            for &freq_hz in freqs_hz {
+                specs.push(JumpSpec {
+                    kind,
+                    freq_hz,
+                    tau_s,
+                    model,
+                });
+            }
+        }
+    }
+    specs
 }
 
 /// Steps that end on a breakpoint of `p(t)` (where `p''` jumps) integrate the segment they
@@ -264,28 +273,19 @@ fn heights_converge_as_rtol_shrinks() {
 #[test]
 fn breakpoints_cause_no_rejected_step_crawl() {
     let p = Params::preset(0.57).unwrap();
-    for model in ModelName::ALL {
-        for (kind, tau) in [
-            (JumpKind::Single, 0.0),
-            (JumpKind::Stutter, 0.0),
-            (JumpKind::DelayedStutter, 0.3),
-        ] {
-            for f in [6.0, 10.0, 15.0] {
-                let spec = JumpSpec {
-                    kind,
-                    freq_hz: f,
-                    tau_s: tau,
-                    model,
-                };
-                let s = simulate_jump(&p, &spec, &opts(1e-8)).unwrap().summary;
-                assert!(
-                    s.steps_rejected * 100 < 7 * s.steps_accepted,
-                    "{model} {kind:?} {f} Hz: {} rejected of {} accepted",
-                    s.steps_rejected,
-                    s.steps_accepted
-                );
-            }
-        }
+    let kinds = [
+        (JumpKind::Single, 0.0),
+        (JumpKind::Stutter, 0.0),
+        (JumpKind::DelayedStutter, 0.3),
+    ];
+    for spec in jump_specs(&kinds, &[6.0, 10.0, 15.0]) {
+        let s = simulate_jump(&p, &spec, &opts(1e-8)).unwrap().summary;
+        assert!(
+            s.steps_rejected * 100 < 7 * s.steps_accepted,
+            "{spec:?}: {} rejected of {} accepted",
+            s.steps_rejected,
+            s.steps_accepted
+        );
     }
 }
 
