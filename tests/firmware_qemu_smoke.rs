@@ -4,9 +4,8 @@
 //!
 //! Skips with a message when `qemu-system-arm` is missing, unless `CI` is set (then it fails).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
-use std::sync::OnceLock;
 
 use sandjumper_sim::hil::emulated_firmware;
 use std::time::{Duration, Instant};
@@ -18,29 +17,14 @@ fn workspace() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// QEMU and the firmware toolchain (flip-link, the thumbv7em target) are there; if not, the
-/// test is skipped with a message, except in CI where that is a failure.
+/// QEMU and the firmware toolchain are there; if not, skip with a message (fail in CI).
 fn qemu_available() -> bool {
-    let missing = emulated_firmware::missing_prerequisites();
-    if missing.is_empty() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "CI must have: {}",
-        missing.join(", ")
-    );
-    eprintln!(
-        "SKIPPED: booting the emulated firmware needs {}",
-        missing.join(", ")
-    );
-    false
+    emulated_firmware::available_for_test("booting the emulated firmware")
 }
 
-/// Builds the emulated-board firmware once per test run and returns the ELF.
+/// The emulated-board firmware, built once per test run.
 fn firmware_elf() -> &'static Path {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| emulated_firmware::build(workspace()).unwrap_or_else(|e| panic!("{e}")))
+    emulated_firmware::build_once(workspace()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn boot(args: &[&str], timeout_s: u32) -> (Output, Duration) {

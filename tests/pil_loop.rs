@@ -8,8 +8,7 @@
 
 mod hil_common;
 
-use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use hil_common::{delayed, params, sil};
@@ -27,27 +26,12 @@ fn workspace() -> &'static Path {
 
 /// QEMU and the firmware toolchain are there; if not, skip with a message (fail in CI).
 fn qemu_available() -> bool {
-    let missing = emulated_firmware::missing_prerequisites();
-    if missing.is_empty() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "CI must have: {}",
-        missing.join(", ")
-    );
-    eprintln!(
-        "SKIPPED: the processor-in-the-loop tests need {}",
-        missing.join(", ")
-    );
-    false
+    emulated_firmware::available_for_test("the processor-in-the-loop tests")
 }
 
-/// Builds the emulated-board firmware once per test run (shared target dir with the
-/// firmware's smoke test) and returns the ELF.
+/// The emulated-board firmware, built once per test run.
 fn firmware_elf() -> &'static Path {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| emulated_firmware::build(workspace()).unwrap_or_else(|e| panic!("{e}")))
+    emulated_firmware::build_once(workspace()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn pil(spec: &HilSpec) -> HilOutcome {

@@ -476,18 +476,11 @@ fn workspace() -> PathBuf {
 /// Build the emulated board's firmware; `None` (skip, or fail in CI) when QEMU or the
 /// firmware toolchain is missing or the firmware does not build here.
 fn qemu_firmware() -> Option<PathBuf> {
-    let missing = emulated_firmware::missing_prerequisites();
-    if !missing.is_empty() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have: {}",
-            missing.join(", ")
-        );
-        eprintln!("SKIPPED: rig through PIL needs {}", missing.join(", "));
+    if !emulated_firmware::available_for_test("rig through PIL") {
         return None;
     }
-    match emulated_firmware::build(&workspace()) {
-        Ok(elf) => Some(elf),
+    match emulated_firmware::build_once(&workspace()) {
+        Ok(elf) => Some(elf.to_path_buf()),
         Err(msg) => {
             assert!(std::env::var_os("CI").is_none(), "{msg}");
             eprintln!("SKIPPED: rig through PIL: {msg}");

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
 
 use super::pil::PilConfig;
 
@@ -83,4 +84,32 @@ pub fn build(workspace: &Path) -> Result<PathBuf, String> {
         ));
     }
     Ok(PilConfig::elf_in(&workspace.join(EMULATED_TARGET_DIR)))
+}
+
+/// The policy of every test that needs the emulated firmware: `true` when this machine has
+/// its prerequisites; otherwise the test is skipped with a message naming `what` and the
+/// missing pieces (`false`), except under CI (`CI` set), where a missing prerequisite fails
+/// the test (panics) instead of hiding it.
+pub fn available_for_test(what: &str) -> bool {
+    let missing = missing_prerequisites();
+    if missing.is_empty() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI must have: {}",
+        missing.join(", ")
+    );
+    eprintln!("SKIPPED: {what} needs {}", missing.join(", "));
+    false
+}
+
+/// [`build`] once per process (the first call builds, later calls return the same ELF or the
+/// same error).
+pub fn build_once(workspace: &Path) -> Result<&'static Path, String> {
+    static ELF: OnceLock<Result<PathBuf, String>> = OnceLock::new();
+    ELF.get_or_init(|| build(workspace))
+        .as_ref()
+        .map(PathBuf::as_path)
+        .map_err(Clone::clone)
 }
