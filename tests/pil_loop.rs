@@ -34,6 +34,25 @@ fn firmware_elf() -> &'static Path {
     emulated_firmware::build_once(workspace()).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Zero force from the first faulted answer on (as in SIL), and the firmware's exit status
+/// carries the fault: 16 + code.
+fn assert_zero_force_and_exit_code(p: &HilOutcome, code: FaultCode, context: &str) {
+    let first = p
+        .trace
+        .iter()
+        .position(|r| r.faulted)
+        .expect("faulted answer");
+    assert!(
+        p.trace[first..].iter().all(|r| r.drive_command_n == 0.0),
+        "{context}: force after the fault"
+    );
+    assert_eq!(
+        p.link.exit_code,
+        Some(16 + i32::from(code.code())),
+        "{context}"
+    );
+}
+
 fn pil(spec: &HilSpec) -> HilOutcome {
     let mut link = pil::start(&PilConfig::new(firmware_elf())).expect("QEMU starts and answers");
     run_jump(&params(0.57), spec, RigModelConfig::default(), &mut link).expect("PIL run")
@@ -94,19 +113,7 @@ fn faults_through_pil_match_sil() {
         assert_eq!(fp.map(|f| f.code), Some(code), "{fault:?}");
         assert_eq!(fp, fs, "{fault:?}: same code, same tick");
         assert_eq!(p.frames_rejected, s.frames_rejected, "{fault:?}");
-        // Zero force from the fault on, as in SIL.
-        let first = p
-            .trace
-            .iter()
-            .position(|r| r.faulted)
-            .expect("faulted answer");
-        assert!(p.trace[first..].iter().all(|r| r.drive_command_n == 0.0));
-        // The firmware's exit status carries the fault: 16 + code.
-        assert_eq!(
-            p.link.exit_code,
-            Some(16 + i32::from(code.code())),
-            "{fault:?}"
-        );
+        assert_zero_force_and_exit_code(&p, code, &format!("{fault:?}"));
     }
 }
 
@@ -122,16 +129,7 @@ fn a_link_that_stops_mid_jump_is_link_lost_in_the_firmware() {
     });
     let p = pil(&spec);
     assert_eq!(p.first_fault().map(|f| f.code), Some(FaultCode::LinkLost));
-    let first = p
-        .trace
-        .iter()
-        .position(|r| r.faulted)
-        .expect("faulted answer");
-    assert!(p.trace[first..].iter().all(|r| r.drive_command_n == 0.0));
-    assert_eq!(
-        p.link.exit_code,
-        Some(16 + i32::from(FaultCode::LinkLost.code()))
-    );
+    assert_zero_force_and_exit_code(&p, FaultCode::LinkLost, "link stops");
 }
 
 #[test]
