@@ -29,9 +29,9 @@
 //!   inside each zero-order-hold period; the stroke limit is not an end stop (not modelled).
 //! - **Spring rest length** L0 = 0.1 m (only differences of heights are reported).
 //! - **Error control**: max norm over components (as ode45); `SimOptions::atol` 1e-11. The
-//!   relative part of a position's tolerance is taken of its displacement from the initial
-//!   state (heights are reported from there), not of its height above an arbitrary origin.
-//!   With it, heights at rtol 1e-6 are within 1e-6 m of rtol 1e-10 (worst seen 7e-7 m).
+//!   relative part of a component's tolerance is taken of the largest size it has reached in
+//!   the run (Gear's `YMAX`), a position's size being its displacement from the initial state
+//!   (heights are reported from there), not its height above an arbitrary origin.
 //! - **Breakpoints**: a step ending on a jump of `p''` sees the left limit of `p(t)`
 //!   ([`jump::Kinematic::begin_segment`]), so no step straddles the jump.
 
@@ -39,6 +39,7 @@ pub mod acqlog;
 pub mod cli;
 pub mod differentiate;
 pub mod error;
+pub mod fastmath;
 pub mod figures;
 pub mod fit;
 pub mod ground;

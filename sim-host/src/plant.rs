@@ -2,6 +2,7 @@
 //! held constant over each control period (zero-order hold), events located inside.
 
 use crate::error::SimError;
+use crate::fastmath::exp_neg;
 use crate::ground::{GroundLaw, Sand};
 use crate::hybrid::Contact;
 use crate::hybrid::GroundMode;
@@ -119,41 +120,6 @@ impl Forced {
             self.command_n
         }
     }
-}
-
-/// `exp(-x)` for `x >= 0`. On `[0, 1]` (a control period up to one lag time constant, the
-/// common case: 0.1 ms over 0.2 ms by default) the Taylor polynomial of degree 17 in Estrin's
-/// form: truncation below `1/18! = 1.6e-16`, within a few ulps of `exp`, no call and a short
-/// dependency chain (it sits on the critical path of every stage of every control period).
-/// Beyond, `exp` itself.
-#[inline]
-pub fn exp_neg(x: f64) -> f64 {
-    if !(0.0..=1.0).contains(&x) {
-        return (-x).exp();
-    }
-    // 1/k! for k = 0..=17.
-    const C: [f64; 18] = {
-        let mut c = [1.0; 18];
-        let mut k = 1;
-        while k < 18 {
-            c[k] = c[k - 1] / k as f64;
-            k += 1;
-        }
-        c
-    };
-    let y = -x;
-    let y2 = y * y;
-    let y4 = y2 * y2;
-    let y8 = y4 * y4;
-    let y16 = y8 * y8;
-    let p = |k: usize| C[k] + C[k + 1] * y;
-    let q0 = p(0) + p(2) * y2;
-    let q1 = p(4) + p(6) * y2;
-    let q2 = p(8) + p(10) * y2;
-    let q3 = p(12) + p(14) * y2;
-    let r0 = q0 + q1 * y4;
-    let r1 = q2 + q3 * y4;
-    (r0 + r1 * y8) + p(16) * y16
 }
 
 impl Actuation<6> for Forced {
@@ -294,25 +260,5 @@ impl Plant {
     /// Metrics of what has been simulated so far (heights relative to the initial rod height).
     pub fn summary(&self) -> JumpSummary {
         self.sim.summary()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exp_neg_is_within_a_few_ulps_of_exp() {
-        let mut worst: f64 = 0.0;
-        for i in 0..=100_000 {
-            let x = i as f64 / 100_000.0;
-            let rel = (exp_neg(x) / (-x).exp() - 1.0).abs();
-            worst = worst.max(rel);
-        }
-        assert!(worst < 4.0 * f64::EPSILON, "worst relative error {worst:e}");
-        for x in [1.5, 7.0, 800.0] {
-            assert_eq!(exp_neg(x), (-x).exp());
-        }
-        assert_eq!(exp_neg(0.0), 1.0);
     }
 }

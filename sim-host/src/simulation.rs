@@ -112,6 +112,13 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         for i in (0..N).step_by(2) {
             sim.dp.origin[i] = y0[i];
         }
+        // The foot's velocity rings about zero at the foot mode (about 53 Hz in flight):
+        // weighed by its value at the step, its tolerance would collapse at every crossing.
+        // It is weighed by the largest foot speed reached instead (21 % fewer steps for the
+        // same heights). The rod's velocity is not: under a stale large scale, the decaying
+        // 8 Hz ringing of a long delay on hard ground accumulates phase error (1.6e-6 m
+        // instead of 6.3e-7 m at rtol 1e-6).
+        sim.dp.scale_by_largest[3] = true;
         sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
         // The final jump height is the highest rod apex once the push-off half has begun.

@@ -1,0 +1,184 @@
+//! Elementary functions for the integrator's hot path, where a libm call would sit on the
+//! critical path of every stage: short polynomials on the small ranges that occur there,
+//! falling back to the standard functions outside them. Each states its accuracy, and the
+//! tests hold it to that.
+
+/// `exp(-x)` for `x >= 0`. On `[0, 1]` (a control period up to one lag time constant, the
+/// common case: 0.1 ms over 0.2 ms by default) the Taylor polynomial of degree 17 in Estrin's
+/// form: truncation below `1/18! = 1.6e-16`, within a few ulps of `exp`, no call and a short
+/// dependency chain (it sits on the critical path of every stage of every control period).
+/// Beyond, `exp` itself.
+#[inline]
+pub fn exp_neg(x: f64) -> f64 {
+    if !(0.0..=1.0).contains(&x) {
+        return (-x).exp();
+    }
+    // 1/k! for k = 0..=17.
+    const C: [f64; 18] = {
+        let mut c = [1.0; 18];
+        let mut k = 1;
+        while k < 18 {
+            c[k] = c[k - 1] / k as f64;
+            k += 1;
+        }
+        c
+    };
+    let y = -x;
+    let y2 = y * y;
+    let y4 = y2 * y2;
+    let y8 = y4 * y4;
+    let y16 = y8 * y8;
+    let p = |k: usize| C[k] + C[k + 1] * y;
+    let q0 = p(0) + p(2) * y2;
+    let q1 = p(4) + p(6) * y2;
+    let q2 = p(8) + p(10) * y2;
+    let q3 = p(12) + p(14) * y2;
+    let r0 = q0 + q1 * y4;
+    let r1 = q2 + q3 * y4;
+    (r0 + r1 * y8) + p(16) * y16
+}
+
+/// Largest `|x|` [`sincos_small`] accepts, rad.
+pub const SINCOS_SMALL_MAX_RAD: f64 = 0.125;
+
+/// `(sin x, cos x)` for `|x| <= SINCOS_SMALL_MAX_RAD` (an angle increment inside one
+/// integration step): Taylor polynomials of degree 11 (sin) and 12 (cos), truncation below
+/// `x^13/13! = 3e-24` and `x^14/14! = 2e-25`, so within an ulp or two of `sin`/`cos`. Outside
+/// the range, `sin_cos` itself.
+#[inline]
+pub fn sincos_small(x: f64) -> (f64, f64) {
+    // NaN goes to `sin_cos` too.
+    if x.abs() > SINCOS_SMALL_MAX_RAD || x.is_nan() {
+        return x.sin_cos();
+    }
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let x8 = x4 * x4;
+    // sin x = x (1 - x^2/3! + x^4/5! - ..), cos x = 1 - x^2/2! + x^4/4! - ..; Estrin in x^2.
+    const S: [f64; 6] = [
+        1.0,
+        -1.0 / 6.0,
+        1.0 / 120.0,
+        -1.0 / 5040.0,
+        1.0 / 362_880.0,
+        -1.0 / 39_916_800.0,
+    ];
+    const C: [f64; 7] = [
+        1.0,
+        -0.5,
+        1.0 / 24.0,
+        -1.0 / 720.0,
+        1.0 / 40_320.0,
+        -1.0 / 3_628_800.0,
+        1.0 / 479_001_600.0,
+    ];
+    let s = (S[0] + S[1] * x2) + (S[2] + S[3] * x2) * x4 + (S[4] + S[5] * x2) * x8;
+    let c = (C[0] + C[1] * x2) + (C[2] + C[3] * x2) * x4 + (C[4] + C[5] * x2 + C[6] * x4) * x8;
+    (x * s, c)
+}
+
+/// `log2 x` to about 5e-8 absolute, for the step-size controller (a factor that needs a few
+/// digits, computed on every step): the exponent from the bits and an atanh series of the
+/// mantissa in `[1/sqrt 2, sqrt 2)`. `x` must be positive and normal (subnormals, zero,
+/// infinities and NaN give a meaningless finite value). No libm call, no table.
+#[inline]
+pub fn log2_approx(x: f64) -> f64 {
+    let bits = x.to_bits();
+    let mut e = ((bits >> 52) & 0x7ff) as i64 - 1023;
+    let mut m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000);
+    if m > core::f64::consts::SQRT_2 {
+        m *= 0.5;
+        e += 1;
+    }
+    // ln m = 2 atanh(u), u = (m - 1)/(m + 1), |u| <= 0.1716: the u^9 term is below 3e-8.
+    let u = (m - 1.0) / (m + 1.0);
+    let u2 = u * u;
+    let ln_m = 2.0 * u * (1.0 + u2 * (1.0 / 3.0 + u2 * (1.0 / 5.0 + u2 * (1.0 / 7.0))));
+    e as f64 + ln_m * core::f64::consts::LOG2_E
+}
+
+/// `2^y` to about 1e-8 relative (see [`log2_approx`]): a Taylor polynomial on `[-1/2, 1/2]`
+/// scaled by the exponent bits; `y` is clamped to `[-1000, 1000]` (NaN gives 1).
+#[inline]
+pub fn exp2_approx(y: f64) -> f64 {
+    let y = if y.is_nan() {
+        0.0
+    } else {
+        y.clamp(-1000.0, 1000.0)
+    };
+    let n = y.round();
+    // 2^f = e^(f ln 2), |f ln 2| <= 0.347: Taylor to degree 7, the first omitted term below 6e-9.
+    let g = (y - n) * core::f64::consts::LN_2;
+    let g2 = g * g;
+    let two_f = (1.0 + g)
+        + g2 * ((0.5 + g / 6.0)
+            + g2 * ((1.0 / 24.0 + g / 120.0) + g2 * (1.0 / 720.0 + g / 5040.0)));
+    two_f * f64::from_bits(((n as i64 + 1023) as u64) << 52)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exp_neg_is_within_a_few_ulps_of_exp() {
+        let mut worst: f64 = 0.0;
+        for i in 0..=100_000 {
+            let x = i as f64 / 100_000.0;
+            let rel = (exp_neg(x) / (-x).exp() - 1.0).abs();
+            worst = worst.max(rel);
+        }
+        assert!(worst < 4.0 * f64::EPSILON, "worst relative error {worst:e}");
+        for x in [1.5, 7.0, 800.0] {
+            assert_eq!(exp_neg(x), (-x).exp());
+        }
+        assert_eq!(exp_neg(0.0), 1.0);
+    }
+
+    #[test]
+    fn sincos_small_is_within_two_ulps_of_sin_cos() {
+        let (mut worst_s, mut worst_c): (f64, f64) = (0.0, 0.0);
+        let n = 200_000;
+        for i in -n..=n {
+            let x = SINCOS_SMALL_MAX_RAD * i as f64 / n as f64;
+            let (s, c) = sincos_small(x);
+            let (s_ref, c_ref) = x.sin_cos();
+            worst_s = worst_s.max((s - s_ref).abs() / f64::EPSILON / s_ref.abs().max(1e-300));
+            worst_c = worst_c.max((c - c_ref).abs() / f64::EPSILON);
+        }
+        assert!(worst_s <= 2.0, "sin: {worst_s} ulp");
+        assert!(worst_c <= 2.0, "cos: {worst_c} ulp");
+        assert_eq!(sincos_small(0.0), (0.0, 1.0));
+        // Outside the range: the standard functions, exactly.
+        for x in [0.2, -1.0, 3.0, f64::NAN] {
+            let (s, c) = sincos_small(x);
+            let (s_ref, c_ref) = x.sin_cos();
+            assert!(
+                s.to_bits() == s_ref.to_bits() && c.to_bits() == c_ref.to_bits(),
+                "{x}"
+            );
+        }
+    }
+
+    #[test]
+    fn log2_and_exp2_approximations_are_within_their_bounds() {
+        let (mut worst_log, mut worst_exp): (f64, f64) = (0.0, 0.0);
+        let mut x = 1e-300;
+        while x < 1e300 {
+            worst_log = worst_log.max((log2_approx(x) - x.log2()).abs());
+            x *= 1.0007;
+        }
+        for i in -200_000..=200_000 {
+            let y = i as f64 * 1e-4;
+            worst_exp = worst_exp.max((exp2_approx(y) / y.exp2() - 1.0).abs());
+        }
+        assert!(worst_log < 5e-8, "log2: {worst_log:e}");
+        assert!(worst_exp < 1e-8, "exp2: {worst_exp:e}");
+        assert!(worst_log > 0.0 && worst_exp > 0.0, "compared something");
+        assert_eq!(log2_approx(1.0), 0.0);
+        assert_eq!(exp2_approx(0.0), 1.0);
+        assert_eq!(exp2_approx(-3.0), 0.125);
+        assert_eq!(exp2_approx(f64::NAN), 1.0);
+        assert_eq!(exp2_approx(5000.0), 2f64.powi(1000));
+    }
+}
