@@ -116,6 +116,12 @@ pub struct Sand {
     added_mass_density: f64,
     /// pi C, m^2.
     added_mass_pi_c_m2: f64,
+    /// `k1 / A_foot`, N/m^3.
+    k1_per_area: f64,
+    /// `pi / (3 cone_rate)`, 1 (infinite when the cone does not grow).
+    pi_over_3_cone_rate: f64,
+    /// `1 / l_re`, 1/m.
+    per_reintrusion_length: f64,
 }
 
 impl Sand {
@@ -146,6 +152,9 @@ impl Sand {
             sigma_over_cos: s.sigma_cone_n_m3 / theta.cos(),
             added_mass_density: s.packing_fraction * s.grain_density_kg_m3 * s.jamming_front_rate,
             added_mass_pi_c_m2: core::f64::consts::PI * s.added_mass_c_m2,
+            k1_per_area: s.k1_n_m * area_scale / (core::f64::consts::PI * r * r),
+            pi_over_3_cone_rate: core::f64::consts::PI / (3.0 * cone_rate),
+            per_reintrusion_length: 1.0 / s.reintrusion_length_m,
         }
     }
 
@@ -159,9 +168,13 @@ impl Sand {
     /// `Int_0^z A_flat(u) du`, m^3 (closed form of the cone's flat-area integral).
     fn flat_area_integral(&self, z_m: f64) -> f64 {
         let r = self.foot_radius_m;
+        if self.cone_rate <= 0.0 {
+            // A jamming front that does not grow (mu = 0): the flat part stays the whole foot.
+            return self.foot_area_m2 * z_m;
+        }
         let zc = z_m.min(self.cone_depth_m);
         let rz = r - self.cone_rate * zc;
-        core::f64::consts::PI * (r * r * r - rz * rz * rz) / (3.0 * self.cone_rate)
+        (r * r * r - rz * rz * rz) * self.pi_over_3_cone_rate
     }
 
     /// Penetration force `F_p(z)`, N (0 above the surface; infinite for the rigid floor below it).
@@ -181,8 +194,7 @@ impl Sand {
             }
             PenetrationLaw::Cone => {
                 let flat = self.flat_area_integral(z_m);
-                self.k1_n_m / self.foot_area_m2 * flat
-                    + self.sigma_over_cos * (self.foot_area_m2 * z_m - flat)
+                self.k1_per_area * flat + self.sigma_over_cos * (self.foot_area_m2 * z_m - flat)
             }
         }
     }
@@ -191,7 +203,7 @@ impl Sand {
     /// anchored at `anchor_m`.
     pub fn reintrusion_overshoot(&self, z_m: f64, anchor_m: f64) -> f64 {
         let below = (z_m - anchor_m).max(0.0);
-        self.kappa_n_m * anchor_m.max(0.0) * (-below / self.reintrusion_length_m).exp()
+        self.kappa_n_m * anchor_m.max(0.0) * (-below * self.per_reintrusion_length).exp()
     }
 
     /// The force the sand resists with at depth `z` (and a static foot's holding capacity):
@@ -297,6 +309,23 @@ mod tests {
         for s_m in [0.001, 0.01, 0.03, 0.05] {
             let num = (s.added_mass(s_m + h) - s.added_mass(s_m - h)) / (2.0 * h);
             assert!((num - s.added_mass_slope(s_m)).abs() < 1e-5 * num);
+        }
+    }
+
+    #[test]
+    fn a_cone_that_does_not_grow_leaves_a_flat_foot() {
+        // mu = 0 is allowed (non-negative): the flat part stays the whole foot, F_p = k1 z,
+        // and no grains join the foot (the added mass grows with mu).
+        let mut p = Params::preset(0.57).unwrap();
+        p.sand.jamming_front_rate = 0.0;
+        let s = Sand::new(&p, GroundLaw::resolve(ModelName::Eq4, &p.model));
+        for z in [0.0, 0.004, 0.03, 0.2] {
+            let f = s.penetration_force(z);
+            assert!(
+                (f - s.k1_n_m * z).abs() <= 1e-12 * f.max(1.0),
+                "F_p({z}) = {f}"
+            );
+            assert_eq!(s.added_mass(z), 0.0);
         }
     }
 

@@ -124,7 +124,7 @@ impl Contact {
         let weight = m_f * robot.gravity_m_s2;
         match self.mode {
             GroundMode::Aerial => FootForces {
-                accel_m_s2: (-weight - f_s) / m_f,
+                accel_m_s2: robot.foot_accel_aerial(f_s),
                 ground_force_n: 0.0,
                 added_mass_kg: 0.0,
             },
@@ -139,7 +139,9 @@ impl Contact {
                 let resist = self.holding_force(sand, z) + sand.drag_coefficient(s) * v_f * v_f;
                 let m_a = sand.added_mass(s);
                 // eq4, implicit in the foot's own acceleration: (m_f + m_a) a = -m_f g - F_s + F_p + alpha v^2.
-                let accel = (-weight - f_s + resist) / (m_f + m_a);
+                // The reciprocal depends on the depth only: it is ready before F_s.
+                let per_kg = 1.0 / (m_f + m_a);
+                let accel = ((resist - weight) - f_s) * per_kg;
                 FootForces {
                     accel_m_s2: accel,
                     ground_force_n: resist - m_a * accel,

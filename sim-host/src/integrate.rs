@@ -208,8 +208,7 @@ impl<const N: usize> DormandPrince<N> {
     /// exactly on it). `f(t, y)` is the right-hand side. The step's dense output is then
     /// [`dense`](Self::dense).
     ///
-    /// The stages are combined component by component in plain arrays (the same operations
-    /// in the same order as the vector form `y + (k1 a1 + k2 a2 + ..) h`).
+    /// The stages are combined component by component in plain arrays.
     pub fn step<F>(
         &mut self,
         f: &mut F,
@@ -245,39 +244,38 @@ impl<const N: usize> DormandPrince<N> {
             if h < min_h {
                 return Err(StepFailure::StepSizeTooSmall { t, h });
             }
-            let a21h = A21 * h;
-            let k2 = rhs(t + C2 * h, from_fn(|i| y0[i] + k1[i] * a21h));
-            let k3 = rhs(
-                t + C3 * h,
-                from_fn(|i| y0[i] + (k1[i] * A31 + k2[i] * A32) * h),
+            // Each stage state is the part already known (earlier stages) plus the newest
+            // stage's term: only one multiply-add waits on the right-hand side just evaluated.
+            let hk = |c: f64, k: &[f64; N]| -> [f64; N] { from_fn(|i| k[i] * (c * h)) };
+            let add = |a: [f64; N], b: [f64; N]| -> [f64; N] { from_fn(|i| a[i] + b[i]) };
+            let k2 = rhs(t + C2 * h, add(y0, hk(A21, &k1)));
+            let base3 = add(y0, hk(A31, &k1));
+            let k3 = rhs(t + C3 * h, add(base3, hk(A32, &k2)));
+            let base4 = add(add(y0, hk(A41, &k1)), hk(A42, &k2));
+            let k4 = rhs(t + C4 * h, add(base4, hk(A43, &k3)));
+            let base5 = add(add(add(y0, hk(A51, &k1)), hk(A52, &k2)), hk(A53, &k3));
+            let k5 = rhs(t + C5 * h, add(base5, hk(A54, &k4)));
+            let base6 = add(
+                add(add(add(y0, hk(A61, &k1)), hk(A62, &k2)), hk(A63, &k3)),
+                hk(A64, &k4),
             );
-            let k4 = rhs(
-                t + C4 * h,
-                from_fn(|i| y0[i] + (k1[i] * A41 + k2[i] * A42 + k3[i] * A43) * h),
+            let k6 = rhs(t1, add(base6, hk(A65, &k5)));
+            let base7 = add(
+                add(add(add(y0, hk(A71, &k1)), hk(A73, &k3)), hk(A74, &k4)),
+                hk(A75, &k5),
             );
-            let k5 = rhs(
-                t + C5 * h,
-                from_fn(|i| y0[i] + (k1[i] * A51 + k2[i] * A52 + k3[i] * A53 + k4[i] * A54) * h),
+            let y1 = add(base7, hk(A76, &k6));
+            let err_base = add(
+                add(add(add(hk(E1, &k1), hk(E3, &k3)), hk(E4, &k4)), hk(E5, &k5)),
+                hk(E6, &k6),
             );
-            let k6 = rhs(
-                t1,
-                from_fn(|i| {
-                    y0[i]
-                        + (k1[i] * A61 + k2[i] * A62 + k3[i] * A63 + k4[i] * A64 + k5[i] * A65) * h
-                }),
-            );
-            let y1: [f64; N] = from_fn(|i| {
-                y0[i] + (k1[i] * A71 + k3[i] * A73 + k4[i] * A74 + k5[i] * A75 + k6[i] * A76) * h
-            });
             let k7 = rhs(t1, y1);
             self.rhs_evaluations += 6;
             // Max norm over components (as MATLAB's ode45): every component meets its tolerance.
             let mut err: f64 = 0.0;
             let mut reached = self.reached;
             for i in 0..N {
-                let err_i =
-                    (k1[i] * E1 + k3[i] * E3 + k4[i] * E4 + k5[i] * E5 + k6[i] * E6 + k7[i] * E7)
-                        * h;
+                let err_i = err_base[i] + k7[i] * (E7 * h);
                 let o = self.origin[i];
                 let here = (y0[i] - o).abs().max((y1[i] - o).abs());
                 reached[i] = reached[i].max(here);

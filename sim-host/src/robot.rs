@@ -4,7 +4,8 @@
 
 use crate::params::Params;
 
-/// Masses, spring and gravity.
+/// Masses, spring and gravity. Build it with [`Robot::new`]; the fields are for reading (the
+/// reciprocals the right-hand side multiplies by are computed there, once).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Robot {
     /// m_m, kg.
@@ -21,6 +22,18 @@ pub struct Robot {
     pub spring_rest_length_m: f64,
     /// g, m/s^2.
     pub gravity_m_s2: f64,
+    /// `1/M`, `m_m/M`, `1/m_r`, `1/m_m`, `1/m_f`: divisions taken out of every evaluation of
+    /// the right-hand side, where they would sit on the critical path of each stage.
+    reciprocals: Reciprocals,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Reciprocals {
+    motor_rod_per_kg: f64,
+    motor_share: f64,
+    rod_per_kg: f64,
+    motor_per_kg: f64,
+    foot_per_kg: f64,
 }
 
 impl Robot {
@@ -35,6 +48,13 @@ impl Robot {
             spring_damping_n_s_m: r.spring_damping_n_s_m,
             spring_rest_length_m: r.spring_rest_length_m,
             gravity_m_s2: r.gravity_m_s2,
+            reciprocals: Reciprocals {
+                motor_rod_per_kg: 1.0 / (r.motor_mass_kg + r.rod_mass_kg),
+                motor_share: r.motor_mass_kg / (r.motor_mass_kg + r.rod_mass_kg),
+                rod_per_kg: 1.0 / r.rod_mass_kg,
+                motor_per_kg: 1.0 / r.motor_mass_kg,
+                foot_per_kg: 1.0 / r.foot_mass_kg,
+            },
         }
     }
 
@@ -66,20 +86,26 @@ impl Robot {
     /// Kinematic drive: `M x_r'' = -M g + F_s - m_m p''`, m/s^2.
     #[inline]
     pub fn rod_accel_kinematic(&self, spring_force_n: f64, p_accel_m_s2: f64) -> f64 {
-        let m = self.motor_rod_mass_kg();
-        (-m * self.gravity_m_s2 + spring_force_n - self.motor_mass_kg * p_accel_m_s2) / m
+        let r = &self.reciprocals;
+        spring_force_n * r.motor_rod_per_kg - (self.gravity_m_s2 + r.motor_share * p_accel_m_s2)
     }
 
     /// Force-driven: `m_r x_r'' = -m_r g - F_m + F_s`, m/s^2.
     #[inline]
     pub fn rod_accel_forced(&self, spring_force_n: f64, motor_force_n: f64) -> f64 {
-        -self.gravity_m_s2 + (spring_force_n - motor_force_n) / self.rod_mass_kg
+        (spring_force_n - motor_force_n) * self.reciprocals.rod_per_kg - self.gravity_m_s2
     }
 
     /// Force-driven: `m_m x_m'' = -m_m g + F_m`, m/s^2.
     #[inline]
     pub fn motor_accel(&self, motor_force_n: f64) -> f64 {
-        -self.gravity_m_s2 + motor_force_n / self.motor_mass_kg
+        motor_force_n * self.reciprocals.motor_per_kg - self.gravity_m_s2
+    }
+
+    /// Acceleration of the foot alone under its weight and the spring, `-g - F_s/m_f`, m/s^2.
+    #[inline]
+    pub fn foot_accel_aerial(&self, spring_force_n: f64) -> f64 {
+        -(spring_force_n * self.reciprocals.foot_per_kg) - self.gravity_m_s2
     }
 
     /// Motor force implied by the motor's acceleration, `F_m = m_m (x_m'' + g)`, N.
