@@ -110,9 +110,19 @@ pub fn exp2_approx(y: f64) -> f64 {
     // 2^f = e^(f ln 2), |f ln 2| <= 0.347: Taylor to degree 7, the first omitted term below 6e-9.
     let g = (y - n) * core::f64::consts::LN_2;
     let g2 = g * g;
-    let two_f = (1.0 + g)
-        + g2 * ((0.5 + g / 6.0)
-            + g2 * ((1.0 / 24.0 + g / 120.0) + g2 * (1.0 / 720.0 + g / 5040.0)));
+    // Coefficients as constants: `g / 6.0` would be a division on every step.
+    const C: [f64; 8] = [
+        1.0,
+        1.0,
+        0.5,
+        1.0 / 6.0,
+        1.0 / 24.0,
+        1.0 / 120.0,
+        1.0 / 720.0,
+        1.0 / 5040.0,
+    ];
+    let two_f = (C[0] + C[1] * g)
+        + g2 * ((C[2] + C[3] * g) + g2 * ((C[4] + C[5] * g) + g2 * (C[6] + C[7] * g)));
     two_f * f64::from_bits(((n as i64 + 1023) as u64) << 52)
 }
 

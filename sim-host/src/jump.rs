@@ -481,7 +481,7 @@ mod tests {
         assert!((left - 0.01875 * w * w).abs() < 1e-9, "left limit {left}");
         // Inside the segment nothing changes.
         assert_eq!(k.eval(0.02), stroke.eval(0.02));
-        // The next segment starts with the hold again (the memo is forgotten).
+        // The next segment starts with the hold again.
         k.begin_segment(half + 0.2);
         assert_eq!(k.eval(half).accel_m_s2, 0.0);
     }

@@ -106,6 +106,7 @@ impl Stroke for SineJump {
     /// for the delayed stutter, to the end otherwise); the delayed stutter's hold at `-A` and
     /// its second half, phase-shifted by `tau`; the final hold.
     fn cosine_piece(&self, t_s: f64) -> Option<CosinePiece> {
+        // Before the start the stroke holds p(0), the signed amplitude.
         let a = self.eval(f64::NAN).position_m;
         let (half, end) = (0.5 * self.period_s(), self.end_s());
         let w = 2.0 * core::f64::consts::PI * self.freq_hz();
