@@ -51,6 +51,12 @@ pub fn sincos_small(x: f64) -> (f64, f64) {
     if x.abs() > SINCOS_SMALL_MAX_RAD || x.is_nan() {
         return x.sin_cos();
     }
+    sincos_small_poly(x)
+}
+
+/// The polynomials of [`sincos_small`], without the range check.
+#[inline(always)]
+fn sincos_small_poly(x: f64) -> (f64, f64) {
     let x2 = x * x;
     let x4 = x2 * x2;
     let x8 = x4 * x4;
@@ -77,6 +83,24 @@ pub fn sincos_small(x: f64) -> (f64, f64) {
     (x * s, c)
 }
 
+/// [`sincos_small`] of `L` angles at once, lane by lane in one straight run (the compiler
+/// vectorizes it): the same polynomials, so the same results. Lanes outside
+/// `|x| <= SINCOS_SMALL_MAX_RAD` (or NaN) get `sin_cos` itself.
+#[inline]
+pub fn sincos_small_lanes<const L: usize>(x: [f64; L]) -> ([f64; L], [f64; L]) {
+    let mut sin = [0.0; L];
+    let mut cos = [0.0; L];
+    if x.iter().all(|x| x.abs() <= SINCOS_SMALL_MAX_RAD) {
+        for i in 0..L {
+            (sin[i], cos[i]) = sincos_small_poly(x[i]);
+        }
+    } else {
+        for i in 0..L {
+            (sin[i], cos[i]) = sincos_small(x[i]);
+        }
+    }
+    (sin, cos)
+}
 /// `log2 x` to about 5e-8 absolute, for the step-size controller (a factor that needs a few
 /// digits, computed on every step): the exponent from the bits and an atanh series of the
 /// mantissa in `[1/sqrt 2, sqrt 2)`. `x` must be positive and normal (subnormals, zero,
@@ -168,6 +192,28 @@ mod tests {
                 "{x}"
             );
         }
+    }
+
+    #[test]
+    fn sincos_small_lanes_equals_sincos_small_lane_by_lane() {
+        let check = |x: [f64; 6]| {
+            let (s, c) = sincos_small_lanes(x);
+            for i in 0..6 {
+                let (es, ec) = sincos_small(x[i]);
+                assert_eq!(
+                    (s[i].to_bits(), c[i].to_bits()),
+                    (es.to_bits(), ec.to_bits()),
+                    "lane {i} of {x:?}"
+                );
+            }
+        };
+        for j in 0..1000 {
+            let base = -SINCOS_SMALL_MAX_RAD + 2.0 * SINCOS_SMALL_MAX_RAD * j as f64 / 1000.0;
+            check(core::array::from_fn(|i| base * (1.0 - 0.15 * i as f64)));
+        }
+        // A lane out of range (or NaN) takes `sin_cos`, the others keep the polynomials.
+        check([0.01, 0.02, 0.2, -0.03, 0.1, 0.125]);
+        check([0.01, f64::NAN, 0.05, -0.03, 3.0, -0.125]);
     }
 
     #[test]

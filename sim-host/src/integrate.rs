@@ -139,6 +139,40 @@ const D5: f64 = 701980252875.0 / 199316789632.0;
 const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
+/// Number of distinct stage times of a step: `t0 + c_i h` for `c = 0, 1/5, 3/10, 4/5, 8/9, 1`
+/// (the seventh stage, FSAL, is at the step's end like the sixth).
+pub const STAGE_TIMES: usize = 6;
+
+/// Index into the stage times of the stage evaluating the step's end (the sixth stage and the
+/// FSAL stage share it).
+pub const END_STAGE: usize = STAGE_TIMES - 1;
+
+/// The right-hand side `y' = f(t, y)` of [`DormandPrince::step`].
+///
+/// Before the stages of each attempted step, [`stage_times`](Self::stage_times) names their
+/// times, so a right-hand side with a part that depends on time alone (a prescribed stroke,
+/// a held motor force) can evaluate it for all stages at once; `eval` then says which stage
+/// it is. Any `FnMut(f64, &SVector) -> SVector` closure is a right-hand side without that.
+pub trait Rhs<const N: usize> {
+    /// The stages of the next attempted step are at `times` (`t0 + c_i h`, in order; the
+    /// last is the step's end, shared by the sixth and the FSAL stage).
+    #[inline]
+    fn stage_times(&mut self, times: &[f64; STAGE_TIMES]) {
+        let _ = times;
+    }
+    /// `y'` at `t`, the time of stage `stage` (an index into the last
+    /// [`stage_times`](Self::stage_times)), or not a stage of the current step when
+    /// `stage >= STAGE_TIMES` (the first stage of a step without FSAL).
+    fn eval(&mut self, stage: usize, t: f64, y: &SVector<f64, N>) -> SVector<f64, N>;
+}
+
+impl<const N: usize, F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>> Rhs<N> for F {
+    #[inline]
+    fn eval(&mut self, _stage: usize, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+        self(t, y)
+    }
+}
+
 /// Hairer's `beta` of the PI step-size controller.
 const PI_BETA: f64 = 0.04;
 
@@ -205,27 +239,23 @@ impl<const N: usize> DormandPrince<N> {
     }
 
     /// Take one accepted step from `(t, y)`, never past `t_limit` (a step reaching it ends
-    /// exactly on it). `f(t, y)` is the right-hand side. The step's dense output is then
+    /// exactly on it). `f` is the right-hand side. The step's dense output is then
     /// [`dense`](Self::dense).
     ///
     /// The stages are combined component by component in plain arrays.
-    pub fn step<F>(
+    pub fn step<F: Rhs<N>>(
         &mut self,
         f: &mut F,
         t: f64,
         y: &SVector<f64, N>,
         t_limit: f64,
-    ) -> Result<(), StepFailure>
-    where
-        F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
-    {
-        let mut rhs = |t: f64, y: [f64; N]| -> [f64; N] { f(t, &SVector::from(y)).into() };
+    ) -> Result<(), StepFailure> {
         let y0: [f64; N] = (*y).into();
         let k1 = match self.fsal {
             Some(k) => k,
             None => {
                 self.rhs_evaluations += 1;
-                rhs(t, y0)
+                f.eval(STAGE_TIMES, t, y).into()
             }
         };
         let min_h = 16.0 * f64::EPSILON * t.abs().max(1e-3);
@@ -244,22 +274,26 @@ impl<const N: usize> DormandPrince<N> {
             if h < min_h {
                 return Err(StepFailure::StepSizeTooSmall { t, h });
             }
+            f.stage_times(&[t, t + C2 * h, t + C3 * h, t + C4 * h, t + C5 * h, t1]);
+            let mut rhs = |stage: usize, t: f64, y: [f64; N]| -> [f64; N] {
+                f.eval(stage, t, &SVector::from(y)).into()
+            };
             // Each stage state is the part already known (earlier stages) plus the newest
             // stage's term: only one multiply-add waits on the right-hand side just evaluated.
             let hk = |c: f64, k: &[f64; N]| -> [f64; N] { from_fn(|i| k[i] * (c * h)) };
             let add = |a: [f64; N], b: [f64; N]| -> [f64; N] { from_fn(|i| a[i] + b[i]) };
-            let k2 = rhs(t + C2 * h, add(y0, hk(A21, &k1)));
+            let k2 = rhs(1, t + C2 * h, add(y0, hk(A21, &k1)));
             let base3 = add(y0, hk(A31, &k1));
-            let k3 = rhs(t + C3 * h, add(base3, hk(A32, &k2)));
+            let k3 = rhs(2, t + C3 * h, add(base3, hk(A32, &k2)));
             let base4 = add(add(y0, hk(A41, &k1)), hk(A42, &k2));
-            let k4 = rhs(t + C4 * h, add(base4, hk(A43, &k3)));
+            let k4 = rhs(3, t + C4 * h, add(base4, hk(A43, &k3)));
             let base5 = add(add(add(y0, hk(A51, &k1)), hk(A52, &k2)), hk(A53, &k3));
-            let k5 = rhs(t + C5 * h, add(base5, hk(A54, &k4)));
+            let k5 = rhs(4, t + C5 * h, add(base5, hk(A54, &k4)));
             let base6 = add(
                 add(add(add(y0, hk(A61, &k1)), hk(A62, &k2)), hk(A63, &k3)),
                 hk(A64, &k4),
             );
-            let k6 = rhs(t1, add(base6, hk(A65, &k5)));
+            let k6 = rhs(END_STAGE, t1, add(base6, hk(A65, &k5)));
             let base7 = add(
                 add(add(add(y0, hk(A71, &k1)), hk(A73, &k3)), hk(A74, &k4)),
                 hk(A75, &k5),
@@ -269,7 +303,7 @@ impl<const N: usize> DormandPrince<N> {
                 add(add(add(hk(E1, &k1), hk(E3, &k3)), hk(E4, &k4)), hk(E5, &k5)),
                 hk(E6, &k6),
             );
-            let k7 = rhs(t1, y1);
+            let k7 = rhs(END_STAGE, t1, y1);
             self.rhs_evaluations += 6;
             // Max norm over components (as MATLAB's ode45): every component meets its tolerance.
             let mut err: f64 = 0.0;

@@ -3,9 +3,10 @@
 //! by apex events.
 
 use crate::error::SimError;
-use crate::fastmath::{SINCOS_SMALL_MAX_RAD, sincos_small};
+use crate::fastmath::{SINCOS_SMALL_MAX_RAD, sincos_small, sincos_small_lanes};
 use crate::ground::{GroundLaw, Sand};
 use crate::hybrid::{Contact, GroundMode};
+use crate::integrate::{END_STAGE, STAGE_TIMES};
 use crate::params::{ModelName, Params};
 use crate::robot::Robot;
 use crate::simulation::{Actuation, Simulation};
@@ -191,6 +192,30 @@ pub struct Kinematic<S> {
     segment_end_s: f64,
     /// The cosine piece in use and its anchor (an empty piece until the first evaluation).
     piece: Cell<AnchoredPiece>,
+    /// `p''` at the stage times of the step being attempted (see [`Actuation::stage_times`]).
+    stages: StageAccel,
+}
+
+/// `p''` at each stage time of one attempted step.
+#[derive(Clone, Copy, Debug)]
+struct StageAccel {
+    /// Stage times, s (NaN: none).
+    times_s: [f64; STAGE_TIMES],
+    /// `p''(t)` at each (the left limit at the segment's end), m/s^2.
+    accel_m_s2: [f64; STAGE_TIMES],
+}
+
+impl StageAccel {
+    const NONE: Self = Self {
+        times_s: [f64::NAN; STAGE_TIMES],
+        accel_m_s2: [0.0; STAGE_TIMES],
+    };
+
+    /// `p''` at `t` if `t` is the time of stage `stage`.
+    #[inline]
+    fn get(&self, stage: usize, t: f64) -> Option<f64> {
+        (stage < STAGE_TIMES && self.times_s[stage] == t).then(|| self.accel_m_s2[stage])
+    }
 }
 
 /// A cosine piece with the sine and cosine of its phase at an anchor time.
@@ -214,6 +239,7 @@ impl<S: Stroke> Kinematic<S> {
                 anchor_s: f64::NAN,
                 sin_cos: (0.0, 1.0),
             }),
+            stages: StageAccel::NONE,
         }
     }
 
@@ -221,6 +247,68 @@ impl<S: Stroke> Kinematic<S> {
     /// `+inf`): at `t >= end_s` the left limit of `p` and its derivatives is used.
     pub fn begin_segment(&mut self, end_s: f64) {
         self.segment_end_s = end_s;
+        self.stages = StageAccel::NONE;
+    }
+
+    /// `t`, or one ulp before the current segment's end when `t` is at or past it.
+    #[inline]
+    fn left_limited(&self, t: f64) -> f64 {
+        if t >= self.segment_end_s {
+            self.segment_end_s.next_down()
+        } else {
+            t
+        }
+    }
+
+    /// `p''` at all stage times of a step: one batch of [`sincos_small_lanes`] from the
+    /// anchor (re-anchored at the step's start when the step leaves its range), or the plain
+    /// [`eval`](Self::eval) per stage when the step is not inside one cosine piece.
+    fn eval_stages(&self, times: &[f64; STAGE_TIMES]) -> [f64; STAGE_TIMES] {
+        let (first, last) = (
+            self.left_limited(times[0]),
+            self.left_limited(times[END_STAGE]),
+        );
+        let inside = |a: &AnchoredPiece| {
+            let w = a.piece.angular_freq_rad_s;
+            a.piece.contains(first)
+                && a.piece.contains(last)
+                && (w * (first - a.anchor_s)).abs() <= SINCOS_SMALL_MAX_RAD
+                && (w * (last - a.anchor_s)).abs() <= SINCOS_SMALL_MAX_RAD
+        };
+        // Only the step's end may reach the segment's end (the integrator steps onto it).
+        if times[END_STAGE - 1] >= self.segment_end_s {
+            return times.map(|t| self.eval(t).accel_m_s2);
+        }
+        let mut anchored = self.piece.get();
+        if !inside(&anchored) {
+            self.eval_anchoring(first);
+            anchored = self.piece.get();
+            if !inside(&anchored) {
+                return times.map(|t| self.eval(t).accel_m_s2);
+            }
+        }
+        let piece = anchored.piece;
+        if piece.angular_freq_rad_s == 0.0 {
+            return [piece.kinematics(0.0, 1.0).accel_m_s2; STAGE_TIMES];
+        }
+        let mut angles = times.map(|t| piece.angular_freq_rad_s * (t - anchored.anchor_s));
+        angles[END_STAGE] = piece.angular_freq_rad_s * (last - anchored.anchor_s);
+        let (ds, dc) = sincos_small_lanes(angles);
+        let (s0, c0) = anchored.sin_cos;
+        core::array::from_fn(|i| {
+            piece
+                .kinematics(s0 * dc[i] + c0 * ds[i], c0 * dc[i] - s0 * ds[i])
+                .accel_m_s2
+        })
+    }
+
+    /// `p''(t)` at stage `stage`: from the step's batch when `t` is that stage's time.
+    #[inline]
+    fn accel_at(&self, stage: usize, t: f64) -> f64 {
+        match self.stages.get(stage, t) {
+            Some(a) => a,
+            None => self.eval(t).accel_m_s2,
+        }
     }
 
     /// `p(t)` with its derivatives. At the end of the current segment it is the left limit:
@@ -228,11 +316,7 @@ impl<S: Stroke> Kinematic<S> {
     /// for the paper's strokes.
     #[inline]
     pub fn eval(&self, t: f64) -> Kinematics {
-        let t = if t >= self.segment_end_s {
-            self.segment_end_s.next_down()
-        } else {
-            t
-        };
+        let t = self.left_limited(t);
         let anchored = self.piece.get();
         if anchored.piece.contains(t) {
             let piece = anchored.piece;
@@ -277,22 +361,31 @@ impl<S: Stroke> Kinematic<S> {
 
 impl<S: Stroke> Actuation<4> for Kinematic<S> {
     #[inline]
+    fn stage_times(&mut self, times: &[f64; STAGE_TIMES]) {
+        self.stages = StageAccel {
+            times_s: *times,
+            accel_m_s2: self.eval_stages(times),
+        };
+    }
+    #[inline]
     fn rod_accel(
         &self,
         robot: &Robot,
+        stage: usize,
         t: f64,
         _y: &Vector4<f64>,
         f_s: f64,
         _dy: &mut Vector4<f64>,
     ) -> f64 {
-        robot.rod_accel_kinematic(f_s, self.eval(t).accel_m_s2)
+        robot.rod_accel_kinematic(f_s, self.accel_at(stage, t))
     }
     fn motor_position(&self, t: f64, _y: &Vector4<f64>) -> f64 {
         self.eval(t).position_m
     }
     fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, f_s: f64) -> f64 {
-        // F_m = m_m (x_r'' + p'' + g), the motor's own acceleration being x_r'' + p''.
-        let p_accel = self.eval(t).accel_m_s2;
+        // F_m = m_m (x_r'' + p'' + g), the motor's own acceleration being x_r'' + p''. At a
+        // step's end, p'' is the last stage's.
+        let p_accel = self.accel_at(END_STAGE, t);
         robot.motor_force_for(robot.rod_accel_kinematic(f_s, p_accel) + p_accel)
     }
 }
@@ -485,6 +578,60 @@ mod tests {
         k.begin_segment(half + 0.2);
         assert_eq!(k.eval(half).accel_m_s2, 0.0);
     }
+    #[test]
+    fn stage_batches_match_the_stroke_and_fall_back_off_their_step() {
+        // Steps as the integrator takes them: stage times announced, then evaluated by
+        // stage; some steps end on a breakpoint (left limit), some are retried shorter
+        // (rejected), one straddles a breakpoint (no single piece: per-stage evaluation).
+        let c = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0];
+        let robot = Robot::new(&Params::preset(0.57).unwrap());
+        let y = Vector4::zeros();
+        let mut dy = Vector4::zeros();
+        for (kind, tau) in [(JumpKind::Single, 0.0), (JumpKind::DelayedStutter, 0.2)] {
+            let stroke = SineJump::new(kind, 0.01875, 17.0, tau).unwrap();
+            let mut k = Kinematic::new(stroke);
+            let w = core::f64::consts::TAU * 17.0;
+            let scale = 0.01875 * w * w;
+            let mut worst = 0.0_f64;
+            let mut check = |k: &mut Kinematic<SineJump>, t0: f64, h: f64, end: f64| {
+                let times = c.map(|c| if c == 1.0 { t0 + h } else { t0 + c * h });
+                k.stage_times(&times);
+                for (stage, &t) in times.iter().enumerate() {
+                    // rod_accel = f_s / (m_m + m_r) - g - share p'': with f_s = 0 it gives p''.
+                    let got = k.rod_accel(&robot, stage, t, &y, 0.0, &mut dy);
+                    let want = robot.rod_accel_kinematic(0.0, {
+                        let t = if t >= end { end.next_down() } else { t };
+                        stroke.eval(t).accel_m_s2
+                    });
+                    worst = worst.max((got - want).abs() / scale);
+                }
+            };
+            let bps = stroke.breakpoints_s();
+            let mut t = 0.0;
+            for &bp in bps.iter().chain([f64::INFINITY].iter()) {
+                k.begin_segment(bp);
+                let limit = bp.min(stroke.end_s() + 0.05);
+                while t < limit {
+                    let h = (limit - t).min(7e-4);
+                    check(&mut k, t, 2.0 * h, bp); // rejected, or past the breakpoint
+                    check(&mut k, t, h, bp);
+                    t += h;
+                }
+                t = limit;
+            }
+            assert!(
+                worst < 8.0 * f64::EPSILON,
+                "{kind:?}: {worst:e} of full scale"
+            );
+            // A time that is not the named stage's is evaluated on its own.
+            k.begin_segment(f64::INFINITY);
+            k.stage_times(&c.map(|c| 0.01 + c * 1e-4));
+            let got = k.rod_accel(&robot, 2, 0.02, &y, 0.0, &mut dy);
+            let want = robot.rod_accel_kinematic(0.0, stroke.eval(0.02).accel_m_s2);
+            assert!((got - want).abs() < 8.0 * f64::EPSILON * scale);
+        }
+    }
+
     #[test]
     fn anchored_evaluation_matches_the_stroke_within_a_few_ulps() {
         // Times as an integrator visits them: forward in small steps with stage times in

@@ -127,6 +127,7 @@ impl Actuation<6> for Forced {
     fn rod_accel(
         &self,
         robot: &Robot,
+        _stage: usize,
         t: f64,
         y: &Vector6<f64>,
         f_s: f64,

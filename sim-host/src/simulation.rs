@@ -6,7 +6,7 @@
 use crate::error::SimError;
 use crate::ground::Sand;
 use crate::hybrid::{Contact, GroundMode, Guard, Transition};
-use crate::integrate::{DenseStep, DormandPrince, StepFailure, locate_crossing};
+use crate::integrate::{DenseStep, DormandPrince, Rhs, STAGE_TIMES, StepFailure, locate_crossing};
 use crate::jump::{Event, EventKind, JumpSummary, SeriesRow, SimOptions};
 use crate::robot::Robot;
 use nalgebra::SVector;
@@ -20,11 +20,20 @@ const MAX_SWITCHES_PER_INSTANT: u32 = 8;
 
 /// How motor and rod are driven.
 pub trait Actuation<const N: usize> {
-    /// Rod acceleration for spring force `f_s`; writes the derivatives of any extra states
-    /// (index 4 on) into `dy`. m/s^2.
+    /// The integrator's next attempted step has its stages at `times` (see
+    /// [`Rhs::stage_times`]): a drive that depends on time alone may evaluate it for all of
+    /// them at once.
+    #[inline]
+    fn stage_times(&mut self, times: &[f64; STAGE_TIMES]) {
+        let _ = times;
+    }
+    /// Rod acceleration for spring force `f_s` at `t`, the time of stage `stage` (an index
+    /// into the last [`stage_times`](Self::stage_times), or `>= STAGE_TIMES` for none);
+    /// writes the derivatives of any extra states (index 4 on) into `dy`. m/s^2.
     fn rod_accel(
         &self,
         robot: &Robot,
+        stage: usize,
         t: f64,
         y: &SVector<f64, N>,
         f_s: f64,
@@ -188,10 +197,12 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                 });
             }
             {
-                let (robot, sand, contact, act) =
-                    (&self.robot, &self.sand, &self.contact, &self.actuation);
-                let mut f =
-                    |t: f64, y: &SVector<f64, N>| derivative(robot, sand, contact, act, t, y);
+                let mut f = PlantRhs {
+                    robot: &self.robot,
+                    sand: &self.sand,
+                    contact: &self.contact,
+                    actuation: &mut self.actuation,
+                };
                 self.dp
                     .step(&mut f, self.t, &self.y, t_end)
                     .map_err(|e| match e {
@@ -468,26 +479,34 @@ fn apexes<const N: usize>(
 }
 
 /// The right-hand side: `[x_r', v_r', x_f', v_f', ..]` in the current ground mode.
-#[inline]
-fn derivative<A: Actuation<N>, const N: usize>(
-    robot: &Robot,
-    sand: &Sand,
-    contact: &Contact,
-    act: &A,
-    t: f64,
-    y: &SVector<f64, N>,
-) -> SVector<f64, N> {
-    let f_s = robot.spring_force(y[0], y[1], y[2], y[3]);
-    let mut dy = SVector::<f64, N>::zeros();
-    let a_r = act.rod_accel(robot, t, y, f_s, &mut dy);
-    dy[0] = y[1];
-    dy[1] = a_r;
-    if contact.mode == GroundMode::Static {
-        dy[2] = 0.0;
-        dy[3] = 0.0;
-    } else {
-        dy[2] = y[3];
-        dy[3] = contact.foot(robot, sand, y[2], y[3], f_s).accel_m_s2;
+struct PlantRhs<'a, A> {
+    robot: &'a Robot,
+    sand: &'a Sand,
+    contact: &'a Contact,
+    actuation: &'a mut A,
+}
+
+impl<A: Actuation<N>, const N: usize> Rhs<N> for PlantRhs<'_, A> {
+    #[inline]
+    fn stage_times(&mut self, times: &[f64; STAGE_TIMES]) {
+        self.actuation.stage_times(times);
     }
-    dy
+
+    #[inline]
+    fn eval(&mut self, stage: usize, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let (robot, contact) = (self.robot, self.contact);
+        let f_s = robot.spring_force(y[0], y[1], y[2], y[3]);
+        let mut dy = SVector::<f64, N>::zeros();
+        let a_r = self.actuation.rod_accel(robot, stage, t, y, f_s, &mut dy);
+        dy[0] = y[1];
+        dy[1] = a_r;
+        if contact.mode == GroundMode::Static {
+            dy[2] = 0.0;
+            dy[3] = 0.0;
+        } else {
+            dy[2] = y[3];
+            dy[3] = contact.foot(robot, self.sand, y[2], y[3], f_s).accel_m_s2;
+        }
+        dy
+    }
 }
