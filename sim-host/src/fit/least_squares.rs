@@ -13,7 +13,7 @@
 //! the optimum; the standard error of `x_j` is the square root of its diagonal element.
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
-use nalgebra_lm::{DMatrix, DVector, Dyn, Owned};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
 
 /// Relative finite-difference step in log-parameter space.
 const LOG_STEP: f64 = 1e-5;
