@@ -130,7 +130,10 @@ pub fn exp2_approx(y: f64) -> f64 {
     } else {
         y.clamp(-1000.0, 1000.0)
     };
-    let n = y.round();
+    // Nearest integer by adding and removing 1.5 * 2^52 (ties to even): two additions,
+    // where `round` is a libm call on baseline x86-64.
+    const ROUNDING: f64 = 6_755_399_441_055_744.0;
+    let n = (y + ROUNDING) - ROUNDING;
     // 2^f = e^(f ln 2), |f ln 2| <= 0.347: Taylor to degree 7, the first omitted term below 6e-9.
     let g = (y - n) * core::f64::consts::LN_2;
     let g2 = g * g;

@@ -318,8 +318,10 @@ impl<const N: usize> DormandPrince<N> {
                 } else {
                     here
                 };
-                let sk = self.atol + self.rtol * scale;
-                let ratio = (err_i / sk).abs();
+                // The reciprocal of the weight is ready before the error (which waits on the
+                // last stage): the division is off the step's critical path.
+                let per_sk = 1.0 / (self.atol + self.rtol * scale);
+                let ratio = (err_i * per_sk).abs();
                 // NaN-propagating max (`f64::max` would drop a NaN component).
                 if ratio.is_nan() || ratio > err {
                     err = ratio;
