@@ -100,6 +100,8 @@ impl From<ModelArg> for ModelName {
 pub struct ParamSource {
     /// TOML file overriding any parameter (tables [robot], [drive], [sand], [model], keys as
     /// printed by `sandjumper params`). Applied on top of the --phi preset.
+    // The doc text is also the `--help` text: the TOML table names stay in brackets.
+    #[allow(rustdoc::broken_intra_doc_links)]
     #[arg(long, value_name = "FILE.toml")]
     pub params: Option<PathBuf>,
     /// Relative tolerance of the Dormand-Prince 5(4) integrator.

@@ -8,7 +8,7 @@
 //!
 //! `m p'' = m g + F_m - F_GM`
 //!
-//! The sand is elastic-perfectly-plastic under the foot [chosen]: a contact spring of
+//! The sand is elastic-perfectly-plastic under the foot \[chosen\]: a contact spring of
 //! stiffness [`CONTACT_STIFFNESS_N_M`] (with damping) on the bottom of the hole, which flows
 //! plastically when its force would exceed the resisting force `F_p(z)` (plus the
 //! re-intrusion overshoot once the foot has left the hole bottom, anchored where it meets the
@@ -27,7 +27,7 @@ use super::session::Fixture;
 
 /// Stiffness of the sand under the foot before it yields, N/m [chosen: 40 N compress it 0.2 mm].
 pub const CONTACT_STIFFNESS_N_M: f64 = 2.0e5;
-/// Damping ratio of the contact [chosen].
+/// Damping ratio of the contact \[chosen\].
 pub const CONTACT_DAMPING_RATIO: f64 = 0.5;
 /// Integration steps per control period.
 pub const SUBSTEPS: u32 = 10;
