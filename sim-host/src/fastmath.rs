@@ -101,6 +101,7 @@ pub fn sincos_small_lanes<const L: usize>(x: [f64; L]) -> ([f64; L], [f64; L]) {
     }
     (sin, cos)
 }
+
 /// `log2 x` to about 5e-8 absolute, for the step-size controller (a factor that needs a few
 /// digits, computed on every step): the exponent from the bits and an atanh series of the
 /// mantissa in `[1/sqrt 2, sqrt 2)`. `x` must be positive and normal (subnormals, zero,

@@ -231,6 +231,23 @@ struct AnchoredPiece {
     sin_cos: (f64, f64),
 }
 
+impl AnchoredPiece {
+    /// The phase advanced since the anchor at `t`, rad.
+    #[inline]
+    fn angle_since_anchor(&self, t: f64) -> f64 {
+        self.piece.angular_freq_rad_s * (t - self.anchor_s)
+    }
+
+    /// The piece's kinematics at the phase `anchor + d`, given `(sin d, cos d)`: angle
+    /// addition from the anchor's sine and cosine.
+    #[inline]
+    fn kinematics_after(&self, sin_d: f64, cos_d: f64) -> Kinematics {
+        let (s0, c0) = self.sin_cos;
+        self.piece
+            .kinematics(s0 * cos_d + c0 * sin_d, c0 * cos_d - s0 * sin_d)
+    }
+}
+
 impl<S: Stroke> Kinematic<S> {
     /// Drive by `stroke`.
     pub fn new(stroke: S) -> Self {
@@ -267,42 +284,43 @@ impl<S: Stroke> Kinematic<S> {
     /// anchor (re-anchored at the step's start when the step leaves its range), or the plain
     /// [`eval`](Self::eval) per stage when the step is not inside one cosine piece.
     fn eval_stages(&self, times: &[f64; STAGE_TIMES]) -> [f64; STAGE_TIMES] {
-        let (first, last) = (
-            self.left_limited(times[0]),
-            self.left_limited(times[END_STAGE]),
-        );
+        self.eval_stages_in_piece(times)
+            .unwrap_or_else(|| times.map(|t| self.eval(t).accel_m_s2))
+    }
+
+    /// [`eval_stages`](Self::eval_stages) when the whole step lies in one cosine piece within
+    /// [`SINCOS_SMALL_MAX_RAD`] of an anchor (re-anchoring at the step's start if needed).
+    #[inline]
+    fn eval_stages_in_piece(&self, times: &[f64; STAGE_TIMES]) -> Option<[f64; STAGE_TIMES]> {
+        // Only the step's end may reach the segment's end (the integrator steps onto it), so
+        // the other stage times need no left limit.
+        if times[END_STAGE - 1] >= self.segment_end_s {
+            return None;
+        }
+        let mut stage_times = *times;
+        stage_times[END_STAGE] = self.left_limited(times[END_STAGE]);
+        let (first, last) = (stage_times[0], stage_times[END_STAGE]);
         let inside = |a: &AnchoredPiece| {
-            let w = a.piece.angular_freq_rad_s;
             a.piece.contains(first)
                 && a.piece.contains(last)
-                && (w * (first - a.anchor_s)).abs() <= SINCOS_SMALL_MAX_RAD
-                && (w * (last - a.anchor_s)).abs() <= SINCOS_SMALL_MAX_RAD
+                && a.angle_since_anchor(first).abs() <= SINCOS_SMALL_MAX_RAD
+                && a.angle_since_anchor(last).abs() <= SINCOS_SMALL_MAX_RAD
         };
-        // Only the step's end may reach the segment's end (the integrator steps onto it).
-        if times[END_STAGE - 1] >= self.segment_end_s {
-            return times.map(|t| self.eval(t).accel_m_s2);
-        }
         let mut anchored = self.piece.get();
         if !inside(&anchored) {
             self.eval_anchoring(first);
             anchored = self.piece.get();
             if !inside(&anchored) {
-                return times.map(|t| self.eval(t).accel_m_s2);
+                return None;
             }
         }
-        let piece = anchored.piece;
-        if piece.angular_freq_rad_s == 0.0 {
-            return [piece.kinematics(0.0, 1.0).accel_m_s2; STAGE_TIMES];
+        if anchored.piece.angular_freq_rad_s == 0.0 {
+            return Some([anchored.piece.kinematics(0.0, 1.0).accel_m_s2; STAGE_TIMES]);
         }
-        let mut angles = times.map(|t| piece.angular_freq_rad_s * (t - anchored.anchor_s));
-        angles[END_STAGE] = piece.angular_freq_rad_s * (last - anchored.anchor_s);
-        let (ds, dc) = sincos_small_lanes(angles);
-        let (s0, c0) = anchored.sin_cos;
-        core::array::from_fn(|i| {
-            piece
-                .kinematics(s0 * dc[i] + c0 * ds[i], c0 * dc[i] - s0 * ds[i])
-                .accel_m_s2
-        })
+        let (ds, dc) = sincos_small_lanes(stage_times.map(|t| anchored.angle_since_anchor(t)));
+        Some(core::array::from_fn(|i| {
+            anchored.kinematics_after(ds[i], dc[i]).accel_m_s2
+        }))
     }
 
     /// `p''(t)` at stage `stage`: from the step's batch when `t` is that stage's time.
@@ -326,11 +344,10 @@ impl<S: Stroke> Kinematic<S> {
             if piece.angular_freq_rad_s == 0.0 {
                 return piece.kinematics(0.0, 1.0);
             }
-            let step = piece.angular_freq_rad_s * (t - anchored.anchor_s);
+            let step = anchored.angle_since_anchor(t);
             if step.abs() <= SINCOS_SMALL_MAX_RAD {
-                let (s0, c0) = anchored.sin_cos;
                 let (ds, dc) = sincos_small(step);
-                return piece.kinematics(s0 * dc + c0 * ds, c0 * dc - s0 * ds);
+                return anchored.kinematics_after(ds, dc);
             }
         }
         self.eval_anchoring(t)
