@@ -120,8 +120,8 @@ impl Contact {
     /// Foot acceleration and ground force for spring force `f_s` and foot state `(x_f, v_f)`.
     #[inline]
     pub fn foot(&self, robot: &Robot, sand: &Sand, x_f: f64, v_f: f64, f_s: f64) -> FootForces {
-        let m_f = robot.foot_mass_kg;
-        let weight = m_f * robot.gravity_m_s2;
+        let m_f = robot.foot_mass_kg();
+        let weight = m_f * robot.gravity_m_s2();
         match self.mode {
             GroundMode::Aerial => FootForces {
                 accel_m_s2: robot.foot_accel_aerial(f_s),

@@ -439,7 +439,7 @@ pub fn kinematic_at_rest<S: Stroke>(
 /// foot sunk to `z0` with `F_p(z0) = (M + m_f) g`, nudged down by a few ulps if rounding
 /// left the load above the sand's capacity (so the rest is exactly consistent).
 pub fn rest_heights(robot: &Robot, sand: &Sand) -> (f64, f64) {
-    let load = (robot.motor_rod_mass_kg() + robot.foot_mass_kg) * robot.gravity_m_s2;
+    let load = (robot.motor_rod_mass_kg() + robot.foot_mass_kg()) * robot.gravity_m_s2();
     let mut z0 = sand.initial_sink(load);
     let rest = robot.rest_rod_above_foot_m();
     for _ in 0..64 {

@@ -176,7 +176,7 @@ impl Plant {
         let robot = Robot::new(params);
         let sand = Sand::new(params, GroundLaw::resolve(model, &params.model));
         let (x_r, x_f) = rest_heights(&robot, &sand);
-        let hold = robot.motor_mass_kg * robot.gravity_m_s2;
+        let hold = robot.motor_mass_kg() * robot.gravity_m_s2();
         let drive = MotorDrive::new(&params.drive);
         let forced = Forced::new(0.0, hold, hold, drive.current_lag_s);
         let y0 = Vector6::new(x_r, 0.0, x_f, 0.0, x_r + initial_p_m, 0.0);

@@ -4,24 +4,18 @@
 
 use crate::params::Params;
 
-/// Masses, spring and gravity. Build it with [`Robot::new`]; the fields are for reading (the
-/// reciprocals the right-hand side multiplies by are computed there, once).
+/// Masses, spring and gravity, read through accessors. Built only by [`Robot::new`], which
+/// also forms the reciprocals the right-hand side multiplies by: the fields are private so
+/// that a mass cannot change without them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Robot {
-    /// m_m, kg.
-    pub motor_mass_kg: f64,
-    /// m_r, kg.
-    pub rod_mass_kg: f64,
-    /// m_f, kg.
-    pub foot_mass_kg: f64,
-    /// k_s, N/m.
-    pub spring_stiffness_n_m: f64,
-    /// c_s, N s/m.
-    pub spring_damping_n_s_m: f64,
-    /// L0, m.
-    pub spring_rest_length_m: f64,
-    /// g, m/s^2.
-    pub gravity_m_s2: f64,
+    motor_mass_kg: f64,
+    rod_mass_kg: f64,
+    foot_mass_kg: f64,
+    spring_stiffness_n_m: f64,
+    spring_damping_n_s_m: f64,
+    spring_rest_length_m: f64,
+    gravity_m_s2: f64,
     /// `1/M`, `m_m/M`, `1/m_r`, `1/m_m`, `1/m_f`: divisions taken out of every evaluation of
     /// the right-hand side, where they would sit on the critical path of each stage.
     reciprocals: Reciprocals,
@@ -56,6 +50,48 @@ impl Robot {
                 foot_per_kg: 1.0 / r.foot_mass_kg,
             },
         }
+    }
+
+    /// m_m, kg.
+    #[inline]
+    pub fn motor_mass_kg(&self) -> f64 {
+        self.motor_mass_kg
+    }
+
+    /// m_r, kg.
+    #[inline]
+    pub fn rod_mass_kg(&self) -> f64 {
+        self.rod_mass_kg
+    }
+
+    /// m_f, kg.
+    #[inline]
+    pub fn foot_mass_kg(&self) -> f64 {
+        self.foot_mass_kg
+    }
+
+    /// k_s, N/m.
+    #[inline]
+    pub fn spring_stiffness_n_m(&self) -> f64 {
+        self.spring_stiffness_n_m
+    }
+
+    /// c_s, N s/m.
+    #[inline]
+    pub fn spring_damping_n_s_m(&self) -> f64 {
+        self.spring_damping_n_s_m
+    }
+
+    /// L0, m.
+    #[inline]
+    pub fn spring_rest_length_m(&self) -> f64 {
+        self.spring_rest_length_m
+    }
+
+    /// g, m/s^2.
+    #[inline]
+    pub fn gravity_m_s2(&self) -> f64 {
+        self.gravity_m_s2
     }
 
     /// `M = m_m + m_r`, kg.

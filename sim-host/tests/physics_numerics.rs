@@ -47,11 +47,11 @@ fn airborne(
 
 fn energy(r: &Robot, y: &Vector4<f64>) -> f64 {
     let m = r.motor_rod_mass_kg();
-    let stretch = r.spring_rest_length_m - (y[0] - y[2]);
+    let stretch = r.spring_rest_length_m() - (y[0] - y[2]);
     0.5 * m * y[1] * y[1]
-        + 0.5 * r.foot_mass_kg * y[3] * y[3]
-        + 0.5 * r.spring_stiffness_n_m * stretch * stretch
-        + r.gravity_m_s2 * (m * y[0] + r.foot_mass_kg * y[2])
+        + 0.5 * r.foot_mass_kg() * y[3] * y[3]
+        + 0.5 * r.spring_stiffness_n_m() * stretch * stretch
+        + r.gravity_m_s2() * (m * y[0] + r.foot_mass_kg() * y[2])
 }
 
 #[test]
