@@ -11,7 +11,7 @@
 //! (Hairer, Norsett & Wanner, `dopri5` `contd5`). Events are located on the dense output
 //! by the Illinois variant of regula falsi. Deterministic: no clocks, no randomness.
 
-use crate::fastmath::{exp2_approx, log2_approx};
+use crate::fastmath::{exp2_in_range, log2_approx};
 use core::array::from_fn;
 use nalgebra::SVector;
 
@@ -175,6 +175,13 @@ impl<const N: usize, F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>> Rhs<N> 
 
 /// Hairer's `beta` of the PI step-size controller.
 const PI_BETA: f64 = 0.04;
+/// `log2 0.9`: the controller's safety factor.
+const LOG2_SAFETY: f64 = -0.152_003_093_445_049_97;
+/// `log2 0.2` and `log2 10`: the most a step may shrink or grow.
+const LOG2_FAC_MIN: f64 = 1.0 - core::f64::consts::LOG2_10;
+const LOG2_FAC_MAX: f64 = core::f64::consts::LOG2_10;
+/// `log2 1e-4`: the smallest previous error the PI controller remembers (Hairer's `facold`).
+const LOG2_ERR_OLD_MIN: f64 = -13.287_712_379_549_449;
 
 /// The Dormand-Prince 5(4) stepper: tolerances, current step size, FSAL stage, counters.
 #[derive(Clone, Debug)]
@@ -226,7 +233,7 @@ impl<const N: usize> DormandPrince<N> {
                 rc: [[0.0; N]; 5],
                 end: [0.0; N],
             },
-            log2_err_old_beta: PI_BETA * log2_approx(1e-4),
+            log2_err_old_beta: PI_BETA * LOG2_ERR_OLD_MIN,
             rhs_evaluations: 0,
             accepted: 0,
             rejected: 0,
@@ -337,12 +344,15 @@ impl<const N: usize> DormandPrince<N> {
                 continue;
             }
             if err <= 1.0 {
-                // PI controller: fac = 0.9 err^-(0.2 - 0.75 beta) err_old^beta.
+                // PI controller: fac = 0.9 err^-(0.2 - 0.75 beta) err_old^beta, clamped to
+                // [0.2, 10], all in log2 (safety and clamp cost no multiply on the chain
+                // from this step's error to the next step's stages).
                 let log2_err = log2_approx(err.max(1e-10));
-                let fac =
-                    0.9 * exp2_approx(-(0.2 - 0.75 * PI_BETA) * log2_err + self.log2_err_old_beta);
-                self.log2_err_old_beta = PI_BETA * log2_err.max(log2_approx(1e-4));
-                let h_next = h * fac.clamp(0.2, 10.0);
+                let log2_fac = (LOG2_SAFETY + self.log2_err_old_beta
+                    - (0.2 - 0.75 * PI_BETA) * log2_err)
+                    .clamp(LOG2_FAC_MIN, LOG2_FAC_MAX);
+                self.log2_err_old_beta = PI_BETA * log2_err.max(LOG2_ERR_OLD_MIN);
+                let h_next = h * exp2_in_range(log2_fac);
                 // A step cut short by t_limit keeps its own proposal for the next step.
                 self.h = if t1 == t_limit {
                     self.h.max(h_next)
@@ -375,7 +385,7 @@ impl<const N: usize> DormandPrince<N> {
                 return Ok(());
             }
             self.rejected += 1;
-            self.h = h * (0.9 * exp2_approx(-0.2 * log2_approx(err))).max(0.2);
+            self.h = h * exp2_in_range((LOG2_SAFETY - 0.2 * log2_approx(err)).max(LOG2_FAC_MIN));
         }
     }
 
