@@ -1,7 +1,13 @@
 //! Speed of the plant simulator: one eq4 single jump at rtol 1e-8, and a 2,000-jump sweep on
-//! two threads (targets on the 2-core machine: < 60 us and < 0.3 s).
+//! two threads (targets on the 2-core machine: < 60 us and < 0.3 s). Beside them, the floor
+//! of the method on the machine at hand: the same Dormand-Prince stepper on the robot's free
+//! flight alone (no ground, no events, no dense-output use), whose time per step is what any
+//! jump's steps cost at the least.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::Vector4;
+use sandjumper_sim::integrate::DormandPrince;
+use sandjumper_sim::robot::Robot;
 use sandjumper_sim::*;
 use std::hint::black_box;
 
@@ -20,6 +26,42 @@ fn one_jump(c: &mut Criterion) {
     c.bench_function("eq4 single jump, rtol 1e-8", |b| {
         b.iter(|| simulate_jump(black_box(&params), black_box(&spec), &opts).unwrap())
     });
+}
+
+/// The robot in free flight with its foot ringing, integrated for `duration_s` by the bare
+/// stepper at rtol 1e-8 (as the jump): returns the accepted steps.
+fn free_flight(robot: &Robot, duration_s: f64) -> u64 {
+    let mut dp = DormandPrince::<4>::new(1e-8, 1e-11, 0.01, 1e-5);
+    dp.scale_by_largest[3] = true;
+    let mut rhs = |_t: f64, y: &Vector4<f64>| {
+        let f_s = robot.spring_force(y[0], y[1], y[2], y[3]);
+        Vector4::new(
+            y[1],
+            robot.rod_accel_kinematic(f_s, 0.0),
+            y[3],
+            robot.foot_accel_aerial(f_s),
+        )
+    };
+    let rest = robot.rest_rod_above_foot_m();
+    let (mut t, mut y) = (0.0, Vector4::new(rest, 1.5, 0.0, 2.5));
+    dp.origin = y;
+    dp.origin[1] = 0.0;
+    dp.origin[3] = 0.0;
+    while t < duration_s {
+        dp.step(&mut rhs, t, &y, duration_s).unwrap();
+        t = dp.dense().t1;
+        y = dp.dense().end_state();
+    }
+    dp.accepted
+}
+
+fn integrator_floor(c: &mut Criterion) {
+    let robot = Robot::new(&Params::preset(0.57).unwrap());
+    let steps = free_flight(&robot, 0.25);
+    c.bench_function(
+        &format!("integrator floor: {steps} DP5 steps of free flight, rtol 1e-8"),
+        |b| b.iter(|| free_flight(black_box(&robot), 0.25)),
+    );
 }
 
 fn sweep(c: &mut Criterion) {
@@ -60,6 +102,6 @@ criterion_group! {
     name = benches;
     // No HTML plots: criterion's plotters backend needs system fonts a fresh machine lacks.
     config = Criterion::default().without_plots();
-    targets = one_jump, sweep
+    targets = one_jump, integrator_floor, sweep
 }
 criterion_main!(benches);
