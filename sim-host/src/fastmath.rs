@@ -118,11 +118,24 @@ pub fn log2_approx(x: f64) -> f64 {
         0.321_879_706_965_249_04,
         -0.082_860_698_276_896_64,
     ];
+    let (e, t) = exponent_and_fraction(x);
+    e as f64 + t * cubic(&Q, t)
+}
+
+/// `x = 2^e (1 + t)`: the unbiased exponent `e` and the mantissa's fraction `t` in `[0, 1)`,
+/// read from the bits (exact; zero and subnormals give `e = -1023`, the sign is ignored).
+#[inline]
+pub fn exponent_and_fraction(x: f64) -> (i64, f64) {
     let bits = x.to_bits();
     let e = ((bits >> 52) & 0x7ff) as i64 - 1023;
     let t = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000) - 1.0;
-    let q = (Q[0] + Q[1] * t) + (t * t) * (Q[2] + Q[3] * t);
-    e as f64 + t * q
+    (e, t)
+}
+
+/// `c0 + c1 t + c2 t^2 + c3 t^3` in Estrin's form (three multiply-add levels deep, not four).
+#[inline]
+pub fn cubic(c: &[f64; 4], t: f64) -> f64 {
+    (c[0] + c[1] * t) + (t * t) * (c[2] + c[3] * t)
 }
 
 /// `2^y` to about 1.2e-4 relative (see [`log2_approx`]); `y` is clamped to `[-1000, 1000]`

@@ -11,7 +11,7 @@
 //! (Hairer, Norsett & Wanner, `dopri5` `contd5`). Events are located on the dense output
 //! by the Illinois variant of regula falsi. Deterministic: no clocks, no randomness.
 
-use crate::fastmath::{exp2_in_range, log2_approx};
+use crate::fastmath::{cubic, exp2_in_range, exponent_and_fraction, log2_approx};
 use core::array::from_fn;
 use nalgebra::SVector;
 
@@ -478,10 +478,9 @@ fn safety_times_error_power(err: f64) -> f64 {
         0.076_678_414_548_524_46,
         -0.021_723_603_268_657_767,
     ];
-    let bits = err.to_bits();
-    let minus_exponent = (1023 - ((bits >> 52) & 0x7ff) as i64).clamp(0, 63) as usize;
-    let t = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000) - 1.0;
-    let mantissa_power = (M[0] + M[1] * t) + (t * t) * (M[2] + M[3] * t);
+    let (e, t) = exponent_and_fraction(err);
+    let minus_exponent = (-e).clamp(0, 63) as usize;
+    let mantissa_power = cubic(&M, t);
     SAFETY_TIMES_POWER_OF_TWO[minus_exponent] * mantissa_power
 }
 
