@@ -6,8 +6,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector4;
-use sandjumper_sim::integrate::DormandPrince;
 use sandjumper_sim::robot::Robot;
+use sandjumper_sim::simulation::plant_stepper;
 use sandjumper_sim::*;
 use std::hint::black_box;
 
@@ -29,10 +29,8 @@ fn one_jump(c: &mut Criterion) {
 }
 
 /// The robot in free flight with its foot ringing, integrated for `duration_s` by the bare
-/// stepper at rtol 1e-8 (as the jump): returns the accepted steps.
+/// stepper, configured as a jump's ([`plant_stepper`]) at rtol 1e-8: returns the accepted steps.
 fn free_flight(robot: &Robot, duration_s: f64) -> u64 {
-    let mut dp = DormandPrince::<4>::new(1e-8, 1e-11, 0.01, 1e-5);
-    dp.scale_by_largest[3] = true;
     let mut rhs = |_t: f64, y: &Vector4<f64>| {
         let f_s = robot.spring_force(y[0], y[1], y[2], y[3]);
         Vector4::new(
@@ -42,11 +40,15 @@ fn free_flight(robot: &Robot, duration_s: f64) -> u64 {
             robot.foot_accel_aerial(f_s),
         )
     };
-    let rest = robot.rest_rod_above_foot_m();
-    let (mut t, mut y) = (0.0, Vector4::new(rest, 1.5, 0.0, 2.5));
-    dp.origin = y;
-    dp.origin[1] = 0.0;
-    dp.origin[3] = 0.0;
+    let (mut t, mut y) = (
+        0.0,
+        Vector4::new(robot.rest_rod_above_foot_m(), 1.5, 0.0, 2.5),
+    );
+    let opts = SimOptions {
+        rtol: 1e-8,
+        ..SimOptions::default()
+    };
+    let mut dp = plant_stepper(&opts, &y);
     while t < duration_s {
         dp.step(&mut rhs, t, &y, duration_s).unwrap();
         t = dp.dense().t1;

@@ -102,7 +102,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             actuation,
             t: 0.0,
             y: y0,
-            dp: DormandPrince::new(opts.rtol, opts.atol, opts.max_step_s, 1e-5),
+            dp: plant_stepper(opts, &y0),
             x_r0: y0[0],
             push_off_start_s,
             events: Vec::new(),
@@ -116,18 +116,6 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
                 value: f64::NEG_INFINITY,
             }; 2],
         };
-        // Heights are reported from the start: positions (even components) are weighed by
-        // their displacement from the initial state, velocities by their size.
-        for i in (0..N).step_by(2) {
-            sim.dp.origin[i] = y0[i];
-        }
-        // The foot's velocity rings about zero at the foot mode (about 53 Hz in flight):
-        // weighed by its value at the step, its tolerance would collapse at every crossing.
-        // It is weighed by the largest foot speed reached instead (21 % fewer steps for the
-        // same heights). The rod's velocity is not: under a stale large scale, the decaying
-        // 8 Hz ringing of a long delay on hard ground accumulates phase error (1.6e-6 m
-        // instead of 6.3e-7 m at rtol 1e-6).
-        sim.dp.scale_by_largest[3] = true;
         sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
         // The final jump height is the highest rod apex once the push-off half has begun.
@@ -447,6 +435,25 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             end_time_s: self.t,
         }
     }
+}
+
+/// The Dormand-Prince stepper of a plant run from `y0` (layout `[x_r, v_r, x_f, v_f, ..]`),
+/// tolerances and largest step from `opts`, weighing the errors as every simulation does.
+pub fn plant_stepper<const N: usize>(opts: &SimOptions, y0: &SVector<f64, N>) -> DormandPrince<N> {
+    let mut dp = DormandPrince::new(opts.rtol, opts.atol, opts.max_step_s, 1e-5);
+    // Heights are reported from the start: positions (even components) are weighed by
+    // their displacement from the initial state, velocities by their size.
+    for i in (0..N).step_by(2) {
+        dp.origin[i] = y0[i];
+    }
+    // The foot's velocity rings about zero at the foot mode (about 53 Hz in flight):
+    // weighed by its value at the step, its tolerance would collapse at every crossing.
+    // It is weighed by the largest foot speed reached instead (21 % fewer steps for the
+    // same heights). The rod's velocity is not: under a stale large scale, the decaying
+    // 8 Hz ringing of a long delay on hard ground accumulates phase error (1.6e-6 m
+    // instead of 6.3e-7 m at rtol 1e-6).
+    dp.scale_by_largest[3] = true;
+    dp
 }
 
 /// Rod apexes (`x_r'` crossing 0 downward) in `[step.t0, t_new]`, located exactly on the
