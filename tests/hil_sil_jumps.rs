@@ -8,14 +8,19 @@
 //! - the jump height is within [`HEIGHT_TOLERANCE`] of the kinematic simulation of the same
 //!   trajectory (the paper's method: `p(t)` imposed exactly).
 //!
-//! Why 2 mm and 15 %: the position loop is a 50 Hz loop on the carriage (1.125 kg) with a
-//! 1-tick (0.1 ms) lockstep delay; at 10 Hz forcing the one-cycle sine reaches 74 m/s^2 and
-//! the spring load changes by tens of newtons within a stance, so the loop lags by about
-//! 1 mm (measured 0.8-1.4 mm), about 3 % of the 37.5 mm stroke, mostly as a phase lag. The
-//! jump height goes with the square of the take-off velocity, so a few percent of stroke
-//! velocity is 5-12 % of height (measured: -12 % to +7 %); 15 % bounds that with margin
-//! while still catching a controller that does not jump properly (a missed push-off
-//! changes the height by a factor of two or more).
+//! - after the step of the feedforward at the start, the loop settles within milliseconds
+//!   instead of ringing at its crossover.
+//!
+//! Why 2 mm and 15 %: the position loop is stiff as a 50 Hz loop on the carriage (1.125 kg),
+//! held at the sensor frame's tick (0.1 ms); at 10 Hz forcing the one-cycle sine reaches
+//! 74 m/s^2 and the spring load changes by tens of newtons within a stance, so the loop lags
+//! by about 1 mm (measured 0.77-1.27 mm), about 3 % of the 37.5 mm stroke, mostly as a phase
+//! lag. The jump height goes with the square of the take-off velocity, so a few percent of
+//! stroke velocity is 5-12 % of height. The delayed stutter adds the spring's ringing through
+//! the delay, which the carriage on its finite loop damps differently from the imposed
+//! `p(t)` (measured over these nine jumps: -13.7 % to +7.5 %). 15 % bounds that while still
+//! catching a controller that does not jump properly (a missed push-off changes the height by
+//! a factor of two or more).
 
 mod hil_common;
 
@@ -89,4 +94,38 @@ fn delayed_stutter_jumps_track_and_match_the_kinematic_height() {
     check(JumpKind::DelayedStutter, 0.75, ModelName::Hard, 0.57);
     check(JumpKind::DelayedStutter, 0.75, ModelName::Eq4, 0.57);
     check(JumpKind::DelayedStutter, 0.75, ModelName::Eq4, 0.62);
+}
+
+/// Largest deviation of the force command from its 21-tick (2.1 ms) moving average between 4
+/// and 31 ms after the start, N: the loop's own oscillation once the feedforward's step at the
+/// start has passed (the trajectory's force changes little over 2 ms).
+fn start_ringing_n(o: &sandjumper_sim::hil::HilOutcome) -> f64 {
+    let f: Vec<f64> = o
+        .trace
+        .iter()
+        .filter(|r| (0.004..0.031).contains(&r.t_s))
+        .map(|r| r.drive_command_n)
+        .collect();
+    assert!(f.len() > 200, "{} ticks", f.len());
+    (10..f.len() - 10)
+        .map(|i| (f[i] - f[i - 10..=i + 10].iter().sum::<f64>() / 21.0).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_loop_settles_after_the_start_step() {
+    // The trajectory starts with its full acceleration: the feedforward steps the force by
+    // ~80 N. A loop without phase margin rings after it at its crossover (the first rig gains
+    // rang at ~470 Hz, +-50 N, for tens of milliseconds); the rig's gains settle within a
+    // few milliseconds (measured 1.6-1.9 N of residue, quantization and the trajectory's own curvature).
+    for (kind, model) in [
+        (JumpKind::Single, ModelName::Hard),
+        (JumpKind::Single, ModelName::Eq4),
+        (JumpKind::Stutter, ModelName::Eq4),
+    ] {
+        let o = sil(&params(0.57), &HilSpec::new(kind, 10.0, 0.0, model));
+        let ring = start_ringing_n(&o);
+        eprintln!("{kind:?} on {model}: {ring:.2} N of ringing 4-31 ms after the start");
+        assert!(ring < 5.0, "{kind:?} on {model}: {ring} N");
+    }
 }

@@ -18,7 +18,8 @@
 //!
 //! `v_est` comes from [`VelocityEstimator`]: encoder count differences times
 //! `metres_per_count * tick_hz`, through a first-order low-pass
-//! `v += alpha (v_raw - v)`, `alpha = 1 - exp(-2 pi f_c / tick_hz)` (default `f_c` 500 Hz).
+//! `v += alpha (v_raw - v)`, `alpha = 1 - exp(-2 pi f_c / tick_hz)` (default `f_c` 2 kHz, see
+//! [`RigConfig::velocity_cutoff_hz`](crate::RigConfig::velocity_cutoff_hz)).
 
 use crate::config::{ConfigError, field as check};
 

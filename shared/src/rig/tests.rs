@@ -533,7 +533,10 @@ fn slow_intrusion_runs_through_the_loop() {
     let mut r = armed_and_started(jc, &mut plant);
     let (worst, samples) = run_to_end(&mut r, &mut plant, 30_000);
     assert_eq!(r.state(), RigState::Done);
-    assert!(worst < 50e-6, "{worst}");
+    // Each segment starts with a step of 0.05 m/s in the commanded velocity; the core's
+    // default loop on the reduced mass lags it by ~50 um for a moment (55 um behind the 2 kHz
+    // velocity filter, 48 um behind the first 500 Hz one, whose lag happened to help here).
+    assert!(worst < 60e-6, "{worst}");
     let deepest = samples
         .iter()
         .map(|s| s.commanded_position_m)

@@ -128,7 +128,7 @@ pub struct HilArgs {
     #[arg(long, value_name = "S", value_parser = parse_tau, required_if_eq("kind", "delayed"))]
     pub tau: Option<f64>,
     /// Gain-lowering damping during the delay: position gain times FACTOR (0 < FACTOR <= 1;
-    /// 0.05 damps the ringing ~10x), velocity gain halved.
+    /// 0.05 damps the ringing ~10x), velocity gain times 0.9.
     #[arg(long, value_name = "FACTOR", value_parser = parse_factor)]
     pub gain_lowering: Option<f32>,
     /// Ground model of the plant.

@@ -7,13 +7,15 @@
 //!   process), [`framed`] (the wire protocol over a byte stream) used by [`pil`] (the real
 //!   firmware in QEMU) and [`serial`] (a real F407 over USB CDC).
 //! - [`run`]: one jump through the loop; [`log`]: its acquisition log and figure;
-//!   [`command`]: `sandjumper hil`.
+//!   [`command`]: `sandjumper hil`; [`loop_margins`]: the position loop's stability margins
+//!   on the rig, from its linear model.
 
 pub mod command;
 pub mod emulated_firmware;
 pub mod framed;
 pub mod link;
 pub mod log;
+pub mod loop_margins;
 pub mod pil;
 pub mod rig_model;
 pub mod run;

@@ -23,6 +23,11 @@ use sandjumper_core::{
 /// integrator at 1e-8 cost half again as many steps.
 pub const DEFAULT_RTOL: f64 = 1e-6;
 
+/// Damping ratio of [`HilSpec::rig_gains`]'s derivative gain on the motor/rod reduced mass
+/// (1.25: 38 degrees of phase margin and 10 dB of gain margin on the rig's loop; 1.0 gives
+/// 40 degrees but leaves the delayed stutter's hard-ground ringing less damped).
+pub const RIG_REDUCED_MASS_DAMPING: f64 = 1.25;
+
 /// Periods simulated after a fault is latched (to show the force stays zero).
 pub const POST_FAULT_PERIODS: u64 = 20;
 
@@ -87,7 +92,7 @@ impl HilSpec {
             freq_hz,
             tau_s,
             model,
-            gains: Self::rig_gains(1.125),
+            gains: Self::rig_gains(1.125, 0.125),
             gain_lowering: None,
             tracking_error_limit_m: 0.005,
             camera_fps: 200,
@@ -97,19 +102,29 @@ impl HilSpec {
         }
     }
 
-    /// Gains for a motor carriage of `motor_mass_kg` (MODEL.md `m_m`): a 50 Hz position loop
-    /// on the carriage itself, `kp = m_m (2 pi 50 Hz)^2`, damping ratio 0.7, acceleration
-    /// feedforward with `m_m`, and an integrator (clamped at 20 N) that takes up the carriage's
-    /// weight `m_m g`, which the core has no feedforward for. The core's own defaults are
-    /// tuned on the motor/rod reduced mass (0.11 kg), which is what moves in flight; in stance
-    /// the spring holds the rod and the drive must move the whole carriage, and with them the
-    /// stutter's push-off lags by more than the 5 mm tracking bound.
-    pub fn rig_gains(motor_mass_kg: f64) -> Gains {
+    /// Gains for a motor carriage of `motor_mass_kg` on a thrust rod of `rod_mass_kg` (MODEL.md
+    /// `m_m`, `m_r`).
+    ///
+    /// - `kp = m_m (2 pi 50 Hz)^2`: stiff enough for stance, where the spring holds the rod and
+    ///   the drive moves the whole carriage against the push-off's load (the core's own
+    ///   defaults, tuned on the reduced mass, lag the stutter's push-off by more than the 5 mm
+    ///   tracking bound there).
+    /// - `kd = 2 zeta sqrt(kp mu)`, `zeta` [`RIG_REDUCED_MASS_DAMPING`], on the reduced mass
+    ///   `mu = m_m m_r / (m_m + m_r)`: above the rod's resonance on the spring (~26 Hz) the drive
+    ///   sees `mu`, and the loop crosses over at a few hundred hertz where the tick, the current
+    ///   lag and the velocity filter take their phase ([`loop_margins`](super::loop_margins):
+    ///   38 degrees and 10 dB with the rig's defaults). Damping chosen on the carriage instead
+    ///   (`zeta` 0.7 on `m_m`, the first version) left 4 degrees and 1 dB: the loop rang at
+    ///   ~470 Hz, +-50 N, after every step in the feedforward.
+    /// - acceleration feedforward with `m_m`, and an integrator (`ki = 10 kp`, clamped at 20 N)
+    ///   that takes up the carriage's weight `m_m g`, which the core has no feedforward for.
+    pub fn rig_gains(motor_mass_kg: f64, rod_mass_kg: f64) -> Gains {
         let w = std::f64::consts::TAU * 50.0;
         let kp = motor_mass_kg * w * w;
+        let reduced_mass = motor_mass_kg * rod_mass_kg / (motor_mass_kg + rod_mass_kg);
         Gains {
             kp_n_per_m: kp as f32,
-            kd_n_s_per_m: (2.0 * 0.7 * (kp * motor_mass_kg).sqrt()) as f32,
+            kd_n_s_per_m: (2.0 * RIG_REDUCED_MASS_DAMPING * (kp * reduced_mass).sqrt()) as f32,
             ki_n_per_m_s: (kp * 10.0) as f32,
             integral_limit_n: 20.0,
             feedforward_mass_kg: motor_mass_kg as f32,
@@ -117,15 +132,17 @@ impl HilSpec {
     }
 
     /// The gain lowering the CLI's `--gain-lowering FACTOR` means: position gain (and
-    /// integral) times `factor`, velocity gain halved, 50 ms smootherstep ramps. Halving (not
-    /// lowering with the position gain) keeps the carriage coupled to the rod through a
-    /// damper: that is what dissipates the spring's ringing (probed over kd factors 0.05-1 at
-    /// kp factor 0.05: below ~0.2 the carriage drifts out of the tracking bound; 0.5 damps
-    /// the ringing 10x on hard ground and on sand).
+    /// integral) times `factor`, velocity gain times 0.9, 50 ms smootherstep ramps. Keeping
+    /// the velocity gain (not lowering it with the position gain) keeps the carriage coupled
+    /// to the rod through a damper: that is what dissipates the spring's ringing. With
+    /// [`rig_gains`](Self::rig_gains) that is ~250 N s/m (probed at kp factor 0.05 over kd
+    /// factors 0.7-1: at 0.8 and below the carriage, held without an integrator, drifts out of
+    /// the 5 mm tracking bound; 0.9 damps the ringing 9.5-12x on hard ground and on sand, 1.0
+    /// 8-10.5x).
     pub fn gain_lowering_factor(factor: f32) -> GainLowering {
         GainLowering {
             kp_factor: factor,
-            kd_factor: 0.5,
+            kd_factor: 0.9,
             ramp_s: 0.05,
         }
     }
