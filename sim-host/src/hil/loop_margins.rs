@@ -34,12 +34,12 @@ pub enum FootSupport {
     Flying,
 }
 
-/// A gain crossover of the loop (`|L| = 1`, falling).
+/// A gain crossover of the loop (`|L| = 1`, falling or, past a resonance, rising).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Crossover {
     /// Frequency, Hz.
     pub freq_hz: f64,
-    /// Phase margin there, degrees (negative: unstable).
+    /// Phase margin there: the angle from `L` to the critical point -1, degrees (0-180).
     pub phase_margin_deg: f64,
 }
 
@@ -93,10 +93,10 @@ pub fn open_loop(
     controller * hold * lag * plant
 }
 
-/// Phase of `l` as a margin from -180 degrees: `180 + arg(l)` wrapped to (-180, 180].
+/// Phase margin of `l` on `|l| = 1`: its angle from the critical point -1, `180 - |arg l|`,
+/// 0-180 degrees (the phase lag or lead that would put `l` on -1).
 fn phase_margin_deg(l: Complex<f64>) -> f64 {
-    let m = 180.0 + l.arg().to_degrees();
-    if m > 180.0 { m - 360.0 } else { m }
+    180.0 - l.arg().to_degrees().abs()
 }
 
 /// The loop's margins, scanned on a logarithmic grid (2,000 points per decade) from 0.1 Hz to
@@ -127,7 +127,7 @@ pub fn margins(
     for i in 1..=points {
         let f = freq(i);
         let here = l(f);
-        if prev.1.norm() >= 1.0 && here.norm() < 1.0 {
+        if (prev.1.norm() >= 1.0) != (here.norm() >= 1.0) {
             let fc = refine(prev.0, f, &|v| v.norm() >= 1.0);
             crossovers.push(Crossover {
                 freq_hz: fc,
