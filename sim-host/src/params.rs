@@ -89,6 +89,22 @@ pub struct RobotParams {
     pub gravity_m_s2: f64,
 }
 
+impl RobotParams {
+    /// The robot of MODEL.md section 1 (the same at every packing fraction).
+    pub const MODEL: Self = Self {
+        motor_mass_kg: 1.125,
+        rod_mass_kg: 0.125,
+        foot_mass_kg: 0.030,
+        spring_stiffness_n_m: 3300.0,
+        spring_damping_n_s_m: 4.0,
+        spring_rest_length_m: 0.1,
+        foot_radius_m: 0.038,
+        stroke_amplitude_m: 0.01875,
+        stroke_limit_m: 0.025,
+        gravity_m_s2: 9.81,
+    };
+}
+
 /// The motor drive for force-driven runs: `F_m = clamp(K_f i, -F_peak, F_peak)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -350,18 +366,7 @@ impl Params {
         let w = (phi - a.phi) / (b.phi - a.phi);
         let lerp = |x: f64, y: f64| x + (y - x) * w;
         Ok(Params {
-            robot: RobotParams {
-                motor_mass_kg: 1.125,
-                rod_mass_kg: 0.125,
-                foot_mass_kg: 0.030,
-                spring_stiffness_n_m: 3300.0,
-                spring_damping_n_s_m: 4.0,
-                spring_rest_length_m: 0.1,
-                foot_radius_m: 0.038,
-                stroke_amplitude_m: 0.01875,
-                stroke_limit_m: 0.025,
-                gravity_m_s2: 9.81,
-            },
+            robot: RobotParams::MODEL,
             drive: DriveParams {
                 force_constant_n_a: 10.0,
                 peak_force_n: 300.0,

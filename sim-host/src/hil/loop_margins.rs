@@ -85,8 +85,8 @@ pub fn open_loop(
     let rod_load = match foot {
         FootSupport::Standing => spring,
         FootSupport::Flying => {
-            let foot = s2 * robot.foot_mass_kg;
-            spring * foot / (foot + spring)
+            let foot_inertia = s2 * robot.foot_mass_kg;
+            spring * foot_inertia / (foot_inertia + spring)
         }
     };
     let plant = one / (s2 * robot.motor_mass_kg) + one / (s2 * robot.rod_mass_kg + rod_load);
@@ -263,7 +263,7 @@ mod rig_tests {
     #[test]
     fn the_rig_gains_keep_their_margins_at_full_and_at_lowered_gain() {
         let p = Params::preset(0.57).unwrap();
-        let full = HilSpec::rig_gains(p.robot.motor_mass_kg, p.robot.rod_mass_kg);
+        let full = HilSpec::rig_gains(&p.robot);
         let lowering = HilSpec::gain_lowering_factor(0.05);
         let lowered = Gains {
             kp_n_per_m: full.kp_n_per_m * lowering.kp_factor,
@@ -286,7 +286,7 @@ mod rig_tests {
         // (it rang there in SIL, +-50 N after the start's feedforward step).
         let p = Params::preset(0.57).unwrap();
         let m_m = p.robot.motor_mass_kg;
-        let g = HilSpec::rig_gains(m_m, p.robot.rod_mass_kg);
+        let g = HilSpec::rig_gains(&p.robot);
         let carriage = Gains {
             kd_n_s_per_m: (2.0 * 0.7 * (f64::from(g.kp_n_per_m) * m_m).sqrt()) as f32,
             ..g

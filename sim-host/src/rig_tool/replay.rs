@@ -365,7 +365,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let program = Program {
         config: JumpConfig {
             // The gains `rig jump` and `hil` run the carriage with.
-            gains: HilSpec::rig_gains(params.robot.motor_mass_kg, params.robot.rod_mass_kg),
+            gains: HilSpec::rig_gains(&params.robot),
             ..JumpConfig::new(TrajectorySpec::Replay {
                 checksum: plan.checksum,
             })
