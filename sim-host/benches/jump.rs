@@ -2,16 +2,21 @@
 //! two threads (targets on the 2-core machine: < 60 us and < 0.3 s). Beside them, the floor
 //! of the method on the machine at hand: the same Dormand-Prince stepper on the robot's free
 //! flight alone (no ground, no events, no dense-output use), whose time per step is what any
-//! jump's steps cost at the least.
+//! jump's steps cost at the least. And the same jump in its three phases (the foot in the sand
+//! until lift-off, flight while the stroke runs, flight after it), so the cost beyond that
+//! floor can be placed.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector4;
+use sandjumper_core::trajectory::SineJump;
+use sandjumper_sim::jump::{GROUNDED_TAIL_S, Kinematic, kinematic_at_rest};
 use sandjumper_sim::robot::Robot;
-use sandjumper_sim::simulation::plant_stepper;
+use sandjumper_sim::simulation::{Simulation, plant_stepper};
 use sandjumper_sim::*;
 use std::hint::black_box;
 
-fn one_jump(c: &mut Criterion) {
+/// The benchmark jump: eq4, phi 0.57, a 10 Hz single jump at rtol 1e-8.
+fn benchmark_jump() -> (Params, JumpSpec, SimOptions) {
     let params = Params::preset(0.57).unwrap();
     let spec = JumpSpec {
         kind: JumpKind::Single,
@@ -23,6 +28,11 @@ fn one_jump(c: &mut Criterion) {
         rtol: 1e-8,
         ..SimOptions::default()
     };
+    (params, spec, opts)
+}
+
+fn one_jump(c: &mut Criterion) {
+    let (params, spec, opts) = benchmark_jump();
     c.bench_function("eq4 single jump, rtol 1e-8", |b| {
         b.iter(|| simulate_jump(black_box(&params), black_box(&spec), &opts).unwrap())
     });
@@ -66,6 +76,76 @@ fn integrator_floor(c: &mut Criterion) {
     );
 }
 
+/// The benchmark jump in three phases, each run from a copy of the simulation where the last
+/// one ended: the foot in the sand up to the first lift-off, flight to the stroke's end, and
+/// flight to touchdown (the run-length rule of `run_kinematic`). The phases' boundaries add
+/// one step end at lift-off, so their steps sum to about the jump's.
+fn jump_phases(c: &mut Criterion) {
+    let (params, spec, opts) = benchmark_jump();
+    let liftoff_s = simulate_jump(&params, &spec, &opts)
+        .unwrap()
+        .summary
+        .liftoff_time_s
+        .unwrap();
+    let stroke = SineJump::new(
+        spec.kind,
+        params.robot.stroke_amplitude_m,
+        spec.freq_hz,
+        spec.tau_s,
+    )
+    .unwrap();
+    let end_s = stroke.end_s();
+    let mut at_rest = kinematic_at_rest(&params, spec.model, stroke, &opts).unwrap();
+    at_rest.settle().unwrap();
+    at_rest.actuation.begin_segment(end_s);
+    let mut lifted = at_rest.clone();
+    lifted.advance_to(liftoff_s, false).unwrap();
+    let mut stroke_done = lifted.clone();
+    stroke_done.advance_to(end_s, false).unwrap();
+    stroke_done.discontinuity();
+    stroke_done.actuation.begin_segment(f64::INFINITY);
+    let steps = |sim: &Simulation<Kinematic<SineJump>, 4>| {
+        let s = sim.summary();
+        s.steps_accepted + s.steps_rejected
+    };
+    let mut landed = stroke_done.clone();
+    assert!(landed.advance_to(end_s + GROUNDED_TAIL_S, true).unwrap());
+    let phases = [
+        (
+            "in the sand to lift-off",
+            &at_rest,
+            liftoff_s,
+            false,
+            steps(&lifted),
+        ),
+        (
+            "flight under the stroke",
+            &lifted,
+            end_s,
+            false,
+            steps(&stroke_done) - steps(&lifted),
+        ),
+        (
+            "flight to touchdown",
+            &stroke_done,
+            end_s + GROUNDED_TAIL_S,
+            true,
+            steps(&landed) - steps(&stroke_done),
+        ),
+    ];
+    let mut group = c.benchmark_group("eq4 single jump phases");
+    for (name, start, until_s, stop_at_touchdown, n) in phases {
+        group.bench_function(format!("{name}: {n} steps"), |b| {
+            b.iter(|| {
+                let mut sim = start.clone();
+                sim.advance_to(black_box(until_s), stop_at_touchdown)
+                    .unwrap()
+            })
+        });
+    }
+    group.finish();
+}
+
 fn sweep(c: &mut Criterion) {
     let params = Params::preset(0.57).unwrap();
     let opts = SimOptions {
@@ -104,6 +184,6 @@ criterion_group! {
     name = benches;
     // No HTML plots: criterion's plotters backend needs system fonts a fresh machine lacks.
     config = Criterion::default().without_plots();
-    targets = one_jump, integrator_floor, sweep
+    targets = one_jump, jump_phases, integrator_floor, sweep
 }
 criterion_main!(benches);
