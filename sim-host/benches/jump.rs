@@ -147,11 +147,7 @@ fn jump_phases(c: &mut Criterion) {
 }
 
 fn sweep(c: &mut Criterion) {
-    let params = Params::preset(0.57).unwrap();
-    let opts = SimOptions {
-        rtol: 1e-8,
-        ..SimOptions::default()
-    };
+    let (params, _, opts) = benchmark_jump();
     // 2,000 jumps: 4 models x 2 kinds x 250 frequencies from 4 to 20 Hz... on two threads.
     let mut specs = Vec::with_capacity(2000);
     for model in ModelName::ALL {
