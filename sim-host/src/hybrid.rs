@@ -164,32 +164,40 @@ impl Contact {
     /// The guards of the current mode (at most two; unused slots have value `-inf`).
     #[inline]
     pub fn guards(&self, robot: &Robot, sand: &Sand, x_f: f64, v_f: f64, f_s: f64) -> [Guard; 2] {
-        self.guards_with(robot, sand, x_f, v_f, || f_s)
+        let values = self.guard_values_with(robot, sand, x_f, v_f, || f_s);
+        let transitions = self.guard_transitions();
+        [0, 1].map(|i| Guard {
+            transition: transitions[i],
+            value: values[i],
+        })
     }
 
-    /// [`guards`](Self::guards) with the spring force `f_s()`, N, computed only by the modes
-    /// whose guards depend on it.
+    /// What each of the current mode's guards does when it fires (slot by slot as in
+    /// [`guard_values_with`](Self::guard_values_with)).
     #[inline]
-    pub fn guards_with(
+    pub fn guard_transitions(&self) -> [Transition; 2] {
+        match self.mode {
+            GroundMode::Aerial => [Transition::Touchdown; 2],
+            GroundMode::Static => [Transition::LiftOff, Transition::Restart],
+            GroundMode::Intruding => [Transition::Stop; 2],
+        }
+    }
+
+    /// The values of the current mode's guards (unused slots `-inf`), with the spring force
+    /// `f_s()`, N, computed only by the modes whose guards depend on it. The run loop keeps
+    /// these plain numbers from step to step; the transitions are looked up only when one
+    /// fires.
+    #[inline]
+    pub fn guard_values_with(
         &self,
         robot: &Robot,
         sand: &Sand,
         x_f: f64,
         v_f: f64,
         f_s: impl FnOnce() -> f64,
-    ) -> [Guard; 2] {
-        let never = |transition| Guard {
-            transition,
-            value: f64::NEG_INFINITY,
-        };
+    ) -> [f64; 2] {
         match self.mode {
-            GroundMode::Aerial => [
-                Guard {
-                    transition: Transition::Touchdown,
-                    value: self.ground_level_m - x_f,
-                },
-                never(Transition::Touchdown),
-            ],
+            GroundMode::Aerial => [self.ground_level_m - x_f, f64::NEG_INFINITY],
             GroundMode::Static => {
                 let load = robot.foot_load(f_s());
                 let restart = if sand.law.is_rigid() {
@@ -197,24 +205,9 @@ impl Contact {
                 } else {
                     load - self.holding_force(sand, depth_of(x_f)) - LOAD_GUARD_MARGIN_N
                 };
-                [
-                    Guard {
-                        transition: Transition::LiftOff,
-                        value: -load - LOAD_GUARD_MARGIN_N,
-                    },
-                    Guard {
-                        transition: Transition::Restart,
-                        value: restart,
-                    },
-                ]
+                [-load - LOAD_GUARD_MARGIN_N, restart]
             }
-            GroundMode::Intruding => [
-                Guard {
-                    transition: Transition::Stop,
-                    value: v_f,
-                },
-                never(Transition::Stop),
-            ],
+            GroundMode::Intruding => [v_f, f64::NEG_INFINITY],
         }
     }
 

@@ -5,7 +5,7 @@
 
 use crate::error::SimError;
 use crate::ground::Sand;
-use crate::hybrid::{Contact, GroundMode, Guard, Transition};
+use crate::hybrid::{Contact, GroundMode, Transition};
 use crate::integrate::{DenseStep, DormandPrince, Rhs, STAGE_TIMES, StepFailure, locate_crossing};
 use crate::jump::{Event, EventKind, JumpSummary, SeriesRow, SimOptions};
 use crate::robot::Robot;
@@ -81,7 +81,9 @@ pub struct Simulation<A, const N: usize> {
     series_interval_s: f64,
     next_sample_s: f64,
     max_steps: u64,
-    start_guards: [Guard; 2],
+    /// The current mode's guard values at the current state (see
+    /// [`Contact::guard_values_with`]).
+    start_guards: [f64; 2],
 }
 
 impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
@@ -111,10 +113,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             series_interval_s: opts.series_interval_s,
             next_sample_s: 0.0,
             max_steps: opts.max_steps,
-            start_guards: [Guard {
-                transition: Transition::Stop,
-                value: f64::NEG_INFINITY,
-            }; 2],
+            start_guards: [f64::NEG_INFINITY; 2],
         };
         sim.refresh_guards();
         sim.metrics.final_time_s = push_off_start_s;
@@ -244,11 +243,11 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     }
 
     /// The earliest guard crossing inside the step, located on the dense output.
-    fn first_switch(&self, step: &DenseStep<N>) -> (Option<(f64, Transition)>, [Guard; 2]) {
+    fn first_switch(&self, step: &DenseStep<N>) -> (Option<(f64, Transition)>, [f64; 2]) {
         let guards = |t: f64| {
             let y = step.at(t);
             self.contact
-                .guards_with(&self.robot, &self.sand, y.get(2), y.get(3), || {
+                .guard_values_with(&self.robot, &self.sand, y.get(2), y.get(3), || {
                     self.robot
                         .spring_force(y.get(0), y.get(1), y.get(2), y.get(3))
                 })
@@ -258,18 +257,14 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         let (mid, end) = (guards(t_mid), guards(step.t1));
         let mut best: Option<(f64, Transition)> = None;
         for i in 0..2 {
-            let samples = [
-                (step.t0, start[i].value),
-                (t_mid, mid[i].value),
-                (step.t1, end[i].value),
-            ];
+            let samples = [(step.t0, start[i]), (t_mid, mid[i]), (step.t1, end[i])];
             for w in samples.windows(2) {
                 let ((ta, ga), (tb, gb)) = (w[0], w[1]);
                 if ga <= 0.0 && gb > 0.0 {
-                    let g = |t: f64| guards(t)[i].value;
+                    let g = |t: f64| guards(t)[i];
                     let te = locate_crossing(g, ta, ga, tb, gb, EVENT_TOLERANCE_S);
                     if best.is_none_or(|(tb, _)| te < tb) {
-                        best = Some((te, start[i].transition));
+                        best = Some((te, self.contact.guard_transitions()[i]));
                     }
                     break;
                 }
@@ -281,9 +276,9 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     /// Guards at the current state (cached for the next step's start).
     fn refresh_guards(&mut self) {
         let f_s = self.spring_force(&self.y);
-        self.start_guards = self
-            .contact
-            .guards(&self.robot, &self.sand, self.y[2], self.y[3], f_s);
+        self.start_guards =
+            self.contact
+                .guard_values_with(&self.robot, &self.sand, self.y[2], self.y[3], || f_s);
     }
 
     /// Apply a transition and any that are due at the same instant.
