@@ -173,14 +173,12 @@ impl<const N: usize, F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>> Rhs<N> 
     }
 }
 
-/// Hairer's `beta` of the PI step-size controller.
-const PI_BETA: f64 = 0.04;
 /// `log2 0.9`: the controller's safety factor.
 const LOG2_SAFETY: f64 = -0.152_003_093_445_049_97;
 /// `log2 0.2`: the most a rejected step shrinks.
 const LOG2_FAC_MIN: f64 = 1.0 - core::f64::consts::LOG2_10;
-/// `log2 1e-4`: the smallest previous error the PI controller remembers (Hairer's `facold`).
-const LOG2_ERR_OLD_MIN: f64 = -13.287_712_379_549_449;
+/// The smallest previous error the PI controller remembers (Hairer's `facold`).
+const ERR_OLD_MIN: f64 = 1e-4;
 
 /// The Dormand-Prince 5(4) stepper: tolerances, current step size, FSAL stage, counters.
 #[derive(Clone, Debug)]
@@ -232,7 +230,7 @@ impl<const N: usize> DormandPrince<N> {
                 rc: [[0.0; N]; 5],
                 end: [0.0; N],
             },
-            err_old_power: exp2_in_range(PI_BETA * LOG2_ERR_OLD_MIN),
+            err_old_power: remembered_error_power(ERR_OLD_MIN),
             rhs_evaluations: 0,
             accepted: 0,
             rejected: 0,
@@ -343,15 +341,15 @@ impl<const N: usize> DormandPrince<N> {
                 continue;
             }
             if err <= 1.0 {
-                // PI controller: fac = 0.9 err^-(0.2 - 0.75 beta) err_old^beta, at most 10.
-                // The error's power comes from its exponent (a table) and its mantissa (a
-                // cubic): the shortest chain from this step's error to the next step's stages,
-                // which all wait for it. The old error's power is for the next step's
-                // controller, off that chain. With err <= 1 and err_old >= 1e-4 the factor is at
-                // least 0.9 * 1e-4^beta = 0.62, so the lower clamp (0.2) cannot bind.
+                // PI controller: fac = 0.9 err^-(0.2 - 0.75 beta) err_old^beta, beta = 0.04, at
+                // most 10. The error's power comes from its exponent (a table) and its mantissa
+                // (a cubic): the shortest chain from this step's error to the next step's
+                // stages, which all wait for it. The old error's power is for the next step's
+                // controller, off that chain, by the same table-and-cubic form. With err <= 1
+                // and err_old >= 1e-4 the factor is at least 0.9 * 1e-4^beta = 0.62, so the
+                // lower clamp (0.2) cannot bind.
                 let fac = (safety_times_error_power(err) * self.err_old_power).min(10.0);
-                self.err_old_power =
-                    exp2_in_range(PI_BETA * log2_approx(err).max(LOG2_ERR_OLD_MIN));
+                self.err_old_power = remembered_error_power(err);
                 let h_next = h * fac;
                 // A step cut short by t_limit keeps its own proposal for the next step.
                 self.h = if t1 == t_limit {
@@ -484,6 +482,44 @@ fn safety_times_error_power(err: f64) -> f64 {
     SAFETY_TIMES_POWER_OF_TWO[minus_exponent] * mantissa_power
 }
 
+/// `2^(-beta i)` for `i = 0..=14`, with Hairer's `beta` = 0.04 of the PI step-size controller:
+/// its `err_old^beta` at `err_old = 2^-i`
+/// (`2^-14 < 1e-4`, the smallest error it remembers).
+#[allow(clippy::excessive_precision)]
+const POWER_OF_TWO_TO_BETA: [f64; 15] = [
+    1.0,
+    0.9726549474122855,
+    0.9460576467255959,
+    0.9201876506248751,
+    0.8950250709279725,
+    0.8705505632961241,
+    0.8467453123625271,
+    0.8235910172675731,
+    0.8010698775896221,
+    0.7791645796604999,
+    0.757858283255199,
+    0.7371346086455506,
+    0.7169776240079136,
+    0.6973718331752027,
+    0.6783021637238359,
+];
+
+/// `max(err, 1e-4)^beta` for `err <= 1`, the PI controller's memory of an accepted step's
+/// error, to about 3.5e-5 relative: the power of the exponent from [`POWER_OF_TWO_TO_BETA`],
+/// `m^beta` of the mantissa `m` in `[1, 2)` a cubic least-squares fit in `m - 1`. No
+/// `log2`/`exp2` round trip. (`err > 1` is never remembered: such a step is rejected.)
+#[inline]
+fn remembered_error_power(err: f64) -> f64 {
+    const M: [f64; 4] = [
+        1.000_034_780_401_279_5,
+        0.039_239_497_432_078_545,
+        -0.015_207_824_591_934_61,
+        0.004_073_028_142_602_006,
+    ];
+    let (e, t) = exponent_and_fraction(err.max(ERR_OLD_MIN));
+    POWER_OF_TWO_TO_BETA[(-e).clamp(0, 14) as usize] * cubic(&M, t)
+}
+
 /// First time in `(a, b]` where `g` turns positive, given `g(a) <= 0 < g(b)`, located to
 /// `tol_s`: returns the right end of the final bracket, so `g(returned) > 0`.
 pub fn locate_crossing<G: FnMut(f64) -> f64>(
@@ -527,6 +563,9 @@ pub fn locate_crossing<G: FnMut(f64) -> f64>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hairer's `beta` of the PI step-size controller (the tables hold its powers).
+    const PI_BETA: f64 = 0.04;
     use nalgebra::Vector2;
 
     #[test]
@@ -629,6 +668,32 @@ mod tests {
         // Tiny errors and zero give about the 2^-63 value: far past the largest factor, 10.
         for tiny in [0.0, 1e-300, 5e-324, 1e-20] {
             assert!(safety_times_error_power(tiny) > 1000.0, "{tiny:e}");
+        }
+    }
+
+    #[test]
+    fn the_remembered_error_power_is_within_its_bound() {
+        let want = |err: f64| err.max(ERR_OLD_MIN).powf(PI_BETA);
+        for (i, v) in POWER_OF_TWO_TO_BETA.iter().enumerate() {
+            let exact = 2f64.powi(-(i as i32)).powf(PI_BETA);
+            assert!(
+                (v / exact - 1.0).abs() < 1e-15,
+                "table entry {i}: {v} vs {exact}"
+            );
+        }
+        let mut worst: f64 = 0.0;
+        let mut err = 1.0;
+        while err > 1e-6 {
+            worst = worst.max((remembered_error_power(err) / want(err) - 1.0).abs());
+            err *= 0.999_3;
+        }
+        assert!(worst < 3.6e-5 && worst > 0.0, "worst {worst:e}");
+        // Below 1e-4 the error is remembered as 1e-4.
+        for tiny in [0.0, 1e-300, 1e-9, 9.9e-5] {
+            assert_eq!(
+                remembered_error_power(tiny),
+                remembered_error_power(ERR_OLD_MIN)
+            );
         }
     }
 
