@@ -476,15 +476,25 @@ fn safety_times_error_power(err: f64) -> f64 {
         0.076_678_414_548_524_46,
         -0.021_723_603_268_657_767,
     ];
-    let (e, t) = exponent_and_fraction(err);
-    let minus_exponent = (-e).clamp(0, 63) as usize;
-    let mantissa_power = cubic(&M, t);
-    SAFETY_TIMES_POWER_OF_TWO[minus_exponent] * mantissa_power
+    power_by_exponent_and_mantissa(&SAFETY_TIMES_POWER_OF_TWO, &M, err)
+}
+
+/// A power of `x = 2^-i m` (`m` in `[1, 2)`) for `0 < x <= 1`: the power of `2^-i` from
+/// `table[i]` (`i` clamped to the table) times the power of `m` from the cubic `mantissa`
+/// in `m - 1`.
+#[inline]
+fn power_by_exponent_and_mantissa<const K: usize>(
+    table: &[f64; K],
+    mantissa: &[f64; 4],
+    x: f64,
+) -> f64 {
+    let (e, t) = exponent_and_fraction(x);
+    let minus_exponent = (-e).clamp(0, K as i64 - 1) as usize;
+    table[minus_exponent] * cubic(mantissa, t)
 }
 
 /// `2^(-beta i)` for `i = 0..=14`, with Hairer's `beta` = 0.04 of the PI step-size controller:
-/// its `err_old^beta` at `err_old = 2^-i`
-/// (`2^-14 < 1e-4`, the smallest error it remembers).
+/// its `err_old^beta` at `err_old = 2^-i` (`2^-14 < 1e-4`, the smallest error it remembers).
 #[allow(clippy::excessive_precision)]
 const POWER_OF_TWO_TO_BETA: [f64; 15] = [
     1.0,
@@ -516,8 +526,7 @@ fn remembered_error_power(err: f64) -> f64 {
         -0.015_207_824_591_934_61,
         0.004_073_028_142_602_006,
     ];
-    let (e, t) = exponent_and_fraction(err.max(ERR_OLD_MIN));
-    POWER_OF_TWO_TO_BETA[(-e).clamp(0, 14) as usize] * cubic(&M, t)
+    power_by_exponent_and_mantissa(&POWER_OF_TWO_TO_BETA, &M, err.max(ERR_OLD_MIN))
 }
 
 /// First time in `(a, b]` where `g` turns positive, given `g(a) <= 0 < g(b)`, located to
