@@ -4,10 +4,12 @@
 //! Depth `z` is measured down from the undisturbed free surface (m); `s` is depth within the
 //! current intrusion episode (m). Forces in N, masses in kg.
 
+use crate::fastmath::cubic;
 use crate::params::{
     DragChoice, ModelName, ModelOverrides, Params, PenetrationChoice, ReintrusionAnchor,
     ReintrusionChoice,
 };
+use core::f64::consts::PI;
 
 /// The penetration force law `F_p(z)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -210,11 +212,140 @@ impl Sand {
     /// `F_p(z)`, plus the overshoot when the episode has an anchor (`Some` once the foot has
     /// been airborne and re-intrusion is on).
     pub fn resisting_force(&self, z_m: f64, anchor_m: Option<f64>) -> f64 {
-        let fp = self.penetration_force(z_m);
+        self.with_overshoot(self.penetration_force(z_m), z_m, anchor_m)
+    }
+
+    /// `F_p` at depth `z`, N, plus the re-intrusion overshoot of an episode anchored at
+    /// `anchor_m` (see [`resisting_force`](Self::resisting_force)).
+    #[inline]
+    fn with_overshoot(&self, penetration_n: f64, z_m: f64, anchor_m: Option<f64>) -> f64 {
         match anchor_m {
-            Some(a) if self.law.reintrusion => fp + self.reintrusion_overshoot(z_m, a),
-            _ => fp,
+            Some(a) if self.law.reintrusion => penetration_n + self.reintrusion_overshoot(z_m, a),
+            _ => penetration_n,
         }
+    }
+
+    /// The laws of an intrusion episode that began at depth `start_m`, its overshoot anchored
+    /// at `anchor_m` (see [`IntrusionEpisode`]).
+    pub fn episode(&self, start_m: f64, anchor_m: Option<f64>) -> IntrusionEpisode {
+        let (r, a, area) = (self.foot_radius_m, self.cone_rate, self.foot_area_m2);
+        // F_p in z on the piece that holds z_start, and where that piece ends.
+        // An episode above the surface (or at a NaN depth) gets no polynomials.
+        let penetration_in_z = if start_m.is_nan() || start_m < 0.0 {
+            None
+        } else {
+            match self.law.penetration {
+                PenetrationLaw::Rigid => None,
+                PenetrationLaw::Linear => Some(([0.0, self.k1_n_m, 0.0, 0.0], f64::INFINITY)),
+                PenetrationLaw::TwoResistance if start_m < self.delta_m => {
+                    Some(([0.0, self.k1_n_m, 0.0, 0.0], self.delta_m))
+                }
+                PenetrationLaw::TwoResistance => Some((
+                    [
+                        (self.k1_n_m - self.k2_n_m) * self.delta_m,
+                        self.k2_n_m,
+                        0.0,
+                        0.0,
+                    ],
+                    f64::INFINITY,
+                )),
+                // k1/A Int A_flat + sigma' (A z - Int A_flat), with
+                // Int_0^z A_flat = pi (R^2 z - R a z^2 + a^2 z^3 / 3) while the cone grows.
+                PenetrationLaw::Cone if start_m < self.cone_depth_m => {
+                    let g = (self.k1_per_area - self.sigma_over_cos) * PI;
+                    Some((
+                        [0.0, self.k1_per_area * area, -g * r * a, g * a * a / 3.0],
+                        self.cone_depth_m,
+                    ))
+                }
+                PenetrationLaw::Cone => {
+                    let full = self.flat_area_integral(self.cone_depth_m);
+                    let sigma_area = self.sigma_over_cos * area;
+                    Some((
+                        [
+                            (self.k1_per_area - self.sigma_over_cos) * full,
+                            sigma_area,
+                            0.0,
+                            0.0,
+                        ],
+                        f64::INFINITY,
+                    ))
+                }
+            }
+        };
+        // alpha(s) and m_a(s) while the cone grows (s below its depth).
+        let (drag, added_mass, drag_end_m) = match self.law.drag {
+            DragLaw::ConstantAlpha => ([self.alpha_kg_m, 0.0, 0.0, 0.0], [0.0; 4], f64::INFINITY),
+            DragLaw::AddedMass => {
+                let d = self.added_mass_density;
+                let b = self.drag_b * d;
+                (
+                    [
+                        b * (area + self.added_mass_pi_c_m2),
+                        -2.0 * b * PI * r * a,
+                        b * PI * a * a,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        d * (area + self.added_mass_pi_c_m2),
+                        -d * PI * r * a,
+                        d * PI * a * a / 3.0,
+                    ],
+                    self.cone_depth_m,
+                )
+            }
+        };
+        let (penetration, polynomial_end_m) = match penetration_in_z {
+            Some((in_z, end_z)) => (
+                taylor_shift(in_z, start_m),
+                (end_z - start_m).min(drag_end_m),
+            ),
+            None => ([0.0; 4], 0.0),
+        };
+        IntrusionEpisode {
+            start_m,
+            anchor_m,
+            polynomial_end_m,
+            penetration,
+            drag,
+            added_mass,
+        }
+    }
+
+    /// `(F_p(z), alpha(s), m_a(s))` of `episode` at depth `z` (`s = z - z_start`): its
+    /// polynomials inside their range, the general laws outside. N, kg/m, kg.
+    #[inline]
+    fn episode_laws(&self, episode: &IntrusionEpisode, z_m: f64) -> (f64, f64, f64) {
+        let s = z_m - episode.start_m;
+        if s >= 0.0 && s < episode.polynomial_end_m {
+            (
+                cubic(&episode.penetration, s),
+                cubic(&episode.drag, s),
+                cubic(&episode.added_mass, s),
+            )
+        } else {
+            (
+                self.penetration_force(z_m),
+                self.drag_coefficient(s),
+                self.added_mass(s),
+            )
+        }
+    }
+
+    /// What the sand does to a foot intruding at depth `z` with velocity `v` in `episode`:
+    /// the resisting force `F_p_re(z) + alpha(s) v^2`, N, and the added mass `m_a(s)`, kg.
+    #[inline]
+    pub fn intrusion(&self, episode: &IntrusionEpisode, z_m: f64, v_m_s: f64) -> (f64, f64) {
+        let (penetration, drag, added_mass) = self.episode_laws(episode, z_m);
+        let resist = self.with_overshoot(penetration, z_m, episode.anchor_m) + drag * v_m_s * v_m_s;
+        (resist, added_mass)
+    }
+
+    /// Added mass `m_a(s)` of a foot at depth `z` in `episode`, kg.
+    #[inline]
+    pub fn episode_added_mass(&self, episode: &IntrusionEpisode, z_m: f64) -> f64 {
+        self.episode_laws(episode, z_m).2
     }
 
     /// Added mass `m_a(s)`, kg: `phi rho mu pi s (R^2 + (mu s)^2/(3 tan^2 theta) - R mu s/tan theta + C)`
@@ -268,6 +399,51 @@ impl Sand {
         }
         hi
     }
+}
+
+/// One intrusion episode (MODEL.md section 3): the depth `z_start` where it began, the depth
+/// its re-intrusion overshoot is anchored at, and its laws prepared as polynomials in the
+/// episode depth `s = z - z_start`: `F_p(z_start + s)` and `m_a(s)` cubic, `alpha(s)` at most
+/// quadratic, each the piece of its law that holds at `s = 0`. They are evaluated for
+/// `0 <= s <` the end of the shortest piece (in the paper's jumps, the whole episode); outside,
+/// the general laws of [`Sand`]. Built by [`Sand::episode`] at each touchdown and restart.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntrusionEpisode {
+    /// Depth z_start where the episode began, m.
+    start_m: f64,
+    /// Depth the overshoot is anchored at (`None` before the foot has been airborne), m.
+    anchor_m: Option<f64>,
+    /// The polynomials hold for `0 <= s <` this, m.
+    polynomial_end_m: f64,
+    /// `F_p(z_start + s)`, N: coefficients of `s^0..s^3`.
+    penetration: [f64; 4],
+    /// `alpha(s)`, kg/m.
+    drag: [f64; 4],
+    /// `m_a(s)`, kg.
+    added_mass: [f64; 4],
+}
+
+impl IntrusionEpisode {
+    /// Depth z_start where the episode began, m.
+    pub fn start_m(&self) -> f64 {
+        self.start_m
+    }
+
+    /// Depth the re-intrusion overshoot is anchored at; `None` until the foot has been
+    /// airborne, m.
+    pub fn anchor_m(&self) -> Option<f64> {
+        self.anchor_m
+    }
+}
+
+/// The coefficients of `p(x0 + s)` in `s`, given those of the cubic `p(x)` in `x`.
+fn taylor_shift(c: [f64; 4], x0: f64) -> [f64; 4] {
+    [
+        c[0] + x0 * (c[1] + x0 * (c[2] + x0 * c[3])),
+        c[1] + x0 * (2.0 * c[2] + 3.0 * x0 * c[3]),
+        c[2] + 3.0 * x0 * c[3],
+        c[3],
+    ]
 }
 
 #[cfg(test)]
@@ -327,6 +503,54 @@ mod tests {
             );
             assert_eq!(s.added_mass(z), 0.0);
         }
+    }
+
+    #[test]
+    fn an_episodes_polynomials_agree_with_the_general_laws() {
+        // Every law and override, episodes starting on each piece (at the surface, before and
+        // past delta, past the full cone), with and without an anchor; depths on both sides
+        // of every breakpoint and above the episode's start.
+        let p = Params::preset(0.57).unwrap();
+        let mut laws: Vec<GroundLaw> = [ModelName::Eq1Linear, ModelName::Eq1, ModelName::Eq4]
+            .iter()
+            .map(|&m| GroundLaw::resolve(m, &p.model))
+            .collect();
+        let mut cone_alpha = laws[2];
+        cone_alpha.drag = DragLaw::ConstantAlpha;
+        let mut two_added = laws[1];
+        two_added.drag = DragLaw::AddedMass;
+        laws.extend([cone_alpha, two_added]);
+        let mut checked = 0;
+        for law in laws {
+            let sand = Sand::new(&p, law);
+            let starts = [0.0, 0.0078, sand.delta_m + 0.002, sand.cone_depth_m + 0.001];
+            for start in starts {
+                for anchor in [None, Some(start)] {
+                    let episode = sand.episode(start, anchor);
+                    for i in -20..=1000 {
+                        let z = start + i as f64 * 1e-4;
+                        let v = -0.37;
+                        let s = z - start;
+                        let want_resist =
+                            sand.resisting_force(z, anchor) + sand.drag_coefficient(s) * v * v;
+                        let (resist, m_a) = sand.intrusion(&episode, z, v);
+                        let scale = want_resist.abs().max(1.0);
+                        assert!(
+                            (resist - want_resist).abs() <= 1e-12 * scale,
+                            "{law:?} from {start} m at {z} m: {resist} vs {want_resist}"
+                        );
+                        let want_m_a = sand.added_mass(s);
+                        assert!(
+                            (m_a - want_m_a).abs() <= 1e-13,
+                            "{law:?} from {start} m at {z} m: m_a {m_a} vs {want_m_a}"
+                        );
+                        assert_eq!(sand.episode_added_mass(&episode, z), m_a);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 40_000);
     }
 
     #[test]

@@ -30,7 +30,7 @@ impl core::fmt::Display for GroundMode {
     }
 }
 
-use crate::ground::Sand;
+use crate::ground::{IntrusionEpisode, Sand};
 use crate::jump::EventKind;
 use crate::robot::Robot;
 
@@ -75,10 +75,9 @@ pub struct Contact {
     /// Height of the ground under the foot, m: follows the foot while grounded, frozen in
     /// flight where the foot left it (rule 1).
     pub ground_level_m: f64,
-    /// Depth z_start where the current intrusion episode began, m.
-    pub episode_start_m: f64,
-    /// Depth the re-intrusion overshoot is anchored at; `None` until the foot has been airborne.
-    pub overshoot_anchor_m: Option<f64>,
+    /// The current (or last) intrusion episode: where it began, the overshoot's anchor, its
+    /// laws (rebuilt at each touchdown and restart, so never out of date).
+    episode: IntrusionEpisode,
     /// The foot has left the ground at least once (the sand under it is disturbed).
     pub airborne_once: bool,
     /// Deepest point reached so far, z_max, m.
@@ -97,24 +96,45 @@ pub fn depth_of(x_f: f64) -> f64 {
 }
 
 impl Contact {
-    /// A static foot at height `x_f` (after the initial sink; no overshoot).
-    pub fn at_rest(x_f: f64) -> Self {
+    /// A static foot at height `x_f` on `sand` (after the initial sink; no overshoot).
+    pub fn at_rest(sand: &Sand, x_f: f64) -> Self {
         let z = depth_of(x_f);
         Self {
             mode: GroundMode::Static,
             ground_level_m: x_f,
-            episode_start_m: z,
-            overshoot_anchor_m: None,
+            episode: sand.episode(z, None),
             airborne_once: false,
             max_depth_m: z.max(0.0),
         }
+    }
+
+    /// A foot in the air over `sand` that has been airborne before (the sand is disturbed),
+    /// the ground level at `ground_level_m`, no intrusion so far.
+    pub fn in_flight(sand: &Sand, ground_level_m: f64) -> Self {
+        Self {
+            mode: GroundMode::Aerial,
+            ground_level_m,
+            episode: sand.episode(0.0, None),
+            airborne_once: true,
+            max_depth_m: 0.0,
+        }
+    }
+
+    /// Depth z_start where the current intrusion episode began, m.
+    pub fn episode_start_m(&self) -> f64 {
+        self.episode.start_m()
+    }
+
+    /// Depth the re-intrusion overshoot is anchored at; `None` until the foot has been airborne.
+    pub fn overshoot_anchor_m(&self) -> Option<f64> {
+        self.episode.anchor_m()
     }
 
     /// Holding capacity of the sand at depth `z` in the current episode, N (`F_p_re` once
     /// airborne, plain `F_p` before; infinite for the rigid floor).
     #[inline]
     pub fn holding_force(&self, sand: &Sand, z_m: f64) -> f64 {
-        sand.resisting_force(z_m, self.overshoot_anchor_m)
+        sand.resisting_force(z_m, self.overshoot_anchor_m())
     }
 
     /// Foot acceleration and ground force for spring force `f_s` and foot state `(x_f, v_f)`.
@@ -134,10 +154,7 @@ impl Contact {
                 added_mass_kg: 0.0,
             },
             GroundMode::Intruding => {
-                let z = depth_of(x_f);
-                let s = z - self.episode_start_m;
-                let resist = self.holding_force(sand, z) + sand.drag_coefficient(s) * v_f * v_f;
-                let m_a = sand.added_mass(s);
+                let (resist, m_a) = sand.intrusion(&self.episode, depth_of(x_f), v_f);
                 // eq4, implicit in the foot's own acceleration: (m_f + m_a) a = -m_f g - F_s + F_p + alpha v^2.
                 // The reciprocal depends on the depth only: it is ready before F_s.
                 let per_kg = 1.0 / (m_f + m_a);
@@ -156,7 +173,7 @@ impl Contact {
     #[inline]
     pub fn added_mass(&self, sand: &Sand, x_f: f64) -> f64 {
         match self.mode {
-            GroundMode::Intruding => sand.added_mass(depth_of(x_f) - self.episode_start_m),
+            GroundMode::Intruding => sand.episode_added_mass(&self.episode, depth_of(x_f)),
             GroundMode::Aerial | GroundMode::Static => 0.0,
         }
     }
@@ -226,16 +243,20 @@ impl Contact {
         match transition {
             Transition::Touchdown => {
                 self.ground_level_m = x_f;
-                self.episode_start_m = z;
-                if sand.law.is_rigid() {
+                let rigid = sand.law.is_rigid();
+                let anchor = if self.airborne_once && !rigid {
+                    Some(z)
+                } else {
+                    self.overshoot_anchor_m()
+                };
+                self.episode = sand.episode(z, anchor);
+                if rigid {
                     // Perfectly plastic impact on the rigid floor.
                     *v_f = 0.0;
                     self.mode = GroundMode::Static;
                 } else {
-                    // No velocity jump: the foot enters the sand with the active law.
-                    if self.airborne_once {
-                        self.overshoot_anchor_m = Some(z);
-                    }
+                    // No velocity jump: the foot enters the sand with the active law (the
+                    // overshoot anchored here once the foot has been airborne).
                     self.mode = GroundMode::Intruding;
                 }
                 Some(EventKind::Touchdown)
@@ -258,12 +279,13 @@ impl Contact {
             }
             Transition::Restart => {
                 // A new intrusion episode starts here.
-                self.episode_start_m = z;
-                if self.overshoot_anchor_m.is_some()
-                    && sand.law.anchor == crate::params::ReintrusionAnchor::Episode
-                {
-                    self.overshoot_anchor_m = Some(z);
-                }
+                let anchor = match self.overshoot_anchor_m() {
+                    Some(_) if sand.law.anchor == crate::params::ReintrusionAnchor::Episode => {
+                        Some(z)
+                    }
+                    kept => kept,
+                };
+                self.episode = sand.episode(z, anchor);
                 if robot.foot_load(f_s) > self.holding_force(sand, z) {
                     self.mode = GroundMode::Intruding;
                     Some(EventKind::Intrusion)

@@ -424,10 +424,11 @@ pub fn kinematic_at_rest<S: Stroke>(
     let sand = Sand::new(params, GroundLaw::resolve(model, &params.model));
     let (x_r, x_f) = rest_heights(&robot, &sand);
     let push_off = stroke.push_off_start_s();
+    let contact = Contact::at_rest(&sand, x_f);
     Ok(Simulation::new(
         robot,
         sand,
-        Contact::at_rest(x_f),
+        contact,
         Kinematic::new(stroke),
         Vector4::new(x_r, 0.0, x_f, 0.0),
         push_off,

@@ -180,7 +180,8 @@ impl Plant {
         let drive = MotorDrive::new(&params.drive);
         let forced = Forced::new(0.0, hold, hold, drive.current_lag_s);
         let y0 = Vector6::new(x_r, 0.0, x_f, 0.0, x_r + initial_p_m, 0.0);
-        let mut sim = Simulation::new(robot, sand, Contact::at_rest(x_f), forced, y0, 0.0, opts);
+        let contact = Contact::at_rest(&sand, x_f);
+        let mut sim = Simulation::new(robot, sand, contact, forced, y0, 0.0, opts);
         sim.settle()?;
         Ok(Plant { sim, drive })
     }

@@ -26,14 +26,7 @@ fn airborne(
 ) -> Simulation<Kinematic<HoldStroke>, 4> {
     let robot = Robot::new(params);
     let sand = Sand::new(params, GroundLaw::resolve(ModelName::Hard, &params.model));
-    let contact = Contact {
-        mode: GroundMode::Aerial,
-        ground_level_m: ground_m,
-        episode_start_m: 0.0,
-        overshoot_anchor_m: None,
-        airborne_once: true,
-        max_depth_m: 0.0,
-    };
+    let contact = Contact::in_flight(&sand, ground_m);
     Simulation::new(
         robot,
         sand,
