@@ -183,7 +183,7 @@ pub struct JumpOutcome {
 /// Strokes made of cosines ([`Stroke::cosine_piece`]) are evaluated by angle addition from
 /// an anchor: one `sin_cos` per anchor, then [`sincos_small`] of the angle since the anchor
 /// for each stage, re-anchoring once that angle exceeds [`SINCOS_SMALL_MAX_RAD`] (every few
-/// steps). Within a few ulps of a `sin_cos` per evaluation, at a fraction of its cost. When
+/// steps; the anchor is placed ahead of the time that needs it, since time runs forward). Within a few ulps of a `sin_cos` per evaluation, at a fraction of its cost. When
 /// the integrator announces a step's stage times ([`Actuation::stage_times`]), `p''` for all
 /// of them is computed at once ([`sincos_small_lanes`]); evaluations at other times, or of a
 /// step that is not inside one piece, go through [`eval`](Self::eval).
@@ -354,8 +354,8 @@ impl<S: Stroke> Kinematic<S> {
     }
 
     /// [`eval`](Self::eval) outside the current piece or too far from its anchor: find the
-    /// piece and anchor it at `t` (one `sin_cos`), or evaluate the stroke itself when it has
-    /// no cosine pieces.
+    /// piece and anchor it ahead of `t` (one `sin_cos`), or evaluate the stroke itself when it
+    /// has no cosine pieces.
     #[cold]
     #[inline(never)]
     fn eval_anchoring(&self, t: f64) -> Kinematics {
@@ -367,17 +367,27 @@ impl<S: Stroke> Kinematic<S> {
             }
         }
         let piece = anchored.piece;
-        let (s, c) = if piece.angular_freq_rad_s == 0.0 {
-            (0.0, 1.0)
-        } else {
-            piece.phase_rad(t).sin_cos()
-        };
-        anchored.anchor_s = t;
-        anchored.sin_cos = (s, c);
+        let w = piece.angular_freq_rad_s;
+        if w == 0.0 {
+            anchored.anchor_s = t;
+            anchored.sin_cos = (0.0, 1.0);
+            self.piece.set(anchored);
+            return piece.kinematics(0.0, 1.0);
+        }
+        // Time runs forward: an anchor ahead of `t` serves the steps after it for about twice
+        // as long as one at `t` (the window reaches from `t` to the anchor's far side).
+        anchored.anchor_s = t + ANCHOR_LEAD_RAD / w.abs();
+        anchored.sin_cos = piece.phase_rad(anchored.anchor_s).sin_cos();
         self.piece.set(anchored);
-        piece.kinematics(s, c)
+        let (ds, dc) = sincos_small(anchored.angle_since_anchor(t));
+        anchored.kinematics_after(ds, dc)
     }
 }
+
+/// How far ahead of the time that needs it a cosine piece is anchored, rad of phase: most of
+/// [`SINCOS_SMALL_MAX_RAD`], with a margin so that the time itself stays within range of the
+/// anchor after rounding.
+const ANCHOR_LEAD_RAD: f64 = 0.9 * SINCOS_SMALL_MAX_RAD;
 
 impl<S: Stroke> Actuation<4> for Kinematic<S> {
     #[inline]
@@ -593,8 +603,18 @@ mod tests {
         let w = core::f64::consts::TAU * 10.0;
         let left = k.eval(half).accel_m_s2;
         assert!((left - 0.01875 * w * w).abs() < 1e-9, "left limit {left}");
-        // Inside the segment nothing changes.
-        assert_eq!(k.eval(0.02), stroke.eval(0.02));
+        // Inside the segment nothing changes (within the few ulps of the anchored
+        // evaluation, whose anchor lies ahead of the time evaluated).
+        let (inside, exact) = (k.eval(0.02), stroke.eval(0.02));
+        let full = [0.01875, 0.01875 * w, 0.01875 * w * w];
+        let got = [inside.position_m, inside.velocity_m_s, inside.accel_m_s2];
+        let want = [exact.position_m, exact.velocity_m_s, exact.accel_m_s2];
+        for i in 0..3 {
+            assert!(
+                (got[i] - want[i]).abs() < 8.0 * f64::EPSILON * full[i],
+                "{inside:?} vs {exact:?}"
+            );
+        }
         // The next segment starts with the hold again.
         k.begin_segment(half + 0.2);
         assert_eq!(k.eval(half).accel_m_s2, 0.0);
