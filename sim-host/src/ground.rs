@@ -228,7 +228,15 @@ impl Sand {
     /// The laws of an intrusion episode that began at depth `start_m`, its overshoot anchored
     /// at `anchor_m` (see [`IntrusionEpisode`]).
     pub fn episode(&self, start_m: f64, anchor_m: Option<f64>) -> IntrusionEpisode {
-        let (r, a, area) = (self.foot_radius_m, self.cone_rate, self.foot_area_m2);
+        let area = self.foot_area_m2;
+        // Int_0^u A_flat as a cubic in u while the cone grows, and A_flat(u), its derivative.
+        let flat_integral = self.flat_area_integral_cubic();
+        let flat_area = [
+            flat_integral[1],
+            2.0 * flat_integral[2],
+            3.0 * flat_integral[3],
+            0.0,
+        ];
         // F_p in z on the piece that holds z_start, and where that piece ends.
         // An episode above the surface (or at a NaN depth) gets no polynomials.
         let penetration_in_z = if start_m.is_nan() || start_m < 0.0 {
@@ -249,14 +257,12 @@ impl Sand {
                     ],
                     f64::INFINITY,
                 )),
-                // k1/A Int A_flat + sigma' (A z - Int A_flat), with
-                // Int_0^z A_flat = pi (R^2 z - R a z^2 + a^2 z^3 / 3) while the cone grows.
+                // k1/A Int A_flat + sigma' (A z - Int A_flat) while the cone grows.
                 PenetrationLaw::Cone if start_m < self.cone_depth_m => {
-                    let g = (self.k1_per_area - self.sigma_over_cos) * PI;
-                    Some((
-                        [0.0, self.k1_per_area * area, -g * r * a, g * a * a / 3.0],
-                        self.cone_depth_m,
-                    ))
+                    let g = self.k1_per_area - self.sigma_over_cos;
+                    let mut in_z = flat_integral.map(|c| g * c);
+                    in_z[1] += self.sigma_over_cos * area;
+                    Some((in_z, self.cone_depth_m))
                 }
                 PenetrationLaw::Cone => {
                     let full = self.flat_area_integral(self.cone_depth_m);
@@ -276,24 +282,15 @@ impl Sand {
         // alpha(s) and m_a(s) while the cone grows (s below its depth).
         let (drag, added_mass, drag_end_m) = match self.law.drag {
             DragLaw::ConstantAlpha => ([self.alpha_kg_m, 0.0, 0.0, 0.0], [0.0; 4], f64::INFINITY),
+            // m_a = d (Int A_flat + pi C s), alpha = b dm_a/ds = b d (A_flat + pi C).
             DragLaw::AddedMass => {
                 let d = self.added_mass_density;
                 let b = self.drag_b * d;
-                (
-                    [
-                        b * (area + self.added_mass_pi_c_m2),
-                        -2.0 * b * PI * r * a,
-                        b * PI * a * a,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        d * (area + self.added_mass_pi_c_m2),
-                        -d * PI * r * a,
-                        d * PI * a * a / 3.0,
-                    ],
-                    self.cone_depth_m,
-                )
+                let mut drag = flat_area.map(|c| b * c);
+                drag[0] += b * self.added_mass_pi_c_m2;
+                let mut added_mass = flat_integral.map(|c| d * c);
+                added_mass[1] += d * self.added_mass_pi_c_m2;
+                (drag, added_mass, self.cone_depth_m)
             }
         };
         let (penetration, polynomial_end_m) = match penetration_in_z {
@@ -311,6 +308,14 @@ impl Sand {
             drag,
             added_mass,
         }
+    }
+
+    /// `Int_0^u A_flat(w) dw = pi (R^2 u - R a u^2 + a^2 u^3 / 3)` (`a` the cone rate
+    /// `mu / tan theta`): its coefficients of `u^0..u^3`, m^3, valid while the cone grows
+    /// (`u` below the cone's depth; everywhere when it does not grow).
+    fn flat_area_integral_cubic(&self) -> [f64; 4] {
+        let (r, a) = (self.foot_radius_m, self.cone_rate);
+        [0.0, self.foot_area_m2, -PI * r * a, PI * a * a / 3.0]
     }
 
     /// `(F_p(z), alpha(s), m_a(s))` of `episode` at depth `z` (`s = z - z_start`): its

@@ -183,7 +183,8 @@ pub struct JumpOutcome {
 /// Strokes made of cosines ([`Stroke::cosine_piece`]) are evaluated by angle addition from
 /// an anchor: one `sin_cos` per anchor, then [`sincos_small`] of the angle since the anchor
 /// for each stage, re-anchoring once that angle exceeds [`SINCOS_SMALL_MAX_RAD`] (every few
-/// steps; the anchor is placed ahead of the time that needs it, since time runs forward). Within a few ulps of a `sin_cos` per evaluation, at a fraction of its cost. When
+/// steps; the anchor is placed ahead of the time that needs it, since time runs forward).
+/// Within a few ulps of a `sin_cos` per evaluation, at a fraction of its cost. When
 /// the integrator announces a step's stage times ([`Actuation::stage_times`]), `p''` for all
 /// of them is computed at once ([`sincos_small_lanes`]); evaluations at other times, or of a
 /// step that is not inside one piece, go through [`eval`](Self::eval).
