@@ -14,9 +14,9 @@ use std::time::{Duration, Instant};
 use hil_common::{delayed, params, sil};
 use sandjumper_core::FaultCode;
 use sandjumper_sim::ModelName;
-use sandjumper_sim::hil::emulated_firmware;
-use sandjumper_sim::hil::pil::{self, PilConfig};
-use sandjumper_sim::hil::{
+use sandjumper_sim::rig::hil::emulated_firmware;
+use sandjumper_sim::rig::hil::pil::{self, PilConfig};
+use sandjumper_sim::rig::hil::{
     HilOutcome, HilSpec, InjectedFault, Injection, LinkError, RigModelConfig, run_jump,
 };
 

@@ -4,8 +4,8 @@
 //! it needs QEMU and the firmware ELF.)
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use sandjumper_sim::hil::run::rig_config;
-use sandjumper_sim::hil::{HilSpec, RigModelConfig, SilLink, run_jump};
+use sandjumper_sim::rig::hil::run::rig_config;
+use sandjumper_sim::rig::hil::{HilSpec, RigModelConfig, SilLink, run_jump};
 use sandjumper_sim::{JumpKind, ModelName, Params};
 use std::hint::black_box;
 

@@ -9,9 +9,9 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector4;
 use sandjumper_core::trajectory::SineJump;
-use sandjumper_sim::jump::{GROUNDED_TAIL_S, Kinematic, kinematic_at_rest};
-use sandjumper_sim::robot::Robot;
-use sandjumper_sim::simulation::{Simulation, plant_stepper};
+use sandjumper_sim::model::jump::{GROUNDED_TAIL_S, Kinematic, kinematic_at_rest};
+use sandjumper_sim::model::robot::Robot;
+use sandjumper_sim::model::simulation::{Simulation, plant_stepper};
 use sandjumper_sim::*;
 use std::hint::black_box;
 

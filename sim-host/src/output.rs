@@ -15,7 +15,7 @@ use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use crate::jump::SeriesRow;
+use crate::model::record::SeriesRow;
 
 /// File written into every output directory; its presence allows replacing that directory.
 pub const MARKER_FILE: &str = ".sandjumper-output";

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
-use sandjumper_sim::fit::data::HeightColumn;
-use sandjumper_sim::fit::jumps::{DragParam, JumpFitSetup, fit_jumps_file};
-use sandjumper_sim::fit::{FitError, FitReport, write_params_files};
+use sandjumper_sim::study::fit::data::HeightColumn;
+use sandjumper_sim::study::fit::jumps::{DragParam, JumpFitSetup, fit_jumps_file};
+use sandjumper_sim::study::fit::{FitError, FitReport, write_params_files};
 use sandjumper_sim::{JumpKind, JumpSpec, ModelName, Params, SimOptions, simulate_jump};
 
 fn gaussian(rng: &mut StdRng) -> f64 {

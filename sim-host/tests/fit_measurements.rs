@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use sandjumper_sim::Params;
-use sandjumper_sim::fit::added_mass::fit_added_mass_file;
-use sandjumper_sim::fit::intrusion::{CurveKind, fit_intrusion_file};
-use sandjumper_sim::fit::{FitError, FitReport, write_params_files};
+use sandjumper_sim::study::fit::added_mass::fit_added_mass_file;
+use sandjumper_sim::study::fit::intrusion::{CurveKind, fit_intrusion_file};
+use sandjumper_sim::study::fit::{FitError, FitReport, write_params_files};
 
 /// Standard normal sample (Box-Muller) from a seeded generator.
 fn gaussian(rng: &mut StdRng) -> f64 {

@@ -39,7 +39,7 @@ fn overrides_change_only_the_given_keys() {
     let mut expected = Params::preset(0.57).unwrap();
     expected.robot.foot_mass_kg = 0.05;
     expected.sand.k1_n_m = 2000.0;
-    expected.model.drag = sandjumper_sim::params::DragChoice::ConstantAlpha;
+    expected.model.drag = sandjumper_sim::model::params::DragChoice::ConstantAlpha;
     assert_eq!(p, expected);
 }
 

@@ -1,12 +1,12 @@
 //! Numerical facts of the plant simulator: energy, rest, convergence, event location, ringing.
 
 use nalgebra::Vector4;
-use sandjumper_sim::ground::{GroundLaw, Sand};
-use sandjumper_sim::hybrid::Contact;
-use sandjumper_sim::jump::{Kinematic, kinematic_at_rest, run_kinematic};
-use sandjumper_sim::robot::Robot;
-use sandjumper_sim::simulation::Simulation;
-use sandjumper_sim::trajectory::HoldStroke;
+use sandjumper_sim::model::ground::{GroundLaw, Sand};
+use sandjumper_sim::model::hybrid::Contact;
+use sandjumper_sim::model::jump::{Kinematic, kinematic_at_rest, run_kinematic};
+use sandjumper_sim::model::robot::Robot;
+use sandjumper_sim::model::simulation::Simulation;
+use sandjumper_sim::model::trajectory::HoldStroke;
 use sandjumper_sim::*;
 
 fn opts(rtol: f64) -> SimOptions {

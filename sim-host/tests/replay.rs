@@ -3,11 +3,11 @@
 //! exact trajectory.
 
 use sandjumper_core::trajectory::{JumpKind, SineJump};
-use sandjumper_sim::acqlog::{
+use sandjumper_sim::model::trajectory::Stroke;
+use sandjumper_sim::rig::acqlog::{
     AcqLog, Column, JumpConfig, LogMetadata, LogRow, ReadOptions, read_log,
 };
-use sandjumper_sim::replay::{DEFAULT_WINDOW_S, ReplayStroke, replay_log};
-use sandjumper_sim::trajectory::Stroke;
+use sandjumper_sim::study::replay::{DEFAULT_WINDOW_S, ReplayStroke, replay_log};
 use sandjumper_sim::{JumpSpec, ModelName, Params, SimOptions, simulate_jump};
 
 /// Encoder resolution of the synthetic logs: 1 um per count.

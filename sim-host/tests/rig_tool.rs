@@ -12,7 +12,7 @@
 //!   1.5 mm at every tick and 0.5 mm RMS (each run tracks its command within ~1 mm; the
 //!   table is the original encoder record resampled at 1 kHz).
 
-use sandjumper_sim::hil::emulated_firmware;
+use sandjumper_sim::rig::hil::emulated_firmware;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -579,7 +579,7 @@ fn cosine_record(amplitude_m: f64, freq_hz: f64) -> Vec<(f64, f64)> {
 
 #[test]
 fn the_replay_plan_refuses_exactly_beyond_the_drives_force_and_the_stroke() {
-    use sandjumper_sim::rig_tool::replay::plan;
+    use sandjumper_sim::rig::tool::replay::plan;
     let (m_m, g, peak): (f64, f64, f64) = (1.125, 9.81, 300.0);
     // Peak force m_m (A w^2 + g): the frequency where it equals 300 N at A = 18.75 mm.
     let a: f64 = 0.01875;

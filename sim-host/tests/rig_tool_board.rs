@@ -15,10 +15,10 @@ use sandjumper_core::{
     FrameDecoder, HostMessage, Rig, RigConfig, RigMessage, TickInput, TickTiming,
 };
 use sandjumper_sim::ModelName;
-use sandjumper_sim::hil::framed::FramedLink;
-use sandjumper_sim::hil::run::{HilSpec, jump_config};
-use sandjumper_sim::params::Params;
-use sandjumper_sim::rig_tool::session::{Program, run_program};
+use sandjumper_sim::model::params::Params;
+use sandjumper_sim::rig::hil::framed::FramedLink;
+use sandjumper_sim::rig::hil::run::{HilSpec, jump_config};
+use sandjumper_sim::rig::tool::session::{Program, run_program};
 
 fn send(stream: &mut UnixStream, msg: &RigMessage) -> bool {
     let frame = encode_frame_vec(msg).expect("encodes");

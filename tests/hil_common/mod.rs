@@ -2,8 +2,8 @@
 #![allow(dead_code)]
 
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::hil::run::rig_config;
-use sandjumper_sim::hil::{HilOutcome, HilSpec, RigModelConfig, SilLink, run_jump};
+use sandjumper_sim::rig::hil::run::rig_config;
+use sandjumper_sim::rig::hil::{HilOutcome, HilSpec, RigModelConfig, SilLink, run_jump};
 use sandjumper_sim::{ModelName, Params};
 
 /// Parameters at `phi`.

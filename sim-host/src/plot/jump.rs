@@ -11,8 +11,8 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::hybrid::GroundMode;
-use crate::jump::{JumpSummary, SeriesRow};
+use crate::model::hybrid::GroundMode;
+use crate::model::record::{JumpSummary, SeriesRow};
 
 use super::{
     FONT, Figure, LegendEntry, PlotResult, XyChart, draw_legend_column, padded_range, palette,

@@ -1,0 +1,147 @@
+//! The argument vocabulary every subcommand shares: jump kinds and ground models as named on
+//! the command line, the parameter source (`--params`, `--rtol`), and value parsers that say
+//! what is allowed.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use sandjumper_core::trajectory::{JumpKind, MAX_FREQ_HZ, MAX_TAU_S, MIN_FREQ_HZ};
+
+use crate::model::params::ModelName;
+
+/// Jump kind as named on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KindArg {
+    /// One-cycle sine starting low: push down, return.
+    Single,
+    /// Pull-up half (preliminary hop), then push-off half.
+    Stutter,
+    /// Stutter with a pause of --tau seconds between its halves.
+    Delayed,
+}
+
+impl From<KindArg> for JumpKind {
+    fn from(k: KindArg) -> Self {
+        match k {
+            KindArg::Single => JumpKind::Single,
+            KindArg::Stutter => JumpKind::Stutter,
+            KindArg::Delayed => JumpKind::DelayedStutter,
+        }
+    }
+}
+
+/// Ground model as named on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModelArg {
+    /// Rigid floor, perfectly plastic impact.
+    Hard,
+    /// F = k1 z + alpha v^2.
+    #[value(name = "eq1-linear")]
+    Eq1Linear,
+    /// Two-resistance F_p with re-intrusion overshoot, constant drag.
+    Eq1,
+    /// Cone F_p, re-intrusion, added mass (the paper's final model).
+    Eq4,
+}
+
+impl From<ModelArg> for ModelName {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Hard => ModelName::Hard,
+            ModelArg::Eq1Linear => ModelName::Eq1Linear,
+            ModelArg::Eq1 => ModelName::Eq1,
+            ModelArg::Eq4 => ModelName::Eq4,
+        }
+    }
+}
+
+/// Options shared by `jump` and `sweep`: parameters and integration.
+#[derive(Debug, Clone, Args)]
+pub struct ParamSource {
+    /// TOML file overriding any parameter (tables [robot], [drive], [sand], [model], keys as
+    /// printed by `sandjumper params`). Applied on top of the --phi preset.
+    // The doc text is also the `--help` text: the TOML table names stay in brackets.
+    #[allow(rustdoc::broken_intra_doc_links)]
+    #[arg(long, value_name = "FILE.toml")]
+    pub params: Option<PathBuf>,
+    /// Relative tolerance of the Dormand-Prince 5(4) integrator.
+    #[arg(long, value_name = "X", default_value = "1e-8", value_parser = parse_rtol)]
+    pub rtol: f64,
+}
+
+/// clap value parser: a finite number.
+pub fn parse_number(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("`{s}` is not a finite number")),
+    }
+}
+
+/// Check a forcing frequency: positive, within the trajectory's supported band.
+pub fn check_freq(f: f64) -> Result<f64, String> {
+    if f <= 0.0 {
+        return Err(format!(
+            "frequency {f} Hz is not positive (allowed: {MIN_FREQ_HZ}..={MAX_FREQ_HZ} Hz)"
+        ));
+    }
+    if !(MIN_FREQ_HZ..=MAX_FREQ_HZ).contains(&f) {
+        return Err(format!(
+            "frequency {f} Hz out of range (allowed: {MIN_FREQ_HZ}..={MAX_FREQ_HZ} Hz)"
+        ));
+    }
+    Ok(f)
+}
+
+/// Check a delay: non-negative, at most the trajectory's longest delay.
+pub fn check_tau(t: f64) -> Result<f64, String> {
+    if t < 0.0 {
+        return Err(format!(
+            "delay tau {t} s is negative (allowed: 0..={MAX_TAU_S} s)"
+        ));
+    }
+    if t > MAX_TAU_S {
+        return Err(format!(
+            "delay tau {t} s out of range (allowed: 0..={MAX_TAU_S} s)"
+        ));
+    }
+    Ok(t)
+}
+
+/// Check a packing fraction: a fraction in (0, 1). Whether a preset exists is checked when
+/// the parameters are resolved (a params file may supply the sand values).
+pub fn check_phi(phi: f64) -> Result<f64, String> {
+    if phi > 0.0 && phi < 1.0 {
+        Ok(phi)
+    } else {
+        Err(format!(
+            "packing fraction {phi} is not a fraction (allowed: 0 < phi < 1; presets 0.57..=0.62)"
+        ))
+    }
+}
+
+/// clap value parser: a forcing frequency in Hz ([`check_freq`]).
+pub fn parse_freq(s: &str) -> Result<f64, String> {
+    check_freq(parse_number(s)?)
+}
+
+/// clap value parser: a delay in s ([`check_tau`]).
+pub fn parse_tau(s: &str) -> Result<f64, String> {
+    check_tau(parse_number(s)?)
+}
+
+/// clap value parser: a packing fraction ([`check_phi`]).
+pub fn parse_phi(s: &str) -> Result<f64, String> {
+    check_phi(parse_number(s)?)
+}
+
+/// clap value parser: an integrator relative tolerance, 1e-14 <= rtol < 1.
+pub fn parse_rtol(s: &str) -> Result<f64, String> {
+    let r = parse_number(s)?;
+    if (1e-14..1.0).contains(&r) {
+        Ok(r)
+    } else {
+        Err(format!(
+            "rtol {r} out of range (allowed: 1e-14 <= rtol < 1)"
+        ))
+    }
+}

@@ -1,0 +1,61 @@
+//! What every subcommand shares: the error it returns (one message and an exit status),
+//! the argument vocabulary ([`args`]) and parameters resolved from `--phi` and `--params`
+//! ([`resolve`]). Subcommands live with what they run (`study/`, `rig/`); the dispatcher in
+//! (`cli`) imports them, and they import only this module, so no import cycles.
+
+pub mod args;
+pub mod resolve;
+
+use std::fmt;
+
+/// Exit status for bad input (the same as clap's usage errors).
+pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit status for an internal failure after the input was accepted.
+pub const EXIT_INTERNAL: u8 = 1;
+
+/// A command failed: the message to print and the exit status.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CliError {
+    /// One message: what, where, what is allowed.
+    pub message: String,
+    /// [`EXIT_BAD_INPUT`] or [`EXIT_INTERNAL`].
+    pub exit: u8,
+}
+
+impl CliError {
+    /// Bad input (exit 2).
+    pub fn input(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            exit: EXIT_BAD_INPUT,
+        }
+    }
+
+    /// Internal failure (exit 1).
+    pub fn internal(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            exit: EXIT_INTERNAL,
+        }
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for CliError {}
+
+impl From<crate::output::OutputError> for CliError {
+    fn from(e: crate::output::OutputError) -> Self {
+        Self::input(e.to_string())
+    }
+}
+
+impl From<crate::plot::PlotError> for CliError {
+    fn from(e: crate::plot::PlotError) -> Self {
+        Self::internal(e.to_string())
+    }
+}

@@ -1,0 +1,191 @@
+//! `sandjumper log check FILE` and `sandjumper log convert IN OUT`.
+
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+use serde::Serialize;
+
+use super::binary::{ConvertReport, MAGIC, convert_binary};
+use super::reader::ReadOptions;
+use super::summary::LogSummary;
+use super::{AcqLog, read_log};
+use crate::command::CliError;
+
+/// `sandjumper log`.
+#[derive(Debug, Clone, Args)]
+pub struct LogArgs {
+    /// What to do with the log.
+    #[command(subcommand)]
+    pub action: LogAction,
+}
+
+/// `sandjumper log` actions.
+#[derive(Debug, Clone, Subcommand)]
+pub enum LogAction {
+    /// Validate a log (CSV or binary) and summarise it: duration, rate, gaps, faults, camera
+    /// frames, dropped samples. Exit status 2 if it is not a valid log.
+    Check(CheckArgs),
+    /// Convert a binary log (the rig's frames as received) to the CSV form, losslessly.
+    Convert(ConvertArgs),
+}
+
+/// `sandjumper log check`.
+#[derive(Debug, Clone, Args)]
+pub struct CheckArgs {
+    /// The log.
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    /// Accept missing samples (interpolated, and counted in the summary).
+    #[arg(long)]
+    pub allow_gaps: bool,
+    /// Print one JSON object instead of the text summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `sandjumper log convert`.
+#[derive(Debug, Clone, Args)]
+pub struct ConvertArgs {
+    /// The binary log.
+    #[arg(value_name = "IN")]
+    pub input: PathBuf,
+    /// The CSV log to write (not overwritten if it exists, unless --force).
+    #[arg(value_name = "OUT.csv")]
+    pub output: PathBuf,
+    /// Convert even if sequence numbers show lost samples (the CSV's tick column shows the
+    /// gaps and `dropped_samples` counts them).
+    #[arg(long)]
+    pub allow_gaps: bool,
+    /// Replace OUT if it exists.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Run `log`.
+pub fn run(a: &LogArgs) -> Result<(), CliError> {
+    match &a.action {
+        LogAction::Check(c) => check(c),
+        LogAction::Convert(c) => convert(c),
+    }
+}
+
+/// JSON of `log check --json`.
+#[derive(Serialize)]
+struct CheckReport<'a> {
+    file: String,
+    form: &'static str,
+    #[serde(flatten)]
+    summary: &'a LogSummary,
+    conversion: Option<&'a ConvertReport>,
+}
+
+fn bad(path: &Path, e: impl std::fmt::Display) -> CliError {
+    CliError::input(format!("log `{}`: {e}", path.display()))
+}
+
+fn is_binary(path: &Path) -> Result<bool, CliError> {
+    let mut head = [0u8; 8];
+    let mut file = std::fs::File::open(path).map_err(|e| bad(path, e))?;
+    let mut got = 0;
+    while got < head.len() {
+        match file.read(&mut head[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) => return Err(bad(path, e)),
+        }
+    }
+    Ok(got == head.len() && &head == MAGIC)
+}
+
+fn load(path: &Path, allow_gaps: bool) -> Result<(AcqLog, Option<ConvertReport>), CliError> {
+    let opts = ReadOptions {
+        allow_gaps,
+        ..ReadOptions::default()
+    };
+    let file = std::fs::File::open(path).map_err(|e| bad(path, e))?;
+    if is_binary(path)? {
+        let (log, report) = convert_binary(BufReader::new(file), allow_gaps, opts.max_rows)
+            .map_err(|e| bad(path, e))?;
+        Ok((log, Some(report)))
+    } else {
+        let log = read_log(BufReader::new(file), &opts).map_err(|e| bad(path, e))?;
+        Ok((log, None))
+    }
+}
+
+fn check(a: &CheckArgs) -> Result<(), CliError> {
+    let (log, conversion) = load(&a.file, a.allow_gaps)?;
+    let summary = log.summary();
+    if a.json {
+        let report = CheckReport {
+            file: a.file.display().to_string(),
+            form: if conversion.is_some() {
+                "binary"
+            } else {
+                "csv"
+            },
+            summary: &summary,
+            conversion: conversion.as_ref(),
+        };
+        let json = serde_json::to_string_pretty(&report)
+            .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
+        println!("{json}");
+        return Ok(());
+    }
+    println!(
+        "{}: valid {} log",
+        a.file.display(),
+        if conversion.is_some() {
+            "binary"
+        } else {
+            "CSV"
+        }
+    );
+    print!("{summary}");
+    if let Some(c) = &conversion {
+        println!(
+            "frames:             {} decoded ({} sample batches), {} rejected, {} other messages",
+            c.frames_ok, c.sample_batches, c.frames_rejected, c.other_messages
+        );
+        println!("samples lost (seq): {}", c.samples_lost);
+        for (code, name, tick) in &c.faults {
+            println!("fault reported:     {code} {name} at tick {tick}");
+        }
+    }
+    Ok(())
+}
+
+fn convert(a: &ConvertArgs) -> Result<(), CliError> {
+    if !is_binary(&a.input)? {
+        return Err(bad(
+            &a.input,
+            "not a binary log (no `SJACQBIN` header); a CSV log needs no conversion (check it with `sandjumper log check`)",
+        ));
+    }
+    if a.output.exists() && !a.force {
+        return Err(CliError::input(format!(
+            "`{}` exists: choose another name or pass --force",
+            a.output.display()
+        )));
+    }
+    let (log, report) = load(&a.input, a.allow_gaps)?;
+    let report = report.unwrap_or_default();
+    // Write next to the target, then rename: a failed conversion leaves no half file.
+    let tmp = a.output.with_extension("csv.partial");
+    log.write_file(&tmp)
+        .and_then(|()| std::fs::rename(&tmp, &a.output).map_err(|e| super::AcqLogError::io(&e)))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            CliError::input(format!("cannot write `{}`: {e}", a.output.display()))
+        })?;
+    eprintln!(
+        "wrote {} ({} samples from {} frames; {} rejected frames; {} samples lost by sequence number)",
+        a.output.display(),
+        report.samples,
+        report.frames_ok,
+        report.frames_rejected,
+        report.samples_lost
+    );
+    Ok(())
+}

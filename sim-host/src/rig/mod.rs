@@ -1,0 +1,7 @@
+//! The rig and its stand-ins: the control loop closed through a link ([`hil`]: the core
+//! in-process, the real firmware under QEMU, or a board on a serial port), the host tool
+//! for a board ([`tool`]), and the acquisition logs both write ([`acqlog`]).
+
+pub mod acqlog;
+pub mod hil;
+pub mod tool;

@@ -1,0 +1,381 @@
+//! `sandjumper figures`: regenerate the simulations behind the paper's figures (Aguilar &
+//! Goldman 2016) as PNG + SVG with the CSV behind each, into one output directory.
+//!
+//! | file stem | what |
+//! |---|---|
+//! | `height_vs_phi` | best jump height vs phi: single, stutter, delayed stutter (tau = 0.75 s), eq1 and eq4, hard ground for reference |
+//! | `height_vs_freq` | jump height vs forcing frequency at several phi and on hard ground |
+//! | `delayed_vs_tau` | delayed-stutter height vs delay at phi = 0.57 (each delay at its best frequency) |
+//! | `penetration_force` | quasi-static `F_p(z)`, two-resistance and cone laws, and a slow re-intrusion |
+//! | `added_mass_stutter` | added mass vs depth during a stutter jump at phi = 0.57, in foot masses |
+//! | `mechanism` | one stutter jump, eq1 vs eq4: positions, spring force, ground force, added mass |
+//!
+//! Beside them: the full sweeps (`*_sweep.csv`, the columns of `sweep.csv`), `failures.csv`
+//! (jumps that could not be simulated, never dropped silently), `params.toml` (the phi = 0.57
+//! preset; every phi uses its own preset), and `summary.txt`, the numbers REPRODUCTION.md
+//! quotes. The directory appears complete or not at all ([`StagedDir`]).
+
+pub mod command;
+pub mod grid;
+pub mod heights;
+pub mod laws;
+pub mod series;
+pub mod sweeps;
+
+use core::fmt;
+use std::path::{Path, PathBuf};
+
+use sandjumper_core::trajectory::JumpKind;
+
+use crate::model::params::{ModelName, Params};
+use crate::output::{OutputError, StagedDir};
+use crate::plot::{Figure, save_figure};
+use crate::study::sweep::{FAILURE_HEADER, ROW_HEADER, SweepFailure, SweepRow, write_csv};
+use sweeps::{BEST_HEADER, BestRow, Grids, LOW_PHI, best_rows, find_best};
+
+/// How to run the figures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FiguresOptions {
+    /// Coarse grids ([`Grids::quick`]) instead of the full set.
+    pub quick: bool,
+    /// Worker threads (0: one per core).
+    pub threads: usize,
+    /// Progress bars on stderr (shown only on a terminal).
+    pub progress: bool,
+    /// Relative tolerance of the integrator.
+    pub rtol: f64,
+}
+
+/// Why the figures could not be written.
+#[derive(Debug)]
+pub enum FiguresError {
+    /// The output directory cannot be used (bad input).
+    Output(OutputError),
+    /// Something failed after the input was accepted (a simulation setup, a file, a figure).
+    Internal(String),
+}
+
+impl fmt::Display for FiguresError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Output(e) => write!(f, "{e}"),
+            Self::Internal(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for FiguresError {}
+
+impl From<OutputError> for FiguresError {
+    fn from(e: OutputError) -> Self {
+        Self::Output(e)
+    }
+}
+
+/// What was written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FiguresReport {
+    /// The output directory.
+    pub dir: PathBuf,
+    /// Files written, by name.
+    pub files: Vec<String>,
+    /// Jumps simulated in the sweeps.
+    pub jumps: usize,
+    /// Jumps that failed (listed in `failures.csv`).
+    pub failures: usize,
+    /// The numbers of `summary.txt`, as (name, value) pairs.
+    pub findings: Vec<(String, String)>,
+}
+
+/// Writes files into the staging directory and remembers their names.
+struct Writer {
+    dir: StagedDir,
+    files: Vec<String>,
+}
+
+impl Writer {
+    fn csv<T: serde::Serialize>(
+        &mut self,
+        name: &str,
+        rows: &[T],
+        header: &[&str],
+    ) -> Result<(), FiguresError> {
+        write_csv(&self.dir.file(name), rows, header).map_err(FiguresError::Internal)?;
+        self.files.push(name.into());
+        Ok(())
+    }
+
+    fn figure(&mut self, stem: &str, fig: &impl Figure) -> Result<(), FiguresError> {
+        let (png, svg) = (format!("{stem}.png"), format!("{stem}.svg"));
+        save_figure(fig, &self.dir.file(&png), Some(&self.dir.file(&svg)))
+            .map_err(|e| FiguresError::Internal(e.to_string()))?;
+        self.files.extend([png, svg]);
+        Ok(())
+    }
+
+    fn text(&mut self, name: &str, text: &str) -> Result<(), FiguresError> {
+        self.dir
+            .write_text(name, text)
+            .map_err(|e| FiguresError::Internal(e.to_string()))?;
+        self.files.push(name.into());
+        Ok(())
+    }
+}
+
+/// Simulate and write every figure into `out`.
+pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport, FiguresError> {
+    let mut w = Writer {
+        dir: StagedDir::create(out)?,
+        files: Vec::new(),
+    };
+    let grids = if opts.quick {
+        Grids::quick()
+    } else {
+        Grids::full()
+    };
+    let mut failures: Vec<SweepFailure> = Vec::new();
+
+    // 1 + 2: every kind, eq1/eq4 at every phi and hard ground, at every frequency.
+    let phi_sweep = sweeps::run(&sweeps::phi_combinations(&grids), opts)?;
+    let best = best_rows(&phi_sweep.rows);
+    w.csv("height_vs_phi_sweep.csv", &phi_sweep.rows, &ROW_HEADER)?;
+    w.csv("height_vs_phi.csv", &best, &BEST_HEADER)?;
+    w.figure("height_vs_phi", &heights::height_vs_phi(&best))?;
+    let freq_phis: Vec<f64> = laws::LAW_PHIS
+        .into_iter()
+        .filter(|p| grids.phis.iter().any(|g| (g - p).abs() < 1e-9))
+        .collect();
+    let freq_rows: Vec<SweepRow> = phi_sweep
+        .rows
+        .iter()
+        .filter(|r| r.kind != "delayed")
+        .filter(|r| r.model == "hard" || freq_phis.iter().any(|p| (p - r.phi).abs() < 1e-9))
+        .cloned()
+        .collect();
+    w.csv("height_vs_freq.csv", &freq_rows, &ROW_HEADER)?;
+    w.figure(
+        "height_vs_freq",
+        &heights::height_vs_freq(&freq_rows, &freq_phis),
+    )?;
+    failures.extend(phi_sweep.failures.iter().cloned());
+
+    // 3: the delayed stutter against its delay.
+    let tau_sweep = sweeps::run(&sweeps::tau_combinations(&grids), opts)?;
+    let tau_best = best_rows(&tau_sweep.rows);
+    w.csv("delayed_vs_tau_sweep.csv", &tau_sweep.rows, &ROW_HEADER)?;
+    w.csv("delayed_vs_tau.csv", &tau_best, &BEST_HEADER)?;
+    w.figure("delayed_vs_tau", &heights::height_vs_tau(&tau_best, &best))?;
+    failures.extend(tau_sweep.failures.iter().cloned());
+
+    // 4: quasi-static force laws.
+    let law_rows = laws::curves().map_err(FiguresError::Internal)?;
+    w.csv("penetration_force.csv", &law_rows, &laws::HEADER)?;
+    w.figure("penetration_force", &laws::figure(&law_rows))?;
+
+    // 5 + 6: one stutter jump at phi = 0.57, at the frequency where the eq4 stutter's
+    // push-off (final) height is highest: the push-off is where the laws differ.
+    let freq = find_best(&best, JumpKind::Stutter, ModelName::Eq4, Some(LOW_PHI))
+        .map(|b| b.best_final_freq_hz)
+        .ok_or_else(|| {
+            FiguresError::Internal("no successful eq4 stutter jump at phi = 0.57".into())
+        })?;
+    let (params4, run4) =
+        series::stutter(ModelName::Eq4, freq, opts.rtol).map_err(FiguresError::Internal)?;
+    let (params1, run1) =
+        series::stutter(ModelName::Eq1, freq, opts.rtol).map_err(FiguresError::Internal)?;
+    let rows4 = series::csv_rows(ModelName::Eq4, &params4, &run4.series);
+    let rows1 = series::csv_rows(ModelName::Eq1, &params1, &run1.series);
+    w.csv("added_mass_stutter.csv", &rows4, &series::HEADER)?;
+    w.figure(
+        "added_mass_stutter",
+        &series::added_mass_figure(&rows4, freq),
+    )?;
+    let both: Vec<_> = rows1.iter().chain(&rows4).cloned().collect();
+    w.csv("mechanism.csv", &both, &series::HEADER)?;
+    w.figure("mechanism", &series::mechanism_figure(&rows1, &rows4, freq))?;
+
+    // Records: failures, parameters, the numbers.
+    w.csv("failures.csv", &failures, &FAILURE_HEADER)?;
+    let params = Params::preset(LOW_PHI).map_err(|e| FiguresError::Internal(e.to_string()))?;
+    w.text(
+        "params.toml",
+        &format!(
+            "# Parameters of the phi = {LOW_PHI} runs; every phi uses its own preset (MODEL.md tables),\n\
+             # hard ground the robot of this file. Integrator rtol = {}; grids: {}.\n{}",
+            opts.rtol,
+            if opts.quick { "quick" } else { "full" },
+            params.to_toml()
+        ),
+    )?;
+    let findings = findings(&params, &best, &tau_best, &phi_sweep.rows, &run1, &run4);
+    let summary: String = findings
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}\n"))
+        .collect();
+    w.text("summary.txt", &summary)?;
+
+    let jumps = phi_sweep.rows.len() + tau_sweep.rows.len() + failures.len() + 2;
+    let Writer { dir, files } = w;
+    let dir = dir.commit()?;
+    Ok(FiguresReport {
+        dir,
+        files,
+        jumps,
+        failures: failures.len(),
+        findings,
+    })
+}
+
+fn mm(x: f64) -> String {
+    format!("{:.2} mm", 1e3 * x)
+}
+
+/// The numbers MODEL.md section 4 speaks about, from the sweeps.
+fn findings(
+    params: &Params,
+    best: &[BestRow],
+    tau_best: &[BestRow],
+    rows: &[SweepRow],
+    eq1: &crate::model::jump::JumpOutcome,
+    eq4: &crate::model::jump::JumpOutcome,
+) -> Vec<(String, String)> {
+    let mut out: Vec<(String, String)> = Vec::new();
+    let mut put = |k: String, v: String| out.push((k, v));
+    let r = &params.robot;
+    let natural = (r.spring_stiffness_n_m / params.motor_rod_mass_kg()).sqrt()
+        / (2.0 * core::f64::consts::PI);
+    put(
+        "hard_natural_frequency_hz (sqrt(k_s/M)/2pi)".into(),
+        format!("{natural:.2}"),
+    );
+    let kinds = [
+        JumpKind::Single,
+        JumpKind::Stutter,
+        JumpKind::DelayedStutter,
+    ];
+    let h = |kind, model, phi| find_best(best, kind, model, phi);
+    for kind in kinds {
+        let name = crate::model::trajectory::kind_name(kind);
+        if let Some(b) = h(kind, ModelName::Hard, None) {
+            put(
+                format!("hard.{name}"),
+                format!("{} at {} Hz", mm(b.jump_height_m), b.best_freq_hz),
+            );
+        }
+        for model in [ModelName::Eq1, ModelName::Eq4] {
+            for phi in [0.57, 0.62] {
+                if let Some(b) = h(kind, model, Some(phi)) {
+                    put(
+                        format!("{model}.phi{phi}.{name}"),
+                        format!(
+                            "{} at {} Hz (final there {}; best final {} at {} Hz)",
+                            mm(b.jump_height_m),
+                            b.best_freq_hz,
+                            mm(b.final_jump_height_m),
+                            mm(b.best_final_jump_height_m),
+                            b.best_final_freq_hz
+                        ),
+                    );
+                }
+            }
+        }
+    }
+    let ratio = |a: Option<&BestRow>, b: Option<&BestRow>| match (a, b) {
+        (Some(a), Some(b)) if b.jump_height_m > 0.0 => {
+            format!("{:.3}", a.jump_height_m / b.jump_height_m)
+        }
+        _ => "n/a".into(),
+    };
+    for model in [ModelName::Eq1, ModelName::Eq4] {
+        let single = |phi| h(JumpKind::Single, model, phi);
+        put(
+            format!("{model}.single_phi0.57_over_hard"),
+            ratio(
+                single(Some(0.57)),
+                h(JumpKind::Single, ModelName::Hard, None),
+            ),
+        );
+        put(
+            format!("{model}.single_phi0.62_over_phi0.57"),
+            ratio(single(Some(0.62)), single(Some(0.57))),
+        );
+        put(
+            format!("{model}.stutter_over_single.phi0.57"),
+            ratio(h(JumpKind::Stutter, model, Some(0.57)), single(Some(0.57))),
+        );
+        put(
+            format!("{model}.delayed_over_single.phi0.57"),
+            ratio(
+                h(JumpKind::DelayedStutter, model, Some(0.57)),
+                single(Some(0.57)),
+            ),
+        );
+        for phi in [0.57, 0.62] {
+            let hs: Vec<f64> = kinds
+                .iter()
+                .filter_map(|&k| h(k, model, Some(phi)))
+                .map(|b| b.jump_height_m)
+                .collect();
+            let (lo, hi) = hs.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+            put(
+                format!("{model}.kind_spread.phi{phi} ((max-min)/max)"),
+                format!("{:.3}", (hi - lo) / hi),
+            );
+        }
+        // Broad band: frequencies within 90 % of the best single jump.
+        let band = |model: ModelName, phi: Option<f64>| -> String {
+            let line: Vec<&SweepRow> = rows
+                .iter()
+                .filter(|r| r.kind == "single" && r.model == model.as_str())
+                .filter(|r| phi.is_none_or(|p| (r.phi - p).abs() < 1e-9))
+                .collect();
+            let top = line.iter().map(|r| r.jump_height_m).fold(0.0, f64::max);
+            let good: Vec<f64> = line
+                .iter()
+                .filter(|r| r.jump_height_m >= 0.9 * top)
+                .map(|r| r.freq_hz)
+                .collect();
+            match (good.first(), good.last()) {
+                (Some(a), Some(b)) => format!("{a}..{b} Hz ({} grid points)", good.len()),
+                _ => "n/a".into(),
+            }
+        };
+        put(
+            format!("{model}.single_band90.phi0.57"),
+            band(model, Some(0.57)),
+        );
+        if model == ModelName::Eq4 {
+            put("hard.single_band90".into(), band(ModelName::Hard, None));
+        }
+        // Delay at which the delayed stutter first beats the single jump at phi = 0.57.
+        if let Some(single) = h(JumpKind::Single, model, Some(0.57)) {
+            let first = tau_best
+                .iter()
+                .filter(|b| b.model == model.as_str())
+                .find(|b| b.jump_height_m > single.jump_height_m)
+                .map_or("never on the grid".to_string(), |b| {
+                    format!("{} s", b.tau_s)
+                });
+            put(
+                format!("{model}.delayed_beats_single_from_tau.phi0.57"),
+                first,
+            );
+        }
+    }
+    for (name, run) in [("eq1", eq1), ("eq4", eq4)] {
+        let s = &run.summary;
+        put(
+            format!("mechanism.{name}"),
+            format!(
+                "height {} final {} max depth {} peak m_a/m_f {:.2}",
+                mm(s.jump_height_m),
+                mm(s.final_jump_height_m),
+                mm(s.max_depth_m),
+                s.peak_added_mass_kg / params.robot.foot_mass_kg
+            ),
+        );
+    }
+    out
+}
