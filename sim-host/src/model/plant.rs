@@ -188,6 +188,13 @@ impl Plant {
         Ok(Plant { sim, drive })
     }
 
+    /// Set when the push-off half of the trajectory begins, s of plant time (the summary's
+    /// final jump height, final apex and final lift-off count from then on, as in a
+    /// kinematic jump). Call before the plant reaches that time.
+    pub fn set_push_off_start(&mut self, push_off_start_s: f64) {
+        self.sim.set_push_off_start(push_off_start_s);
+    }
+
     /// The motor drive (force constant, F_peak, lag) of this plant.
     pub fn drive(&self) -> &MotorDrive {
         &self.drive

@@ -120,15 +120,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             start_guards: [f64::NEG_INFINITY; 2],
         };
         sim.refresh_guards();
-        sim.metrics.final_time_s = push_off_start_s;
-        // The final jump height is the highest rod apex once the push-off half has begun.
-        // The rest height at t = 0 is a candidate only when the push-off starts at 0
-        // (single jump); for a stutter the rod is still falling from its preliminary hop at
-        // the push-off start, and that tail is not the push-off's height. A push-off hop
-        // that peaks below the rest height gives a negative final height, reported as is.
-        if push_off_start_s > 0.0 {
-            sim.metrics.final_height_m = f64::NEG_INFINITY;
-        }
+        sim.begin_final_metrics(push_off_start_s);
         sim.observe(0.0, &y0);
         sim.sample(0.0, &y0);
         sim
@@ -326,6 +318,32 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         self.refresh_guards();
         self.sample(self.t, &self.y.clone());
         Ok(touched)
+    }
+
+    /// Set when the push-off half begins, s (the final jump height and final lift-off are
+    /// measured from then on). Call before the run reaches that time.
+    pub fn set_push_off_start(&mut self, push_off_start_s: f64) {
+        self.push_off_start_s = push_off_start_s;
+        self.begin_final_metrics(push_off_start_s);
+        if push_off_start_s <= self.t {
+            let (t, h) = (self.t, self.y[0] - self.x_r0);
+            self.consider_height(t, h);
+        }
+    }
+
+    /// The final jump height is the highest rod apex once the push-off half has begun. The
+    /// rest height at t = 0 is a candidate only when the push-off starts at 0 (single jump);
+    /// for a stutter the rod is still falling from its preliminary hop at the push-off start,
+    /// and that tail is not the push-off's height. A push-off hop that peaks below the rest
+    /// height gives a negative final height, reported as is.
+    fn begin_final_metrics(&mut self, push_off_start_s: f64) {
+        self.metrics.final_time_s = push_off_start_s;
+        self.metrics.final_height_m = if push_off_start_s > 0.0 {
+            f64::NEG_INFINITY
+        } else {
+            0.0
+        };
+        self.metrics.final_liftoff_s = None;
     }
 
     fn record(&mut self, kind: EventKind) {

@@ -182,6 +182,12 @@ impl RigModel {
         })
     }
 
+    /// Tell the plant when the push-off half begins, s of plant time (see
+    /// [`Plant::set_push_off_start`]).
+    pub fn set_push_off_start(&mut self, push_off_start_s: f64) {
+        self.plant.set_push_off_start(push_off_start_s);
+    }
+
     /// The plant.
     pub fn plant(&self) -> &Plant {
         &self.plant

@@ -13,7 +13,7 @@ use crate::model::jump::{AIRBORNE_TAIL_S, GROUNDED_TAIL_S};
 use crate::model::options::SimOptions;
 use crate::model::params::{ModelName, Params, RobotParams};
 use crate::model::record::JumpSummary;
-use sandjumper_core::protocol::FaultReport;
+use sandjumper_core::protocol::{ActuatorFrame, FaultReport};
 use sandjumper_core::sample::flags;
 use sandjumper_core::trajectory::{JumpKind, SineJump};
 use sandjumper_core::{
@@ -285,22 +285,16 @@ pub fn jump_config(params: &Params, spec: &HilSpec) -> JumpConfig {
     }
 }
 
-/// Run one jump through `link` against a rig model of `params`.
+/// Run one jump through `link` against a rig model of `params`: plan the periods, open the
+/// session (configure, one idle tick, arm), exchange one lockstep frame per period until the
+/// run-length rule or a latched fault ends the run, then close the link and report.
 pub fn run_jump(
     params: &Params,
     spec: &HilSpec,
     model_config: RigModelConfig,
     link: &mut dyn RigLink,
 ) -> Result<HilOutcome, HilError> {
-    let traj = trajectory(params, spec)?;
-    if !(spec.settle_s.is_finite() && (0.0..=5.0).contains(&spec.settle_s)) {
-        return Err(SimError::InvalidInput {
-            field: "settle_s",
-            value: spec.settle_s.to_string(),
-            allowed: "0..=5 s".into(),
-        }
-        .into());
-    }
+    let plan = RunPlan::new(params, spec, model_config.tick_hz)?;
     let opts = SimOptions {
         rtol: spec.rtol,
         ..SimOptions::default()
@@ -308,112 +302,183 @@ pub fn run_jump(
     let mut rig = RigModel::new(
         params,
         spec.model,
-        traj.eval(0.0).position_m,
+        plan.trajectory.eval(0.0).position_m,
         model_config,
         &opts,
     )?;
-    let tick_hz = f64::from(model_config.tick_hz);
-    let period_s = 1.0 / tick_hz;
-    let start_period = ((spec.settle_s * tick_hz).round() as u64).max(1);
-    let push_off_period = start_period + (traj.push_off_start_s() * tick_hz).round() as u64;
-    let end_period = start_period + (traj.end_s() * tick_hz).ceil() as u64;
-    let last_period = end_period + (AIRBORNE_TAIL_S * tick_hz).ceil() as u64 + 10;
-    let mut injections: Vec<(u64, InjectedFault)> = spec
-        .injections
-        .iter()
-        .map(|i| {
-            (
-                start_period + (i.at_s.max(0.0) * tick_hz).round() as u64,
-                i.fault,
-            )
-        })
-        .collect();
-    injections.sort_by_key(|i| i.0);
-
+    rig.set_push_off_start(plan.time_from_start_s(plan.push_off_period));
     let wall = Instant::now();
+    open_session(params, spec, &mut rig, link)?;
+    let mut run = LockstepRun::new(&plan);
+    loop {
+        run.period(&plan, &mut rig, link)?;
+        if run.is_over(&plan, &rig)? {
+            break;
+        }
+    }
+    let link_report = link.finish()?;
+    Ok(run.into_outcome(&plan, &rig, link, link_report, wall.elapsed().as_secs_f64()))
+}
+
+/// When things happen in a run, in control periods (period 0 is the idle tick before Arm).
+struct RunPlan {
+    /// The trajectory the controller runs.
+    trajectory: SineJump,
+    /// Control period, s.
+    period_s: f64,
+    /// Control periods per second.
+    tick_hz: f64,
+    /// The period at which `Start` is sent (after the settling time).
+    start_period: u64,
+    /// The period at which the push-off half begins.
+    push_off_period: u64,
+    /// The period at which the trajectory ends.
+    end_period: u64,
+    /// The last period the run-length rule allows.
+    last_period: u64,
+    /// Injected faults by period, in order.
+    injections: Vec<(u64, InjectedFault)>,
+}
+
+impl RunPlan {
+    fn new(params: &Params, spec: &HilSpec, tick_hz: u32) -> Result<Self, HilError> {
+        let trajectory = trajectory(params, spec)?;
+        if !(spec.settle_s.is_finite() && (0.0..=5.0).contains(&spec.settle_s)) {
+            return Err(SimError::InvalidInput {
+                field: "settle_s",
+                value: spec.settle_s.to_string(),
+                allowed: "0..=5 s".into(),
+            }
+            .into());
+        }
+        let tick_hz = f64::from(tick_hz);
+        let start_period = ((spec.settle_s * tick_hz).round() as u64).max(1);
+        let push_off_period =
+            start_period + (trajectory.push_off_start_s() * tick_hz).round() as u64;
+        let end_period = start_period + (trajectory.end_s() * tick_hz).ceil() as u64;
+        let last_period = end_period + (AIRBORNE_TAIL_S * tick_hz).ceil() as u64 + 10;
+        let mut injections: Vec<(u64, InjectedFault)> = spec
+            .injections
+            .iter()
+            .map(|i| {
+                (
+                    start_period + (i.at_s.max(0.0) * tick_hz).round() as u64,
+                    i.fault,
+                )
+            })
+            .collect();
+        injections.sort_by_key(|i| i.0);
+        Ok(Self {
+            trajectory,
+            period_s: 1.0 / tick_hz,
+            tick_hz,
+            start_period,
+            push_off_period,
+            end_period,
+            last_period,
+            injections,
+        })
+    }
+
+    /// Time of period `period` since the trajectory's start, s.
+    fn time_s(&self, period: u64) -> f64 {
+        (period as f64 - self.start_period as f64) * self.period_s
+    }
+
+    /// Time of period `period` since the run began (the plant's clock), s.
+    fn time_from_start_s(&self, period: u64) -> f64 {
+        period as f64 * self.period_s
+    }
+}
+
+/// Configure the controller, give it one tick in Idle and arm it.
+///
+/// The idle tick (drive disabled) comes first: the controller's encoder extension takes its
+/// first reading there, so the velocity estimate (reset on Arm) never sees the jump from
+/// count 0 to the start position.
+fn open_session(
+    params: &Params,
+    spec: &HilSpec,
+    rig: &mut RigModel,
+    link: &mut dyn RigLink,
+) -> Result<(), HilError> {
     link.command(&Command::Configure(jump_config(params, spec)))?;
-    // One tick in Idle (drive disabled) first: the controller's encoder extension takes its
-    // first reading there, so the velocity estimate (reset on Arm) never sees the jump from
-    // count 0 to the start position.
     let first = rig.sense(0);
     let idle = link.exchange(&first)?;
     rig.actuate(f64::from(idle.force_n), idle.drive_enabled, idle.trigger)?;
     link.command(&Command::Arm)?;
+    Ok(())
+}
 
-    let mut trace = Vec::with_capacity((last_period + 1) as usize);
-    let mut frame_no: u32 = 1;
-    let mut rig_ticks: u32 = 1;
-    let mut corrupt_left = 0u32;
-    let mut link_stopped = false;
-    let mut overrun_next = false;
-    let mut fault_period: Option<u64> = None;
-    let mut done_period: Option<u64> = None;
-    let mut final_height = 0.0f64;
-    let mut final_apex_period = push_off_period;
-    let mut was_aerial = false;
-    let mut next_injection = 0;
-    let mut period: u64 = 1;
-    loop {
-        if period == start_period {
+/// The state of the lockstep loop between periods.
+struct LockstepRun {
+    trace: Vec<TraceRow>,
+    /// Sensor frame number of the next period.
+    frame_no: u32,
+    /// The controller's tick number of the next answered frame.
+    rig_ticks: u32,
+    /// Corrupted frames still to send.
+    corrupt_left: u32,
+    /// The host has gone silent.
+    link_stopped: bool,
+    /// The next sensor frame flags an overrun.
+    overrun_next: bool,
+    fault_period: Option<u64>,
+    done_period: Option<u64>,
+    was_aerial: bool,
+    next_injection: usize,
+    /// The next period to run.
+    period: u64,
+}
+
+impl LockstepRun {
+    fn new(plan: &RunPlan) -> Self {
+        Self {
+            trace: Vec::with_capacity((plan.last_period + 1) as usize),
+            frame_no: 1,
+            rig_ticks: 1,
+            corrupt_left: 0,
+            link_stopped: false,
+            overrun_next: false,
+            fault_period: None,
+            done_period: None,
+            was_aerial: false,
+            next_injection: 0,
+            period: 1,
+        }
+    }
+
+    /// One control period: start the trajectory when due, inject what is due, exchange a
+    /// frame (or not, as injected), drive the plant and trace it.
+    fn period(
+        &mut self,
+        plan: &RunPlan,
+        rig: &mut RigModel,
+        link: &mut dyn RigLink,
+    ) -> Result<(), HilError> {
+        if self.period == plan.start_period {
             link.command(&Command::Start)?;
         }
-        while next_injection < injections.len() && injections[next_injection].0 == period {
-            match injections[next_injection].1 {
-                InjectedFault::EncoderFrozen => rig.inject(EncoderInjection::Frozen),
-                InjectedFault::EncoderJump { counts } => {
-                    rig.inject(EncoderInjection::Jump { counts })
-                }
-                InjectedFault::Overrun => overrun_next = true,
-                InjectedFault::LinkStops => link_stopped = true,
-                InjectedFault::CorruptFrames { count } => corrupt_left = count,
-            }
-            next_injection += 1;
-        }
+        self.inject_due(plan, rig);
         let state = rig.state();
         let rod_height_m = rig.rod_height_m();
-        if period >= push_off_period && rod_height_m > final_height {
-            final_height = rod_height_m;
-            final_apex_period = period;
-        }
-        let mut sensor = rig.sense(frame_no);
-        frame_no = frame_no.wrapping_add(1);
-        sensor.overrun = std::mem::take(&mut overrun_next);
-        let mut rig_tick = None;
-        let actuator = if link_stopped {
-            link.silent_period()?
-        } else if corrupt_left > 0 {
-            corrupt_left -= 1;
-            link.send_corrupted(&sensor)?;
-            None
-        } else {
-            let a = link.exchange(&sensor)?;
-            if a.frame != sensor.frame {
-                return Err(LinkError::Protocol(format!(
-                    "actuator frame {} answers sensor frame {}",
-                    a.frame, sensor.frame
-                ))
-                .into());
-            }
-            rig_tick = Some(rig_ticks);
-            rig_ticks = rig_ticks.wrapping_add(1);
-            Some(a)
-        };
+        let (actuator, rig_tick) = self.exchange(rig, link)?;
         match actuator {
             Some(a) => {
                 rig.actuate(f64::from(a.force_n), a.drive_enabled, a.trigger)?;
-                if a.fault.is_some() && fault_period.is_none() {
-                    fault_period = Some(period);
+                if a.fault.is_some() && self.fault_period.is_none() {
+                    self.fault_period = Some(self.period);
                 }
-                if a.state == RigState::Done && done_period.is_none() {
-                    done_period = Some(period);
+                if a.state == RigState::Done && self.done_period.is_none() {
+                    self.done_period = Some(self.period);
                 }
             }
             None => rig.hold()?,
         }
-        trace.push(TraceRow {
-            period,
+        self.trace.push(TraceRow {
+            period: self.period,
             rig_tick,
-            t_s: (period as f64 - start_period as f64) * period_s,
+            t_s: plan.time_s(self.period),
             p_m: state.p,
             rod_height_m,
             spring_force_n: state.f_s,
@@ -421,57 +486,123 @@ pub fn run_jump(
             drive_command_n: rig.drive_command_n(),
             faulted: actuator.is_some_and(|a| a.fault.is_some()),
         });
-        period += 1;
+        self.period += 1;
+        Ok(())
+    }
 
-        if let Some(f) = fault_period
-            && period >= f + POST_FAULT_PERIODS
-        {
-            break;
-        }
-        let aerial = rig.state().mode == GroundMode::Aerial;
-        if let Some(d) = done_period.map(|d| d.max(end_period)) {
-            let touchdown = was_aerial && !aerial;
-            let grounded_tail_over = period >= d + (GROUNDED_TAIL_S * tick_hz).round() as u64;
-            if touchdown || (grounded_tail_over && !aerial) || period >= last_period {
+    /// Apply the injections due at this period.
+    fn inject_due(&mut self, plan: &RunPlan, rig: &mut RigModel) {
+        while let Some(&(at, fault)) = plan.injections.get(self.next_injection) {
+            if at != self.period {
                 break;
             }
+            match fault {
+                InjectedFault::EncoderFrozen => rig.inject(EncoderInjection::Frozen),
+                InjectedFault::EncoderJump { counts } => {
+                    rig.inject(EncoderInjection::Jump { counts })
+                }
+                InjectedFault::Overrun => self.overrun_next = true,
+                InjectedFault::LinkStops => self.link_stopped = true,
+                InjectedFault::CorruptFrames { count } => self.corrupt_left = count,
+            }
+            self.next_injection += 1;
         }
-        was_aerial = aerial;
-        if period > last_period + start_period + 100_000 {
+    }
+
+    /// Send this period's sensor frame (silence or a corrupted frame, if injected) and take
+    /// the controller's answer: the actuator frame and the controller's tick number, if any.
+    fn exchange(
+        &mut self,
+        rig: &mut RigModel,
+        link: &mut dyn RigLink,
+    ) -> Result<(Option<ActuatorFrame>, Option<u32>), HilError> {
+        let mut sensor = rig.sense(self.frame_no);
+        self.frame_no = self.frame_no.wrapping_add(1);
+        sensor.overrun = std::mem::take(&mut self.overrun_next);
+        if self.link_stopped {
+            return Ok((link.silent_period()?, None));
+        }
+        if self.corrupt_left > 0 {
+            self.corrupt_left -= 1;
+            link.send_corrupted(&sensor)?;
+            return Ok((None, None));
+        }
+        let a = link.exchange(&sensor)?;
+        if a.frame != sensor.frame {
+            return Err(LinkError::Protocol(format!(
+                "actuator frame {} answers sensor frame {}",
+                a.frame, sensor.frame
+            ))
+            .into());
+        }
+        let tick = self.rig_ticks;
+        self.rig_ticks = self.rig_ticks.wrapping_add(1);
+        Ok((Some(a), Some(tick)))
+    }
+
+    /// The run-length rule (MODEL.md): a few periods after a fault; else, once the controller
+    /// is done and the trajectory over, at the first touchdown, at the end of the grounded
+    /// tail, or at the last period allowed. A controller that never reports done is an error.
+    fn is_over(&mut self, plan: &RunPlan, rig: &RigModel) -> Result<bool, HilError> {
+        if let Some(f) = self.fault_period
+            && self.period >= f + POST_FAULT_PERIODS
+        {
+            return Ok(true);
+        }
+        let aerial = rig.state().mode == GroundMode::Aerial;
+        if let Some(d) = self.done_period.map(|d| d.max(plan.end_period)) {
+            let touchdown = self.was_aerial && !aerial;
+            let grounded_tail_over =
+                self.period >= d + (GROUNDED_TAIL_S * plan.tick_hz).round() as u64;
+            if touchdown || (grounded_tail_over && !aerial) || self.period >= plan.last_period {
+                return Ok(true);
+            }
+        }
+        self.was_aerial = aerial;
+        if self.period > plan.last_period + plan.start_period + 100_000 {
             return Err(LinkError::Protocol(
                 "the controller never reported the trajectory done".into(),
             )
             .into());
         }
+        Ok(false)
     }
-    let link_report = link.finish()?;
-    let wall_time_s = wall.elapsed().as_secs_f64();
 
-    let mut samples = link.take_samples();
-    samples.sort_by_key(|s| s.seq);
-    let faults = link.take_faults();
-    let t0 = start_period as f64 * period_s;
-    let mut summary = shifted(rig.plant().summary(), t0);
-    summary.final_jump_height_m = final_height;
-    summary.final_apex_time_s = (final_apex_period as f64 - start_period as f64) * period_s;
-    let counters = link_report.counters().unwrap_or_default();
-    let simulated_time_s = period as f64 * period_s;
-    Ok(HilOutcome {
-        link_name: link.name(),
-        summary,
-        ticks: period,
-        start_period,
-        frames_lost: counters.lockstep_frames_lost + link_report.host_frames_rejected,
-        frames_rejected: counters.frames_rejected,
-        faults,
-        camera_frames: rig.camera_frames().to_vec(),
-        samples,
-        trace,
-        wall_time_s,
-        simulated_time_s,
-        realtime_factor: simulated_time_s / wall_time_s.max(1e-9),
-        link: link_report,
-    })
+    /// Collect what the link recorded and the plant's summary, times from the trajectory's
+    /// start. The plant located every apex and lift-off exactly and knew when the push-off
+    /// began, so its final height, apex and lift-off are those of a kinematic jump.
+    fn into_outcome(
+        self,
+        plan: &RunPlan,
+        rig: &RigModel,
+        link: &mut dyn RigLink,
+        link_report: LinkReport,
+        wall_time_s: f64,
+    ) -> HilOutcome {
+        let mut samples = link.take_samples();
+        samples.sort_by_key(|s| s.seq);
+        let faults = link.take_faults();
+        let t0 = plan.start_period as f64 * plan.period_s;
+        let summary = shifted(rig.plant().summary(), t0);
+        let counters = link_report.counters().unwrap_or_default();
+        let simulated_time_s = self.period as f64 * plan.period_s;
+        HilOutcome {
+            link_name: link.name(),
+            summary,
+            ticks: self.period,
+            start_period: plan.start_period,
+            frames_lost: counters.lockstep_frames_lost + link_report.host_frames_rejected,
+            frames_rejected: counters.frames_rejected,
+            faults,
+            camera_frames: rig.camera_frames().to_vec(),
+            samples,
+            trace: self.trace,
+            wall_time_s,
+            simulated_time_s,
+            realtime_factor: simulated_time_s / wall_time_s.max(1e-9),
+            link: link_report,
+        }
+    }
 }
 
 /// The plant's summary with every time measured from the trajectory's start.
@@ -479,6 +610,7 @@ fn shifted(mut s: JumpSummary, t0: f64) -> JumpSummary {
     s.liftoff_time_s = s.liftoff_time_s.map(|t| t - t0);
     s.final_liftoff_time_s = s.final_liftoff_time_s.map(|t| t - t0);
     s.apex_time_s -= t0;
+    s.final_apex_time_s -= t0;
     s.end_time_s -= t0;
     for e in &mut s.events {
         e.t_s -= t0;
