@@ -46,6 +46,7 @@ fn main() {
     eprintln!(
         "sandjumper-firmware runs on the rig board or QEMU; build it with \
          `cargo build --release -p sandjumper-firmware --target thumbv7em-none-eabihf` \
-         (add `--no-default-features --features board-qemu` for the emulated board)"
+         (the emulated board: add `--no-default-features --features board-qemu \
+         --target-dir target/firmware`, its own directory, where `hil --link pil` looks)"
     );
 }

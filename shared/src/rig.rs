@@ -154,6 +154,14 @@ struct LoadedJump {
     schedule: Option<GainSchedule>,
 }
 
+/// What one tick aims at: the setpoint, the gain scale and the tracking-error limit.
+struct TickTarget {
+    setpoint: Setpoint,
+    scale: GainScale,
+    /// Largest allowed |setpoint - position|, m (infinite with no jump loaded).
+    tracking_limit_m: f32,
+}
+
 /// The control loop. `Q` is the sample-queue capacity.
 #[derive(Debug)]
 pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
@@ -301,108 +309,18 @@ impl<const Q: usize> Rig<Q> {
         }
     }
 
-    /// One control tick.
+    /// One control tick: check the previous tick's timing, read the encoder, watch the host,
+    /// advance the setpoint, fire the camera, run the position loop, record the sample.
     pub fn tick(&mut self, input: &TickInput) -> TickOutput {
         let tick = self.tick;
         self.tick = tick.wrapping_add(1);
 
-        match input.timing {
-            TickTiming::Unknown => {}
-            TickTiming::Cycles(c) => {
-                self.counters.max_tick_cycles = self.counters.max_tick_cycles.max(c);
-                if self.config.deadline_cycles > 0 && c > self.config.deadline_cycles {
-                    self.fault_at(FaultCode::DeadlineOverrun, tick);
-                }
-            }
-            TickTiming::Overrun => self.fault_at(FaultCode::DeadlineOverrun, tick),
-        }
-
-        let before = self.encoder.count();
-        let started = self.encoder.is_started();
-        let count = match self.encoder.update(input.encoder_raw) {
-            Ok(c) => {
-                // The first reading sets the count; it is not a movement.
-                if started {
-                    let delta = (c - before).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
-                    self.velocity.update(delta);
-                }
-                c
-            }
-            Err(_) => {
-                self.fault_at(FaultCode::EncoderFault, tick);
-                before
-            }
-        };
-        let count_i32 = count.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
-        let position_m = count_i32 as f32 * self.config.metres_per_count;
-
-        if self.state.drive_enabled() {
-            self.ticks_since_host = self.ticks_since_host.saturating_add(1);
-            if self.watchdog_ticks > 0 && self.ticks_since_host > self.watchdog_ticks {
-                self.fault_at(FaultCode::CommandWatchdog, tick);
-            }
-        }
-
-        // Setpoint for this tick.
-        let mut scale = GainScale::FULL;
-        let mut setpoint = self.hold;
-        let mut tracking_limit = f32::INFINITY;
-        if let Some(j) = &self.jump {
-            tracking_limit = j.config.tracking_error_limit_m;
-            match self.state {
-                RigState::Running => {
-                    let (sp, phase) = j.profile.eval(self.run_tick, &self.replay);
-                    if let Some(s) = &j.schedule {
-                        scale = s.scale(self.run_tick);
-                    }
-                    setpoint = sp;
-                    self.phase = phase;
-                    self.run_tick = self.run_tick.saturating_add(1);
-                    if phase == Phase::Finished {
-                        self.state = RigState::Done;
-                        self.hold = Setpoint {
-                            velocity_m_s: 0.0,
-                            accel_m_s2: 0.0,
-                            ..sp
-                        };
-                    }
-                }
-                RigState::Done => self.phase = Phase::Finished,
-                _ => {}
-            }
-        }
-
-        let trigger = if matches!(self.state, RigState::Running | RigState::Done) {
-            self.camera.tick()
-        } else {
-            crate::camera::TriggerTick {
-                level: false,
-                frame: None,
-            }
-        };
-
-        let mut force_n = 0.0;
-        let mut record_flags = 0u16;
-        if self.state.drive_enabled() {
-            let out =
-                self.controller
-                    .update(&setpoint, position_m, self.velocity.velocity_m_s(), scale);
-            if position_m.abs() > self.config.stroke_limit_m {
-                self.fault_at(FaultCode::StrokeLimit, tick);
-            } else if out.error_m.abs() > tracking_limit {
-                self.fault_at(FaultCode::TrackingError, tick);
-            }
-            force_n = out.force_n;
-            if out.saturated {
-                record_flags |= flags::SATURATED;
-            }
-            if out.integrator_held {
-                record_flags |= flags::INTEGRATOR_HELD;
-            }
-            if scale.position < 1.0 || scale.velocity < 1.0 {
-                record_flags |= flags::GAINS_LOWERED;
-            }
-        }
+        self.check_timing(input.timing, tick);
+        let (count, position_m) = self.read_encoder(input.encoder_raw, tick);
+        self.watch_host(tick);
+        let target = self.advance_setpoint();
+        let trigger = self.camera_tick();
+        let (mut force_n, mut record_flags) = self.control(&target, position_m, tick);
 
         let drive_enabled = self.state.drive_enabled();
         if !drive_enabled {
@@ -411,30 +329,12 @@ impl<const Q: usize> Rig<Q> {
         }
         let camera_trigger = trigger.level && drive_enabled;
         let camera_frame = if drive_enabled { trigger.frame } else { None };
-
-        record_flags |= match self.state {
-            RigState::Idle => 0,
-            RigState::Armed => flags::ARMED,
-            RigState::Running => flags::RUNNING,
-            RigState::Done => flags::DONE,
-            RigState::Faulted => flags::FAULTED,
-        };
-        if drive_enabled {
-            record_flags |= flags::DRIVE_ENABLED;
-        }
-        if camera_trigger {
-            record_flags |= flags::CAMERA_HIGH;
-        }
-        match self.phase {
-            Phase::Delay => record_flags |= flags::DELAY,
-            Phase::PushOff => record_flags |= flags::PUSH_OFF,
-            _ => {}
-        }
+        record_flags |= self.state_flags(drive_enabled, camera_trigger);
         self.samples.push(SampleRecord {
             seq: 0,
             tick,
             encoder_count: count,
-            commanded_position_m: setpoint.position_m,
+            commanded_position_m: target.setpoint.position_m,
             force_n,
             current_a: input.current_a,
             camera_frame,
@@ -451,6 +351,158 @@ impl<const Q: usize> Rig<Q> {
             fault: self.fault,
             tick,
         }
+    }
+
+    /// The previous tick's duration against the deadline: the longest is kept, an overrun
+    /// latches [`FaultCode::DeadlineOverrun`].
+    fn check_timing(&mut self, timing: TickTiming, tick: u32) {
+        match timing {
+            TickTiming::Unknown => {}
+            TickTiming::Cycles(c) => {
+                self.counters.max_tick_cycles = self.counters.max_tick_cycles.max(c);
+                if self.config.deadline_cycles > 0 && c > self.config.deadline_cycles {
+                    self.fault_at(FaultCode::DeadlineOverrun, tick);
+                }
+            }
+            TickTiming::Overrun => self.fault_at(FaultCode::DeadlineOverrun, tick),
+        }
+    }
+
+    /// Extend the raw counter to a count and feed the velocity estimate (the first reading
+    /// sets the count; it is not a movement). An implausible jump latches
+    /// [`FaultCode::EncoderFault`] and keeps the last count. Returns the count and the
+    /// position, m.
+    fn read_encoder(&mut self, raw: u32, tick: u32) -> (i64, f32) {
+        let before = self.encoder.count();
+        let started = self.encoder.is_started();
+        let count = match self.encoder.update(raw) {
+            Ok(c) => {
+                if started {
+                    let delta = (c - before).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+                    self.velocity.update(delta);
+                }
+                c
+            }
+            Err(_) => {
+                self.fault_at(FaultCode::EncoderFault, tick);
+                before
+            }
+        };
+        let count_i32 = count.clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        (count, count_i32 as f32 * self.config.metres_per_count)
+    }
+
+    /// While the drive is enabled, a host that stays silent past the command watchdog
+    /// latches [`FaultCode::CommandWatchdog`].
+    fn watch_host(&mut self, tick: u32) {
+        if self.state.drive_enabled() {
+            self.ticks_since_host = self.ticks_since_host.saturating_add(1);
+            if self.watchdog_ticks > 0 && self.ticks_since_host > self.watchdog_ticks {
+                self.fault_at(FaultCode::CommandWatchdog, tick);
+            }
+        }
+    }
+
+    /// This tick's setpoint, gain scale and tracking limit: the trajectory's next point while
+    /// Running (Done when it finishes, holding its last position), else the hold setpoint.
+    fn advance_setpoint(&mut self) -> TickTarget {
+        let mut target = TickTarget {
+            setpoint: self.hold,
+            scale: GainScale::FULL,
+            tracking_limit_m: f32::INFINITY,
+        };
+        let Some(j) = &self.jump else {
+            return target;
+        };
+        target.tracking_limit_m = j.config.tracking_error_limit_m;
+        match self.state {
+            RigState::Running => {
+                let (sp, phase) = j.profile.eval(self.run_tick, &self.replay);
+                if let Some(s) = &j.schedule {
+                    target.scale = s.scale(self.run_tick);
+                }
+                target.setpoint = sp;
+                self.phase = phase;
+                self.run_tick = self.run_tick.saturating_add(1);
+                if phase == Phase::Finished {
+                    self.state = RigState::Done;
+                    self.hold = Setpoint {
+                        velocity_m_s: 0.0,
+                        accel_m_s2: 0.0,
+                        ..sp
+                    };
+                }
+            }
+            RigState::Done => self.phase = Phase::Finished,
+            _ => {}
+        }
+        target
+    }
+
+    /// The camera trigger runs while the trajectory runs and after it (Running, Done).
+    fn camera_tick(&mut self) -> crate::camera::TriggerTick {
+        if matches!(self.state, RigState::Running | RigState::Done) {
+            self.camera.tick()
+        } else {
+            crate::camera::TriggerTick {
+                level: false,
+                frame: None,
+            }
+        }
+    }
+
+    /// The position loop while the drive is enabled: the force command and the sample flags
+    /// it sets; a position past the stroke limit latches [`FaultCode::StrokeLimit`], a
+    /// tracking error past the limit [`FaultCode::TrackingError`].
+    fn control(&mut self, target: &TickTarget, position_m: f32, tick: u32) -> (f32, u16) {
+        let mut record_flags = 0u16;
+        if !self.state.drive_enabled() {
+            return (0.0, record_flags);
+        }
+        let out = self.controller.update(
+            &target.setpoint,
+            position_m,
+            self.velocity.velocity_m_s(),
+            target.scale,
+        );
+        if position_m.abs() > self.config.stroke_limit_m {
+            self.fault_at(FaultCode::StrokeLimit, tick);
+        } else if out.error_m.abs() > target.tracking_limit_m {
+            self.fault_at(FaultCode::TrackingError, tick);
+        }
+        if out.saturated {
+            record_flags |= flags::SATURATED;
+        }
+        if out.integrator_held {
+            record_flags |= flags::INTEGRATOR_HELD;
+        }
+        if target.scale.position < 1.0 || target.scale.velocity < 1.0 {
+            record_flags |= flags::GAINS_LOWERED;
+        }
+        (out.force_n, record_flags)
+    }
+
+    /// The sample flags of the state machine, the drive, the camera line and the phase.
+    fn state_flags(&self, drive_enabled: bool, camera_trigger: bool) -> u16 {
+        let mut f = match self.state {
+            RigState::Idle => 0,
+            RigState::Armed => flags::ARMED,
+            RigState::Running => flags::RUNNING,
+            RigState::Done => flags::DONE,
+            RigState::Faulted => flags::FAULTED,
+        };
+        if drive_enabled {
+            f |= flags::DRIVE_ENABLED;
+        }
+        if camera_trigger {
+            f |= flags::CAMERA_HIGH;
+        }
+        match self.phase {
+            Phase::Delay => f |= flags::DELAY,
+            Phase::PushOff => f |= flags::PUSH_OFF,
+            _ => {}
+        }
+        f
     }
 
     /// Latch a fault found during tick `tick` (the tick counter has already advanced).

@@ -1,7 +1,9 @@
 //! The rig and its stand-ins: the control loop closed through a link ([`hil`]: the core
 //! in-process, the real firmware under QEMU, or a board on a serial port), the host tool
-//! for a board ([`tool`]), and the acquisition logs both write ([`acqlog`]).
+//! for a board ([`tool`]), the acquisition logs both write ([`acqlog`]), and which board a
+//! firmware image was built for ([`firmware_image`]).
 
 pub mod acqlog;
+pub mod firmware_image;
 pub mod hil;
 pub mod tool;

@@ -22,6 +22,7 @@ use crate::model::record::JumpSummary;
 use crate::model::trajectory::kind_name;
 use crate::output::StagedDir;
 use crate::plot::save_figure;
+use crate::rig::firmware_image::{Board, check_elf};
 use sandjumper_core::trajectory::JumpKind;
 
 /// Where the controller is.
@@ -155,7 +156,7 @@ pub struct HilArgs {
     #[arg(
         long,
         value_name = "ELF",
-        default_value = "target/thumbv7em-none-eabihf/release/sandjumper-firmware"
+        default_value = crate::rig::firmware_image::EMULATED_ELF
     )]
     pub firmware: PathBuf,
     /// Write acquisition.csv (the acquisition-log format), params.toml, summary.json,
@@ -232,7 +233,10 @@ pub fn open_link(
     let fail = |e: super::link::LinkError| CliError::input(format!("cannot open the link: {e}"));
     Ok(match arg {
         LinkArg::Sil => Box::new(SilLink::new(rig_config(model_config)).map_err(fail)?),
-        LinkArg::Pil => Box::new(pil::start(&PilConfig::new(firmware)).map_err(fail)?),
+        LinkArg::Pil => {
+            check_elf(firmware, Board::Emulated).map_err(|e| CliError::input(e.to_string()))?;
+            Box::new(pil::start(&PilConfig::new(firmware)).map_err(fail)?)
+        }
         LinkArg::Serial(path) => {
             Box::new(serial::start(path, Duration::from_secs(2)).map_err(fail)?)
         }

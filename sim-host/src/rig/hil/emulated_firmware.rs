@@ -9,9 +9,10 @@ use std::sync::OnceLock;
 use super::pil::PilConfig;
 
 /// Target directory of the emulated build, relative to the workspace root. Separate from
-/// `target/` (a running `cargo test` holds that lock) and shared by every PIL test and by
-/// `.ci/run`, so the ELF is built once.
-pub const EMULATED_TARGET_DIR: &str = "target/firmware";
+/// `target/` (a running `cargo test` holds that lock, and the F407 build of the same name
+/// lives there) and shared by every PIL test, by `.ci/run` and by `hil --link pil`'s default
+/// `--firmware`, so the ELF is built once.
+pub use crate::rig::firmware_image::EMULATED_TARGET_DIR;
 
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")

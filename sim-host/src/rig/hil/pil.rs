@@ -19,6 +19,7 @@ use std::time::Duration;
 
 use super::framed::{ChildGuard, FramedLink};
 use super::link::LinkError;
+use crate::rig::firmware_image::{Board, check_elf};
 
 /// How to start the emulated firmware.
 #[derive(Clone, Debug, PartialEq)]
@@ -82,14 +83,10 @@ pub fn start(config: &PilConfig) -> Result<FramedLink, LinkError> {
 /// Start QEMU with `firmware_args` (the first word is the session; `fifo` gets the two FIFO
 /// paths appended).
 pub fn start_session(config: &PilConfig, firmware_args: &[&str]) -> Result<FramedLink, LinkError> {
-    if !config.elf.is_file() {
-        return Err(LinkError::Io {
-            what: format!("firmware ELF {}", config.elf.display()),
-            message: "not found; build it with `cargo build -p sandjumper-firmware --target thumbv7em-none-eabihf \
-                      --release --no-default-features --features board-qemu`"
-                .into(),
-        });
-    }
+    check_elf(&config.elf, Board::Emulated).map_err(|e| LinkError::Io {
+        what: "firmware image".into(),
+        message: e.to_string(),
+    })?;
     let dir = tempfile::Builder::new()
         .prefix("sandjumper-pil-")
         .tempdir()

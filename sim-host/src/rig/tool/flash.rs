@@ -10,12 +10,13 @@ use clap::Args;
 
 use super::{SimLink, TargetArgs};
 use crate::command::CliError;
+use crate::rig::firmware_image::{Board, check_elf};
 
 /// The board's chip as probe-rs names it.
 pub const CHIP: &str = "STM32F407VGTx";
 /// Where `cargo build -p sandjumper-firmware --target thumbv7em-none-eabihf --release` puts
 /// the F407 firmware.
-pub const DEFAULT_F407_ELF: &str = "target/thumbv7em-none-eabihf/release/sandjumper-firmware";
+pub const DEFAULT_F407_ELF: &str = crate::rig::firmware_image::F407_ELF;
 
 /// `rig flash`.
 #[derive(Debug, Clone, Args)]
@@ -51,13 +52,7 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
         .firmware
         .clone()
         .unwrap_or_else(|| PathBuf::from(DEFAULT_F407_ELF));
-    if !elf.is_file() {
-        return Err(CliError::input(format!(
-            "firmware ELF {} not found (build it with `cargo build -p sandjumper-firmware \
-             --target thumbv7em-none-eabihf --release`, or give --firmware ELF)",
-            elf.display()
-        )));
-    }
+    check_elf(&elf, Board::F407).map_err(|e| CliError::input(e.to_string()))?;
     if !on_path(&a.probe_rs) {
         return Err(CliError::input(format!(
             "probe-rs not found ({}): install it with `cargo install probe-rs-tools`, or give \

@@ -95,7 +95,7 @@ pub struct TargetArgs {
 }
 
 /// The ELF QEMU runs for `--link pil` unless `--firmware` says otherwise.
-pub const DEFAULT_QEMU_ELF: &str = "target/thumbv7em-none-eabihf/release/sandjumper-firmware";
+pub const DEFAULT_QEMU_ELF: &str = crate::rig::firmware_image::EMULATED_ELF;
 
 impl TargetArgs {
     /// The link argument of `sandjumper hil` this target is.
