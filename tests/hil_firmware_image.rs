@@ -57,7 +57,7 @@ fn refused(firmware: &str, expect: &[&str]) {
 fn a_missing_file_is_refused_with_the_build_command() {
     let dir = tempfile::tempdir().expect("temp dir");
     let missing = dir.path().join("no-such.elf");
-    refused(missing.to_str().expect("utf-8"), &["missing"]);
+    refused(missing.to_str().expect("utf-8"), &["not found"]);
 }
 
 #[test]
@@ -95,3 +95,33 @@ fn the_two_boards_build_to_different_paths() {
     assert!(EMULATED_BUILD.contains("--target-dir target/firmware"));
     assert!(EMULATED_ELF.starts_with("target/firmware/"));
 }
+
+#[test]
+fn rig_flash_refuses_the_emulated_boards_image() {
+    if !sandjumper_sim::rig::hil::emulated_firmware::available_for_test("the flash image check") {
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let elf = sandjumper_sim::rig::hil::emulated_firmware::build_once(root)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let elf_s = elf.to_str().expect("utf-8");
+    // A stand-in for probe-rs that exists: the image check comes before any probe-rs call.
+    let (code, message) = run(&[
+        "rig",
+        "flash",
+        "--port",
+        "/dev/ttyACM0",
+        "--firmware",
+        elf_s,
+        "--probe-rs",
+        "/bin/false",
+    ])
+    .expect_err("refused");
+    assert_eq!(code, EXIT_BAD_INPUT, "{message}");
+    for piece in [elf_s, "emulated-board build", "STM32F407", F407_BUILD_HINT] {
+        assert!(message.contains(piece), "`{piece}` not in: {message}");
+    }
+}
+
+/// The F407 build command, as the flash refusal names it.
+const F407_BUILD_HINT: &str = sandjumper_sim::rig::firmware_image::F407_BUILD;

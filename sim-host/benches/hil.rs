@@ -1,9 +1,17 @@
-//! Speed of the loop: one full delayed-stutter jump (tau 0.75 s, eq4, phi 0.57; 1.3 s simulated,
-//! 13,011 control ticks at 10 kHz) through software in the loop. Target: at least 200x faster
-//! than real time, i.e. under 6.5 ms per jump. (PIL speed: `sandjumper hil --link pil --bench N`,
-//! it needs QEMU and the firmware ELF.)
+//! Speed of the loop.
+//!
+//! - SIL: one full delayed-stutter jump (tau 0.75 s, eq4, phi 0.57; 1.3 s simulated, 13,011
+//!   control ticks at 10 kHz) through software in the loop. Target: at least 200x faster than
+//!   real time, i.e. under 6.5 ms per jump.
+//! - PIL: the delayed stutter at 10 Hz, tau 0.3 s (eq4, phi 0.57; 0.85 s simulated, 8,523
+//!   ticks) through the real firmware in QEMU, QEMU's start-up included, with QEMU and the
+//!   host's threads on one core (the default) and, side by side, unpinned. Target: at least
+//!   2x real time, i.e. under 0.43 s. Needs QEMU and the emulated firmware (built here if
+//!   missing); skipped with a message otherwise.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use sandjumper_sim::rig::hil::emulated_firmware;
+use sandjumper_sim::rig::hil::pil::{self, PilConfig};
 use sandjumper_sim::rig::hil::run::rig_config;
 use sandjumper_sim::rig::hil::{HilSpec, RigModelConfig, SilLink, run_jump};
 use sandjumper_sim::{JumpKind, ModelName, Params};
@@ -24,9 +32,56 @@ fn delayed_stutter_sil(c: &mut Criterion) {
     );
 }
 
+fn delayed_stutter_pil(c: &mut Criterion) {
+    let missing = emulated_firmware::missing_prerequisites();
+    if !missing.is_empty() {
+        eprintln!("PIL bench skipped: needs {}", missing.join(", "));
+        return;
+    }
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let elf = match emulated_firmware::build(&root) {
+        Ok(elf) => elf,
+        Err(e) => {
+            eprintln!("PIL bench skipped: {e}");
+            return;
+        }
+    };
+    let params = Params::preset(0.57).unwrap();
+    let spec = HilSpec::new(JumpKind::DelayedStutter, 10.0, 0.3, ModelName::Eq4);
+    let config = RigModelConfig::default();
+    let mut simulated_s = 0.0;
+    let mut group = c.benchmark_group("PIL delayed stutter tau 0.3 s, eq4, start-up included");
+    for pinned in [true, false] {
+        let pil_config = PilConfig {
+            pin_to_one_core: pinned,
+            ..PilConfig::new(&elf)
+        };
+        let name = if pinned { "one core" } else { "unpinned" };
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let mut link = pil::start(&pil_config).unwrap();
+                let o = run_jump(black_box(&params), black_box(&spec), config, &mut link).unwrap();
+                simulated_s = o.simulated_time_s;
+                o
+            })
+        });
+    }
+    group.finish();
+    eprintln!(
+        "PIL: {simulated_s:.3} s simulated per jump; real-time factor = {simulated_s:.3} s / the \
+         times above (target: at least 2x, under {:.3} s)",
+        simulated_s / 2.0
+    );
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20).without_plots();
     targets = delayed_stutter_sil
 }
-criterion_main!(benches);
+criterion_group! {
+    name = pil_benches;
+    config = Criterion::default().sample_size(10).without_plots();
+    targets = delayed_stutter_pil
+}
+criterion_main!(benches, pil_benches);

@@ -99,7 +99,7 @@ pub fn check_elf(path: &Path, wanted: Board) -> Result<(), ImageError> {
     };
     let bytes = std::fs::read(path).map_err(|e| {
         fail(if e.kind() == std::io::ErrorKind::NotFound {
-            "missing".into()
+            "not found".into()
         } else {
             format!("unreadable ({e})")
         })

@@ -10,6 +10,7 @@
 //!   [`command`]: `sandjumper hil`; [`loop_margins`]: the position loop's stability margins
 //!   on the rig, from its linear model.
 
+pub mod affinity;
 pub mod command;
 pub mod emulated_firmware;
 pub mod framed;

@@ -52,7 +52,13 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
         .firmware
         .clone()
         .unwrap_or_else(|| PathBuf::from(DEFAULT_F407_ELF));
-    check_elf(&elf, Board::F407).map_err(|e| CliError::input(e.to_string()))?;
+    if !elf.is_file() {
+        return Err(CliError::input(format!(
+            "firmware ELF {} not found (build it with `cargo build -p sandjumper-firmware \
+             --target thumbv7em-none-eabihf --release`, or give --firmware ELF)",
+            elf.display()
+        )));
+    }
     if !on_path(&a.probe_rs) {
         return Err(CliError::input(format!(
             "probe-rs not found ({}): install it with `cargo install probe-rs-tools`, or give \
@@ -60,6 +66,8 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
             a.probe_rs.display()
         )));
     }
+    // probe-rs must not be handed the emulated board's image (or anything else).
+    check_elf(&elf, Board::F407).map_err(|e| CliError::input(e.to_string()))?;
     let step = |args: &[&std::ffi::OsStr], what: &str| -> Result<(), CliError> {
         let out = Command::new(&a.probe_rs)
             .args(args)
