@@ -369,3 +369,31 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
     );
     assert!(!bad.exists());
 }
+
+/// A final jump height that is not positive is said in words (summary, JSON); a jump that
+/// lifts the rod above rest carries no such note. The README's first command is such a jump.
+#[test]
+fn a_final_height_that_is_not_positive_is_explained() {
+    const NOTE: &str = "push-off did not lift the rod above its rest height";
+    let stalled = ["jump", "--kind", "stutter", "--freq", "12", "--phi", "0.57"];
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&[&stalled[..], &["--json"]].concat())).expect("JSON");
+    assert!(
+        json["final_jump_height_m"].as_f64().unwrap() <= 0.0,
+        "{json}"
+    );
+    assert_eq!(json["final_jump_note"], NOTE);
+    assert!(ok(&stalled).contains(NOTE));
+    let readme_first = [
+        "jump", "--kind", "delayed", "--freq", "10", "--tau", "0.1", "--model", "eq4", "--phi",
+        "0.57",
+    ];
+    let json: serde_json::Value =
+        serde_json::from_str(&ok(&[&readme_first[..], &["--json"]].concat())).expect("JSON");
+    assert!(
+        json["final_jump_height_m"].as_f64().unwrap() > 0.03,
+        "{json}"
+    );
+    assert!(json.get("final_jump_note").is_none(), "{json}");
+    assert!(!ok(&readme_first).contains(NOTE));
+}

@@ -41,6 +41,16 @@ pub struct JumpSummary {
     pub end_time_s: f64,
 }
 
+impl JumpSummary {
+    /// What a final jump height that is not positive means, in words: the push-off hop
+    /// peaked at or below the rod's rest height (a bare negative height reads as a bug).
+    /// `None` when the push-off lifted the rod above rest.
+    pub fn final_height_note(&self) -> Option<&'static str> {
+        (self.final_jump_height_m <= 0.0)
+            .then_some("push-off did not lift the rod above its rest height")
+    }
+}
+
 /// One sample of the time series (SI units).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SeriesRow {

@@ -364,7 +364,8 @@ impl Figure for JumpFigure<'_> {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> PlotResult<()> {
         let root = root.margin(14, 6, 6, 6);
-        let (head, body) = root.split_vertically(80);
+        let note = self.summary.final_height_note();
+        let (head, body) = root.split_vertically(if note.is_some() { 110 } else { 80 });
         head.draw(&Text::new(
             self.title.clone(),
             (Y_LABEL_AREA as i32, 6),
@@ -375,6 +376,13 @@ impl Figure for JumpFigure<'_> {
             (Y_LABEL_AREA as i32, 46),
             (FONT, 21).into_font().color(&RGBColor(70, 70, 70)),
         ))?;
+        if let Some(note) = note {
+            head.draw(&Text::new(
+                format!("final (push-off) height not positive: {note}"),
+                (Y_LABEL_AREA as i32, 76),
+                (FONT, 21).into_font().color(&RGBColor(170, 40, 30)),
+            ))?;
+        }
         let w = body.dim_in_pixel().0;
         let (plots, legends) = body.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
         let h = plots.dim_in_pixel().1;

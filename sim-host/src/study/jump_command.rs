@@ -66,6 +66,9 @@ pub struct JumpReport<'a> {
     /// Metrics.
     #[serde(flatten)]
     pub summary: &'a JumpSummary,
+    /// What a final jump height that is not positive means, in words (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub final_jump_note: Option<&'static str>,
     /// Warnings (e.g. motor force above its peak).
     pub warnings: &'a [String],
 }
@@ -97,6 +100,9 @@ pub(crate) fn human_summary(title: &str, out: &JumpOutcome) -> String {
         mm(s.final_jump_height_m),
         s.final_apex_time_s
     );
+    if let Some(note) = s.final_height_note() {
+        t += &format!("                     {note}\n");
+    }
     t += &format!("  max depth          {}\n", mm(s.max_depth_m));
     t += &format!("  peak added mass    {:.1} g\n", 1e3 * s.peak_added_mass_kg);
     t += &match s.liftoff_time_s {
@@ -186,6 +192,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         tau_s: spec.tau_s,
         rtol: opts.rtol,
         summary: &outcome.summary,
+        final_jump_note: outcome.summary.final_height_note(),
         warnings: &outcome.warnings,
     };
     let json = serde_json::to_string_pretty(&report)

@@ -202,6 +202,9 @@ pub struct HilReport<'a> {
     /// Jump metrics (times from the trajectory's start).
     #[serde(flatten)]
     pub summary: &'a JumpSummary,
+    /// What a final jump height that is not positive means, in words (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub final_jump_note: Option<&'static str>,
     /// Control periods simulated.
     pub ticks: u64,
     /// Frames lost (controller-side gaps + host-side undecodable).
@@ -295,6 +298,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         tau_s: spec.tau_s,
         gain_lowering: a.gain_lowering,
         summary: &outcome.summary,
+        final_jump_note: outcome.summary.final_height_note(),
         ticks: outcome.ticks,
         frames_lost: outcome.frames_lost,
         frames_rejected: outcome.frames_rejected,
@@ -367,6 +371,9 @@ fn human(title: &str, r: &HilReport<'_>) -> String {
         s.apex_time_s
     );
     t += &format!("  final jump height  {}\n", mm(s.final_jump_height_m));
+    if let Some(note) = s.final_height_note() {
+        t += &format!("                     {note}\n");
+    }
     t += &format!("  max depth          {}\n", mm(s.max_depth_m));
     t += &format!(
         "  tracking error     {} (max until the force first saturated)\n",
