@@ -1,5 +1,6 @@
 //! Host commands to the rig, the rig's replies, and why a command can be rejected.
 
+use crate::reset::ResetCause;
 use core::fmt;
 
 use crate::config::{ConfigError, JumpConfig};
@@ -40,6 +41,9 @@ pub enum Command {
     StatusQuery,
     /// Keep the host-link watchdog fed; no other effect.
     Heartbeat,
+    /// The carriage's position after a reset other than power-on has been checked (homed, or
+    /// seen by hand): `Arm` is allowed again.
+    AcknowledgeReset,
 }
 
 /// Which command (for rejections).
@@ -57,6 +61,7 @@ pub enum CommandKind {
     SetGains,
     StatusQuery,
     Heartbeat,
+    AcknowledgeReset,
 }
 
 impl Command {
@@ -74,6 +79,7 @@ impl Command {
             Self::SetGains(_) => CommandKind::SetGains,
             Self::StatusQuery => CommandKind::StatusQuery,
             Self::Heartbeat => CommandKind::Heartbeat,
+            Self::AcknowledgeReset => CommandKind::AcknowledgeReset,
         }
     }
 }
@@ -104,6 +110,8 @@ pub enum CommandError {
     InvalidConfiguration(ConfigError),
     /// A replay upload step failed.
     Replay(ReplayError),
+    /// `Arm` after a reset other than power-on, not yet acknowledged (`AcknowledgeReset`).
+    ResetNotAcknowledged { cause: ResetCause },
 }
 
 impl fmt::Display for CommandError {
@@ -115,6 +123,11 @@ impl fmt::Display for CommandError {
             Self::NotConfigured => write!(f, "no jump configured (send Configure first)"),
             Self::InvalidConfiguration(e) => write!(f, "invalid configuration: {e}"),
             Self::Replay(e) => write!(f, "replay upload: {e}"),
+            Self::ResetNotAcknowledged { cause } => write!(
+                f,
+                "the board reset ({cause:?}) since power-on: position zero may have moved; home \
+                 or check the carriage, then send AcknowledgeReset"
+            ),
         }
     }
 }
@@ -136,6 +149,8 @@ pub enum Rejection {
     InvalidConfiguration,
     /// Replay upload failed; for a checksum mismatch `actual` is the table's checksum.
     Replay { actual_checksum: Option<u32> },
+    /// See [`CommandError::ResetNotAcknowledged`].
+    ResetNotAcknowledged { cause: ResetCause },
 }
 
 impl From<&CommandError> for Rejection {
@@ -152,6 +167,7 @@ impl From<&CommandError> for Rejection {
             CommandError::Replay(_) => Self::Replay {
                 actual_checksum: None,
             },
+            CommandError::ResetNotAcknowledged { cause } => Self::ResetNotAcknowledged { cause },
         }
     }
 }

@@ -93,6 +93,12 @@ pub struct RigConfig {
     pub velocity_cutoff_hz: f32,
     /// Consecutive rejected frames that latch `LinkCorrupted` (default 10; 0 disables).
     pub corrupted_frame_limit: u32,
+    /// In lockstep, control periods in a row without a sensor frame that latch `LinkLost`
+    /// (default 2, at least 1).
+    pub lockstep_timeout_ticks: u32,
+    /// One control period in cycles of the glue's cycle counter, for tick-gap detection
+    /// (`Rig::note_tick_start`; 0 disables it, the default).
+    pub tick_period_cycles: u32,
 }
 
 impl Default for RigConfig {
@@ -108,6 +114,8 @@ impl Default for RigConfig {
             deadline_cycles: 0,
             velocity_cutoff_hz: 2000.0,
             corrupted_frame_limit: 10,
+            lockstep_timeout_ticks: 2,
+            tick_period_cycles: 0,
         }
     }
 }
@@ -150,6 +158,12 @@ impl RigConfig {
             self.velocity_cutoff_hz,
             self.velocity_cutoff_hz > 0.0 && self.velocity_cutoff_hz < self.tick_hz as f32 / 2.0,
             "0 < f_c < tick_hz / 2",
+        )?;
+        field(
+            "lockstep_timeout_ticks",
+            self.lockstep_timeout_ticks as f32,
+            (1..=self.tick_hz).contains(&self.lockstep_timeout_ticks),
+            "1..=tick_hz ticks (at most 1 s)",
         )
     }
 

@@ -64,6 +64,12 @@ impl EncoderExtender {
         self.count
     }
 
+    /// Forget the counter's history: the next reading sets the count, as the first reading
+    /// after start-up does (entering lockstep, where the host's counter replaces the board's).
+    pub fn restart(&mut self) {
+        self.started = false;
+    }
+
     /// Feed one raw reading. The first reading is taken as a signed value of the counter's
     /// width (so a counter reset to 0 at the rig's zero position reads 0, and one step below
     /// reads -1). On a jump the count is left unchanged (last good value) and the raw value is

@@ -5,7 +5,8 @@
 //! * Upload: [`ReplayTable::begin`] (length, period), [`ReplayTable::write_chunk`] in order,
 //!   [`ReplayTable::commit`] with the CRC-32 of the whole table ([`replay_checksum`]:
 //!   CRC-32/ISO-HDLC over the samples as little-endian f32 bytes), which the host computes the
-//!   same way. Only a committed table can be replayed.
+//!   same way. Only a committed table can be replayed. The table keeps the checksum as chunks
+//!   arrive, so every step of an upload costs at most one chunk's work inside a control tick.
 //! * Interpolation: Catmull-Rom cubic between samples (position and velocity continuous,
 //!   acceleration piecewise linear: a smoothing second difference). Before the first sample
 //!   it holds `p[0]`; after the last it holds the last.
@@ -17,6 +18,37 @@ pub const REPLAY_CAPACITY: usize = 4096;
 
 /// CRC used for replay checksums (and, in [`crate::protocol`], for frames).
 pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// The CRC a running checksum uses (a static, so its digest can live in the table).
+static CRC32_RUNNING: crc::Crc<u32> = CRC32;
+
+/// The checksum of the samples uploaded so far, kept as chunks arrive: committing a full table
+/// costs nothing more than a chunk (a control tick on the rig handles commands, and a CRC over
+/// 16 KiB at once would take three ticks' budget).
+#[derive(Clone)]
+struct RunningChecksum(crc::Digest<'static, u32>);
+
+impl RunningChecksum {
+    const fn new() -> Self {
+        Self(CRC32_RUNNING.digest())
+    }
+
+    fn update(&mut self, samples: &[f32]) {
+        for s in samples {
+            self.0.update(&s.to_le_bytes());
+        }
+    }
+
+    fn value(&self) -> u32 {
+        self.0.clone().finalize()
+    }
+}
+
+impl fmt::Debug for RunningChecksum {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "RunningChecksum({:#010x})", self.value())
+    }
+}
 
 /// CRC-32/ISO-HDLC of the samples as little-endian f32 bytes.
 pub fn replay_checksum(samples: &[f32]) -> u32 {
@@ -103,6 +135,8 @@ pub struct ReplayTable {
     /// `1 / period_ticks`, so the tick path multiplies instead of dividing.
     inv_period: f32,
     upload: Upload,
+    /// The checksum of the samples written so far.
+    running: RunningChecksum,
 }
 
 impl Default for ReplayTable {
@@ -120,6 +154,7 @@ impl ReplayTable {
             period_ticks: 1,
             inv_period: 1.0,
             upload: Upload::Empty,
+            running: RunningChecksum::new(),
         }
     }
 
@@ -140,6 +175,7 @@ impl ReplayTable {
         self.period_ticks = period_ticks;
         self.inv_period = 1.0 / period_ticks as f32;
         self.upload = Upload::Uploading { written: 0 };
+        self.running = RunningChecksum::new();
         Ok(())
     }
 
@@ -168,11 +204,13 @@ impl ReplayTable {
             }
         }
         self.samples[offset as usize..end as usize].copy_from_slice(chunk);
+        self.running.update(chunk);
         self.upload = Upload::Uploading { written: end };
         Ok(())
     }
 
     /// Finish the upload: all samples present and the checksum matches. Returns the checksum.
+    /// Constant time: the checksum was kept as the chunks arrived.
     pub fn commit(&mut self, expected_crc: u32) -> Result<u32, ReplayError> {
         let Upload::Uploading { written } = self.upload else {
             return Err(ReplayError::NotUploading);
@@ -183,7 +221,7 @@ impl ReplayTable {
                 len: self.len,
             });
         }
-        let actual = replay_checksum(self.samples());
+        let actual = self.running.value();
         if actual != expected_crc {
             return Err(ReplayError::Checksum {
                 expected: expected_crc,
@@ -261,6 +299,23 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
+        /// The checksum kept chunk by chunk is the checksum of the whole table, however the
+        /// upload is cut into chunks, and a restarted upload starts its checksum afresh.
+        #[test]
+        fn the_running_checksum_is_the_whole_tables(
+            xs in proptest::collection::vec(-0.02f32..0.02, 1..300),
+            chunk in 1usize..40,
+        ) {
+            let mut t = ReplayTable::new();
+            t.begin(5, 1).unwrap();
+            t.write_chunk(0, &[0.001; 5]).unwrap();
+            t.begin(xs.len() as u32, 1).unwrap();
+            for (k, c) in xs.chunks(chunk).enumerate() {
+                t.write_chunk((chunk * k) as u32, c).unwrap();
+            }
+            prop_assert_eq!(t.commit(replay_checksum(&xs)), Ok(replay_checksum(&xs)));
+        }
+
         /// Interpolation passes through every sample, and position and velocity are
         /// continuous across the knots (the step over one tick is bounded by the local slope).
         #[test]

@@ -21,9 +21,11 @@ use crate::config::{ConfigError, JumpConfig, RigConfig, Trajectory};
 use crate::controller::{GainScale, GainSchedule, Gains, PositionController, VelocityEstimator};
 use crate::encoder::EncoderExtender;
 use crate::fault::FaultCode;
+use crate::lockstep::LockstepLink;
 use crate::profile::{IntrusionTicks, Phase, ReplayTicks, Setpoint, SineTicks, TickProfile};
 use crate::protocol::{ActuatorFrame, SensorFrame};
 use crate::replay::{ReplayError, ReplayTable};
+use crate::reset::ResetCause;
 use crate::sample::{SampleQueue, SampleRecord, flags};
 use crate::trajectory::TrajectoryError;
 
@@ -119,6 +121,12 @@ pub struct Counters {
     pub faults_after_latch: u32,
     /// Longest tick reported by the glue, cycles.
     pub max_tick_cycles: u32,
+    /// Control ticks that never ran (a gap between two tick starts of more than one and a
+    /// half periods: an interrupt missed or merged), as reported by the glue.
+    pub ticks_missed: u32,
+    /// Frames from the host the glue could not queue for the core (its inbound queue was
+    /// full), as reported by the glue.
+    pub frames_dropped: u32,
 }
 
 /// A snapshot of the rig for the host.
@@ -145,6 +153,10 @@ pub struct Status {
     pub replay_checksum: Option<u32>,
     /// Counters.
     pub counters: Counters,
+    /// Why the board last reset.
+    pub reset_cause: ResetCause,
+    /// `Arm` is allowed: a power-on reset, or a later reset acknowledged by the host.
+    pub reset_acknowledged: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -176,7 +188,11 @@ pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     hold: Setpoint,
     ticks_since_host: u32,
     consecutive_rejected: u32,
-    last_lockstep_frame: Option<u32>,
+    lockstep_link: LockstepLink,
+    reset_cause: ResetCause,
+    reset_acknowledged: bool,
+    /// Cycle count at the start of the previous tick (tick-gap detection).
+    last_tick_start: Option<u32>,
     encoder: EncoderExtender,
     velocity: VelocityEstimator,
     controller: PositionController,
@@ -203,7 +219,10 @@ impl<const Q: usize> Rig<Q> {
             hold: Setpoint::default(),
             ticks_since_host: 0,
             consecutive_rejected: 0,
-            last_lockstep_frame: None,
+            lockstep_link: LockstepLink::new(),
+            reset_cause: ResetCause::PowerOn,
+            reset_acknowledged: true,
+            last_tick_start: None,
             encoder: EncoderExtender::new(config.counter_width, config.max_counts_per_tick),
             velocity: VelocityEstimator::new(
                 config.metres_per_count,
@@ -274,6 +293,8 @@ impl<const Q: usize> Rig<Q> {
             configured: self.jump.is_some(),
             replay_checksum: self.replay.committed_checksum(),
             counters: self.counters(),
+            reset_cause: self.reset_cause,
+            reset_acknowledged: self.reset_acknowledged,
         }
     }
 
@@ -519,15 +540,16 @@ impl<const Q: usize> Rig<Q> {
     /// `timing` is the glue's own measurement; the frame's `overrun` flag (fault injection)
     /// also counts as an overrun.
     pub fn lockstep(&mut self, frame: &SensorFrame, timing: TickTiming) -> ActuatorFrame {
-        if let Some(last) = self.last_lockstep_frame {
-            let gap = frame.frame.wrapping_sub(last.wrapping_add(1));
-            if gap != 0 {
-                let lost = if gap < (1 << 31) { gap } else { 1 };
-                self.counters.lockstep_frames_lost =
-                    self.counters.lockstep_frames_lost.wrapping_add(lost);
-            }
+        let arrival = self.lockstep_link.on_frame(frame.frame);
+        if arrival.entered {
+            // The host's counter replaces the board's: its first reading is not a movement.
+            self.encoder.restart();
+            self.velocity.reset();
         }
-        self.last_lockstep_frame = Some(frame.frame);
+        self.counters.lockstep_frames_lost = self
+            .counters
+            .lockstep_frames_lost
+            .wrapping_add(arrival.lost);
         self.ticks_since_host = 0;
         let timing = if frame.overrun {
             TickTiming::Overrun
@@ -548,6 +570,57 @@ impl<const Q: usize> Rig<Q> {
             state: out.state,
             fault: out.fault,
         }
+    }
+
+    /// In lockstep, a control period passed without a sensor frame (the glue's timer ticked,
+    /// or the SIL rig's period ended). After [`RigConfig::lockstep_timeout_ticks`] such
+    /// periods in a row latches `LinkLost` (once); returns true from then on, while the
+    /// silence lasts. Before lockstep: no effect.
+    pub fn lockstep_silent_period(&mut self) -> bool {
+        let timeout = self.config.lockstep_timeout_ticks;
+        if self.lockstep_link.on_silent_period(timeout) {
+            let tick = self.tick;
+            self.fault_at(FaultCode::LinkLost, tick);
+        }
+        self.lockstep_link.silent_periods() >= timeout
+    }
+
+    /// The board's reset cause, read at start-up: after anything but a power-on reset, `Arm`
+    /// is refused until the host sends `AcknowledgeReset` (see [`crate::reset`]).
+    pub fn set_reset_cause(&mut self, cause: ResetCause) {
+        self.reset_cause = cause;
+        self.reset_acknowledged = cause.is_power_on();
+    }
+
+    /// A control tick's interrupt started at `cycles` of the glue's free-running cycle
+    /// counter. With [`RigConfig::tick_period_cycles`] set, a gap of more than one and a half
+    /// periods since the previous start (a tick missed, or two merged into one) is counted in
+    /// `ticks_missed` and latches `DeadlineOverrun`: the loop did not run at its rate.
+    pub fn note_tick_start(&mut self, cycles: u32) {
+        let period = self.config.tick_period_cycles;
+        if let Some(previous) = self.last_tick_start
+            && period > 0
+        {
+            let gap = cycles.wrapping_sub(previous);
+            if gap > period + period / 2 {
+                let missed = (gap / period).saturating_sub(1).max(1);
+                self.counters.ticks_missed = self.counters.ticks_missed.saturating_add(missed);
+                let tick = self.tick;
+                self.fault_at(FaultCode::DeadlineOverrun, tick);
+            }
+        }
+        self.last_tick_start = Some(cycles);
+    }
+
+    /// `n` frames from the host were dropped by the glue before reaching the core (counted
+    /// in the status, never silent).
+    pub fn note_frames_dropped(&mut self, n: u32) {
+        self.counters.frames_dropped = self.counters.frames_dropped.saturating_add(n);
+    }
+
+    /// Lockstep has been entered (a sensor frame has arrived since start-up).
+    pub fn in_lockstep(&self) -> bool {
+        self.lockstep_link.is_active()
     }
 
     /// Handle one host command. Feeds the watchdog. A rejected command changes nothing (except
@@ -585,7 +658,16 @@ impl<const Q: usize> Rig<Q> {
                     Err(CommandError::InvalidConfiguration(e))
                 }
             },
+            (Command::AcknowledgeReset, _) => {
+                self.reset_acknowledged = true;
+                Ok(Reply::Ack)
+            }
             (Command::Arm, Idle) => {
+                if !self.reset_acknowledged {
+                    return Err(CommandError::ResetNotAcknowledged {
+                        cause: self.reset_cause,
+                    });
+                }
                 let Some(j) = self.jump else {
                     return Err(CommandError::NotConfigured);
                 };

@@ -109,7 +109,11 @@ fn worst_case_rig_messages_fit_a_frame() {
             commands_rejected: u32::MAX,
             faults_after_latch: u32::MAX,
             max_tick_cycles: u32::MAX,
+            ticks_missed: u32::MAX,
+            frames_dropped: u32::MAX,
         },
+        reset_cause: crate::ResetCause::BrownOut,
+        reset_acknowledged: false,
     };
     for msg in [
         full_batch(),

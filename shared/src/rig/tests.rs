@@ -3,6 +3,7 @@ use crate::command::REPLAY_CHUNK;
 use crate::config::TrajectorySpec;
 use crate::controller::GainLowering;
 use crate::replay::replay_checksum;
+use crate::reset::ResetCause;
 use crate::trajectory::JumpKind;
 use proptest::prelude::*;
 
@@ -611,4 +612,136 @@ proptest! {
             }
         }
     }
+}
+
+/// A sensor frame from the host with its own encoder count.
+fn host_frame(frame: u32, encoder_count: u32) -> SensorFrame {
+    SensorFrame {
+        frame,
+        encoder_count,
+        current_a: None,
+        overrun: false,
+    }
+}
+
+#[test]
+fn lockstep_entered_after_thousands_of_free_running_ticks_arms_cleanly() {
+    // On the rig the core has read its own encoder (TIM2) since boot; the host's simulated
+    // count starts far from it. Entering lockstep must not read that as a movement.
+    let mut r = rig();
+    for k in 0..5_000u32 {
+        r.tick(&input(2_000_000 + k % 7));
+    }
+    assert_eq!(r.fault(), None);
+    r.handle(&Command::Configure(sine(JumpKind::Stutter, 10.0, 0.0)))
+        .unwrap();
+    let start = 18_750u32; // p(0) = +A for a stutter
+    let a = r.lockstep(&host_frame(1, start), TickTiming::Unknown);
+    assert_eq!(a.fault, None, "entering lockstep latched {:?}", a.fault);
+    assert!(r.in_lockstep());
+    r.handle(&Command::Arm).unwrap();
+    for k in 2..200 {
+        let a = r.lockstep(&host_frame(k, start), TickTiming::Unknown);
+        assert_eq!((a.state, a.fault), (RigState::Armed, None), "frame {k}");
+        assert!(a.drive_enabled);
+    }
+    // Holding the start position: no velocity from the switch of counters.
+    assert!(r.velocity.velocity_m_s().abs() < 1e-3);
+}
+
+#[test]
+fn frames_that_stop_in_lockstep_latch_link_lost() {
+    let mut r = rig();
+    r.handle(&Command::Configure(sine(JumpKind::Stutter, 10.0, 0.0)))
+        .unwrap();
+    assert!(
+        !r.lockstep_silent_period(),
+        "no lockstep yet: no link to lose"
+    );
+    r.lockstep(&host_frame(1, 18_750), TickTiming::Unknown);
+    r.handle(&Command::Arm).unwrap();
+    r.lockstep(&host_frame(2, 18_750), TickTiming::Unknown);
+    let timeout = r.config().lockstep_timeout_ticks;
+    for k in 1..timeout {
+        assert!(!r.lockstep_silent_period(), "silent period {k}");
+        assert_eq!(r.fault(), None);
+    }
+    assert!(r.lockstep_silent_period());
+    assert_eq!(r.fault(), Some(FaultCode::LinkLost));
+    assert!(!r.state().drive_enabled());
+    // Reported once: further silence is no new fault.
+    assert!(r.lockstep_silent_period());
+    assert_eq!(r.counters().faults_after_latch, 0);
+    // A frame that comes back gets zero force from the latched rig.
+    let a = r.lockstep(&host_frame(3, 18_750), TickTiming::Unknown);
+    assert_eq!((a.force_n, a.drive_enabled), (0.0, false));
+}
+
+#[test]
+fn a_reset_other_than_power_on_refuses_arm_until_acknowledged() {
+    for cause in [
+        ResetCause::Watchdog,
+        ResetCause::Software,
+        ResetCause::Pin,
+        ResetCause::BrownOut,
+        ResetCause::LowPower,
+        ResetCause::Unknown,
+    ] {
+        let mut r = rig();
+        r.set_reset_cause(cause);
+        r.handle(&Command::Configure(sine(JumpKind::Single, 10.0, 0.0)))
+            .unwrap();
+        assert_eq!(
+            r.handle(&Command::Arm),
+            Err(CommandError::ResetNotAcknowledged { cause })
+        );
+        assert_eq!(r.state(), RigState::Idle, "{cause:?}: nothing armed");
+        let s = r.status();
+        assert_eq!((s.reset_cause, s.reset_acknowledged), (cause, false));
+        r.handle(&Command::AcknowledgeReset).unwrap();
+        assert!(r.status().reset_acknowledged);
+        r.handle(&Command::Arm).unwrap();
+        assert_eq!(r.state(), RigState::Armed);
+    }
+    let mut r = rig();
+    r.set_reset_cause(ResetCause::PowerOn);
+    r.handle(&Command::Configure(sine(JumpKind::Single, 10.0, 0.0)))
+        .unwrap();
+    r.handle(&Command::Arm).unwrap();
+}
+
+#[test]
+fn a_missed_or_merged_tick_is_counted_and_latches_deadline_overrun() {
+    let period = 16_800u32; // 168 MHz at 10 kHz
+    let mut r: Rig<64> = Rig::new(RigConfig {
+        tick_period_cycles: period,
+        ..RigConfig::default()
+    })
+    .unwrap();
+    // Regular ticks, with jitter, across the counter's wrap: fine.
+    let mut t = u32::MAX - 5 * period;
+    for k in 0..20u32 {
+        r.note_tick_start(t.wrapping_add(k % 3 * 100));
+        r.tick(&input(0));
+        t = t.wrapping_add(period);
+    }
+    assert_eq!((r.fault(), r.counters().ticks_missed), (None, 0));
+    // Two periods pass between tick starts: one tick never ran.
+    t = t.wrapping_add(period);
+    r.note_tick_start(t);
+    assert_eq!(r.fault(), Some(FaultCode::DeadlineOverrun));
+    assert_eq!(r.counters().ticks_missed, 1);
+    // Off when the period is not known.
+    let mut r = rig();
+    r.note_tick_start(0);
+    r.note_tick_start(1_000_000);
+    assert_eq!((r.fault(), r.counters().ticks_missed), (None, 0));
+}
+
+#[test]
+fn frames_dropped_by_the_glue_are_counted_in_the_status() {
+    let mut r = rig();
+    r.note_frames_dropped(3);
+    r.note_frames_dropped(2);
+    assert_eq!(r.status().counters.frames_dropped, 5);
 }

@@ -3,9 +3,10 @@
 //! (`note_frame_ok`), a corrupted one is rejected by the real frame decoder and counted
 //! (`note_frame_rejected`), a sensor frame runs one [`Rig::lockstep`] tick.
 //!
-//! The firmware in lockstep has no clock of its own; SIL stands in for a rig that keeps
-//! time: when sensor frames stop for `link_timeout_periods` periods the glue latches
-//! `LinkLost` (the core's table: "raised by the glue's link timeout") and drives zero force.
+//! The emulated firmware in lockstep has no clock of its own; SIL stands in for a rig that
+//! keeps time, as the F407 does: each period without a sensor frame is reported to the core
+//! ([`Rig::lockstep_silent_period`]), which latches `LinkLost` after
+//! `RigConfig::lockstep_timeout_ticks` of them, and the force is zero.
 
 use super::link::{LinkError, LinkReport, RigLink, corrupted_sensor_frame, reply_or_rejected};
 use sandjumper_core::protocol::FaultReport;
@@ -15,9 +16,6 @@ use sandjumper_core::{
     SampleRecord, SensorFrame, TickTiming,
 };
 
-/// Default link timeout of the SIL glue, control periods.
-pub const DEFAULT_LINK_TIMEOUT_PERIODS: u32 = 2;
-
 /// The core's control loop in-process.
 #[derive(Debug)]
 pub struct SilLink {
@@ -25,8 +23,6 @@ pub struct SilLink {
     decoder: FrameDecoder,
     samples: Vec<SampleRecord>,
     faults: Vec<FaultReport>,
-    silent_periods: u32,
-    link_timeout_periods: u32,
 }
 
 impl SilLink {
@@ -41,15 +37,21 @@ impl SilLink {
             decoder: FrameDecoder::new(),
             samples: Vec::new(),
             faults: Vec::new(),
-            silent_periods: 0,
-            link_timeout_periods: DEFAULT_LINK_TIMEOUT_PERIODS,
         })
     }
 
-    /// Periods without a sensor frame before `LinkLost` (at least 1).
-    pub fn with_link_timeout(mut self, periods: u32) -> Self {
-        self.link_timeout_periods = periods.max(1);
-        self
+    /// Periods without a sensor frame before `LinkLost` (at least 1): the core's
+    /// `lockstep_timeout_ticks`. Call before the session starts (the rig is rebuilt).
+    pub fn with_link_timeout(mut self, periods: u32) -> Result<Self, LinkError> {
+        let config = RigConfig {
+            lockstep_timeout_ticks: periods.max(1),
+            ..*self.rig.config()
+        };
+        self.rig = Rig::new(config).map_err(|e| LinkError::Io {
+            what: "rig configuration".into(),
+            message: e.to_string(),
+        })?;
+        Ok(self)
     }
 
     /// The core's rig (for tests).
@@ -84,7 +86,6 @@ impl RigLink for SilLink {
     }
 
     fn exchange(&mut self, frame: &SensorFrame) -> Result<ActuatorFrame, LinkError> {
-        self.silent_periods = 0;
         let before = self.rig.fault();
         self.rig.note_frame_ok();
         let out = self.rig.lockstep(frame, TickTiming::Unknown);
@@ -93,7 +94,6 @@ impl RigLink for SilLink {
     }
 
     fn send_corrupted(&mut self, frame: &SensorFrame) -> Result<(), LinkError> {
-        self.silent_periods = 0;
         let before = self.rig.fault();
         for byte in corrupted_sensor_frame(frame) {
             match self.decoder.push::<HostMessage>(byte) {
@@ -111,13 +111,12 @@ impl RigLink for SilLink {
     }
 
     fn silent_period(&mut self) -> Result<Option<ActuatorFrame>, LinkError> {
-        self.silent_periods = self.silent_periods.saturating_add(1);
-        if self.silent_periods < self.link_timeout_periods {
+        let before = self.rig.fault();
+        let lost = self.rig.lockstep_silent_period();
+        self.collect(before);
+        if !lost {
             return Ok(None);
         }
-        let before = self.rig.fault();
-        self.rig.raise_fault(FaultCode::LinkLost);
-        self.collect(before);
         let status = self.rig.status();
         Ok(Some(ActuatorFrame {
             frame: u32::MAX,
