@@ -1,28 +1,40 @@
 //! The rig firmware on the STM32F407: RTIC 2.
 //!
 //! Priorities (higher preempts lower):
-//! - 3 `control_tick` (TIM7 at [`board::TICK_HZ`]): at most one host frame from the inbound
-//!   queue, then encoder -> core tick -> DAC + drive enable -> camera trigger, cycle-counted
-//!   with the DWT (the count goes into the next tick's `TickTiming`, so the core latches
-//!   `DeadlineOverrun` past [`board::TICK_BUDGET_CYCLES`]); sample records move to the
-//!   telemetry queue; the watchdog is fed. It owns the core's `Rig` and the peripherals outright.
+//! - 3 `control_tick` (TIM7 at [`board::TICK_HZ`]): the tick's start time to the core (a gap
+//!   of more than 1.5 periods is a missed tick), the encoder and the current sample read
+//!   first, then at most one host frame from the inbound queue, then the core tick -> DAC +
+//!   drive enable -> camera trigger, cycle-counted with the DWT (the count goes into the next
+//!   tick's `TickTiming`, so the core latches `DeadlineOverrun` past
+//!   [`board::TICK_BUDGET_CYCLES`]); sample records move to the telemetry queue; the watchdog
+//!   is fed. It owns the core's `Rig` and the peripherals outright. It never logs: a full RTT
+//!   buffer in blocking mode (a probe attached, or one that went away) would stall it with the
+//!   drive on. What it would have said is counted in the core's `Status`.
 //! - 1 `host_link` (OTG_FS interrupt, also pended by the tick): USB CDC, frame decoding,
 //!   replies, telemetry batches. It talks to the tick only through lock-free single-producer
 //!   single-consumer queues, so nothing it does can delay or block the tick.
 //!
 //! Losses are counted: sample records that find the telemetry queue full stay in the core's
 //! queue, whose overflow the core counts (`samples_dropped` in every `Status`, and as gaps in
-//! the sequence numbers); frames the link cannot queue or send are counted and logged.
+//! the sequence numbers); frames the link cannot queue, either way, are counted in the core's
+//! `frames_dropped` (the link task's count reaches the tick through an atomic counter) and
+//! logged by the link task at every power of two.
 //!
 //! Hardware-in-the-loop on the real board: the first `HostMessage::Sensor` frame switches the
 //! tick to lockstep (one core tick per sensor frame, the actuator frame sent back) until reset;
-//! the real drive stays disabled at zero force in that mode.
+//! the real drive stays disabled at zero force in that mode. The core restarts its encoder
+//! extension on entry (the host's count replaces TIM2's) and latches `LinkLost` when sensor
+//! frames stop for [`LOCKSTEP_TIMEOUT_TICKS`] timer ticks.
+//!
+//! At start-up the reset cause (RCC_CSR) goes to the core: after anything but a power-on
+//! reset, `Arm` is refused until the host sends `AcknowledgeReset`.
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use crate::board::f407::{self as board, RigIo};
     use crate::drive;
     use crate::link;
+    use core::sync::atomic::{AtomicU32, Ordering};
     use cortex_m::peripheral::DWT;
     use heapless::spsc::{Consumer, Producer, Queue};
     use sandjumper_core::protocol::{FrameDecoder, MAX_FRAME, SAMPLE_BATCH, encode_frame};
@@ -44,6 +56,11 @@ mod app {
     const INBOUND: usize = 8;
     /// Messages waiting for the link (capacity N - 1).
     const OUTBOUND: usize = 8;
+    /// Timer ticks in lockstep without a sensor frame before `LinkLost`: 50 ms (USB full speed
+    /// delivers a frame per 1 ms USB frame at best, so tens of ticks pass between frames).
+    pub const LOCKSTEP_TIMEOUT_TICKS: u32 = board::TICK_HZ / 20;
+    /// Host frames the link task could not queue for the tick, not yet handed to the core.
+    static INBOUND_DROPPED: AtomicU32 = AtomicU32::new(0);
 
     type Serial = SerialPort<'static, UsbBusType, [u8; 256], [u8; 1024]>;
 
@@ -84,6 +101,7 @@ mod app {
         let mut core = cx.core;
         core.DCB.enable_trace();
         core.DWT.enable_cycle_counter();
+        let reset_cause = board::take_reset_cause();
         let parts = board::init(cx.device);
         let mut io = parts.io;
 
@@ -91,9 +109,11 @@ mod app {
             tick_hz: board::TICK_HZ,
             counter_width: CounterWidth::Bits32,
             deadline_cycles: board::TICK_BUDGET_CYCLES,
+            tick_period_cycles: board::TICK_PERIOD_CYCLES,
+            lockstep_timeout_ticks: LOCKSTEP_TIMEOUT_TICKS,
             ..RigConfig::default()
         };
-        let rig = match Rig::new(config) {
+        let mut rig = match Rig::new(config) {
             Ok(rig) => rig,
             // The board's fixed configuration is checked by the core; a bad one is a build
             // defect: stay safe and say so.
@@ -102,6 +122,8 @@ mod app {
                 defmt::panic!("rig configuration rejected: {}", e)
             }
         };
+
+        rig.set_reset_cause(reset_cause);
 
         let usb_bus = cx
             .local
@@ -125,9 +147,10 @@ mod app {
 
         io.start_ticking(board::TICK_HZ);
         defmt::info!(
-            "sandjumper firmware: STM32F407, tick {} Hz, budget {} cycles",
+            "sandjumper firmware: STM32F407, tick {} Hz, budget {} cycles, reset cause {}",
             board::TICK_HZ,
-            board::TICK_BUDGET_CYCLES
+            board::TICK_BUDGET_CYCLES,
+            reset_cause
         );
         (
             Shared {},
@@ -151,7 +174,6 @@ mod app {
         io, rig, inbound_rx, outbound_tx, samples_tx,
         timing: TickTiming = TickTiming::Unknown,
         lockstep: bool = false,
-        dropped_messages: u32 = 0,
     ])]
     fn control_tick(cx: control_tick::Context) {
         let start = DWT::cycle_count();
@@ -163,11 +185,18 @@ mod app {
             samples_tx,
             timing,
             lockstep,
-            dropped_messages,
             ..
         } = cx.local;
         io.acknowledge_tick();
+        rig.note_tick_start(start);
+        // The sensors first, at a fixed time after the tick starts, whatever the host sent.
+        let encoder_raw = io.encoder_count();
+        let current_code = io.current_sense_code();
         let fault_before = rig.fault();
+        let dropped = INBOUND_DROPPED.swap(0, Ordering::Relaxed);
+        if dropped > 0 {
+            rig.note_frames_dropped(dropped);
+        }
         // At most one host frame per tick, and only when its answer (plus a fault report) has
         // room to leave.
         let mut ticked = false;
@@ -177,21 +206,14 @@ mod app {
                 None => {}
                 Some(Inbound::Rejected) => rig.note_frame_rejected(),
                 Some(Inbound::Message(HostMessage::Command { id, command })) => {
-                    send(
-                        outbound_tx,
-                        dropped_messages,
-                        link::reply_to(rig, id, &command),
-                    );
+                    let reply = link::reply_to(rig, id, &command);
+                    send(outbound_tx, rig, reply);
                 }
                 Some(Inbound::Message(HostMessage::Sensor(frame))) => {
                     *lockstep = true;
                     rig.note_frame_ok();
                     let actuator = rig.lockstep(&frame, *timing);
-                    send(
-                        outbound_tx,
-                        dropped_messages,
-                        RigMessage::Actuator(actuator),
-                    );
+                    send(outbound_tx, rig, RigMessage::Actuator(actuator));
                     ticked = true;
                 }
             }
@@ -201,10 +223,14 @@ mod app {
             // Hardware-in-the-loop: the simulated plant is driven, never the real motor.
             io.set_drive(drive::ZERO_FORCE_CODE, false);
             io.set_camera_trigger(false);
+            if !ticked {
+                // A timer tick without a sensor frame: the core counts the silence.
+                rig.lockstep_silent_period();
+            }
         } else {
             let input = TickInput {
-                encoder_raw: io.encoder_count(),
-                current_a: Some(drive::current_from_code(io.current_sense_code())),
+                encoder_raw,
+                current_a: Some(drive::current_from_code(current_code)),
                 timing: *timing,
             };
             let out = rig.tick(&input);
@@ -215,7 +241,7 @@ mod app {
             ticked = true;
         }
         if let Some(report) = link::newly_latched(rig, fault_before) {
-            send(outbound_tx, dropped_messages, report);
+            send(outbound_tx, rig, report);
         }
 
         // Telemetry: as many records as the link's queue takes; the rest wait in the core's
@@ -236,15 +262,15 @@ mod app {
         }
     }
 
-    /// Queues a message for the link; if the queue is full it is counted as dropped (and the
-    /// count logged), never waited for.
-    fn send(outbound: &mut Producer<'static, RigMessage>, dropped: &mut u32, msg: RigMessage) {
+    /// Queues a message for the link; if the queue is full it is counted in the core's
+    /// `frames_dropped`, never waited for (and never logged from the tick).
+    fn send<const Q: usize>(
+        outbound: &mut Producer<'static, RigMessage>,
+        rig: &mut Rig<Q>,
+        msg: RigMessage,
+    ) {
         if outbound.enqueue(msg).is_err() {
-            *dropped = dropped.wrapping_add(1);
-            defmt::warn!(
-                "control tick: outbound queue full, {} messages dropped",
-                *dropped
-            );
+            rig.note_frames_dropped(1);
         }
     }
 
@@ -279,11 +305,15 @@ mod app {
                     Some(Err(_)) => Inbound::Rejected,
                 };
                 if inbound_tx.enqueue(inbound).is_err() {
+                    // The core counts it (next tick); the log is rate-limited.
+                    INBOUND_DROPPED.fetch_add(1, Ordering::Relaxed);
                     *inbound_dropped = inbound_dropped.wrapping_add(1);
-                    defmt::warn!(
-                        "host link: inbound queue full, {} frames dropped",
-                        *inbound_dropped
-                    );
+                    if inbound_dropped.is_power_of_two() {
+                        defmt::warn!(
+                            "host link: inbound queue full, {} frames dropped",
+                            *inbound_dropped
+                        );
+                    }
                 }
             }
         }

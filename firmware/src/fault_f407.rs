@@ -1,44 +1,102 @@
-//! What the STM32F407 does when the firmware itself fails: drive disabled and zero force first
-//! (raw register writes, no HAL state needed), then a defmt report over RTT, then a stop.
+//! What the STM32F407 does when the firmware itself fails: drive disabled and zero force first,
+//! then a defmt report over RTT, then a stop that the independent watchdog ends with a reset.
 //!
 //! Our own panic handler rather than `panic-probe`: panic-probe prints before anything else,
 //! and the drive must be made safe before anything else. The behaviour otherwise matches it
 //! (report over defmt, then HardFault so `probe-rs run` shows a backtrace).
 //!
-//! After a HardFault the core halts in the handler (a breakpoint if a debugger is attached); the
-//! independent watchdog then resets the chip, and the drive enable pin, an input with a
-//! pull-down after reset, keeps the drive off.
+//! The HardFault handler's first instructions use registers only: a stack overflow (flip-link
+//! puts the stack at the bottom of RAM, so an overflow faults instead of corrupting data)
+//! leaves the stack pointer below RAM, and anything that pushes there faults again and locks
+//! the core up with the enable line still high. So the entry, in assembly, drops the enable
+//! line and writes the zero-force DAC code, then moves the stack pointer back to the top of the
+//! stack and only then calls Rust ([`hard_fault_after_safe`]).
+//!
+//! After a fault the core stops in a loop (one breakpoint first if a debugger has been
+//! attached since power-up); the independent watchdog, which keeps counting while the core is
+//! halted, then resets the chip. From reset until `init` configures it, PE7 is a floating input:
+//! the board must hold the drive's enable line low with an external pull-down (see
+//! `docs/firmware.md`, wiring).
 
-use crate::board::f407::force_safe_state;
+use crate::board::f407::{DAC_DHR12R1, DRIVE_ENABLE_PIN, GPIOE_BSRR, force_safe_state};
+use crate::drive::ZERO_FORCE_CODE;
 use cortex_m::peripheral::DCB;
-use cortex_m_rt::{ExceptionFrame, exception};
 use defmt_rtt as _;
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    force_safe_state();
+    // Mask first: the control tick must not preempt and re-enable the drive.
     cortex_m::interrupt::disable();
+    force_safe_state();
     defmt::error!("panic: {}", defmt::Display2Format(info));
     cortex_m::asm::udf()
 }
 
 #[defmt::panic_handler]
 fn defmt_panic() -> ! {
+    cortex_m::interrupt::disable();
     force_safe_state();
     cortex_m::asm::udf()
 }
 
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+// The HardFault vector (cortex-m-rt's vector table takes the `HardFault` symbol). Registers
+// only until the stack pointer is valid again:
+//   1. drive enable low (GPIOE BSRR reset bit), 2. DAC to the zero-force code,
+//   3. r0 = the faulting stack pointer, MSP = the top of the stack, 4. branch to Rust.
+core::arch::global_asm!(
+    ".section .HardFault.user, \"ax\"",
+    ".global HardFault",
+    ".type HardFault, %function",
+    ".thumb_func",
+    "HardFault:",
+    "cpsid i",
+    "ldr r0, ={bsrr}",
+    "ldr r1, ={enable_off}",
+    "str r1, [r0]",
+    "ldr r0, ={dac}",
+    "ldr r1, ={zero}",
+    "str r1, [r0]",
+    "mrs r0, msp",
+    "ldr r1, =_stack_start",
+    "msr msp, r1",
+    "b {after}",
+    ".ltorg",
+    bsrr = const GPIOE_BSRR,
+    enable_off = const 1u32 << (16 + DRIVE_ENABLE_PIN),
+    dac = const DAC_DHR12R1,
+    zero = const ZERO_FORCE_CODE as u32,
+    after = sym hard_fault_after_safe,
+);
+
+/// RAM (the stack lives in it): where a stacked exception frame can be read.
+const RAM: core::ops::Range<u32> = 0x2000_0000..0x2002_0000;
+
+/// The rest of the HardFault handler, on a valid stack with the drive already safe: report the
+/// faulting pc and lr if the stacked frame is readable, then stop.
+///
+/// # Safety
+/// Called only from the `HardFault` entry above, with `faulting_sp` the stack pointer at the
+/// fault.
+#[unsafe(no_mangle)]
+unsafe extern "C" fn hard_fault_after_safe(faulting_sp: u32) -> ! {
     force_safe_state();
-    defmt::error!(
-        "HardFault: pc={=u32:#x} lr={=u32:#x}",
-        frame.pc(),
-        frame.lr()
-    );
+    if RAM.contains(&faulting_sp) && RAM.contains(&(faulting_sp + 32)) {
+        // SAFETY: the eight words of the exception frame lie in RAM (checked above).
+        let (lr, pc) = unsafe {
+            let frame = faulting_sp as *const u32;
+            (frame.add(5).read_volatile(), frame.add(6).read_volatile())
+        };
+        defmt::error!("HardFault: pc={=u32:#x} lr={=u32:#x}", pc, lr);
+    } else {
+        defmt::error!(
+            "HardFault with the stack pointer at {=u32:#x}, outside RAM (stack overflow?)",
+            faulting_sp
+        );
+    }
+    if DCB::is_debugger_attached() {
+        cortex_m::asm::bkpt();
+    }
     loop {
-        if DCB::is_debugger_attached() {
-            cortex_m::asm::bkpt();
-        }
+        cortex_m::asm::nop();
     }
 }

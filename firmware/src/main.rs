@@ -17,6 +17,9 @@ compile_error!(
 mod drive;
 #[cfg_attr(not(target_os = "none"), allow(dead_code))]
 mod link;
+#[cfg(any(not(target_os = "none"), feature = "board-f407"))]
+#[cfg_attr(not(target_os = "none"), allow(dead_code))]
+mod reset_flags;
 #[cfg(any(not(target_os = "none"), feature = "board-qemu"))]
 #[cfg_attr(not(target_os = "none"), allow(dead_code))]
 mod session;

@@ -4,20 +4,20 @@
 //!
 //! | signal | pin / peripheral | notes |
 //! |---|---|---|
-//! | encoder A / B | PA15 / PB3, TIM2 CH1 / CH2 (AF1) | 32-bit quadrature counter, x4 decoding |
+//! | encoder A / B | PA15 / PB3, TIM2 CH1 / CH2 (AF1) | 32-bit quadrature counter, x4 decoding, input filter f_CK_INT N = 8 ([`ENCODER_FILTER`]) |
 //! | force command | PA4, DAC channel 1 | 12-bit, 0..3.3 V, mid-point = zero force ([`crate::drive`]) |
 //! | drive enable | PE7, push-pull, active high | low on reset (fit a pull-down), on any fault, panic, HardFault |
-//! | camera trigger | PE9, push-pull, active high | one control tick long, raised in the tick that starts a frame |
-//! | motor current sense | PA1, ADC1 channel 1 | sampled at the end of each tick, read by the next |
+//! | camera trigger | PE9, push-pull, active high | raised in the tick that starts a frame, for the jump configuration's `camera_pulse_ticks` (default 10 ticks = 1 ms) |
+//! | motor current sense | PA1, ADC1 channel 1 | ADC clock PCLK2/4 = 21 MHz (limit 36 MHz); sampled at the end of each tick, read by the next |
 //! | USB host link | PA11 (D-) / PA12 (D+), OTG_FS | CDC-ACM full speed |
 //! | status LEDs | PD12 green (running), PD14 red (fault) | the Discovery board's LEDs |
 //! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
-//! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick |
+//! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick; keeps counting while the core is halted by a debugger |
 
 use stm32f4xx_hal::{
     adc::{
         Adc,
-        config::{AdcConfig, SampleTime, Sequence},
+        config::{AdcConfig, Clock, SampleTime, Sequence},
     },
     dac::{C1, DacExt, DacOut, DacPin},
     gpio::{Analog, Output, PA1, PD12, PD14, PE7, PE9, PushPull},
@@ -30,6 +30,8 @@ use stm32f4xx_hal::{
 };
 
 use crate::drive;
+use crate::reset_flags;
+use sandjumper_core::ResetCause;
 
 /// External crystal, Hz.
 pub const HSE_HZ: u32 = 8_000_000;
@@ -76,7 +78,31 @@ pub const TICK_BUDGET_CYCLES: u32 = SYSCLK_HZ / TICK_HZ * 8 / 10;
 pub const WATCHDOG_MS: u32 = 10;
 
 /// Drive enable: GPIOE pin 7.
-const DRIVE_ENABLE_PIN: u32 = 7;
+pub const DRIVE_ENABLE_PIN: u32 = 7;
+/// GPIOE's bit set/reset register (RM0090 8.4.7), for writes that need no HAL state.
+pub const GPIOE_BSRR: u32 = 0x4002_1000 + 0x18;
+/// The DAC's channel-1 12-bit right-aligned data register (RM0090 14.5.3).
+pub const DAC_DHR12R1: u32 = 0x4000_7400 + 0x08;
+/// One control period in core cycles (tick-gap detection).
+pub const TICK_PERIOD_CYCLES: u32 = SYSCLK_HZ / TICK_HZ;
+/// TIM2's input filter on both encoder channels (CCMR1 IC1F = IC2F = 0b0011: sampled at
+/// f_CK_INT = 84 MHz, 8 samples must agree): an edge shorter than ~95 ns is rejected (noise
+/// on long encoder cables), while the rig's fastest edges (1 um counts at ~2 m/s, x4
+/// decoding) are 500 ns apart.
+pub const ENCODER_FILTER: u8 = 0b0011;
+
+/// Why the chip last reset (RCC_CSR's flags), then clear the flags so the next reset reads
+/// its own. Call before the clock tree is set up.
+pub fn take_reset_cause() -> ResetCause {
+    // SAFETY: a read and a write of RCC_CSR before the HAL owns the RCC; RMVF only clears the
+    // reset flags.
+    unsafe {
+        let rcc = &*pac::RCC::ptr();
+        let csr = rcc.csr().read().bits();
+        rcc.csr().modify(|_, w| w.rmvf().clear());
+        reset_flags::reset_cause(csr)
+    }
+}
 
 /// Drive the actuator to a safe state with raw register writes: usable from the panic and
 /// HardFault handlers, whatever state the HAL objects are in. Disables the drive first, then
@@ -138,7 +164,8 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         .pe9
         .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
 
-    // PA15/PB3 leave reset as JTAG pins (AF0); SWD debugging does not need them.
+    // PA15/PB3 leave reset as JTAG pins (AF0); SWD debugging does not need them. PB3 is also
+    // SWO: no trace output on this board.
     let encoder = Qei::new(
         dp.TIM2,
         (
@@ -147,9 +174,21 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         ),
         &mut rcc,
     );
+    // SAFETY: CCMR1's input-filter fields of TIM2, which the encoder owns; counting goes on.
+    unsafe {
+        (*pac::TIM2::ptr())
+            .ccmr1_input()
+            .modify(|_, w| w.ic1f().bits(ENCODER_FILTER).ic2f().bits(ENCODER_FILTER));
+    }
 
     let current_pin = gpioa.pa1.into_analog();
-    let mut current_adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
+    // PCLK2 is 84 MHz: /4 gives 21 MHz, within the ADC's 36 MHz limit (/2 would be 42).
+    let mut current_adc = Adc::new(
+        dp.ADC1,
+        true,
+        AdcConfig::default().clock(Clock::Pclk2_div_4),
+        &mut rcc,
+    );
     current_adc.configure_channel(&current_pin, Sequence::One, SampleTime::Cycles_84);
     current_adc.enable();
     current_adc.start_conversion();
@@ -164,7 +203,9 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     );
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
-    watchdog.stop_on_debug(&dp.DBGMCU, true);
+    // Not frozen while the core is halted: a breakpoint or a probe halt while Armed must not
+    // hold the force (the watchdog resets the chip and the enable line drops).
+    watchdog.stop_on_debug(&dp.DBGMCU, false);
     watchdog.start(WATCHDOG_MS.millis());
 
     Parts {
