@@ -119,7 +119,12 @@ fn run_session<const Q: usize>(
                     }
                 }
                 Some(Ok(HostMessage::Command { id, command })) => {
-                    send(link, &link::reply_to(rig, id, &command))?;
+                    // On the rig a command runs inside a control tick: its cost is that tick's
+                    // and reaches the core with the next tick, as the F407's does.
+                    let start = counter.start();
+                    let reply = link::reply_to(rig, id, &command);
+                    previous_tick = TickTiming::Cycles(counter.instructions_since(start));
+                    send(link, &reply)?;
                 }
                 Some(Ok(HostMessage::Sensor(frame))) => {
                     rig.note_frame_ok();
