@@ -37,14 +37,12 @@ fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
     let samples: Vec<f32> = (0..REPLAY_CAPACITY)
         .map(|k| 0.01 * (k as f32 * 0.002).sin())
         .collect();
-    let mut frame = 0u32;
     let mut worst = (0u32, String::new());
-    for command in replay_upload(&samples, 10) {
+    for (frame, command) in (1u32..).zip(replay_upload(&samples, 10)) {
         let what = format!("{:?}", command.kind());
         link.command(&command)
             .unwrap_or_else(|e| panic!("{what}: {e}"));
         // One sensor frame reports the command's tick to the core.
-        frame += 1;
         link.exchange(&SensorFrame {
             frame,
             encoder_count: 0,
