@@ -221,7 +221,7 @@ mod app {
 
         if *lockstep {
             // Hardware-in-the-loop: the simulated plant is driven, never the real motor.
-            io.set_drive(drive::ZERO_FORCE_CODE, false);
+            io.set_drive(rig.drive_calibration().zero_code, false);
             io.set_camera_trigger(false);
             if !ticked {
                 // A timer tick without a sensor frame: the core counts the silence.
@@ -234,7 +234,8 @@ mod app {
                 timing: *timing,
             };
             let out = rig.tick(&input);
-            io.set_drive(drive::force_to_code(out.force_n), out.drive_enabled);
+            let code = rig.drive_calibration().force_to_code(out.force_n);
+            io.set_drive(code, out.drive_enabled);
             io.set_camera_trigger(out.camera_trigger);
             io.start_current_sample();
             io.set_leds(out.drive_enabled, out.fault.is_some());

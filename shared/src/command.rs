@@ -1,5 +1,6 @@
 //! Host commands to the rig, the rig's replies, and why a command can be rejected.
 
+use crate::drive_calibration::{CalibrationError, DriveCalibration};
 use crate::reset::ResetCause;
 use core::fmt;
 
@@ -44,6 +45,9 @@ pub enum Command {
     /// The carriage's position after a reset other than power-on has been checked (homed, or
     /// seen by hand): `Arm` is allowed again.
     AcknowledgeReset,
+    /// The DAC codes of the force command measured on the rig (drive disabled: Idle or
+    /// Faulted only). Checked, then used for every force command and reported in `Status`.
+    SetDriveCalibration(DriveCalibration),
 }
 
 /// Which command (for rejections).
@@ -62,6 +66,7 @@ pub enum CommandKind {
     StatusQuery,
     Heartbeat,
     AcknowledgeReset,
+    SetDriveCalibration,
 }
 
 impl Command {
@@ -80,6 +85,7 @@ impl Command {
             Self::StatusQuery => CommandKind::StatusQuery,
             Self::Heartbeat => CommandKind::Heartbeat,
             Self::AcknowledgeReset => CommandKind::AcknowledgeReset,
+            Self::SetDriveCalibration(_) => CommandKind::SetDriveCalibration,
         }
     }
 }
@@ -112,6 +118,8 @@ pub enum CommandError {
     Replay(ReplayError),
     /// `Arm` after a reset other than power-on, not yet acknowledged (`AcknowledgeReset`).
     ResetNotAcknowledged { cause: ResetCause },
+    /// The drive calibration failed its check.
+    InvalidCalibration(CalibrationError),
 }
 
 impl fmt::Display for CommandError {
@@ -128,6 +136,7 @@ impl fmt::Display for CommandError {
                 "the board reset ({cause:?}) since power-on: position zero may have moved; home \
                  or check the carriage, then send AcknowledgeReset"
             ),
+            Self::InvalidCalibration(e) => write!(f, "drive calibration refused: {e}"),
         }
     }
 }
@@ -151,6 +160,8 @@ pub enum Rejection {
     Replay { actual_checksum: Option<u32> },
     /// See [`CommandError::ResetNotAcknowledged`].
     ResetNotAcknowledged { cause: ResetCause },
+    /// See [`CommandError::InvalidCalibration`].
+    InvalidCalibration(CalibrationError),
 }
 
 impl From<&CommandError> for Rejection {
@@ -168,6 +179,7 @@ impl From<&CommandError> for Rejection {
                 actual_checksum: None,
             },
             CommandError::ResetNotAcknowledged { cause } => Self::ResetNotAcknowledged { cause },
+            CommandError::InvalidCalibration(e) => Self::InvalidCalibration(e),
         }
     }
 }

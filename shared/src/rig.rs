@@ -19,6 +19,7 @@ use crate::camera::CameraTrigger;
 use crate::command::{Command, CommandError, CommandKind, Reply};
 use crate::config::{ConfigError, JumpConfig, RigConfig, Trajectory};
 use crate::controller::{GainScale, GainSchedule, Gains, PositionController, VelocityEstimator};
+use crate::drive_calibration::DriveCalibration;
 use crate::encoder::EncoderExtender;
 use crate::fault::FaultCode;
 use crate::lockstep::LockstepLink;
@@ -157,6 +158,8 @@ pub struct Status {
     pub reset_cause: ResetCause,
     /// `Arm` is allowed: a power-on reset, or a later reset acknowledged by the host.
     pub reset_acknowledged: bool,
+    /// The DAC codes of the force command in use.
+    pub drive_calibration: DriveCalibration,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -191,6 +194,7 @@ pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     lockstep_link: LockstepLink,
     reset_cause: ResetCause,
     reset_acknowledged: bool,
+    drive_calibration: DriveCalibration,
     /// Cycle count at the start of the previous tick (tick-gap detection).
     last_tick_start: Option<u32>,
     encoder: EncoderExtender,
@@ -222,6 +226,7 @@ impl<const Q: usize> Rig<Q> {
             lockstep_link: LockstepLink::new(),
             reset_cause: ResetCause::PowerOn,
             reset_acknowledged: true,
+            drive_calibration: DriveCalibration::NOMINAL,
             last_tick_start: None,
             encoder: EncoderExtender::new(config.counter_width, config.max_counts_per_tick),
             velocity: VelocityEstimator::new(
@@ -295,6 +300,7 @@ impl<const Q: usize> Rig<Q> {
             counters: self.counters(),
             reset_cause: self.reset_cause,
             reset_acknowledged: self.reset_acknowledged,
+            drive_calibration: self.drive_calibration,
         }
     }
 
@@ -585,6 +591,12 @@ impl<const Q: usize> Rig<Q> {
         self.lockstep_link.silent_periods() >= timeout
     }
 
+    /// The DAC codes of the force command (`SetDriveCalibration`; nominal until set): the glue
+    /// turns every force command into a DAC code with them.
+    pub fn drive_calibration(&self) -> &DriveCalibration {
+        &self.drive_calibration
+    }
+
     /// The board's reset cause, read at start-up: after anything but a power-on reset, `Arm`
     /// is refused until the host sends `AcknowledgeReset` (see [`crate::reset`]).
     pub fn set_reset_cause(&mut self, cause: ResetCause) {
@@ -658,6 +670,11 @@ impl<const Q: usize> Rig<Q> {
                     Err(CommandError::InvalidConfiguration(e))
                 }
             },
+            (Command::SetDriveCalibration(c), Idle | Faulted) => {
+                c.validate().map_err(CommandError::InvalidCalibration)?;
+                self.drive_calibration = *c;
+                Ok(Reply::Ack)
+            }
             (Command::AcknowledgeReset, _) => {
                 self.reset_acknowledged = true;
                 Ok(Reply::Ack)

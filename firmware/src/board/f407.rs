@@ -258,7 +258,8 @@ impl RigIo {
         self.current_adc.start_conversion();
     }
 
-    /// Writes the force command (a DAC code from [`drive::force_to_code`]) and the enable line.
+    /// Writes the force command (a DAC code from the core's `DriveCalibration`; its zero code
+    /// when disabled) and the enable line: enabling after the code is written, disabling before.
     #[inline(always)]
     pub fn set_drive(&mut self, code: u16, enable: bool) {
         if enable {
@@ -266,7 +267,7 @@ impl RigIo {
             self.drive_enable.set_high();
         } else {
             self.drive_enable.set_low();
-            self.force_dac.set_value(drive::ZERO_FORCE_CODE);
+            self.force_dac.set_value(code);
         }
     }
 

@@ -114,6 +114,10 @@ fn worst_case_rig_messages_fit_a_frame() {
         },
         reset_cause: crate::ResetCause::BrownOut,
         reset_acknowledged: false,
+        drive_calibration: crate::DriveCalibration {
+            zero_code: u16::MAX,
+            codes_per_newton: f32::MAX,
+        },
     };
     for msg in [
         full_batch(),

@@ -2,6 +2,7 @@ use super::*;
 use crate::command::REPLAY_CHUNK;
 use crate::config::TrajectorySpec;
 use crate::controller::GainLowering;
+use crate::drive_calibration::DriveCalibration;
 use crate::replay::replay_checksum;
 use crate::reset::ResetCause;
 use crate::trajectory::JumpKind;
@@ -744,4 +745,36 @@ fn frames_dropped_by_the_glue_are_counted_in_the_status() {
     r.note_frames_dropped(3);
     r.note_frames_dropped(2);
     assert_eq!(r.status().counters.frames_dropped, 5);
+}
+
+#[test]
+fn the_drive_calibration_is_checked_set_only_with_the_drive_off_and_reported() {
+    let mut r = rig();
+    let cal = DriveCalibration {
+        zero_code: 2101,
+        codes_per_newton: DriveCalibration::NOMINAL.codes_per_newton * 0.95,
+    };
+    r.handle(&Command::SetDriveCalibration(cal)).unwrap();
+    assert_eq!(r.status().drive_calibration, cal);
+    assert_eq!(r.drive_calibration().force_to_code(0.0), 2101);
+    // Refused while the drive is enabled.
+    r.handle(&Command::Configure(sine(JumpKind::Single, 10.0, 0.0)))
+        .unwrap();
+    r.handle(&Command::Arm).unwrap();
+    assert!(matches!(
+        r.handle(&Command::SetDriveCalibration(DriveCalibration::NOMINAL)),
+        Err(CommandError::IllegalInState { .. })
+    ));
+    assert_eq!(r.status().drive_calibration, cal);
+    // A calibration that fails its check changes nothing.
+    r.handle(&Command::Abort).unwrap();
+    let bad = DriveCalibration {
+        zero_code: 3000,
+        ..cal
+    };
+    assert!(matches!(
+        r.handle(&Command::SetDriveCalibration(bad)),
+        Err(CommandError::InvalidCalibration(_))
+    ));
+    assert_eq!(r.status().drive_calibration, cal);
 }
