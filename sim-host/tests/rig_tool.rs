@@ -632,3 +632,63 @@ fn the_replay_plan_refuses_exactly_beyond_the_drives_force_and_the_stroke() {
     // A table rate that does not divide the control rate.
     assert!(plan(&long(10), 3000, 10_000, m_m, g, peak).is_err());
 }
+
+/// `rig calibrate-drive` sends the codes and saves them; `--drive-calibration FILE` sends the
+/// saved codes with any later command (the status shows them); bad codes or a bad file are
+/// refused with exit 2, naming what and where.
+#[test]
+fn the_drive_calibration_is_sent_saved_and_sent_again_from_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("drive.toml");
+    let calibrate = |zero: &str, extra: &[&str]| {
+        let mut args = vec![
+            "rig",
+            "calibrate-drive",
+            "--link",
+            "sil",
+            "--zero-code",
+            zero,
+            "--codes-per-newton",
+            "6.5",
+        ];
+        args.extend_from_slice(extra);
+        sandjumper(&args)
+    };
+    let o = calibrate("2100", &["--save", s(&file)]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("0 N -> code 2100"));
+    let o = sandjumper(&[
+        "rig",
+        "status",
+        "--link",
+        "sil",
+        "--drive-calibration",
+        s(&file),
+        "--json",
+    ]);
+    ok(&o);
+    let status: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(status["status"]["drive_calibration"]["zero_code"], 2100);
+    assert_eq!(status["status"]["reset_cause"], "PowerOn");
+    let o = calibrate("3000", &[]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--zero-code"), "{}", stderr(&o));
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "zero_code = 2100\ngain = 6.5\n").unwrap();
+    let o = sandjumper(&[
+        "rig",
+        "status",
+        "--link",
+        "sil",
+        "--drive-calibration",
+        s(&bad),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains(s(&bad)) && stderr(&o).contains("gain"),
+        "{}",
+        stderr(&o)
+    );
+    let o = sandjumper(&["rig", "acknowledge-reset", "--link", "sil"]);
+    ok(&o);
+}

@@ -11,8 +11,13 @@
 //!   checksum, run it, record the new log; refused before anything moves when it would leave
 //!   the stroke, exceed the drive's force or not fit the firmware's buffer.
 //!
+//! - `calibrate-drive`: send (and save) the DAC codes of the drive's force command measured at
+//!   bring-up; `--drive-calibration FILE` sends saved codes at the start of any command.
+//! - `acknowledge-reset`: allow `Arm` again after a reset other than power-on.
+//!
 //! All programs run through [`session::run_program`], the one code path for the three links.
 
+pub mod calibrate;
 pub mod flash;
 pub mod intrude;
 pub mod intrusion_fixture;
@@ -59,6 +64,11 @@ pub enum RigCommand {
     /// Upload an acquisition log's (edited) motor trajectory, verify it, run it and record the
     /// new log.
     Replay(replay::ReplayArgs),
+    /// Send the DAC codes of the drive's force command measured at bring-up (drive off), and
+    /// save them for --drive-calibration.
+    CalibrateDrive(calibrate::CalibrateDriveArgs),
+    /// Allow Arm again after a reset other than power-on (the carriage's position checked).
+    AcknowledgeReset(calibrate::AcknowledgeResetArgs),
 }
 
 /// A simulated controller.
@@ -92,6 +102,9 @@ pub struct TargetArgs {
     /// F407 build.
     #[arg(long, value_name = "ELF")]
     pub firmware: Option<PathBuf>,
+    /// Drive calibration saved by `rig calibrate-drive --save`: sent when the session opens.
+    #[arg(long, value_name = "FILE.toml")]
+    pub drive_calibration: Option<PathBuf>,
 }
 
 /// The ELF QEMU runs for `--link pil` unless `--firmware` says otherwise.
@@ -112,8 +125,22 @@ impl TargetArgs {
         self.controller.port.is_none()
     }
 
-    /// Open the link (as `sandjumper hil` does).
+    /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
+    /// `--drive-calibration` names one.
     pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
+        let calibration = self
+            .drive_calibration
+            .as_deref()
+            .map(calibrate::read_calibration)
+            .transpose()?;
+        let mut link = self.open_link(model)?;
+        if let Some(cal) = calibration {
+            calibrate::send_calibration(link.as_mut(), cal)?;
+        }
+        Ok(link)
+    }
+
+    fn open_link(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
         let elf = self
             .firmware
             .clone()
@@ -172,5 +199,7 @@ pub fn run(a: &RigArgs) -> Result<(), CliError> {
         RigCommand::Jump(j) => jump::run(j),
         RigCommand::Intrude(i) => intrude::run(i),
         RigCommand::Replay(r) => replay::run(r),
+        RigCommand::CalibrateDrive(c) => calibrate::run(c),
+        RigCommand::AcknowledgeReset(a) => calibrate::acknowledge_reset(a),
     }
 }

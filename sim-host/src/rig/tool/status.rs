@@ -55,7 +55,10 @@ pub fn describe(s: &Status) -> String {
          replay table       {replay}\n  camera frames      {}\n  \
          samples            {} produced, {} dropped\n  \
          frames             {} ok, {} rejected, {} lockstep lost\n  \
-         commands rejected  {}\n  faults after latch {}\n  max tick           {} cycles\n",
+         commands rejected  {}\n  faults after latch {}\n  max tick           {} cycles\n  \
+         ticks missed       {}\n  frames dropped     {}\n  \
+         last reset         {:?}{}\n  \
+         drive calibration  zero code {}, {} codes/N\n",
         s.state,
         s.phase,
         s.tick,
@@ -70,6 +73,16 @@ pub fn describe(s: &Status) -> String {
         c.commands_rejected,
         c.faults_after_latch,
         c.max_tick_cycles,
+        c.ticks_missed,
+        c.frames_dropped,
+        s.reset_cause,
+        if s.reset_acknowledged {
+            ""
+        } else {
+            " (Arm refused until `rig acknowledge-reset`)"
+        },
+        s.drive_calibration.zero_code,
+        s.drive_calibration.codes_per_newton,
     )
 }
 
