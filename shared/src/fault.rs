@@ -6,10 +6,10 @@
 //! | 2 | `TrackingError` | `\|p_cmd - p\|` beyond the configured bound while the drive is enabled | `ClearFault` |
 //! | 3 | `EncoderFault` | encoder count moved more in one tick than physically possible | `ClearFault` |
 //! | 4 | `CommandWatchdog` | host link silent longer than the watchdog while the drive is enabled | `ClearFault` |
-//! | 5 | `DeadlineOverrun` | a control tick took longer than its budget (or the glue flagged an overrun) | `ClearFault` |
+//! | 5 | `DeadlineOverrun` | a control tick took longer than its budget, the glue flagged an overrun, or a tick was missed (`Rig::note_tick_start`) | `ClearFault` |
 //! | 6 | `InvalidConfiguration` | a jump configuration failed validation, or a replay jump is armed after its table was re-uploaded | `ClearFault` |
 //! | 7 | `LinkCorrupted` | too many consecutive corrupted frames on the host link | `ClearFault` |
-//! | 8 | `LinkLost` | lockstep sensor frames stopped (reported by the glue's link timeout) | `ClearFault` |
+//! | 8 | `LinkLost` | lockstep sensor frames stopped (`Rig::lockstep_silent_period`), or the link closed mid-run | `ClearFault` |
 //!
 //! Any fault: force command exactly zero from the faulting tick on, drive disabled, state
 //! `Faulted`; only the first fault is latched (later ones are counted, not reported over it).
