@@ -1,8 +1,11 @@
-//! The STM32F407 image's fault paths, read from its disassembly (the board itself is not
-//! here): the HardFault entry drops the drive using registers only before it touches the stack
-//! (a stack overflow leaves the stack pointer below RAM, and a push there locks the core up
-//! with the enable line high), and the panic handler masks interrupts before anything else
-//! (the control tick must not preempt it and re-enable the drive).
+//! The STM32F407 image, read from its disassembly (the board itself is not here):
+//! - the HardFault entry drops the drive using registers only before it touches the stack (a
+//!   stack overflow leaves the stack pointer below RAM, and a push there locks the core up
+//!   with the enable line high);
+//! - the panic handler masks interrupts before anything else (the control tick must not
+//!   preempt it and re-enable the drive);
+//! - nothing the control tick calls logs (defmt over RTT in blocking mode would stall the tick
+//!   with the drive on when the buffer is full or the probe has gone).
 //!
 //! Needs the F407 release build and `llvm-objdump` (rustup's llvm-tools); skipped with a
 //! message without them, except under CI (`.ci/run` builds and installs both first).
@@ -114,5 +117,85 @@ fn the_panic_handler_masks_interrupts_before_it_writes_a_register() {
     assert!(
         matches!((mask, first_write), (Some(m), Some(w)) if m < w),
         "{code:#?}"
+    );
+}
+
+/// Every function the code starting at `root` can call, by name (demangled), from the whole
+/// image's disassembly: direct calls and branches to other functions, not descending into
+/// the panic path (`stop` names it; a panic makes the drive safe before it logs).
+fn reachable(tool: &Path, elf: &Path, root: &str, stop: &[&str]) -> Vec<String> {
+    let out = Command::new(tool)
+        .args(["-d", "--no-show-raw-insn", "-C"])
+        .arg(elf)
+        .output()
+        .expect("llvm-objdump runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut calls: std::collections::HashMap<String, Vec<String>> = Default::default();
+    let mut current = String::new();
+    for line in text.lines() {
+        // `0800040c <name>:` starts a function.
+        if let Some(rest) = line.strip_suffix(">:")
+            && let Some((_, name)) = rest.split_once(" <")
+        {
+            current = name.to_string();
+            continue;
+        }
+        let Some((_, insn)) = line.split_once(':') else {
+            continue;
+        };
+        let insn = insn.trim();
+        let mnemonic = insn.split_whitespace().next().unwrap_or("");
+        if !(mnemonic.starts_with("bl") || mnemonic.starts_with("b.") || mnemonic == "b") {
+            continue;
+        }
+        if let Some((_, target)) = insn.split_once(" <")
+            && let Some(target) = target.split('>').next()
+            && !target.contains('+')
+        {
+            calls
+                .entry(current.clone())
+                .or_default()
+                .push(target.to_string());
+        }
+    }
+    let mut seen = vec![root.to_string()];
+    let mut todo = vec![root.to_string()];
+    while let Some(f) = todo.pop() {
+        for g in calls.get(&f).into_iter().flatten() {
+            if !seen.contains(g) && !stop.iter().any(|s| g.contains(s)) {
+                seen.push(g.clone());
+                todo.push(g.clone());
+            }
+        }
+    }
+    seen
+}
+
+#[test]
+fn the_control_tick_never_logs() {
+    let Some((tool, elf)) = setup() else { return };
+    let stop = [
+        "panic",
+        "rust_begin_unwind",
+        "unwrap_failed",
+        "expect_failed",
+    ];
+    let from_tick = reachable(&tool, &elf, "TIM7", &stop);
+    assert!(
+        from_tick
+            .iter()
+            .any(|f| f.contains("Rig") && f.contains("tick")),
+        "the call graph misses the core's tick: {from_tick:#?}"
+    );
+    let logging: Vec<&String> = from_tick.iter().filter(|f| f.contains("defmt")).collect();
+    assert!(
+        logging.is_empty(),
+        "the control tick reaches defmt (a blocking RTT buffer would stall it): {logging:#?}"
+    );
+    // The checker sees logging where there is some: the USB task logs (rate-limited).
+    let from_link = reachable(&tool, &elf, "OTG_FS", &stop);
+    assert!(
+        from_link.iter().any(|f| f.contains("defmt")),
+        "{from_link:#?}"
     );
 }
