@@ -7,7 +7,7 @@ use core::fmt;
 use crate::config::{ConfigError, JumpConfig};
 use crate::controller::Gains;
 use crate::replay::ReplayError;
-use crate::rig::{RigState, Status};
+use crate::status::{RigState, Status};
 
 /// Samples per `ReplayChunk` command (fits a frame with room to spare).
 pub const REPLAY_CHUNK: usize = 64;

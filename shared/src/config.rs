@@ -1,68 +1,14 @@
 //! Configuration: the rig's fixed hardware facts ([`RigConfig`], given once at start-up) and
 //! one jump's configuration ([`JumpConfig`], sent by the host with `Configure`).
 
-use core::fmt;
-
 use crate::controller::{GainLowering, Gains};
 use crate::encoder::CounterWidth;
 use crate::intrusion::SlowIntrusion;
 use crate::profile::{MAX_TICK_HZ, MIN_TICK_HZ};
 use crate::trajectory::{JumpKind, SineJump, TrajectoryError};
 
-/// A configuration value out of range.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ConfigError {
-    /// `what` = `value` is not allowed; `allowed` says what is.
-    Field {
-        what: &'static str,
-        value: f32,
-        allowed: &'static str,
-    },
-    /// The trajectory's parameters.
-    Trajectory(TrajectoryError),
-}
-
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Field {
-                what,
-                value,
-                allowed,
-            } => {
-                write!(f, "{what} = {value} not allowed: {allowed}")
-            }
-            Self::Trajectory(e) => write!(f, "trajectory: {e}"),
-        }
-    }
-}
-
-impl core::error::Error for ConfigError {}
-
-impl From<TrajectoryError> for ConfigError {
-    fn from(e: TrajectoryError) -> Self {
-        Self::Trajectory(e)
-    }
-}
-
-/// `Ok` if `ok`, else a [`ConfigError::Field`] naming the value and what is allowed.
-pub(crate) fn field(
-    what: &'static str,
-    value: f32,
-    ok: bool,
-    allowed: &'static str,
-) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError::Field {
-            what,
-            value,
-            allowed,
-        })
-    }
-}
+pub use crate::config_error::ConfigError;
+pub(crate) use crate::config_error::field;
 
 /// Facts about the rig, fixed at start-up (the firmware's board module or the simulator).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -21,7 +21,7 @@
 //! `v += alpha (v_raw - v)`, `alpha = 1 - exp(-2 pi f_c / tick_hz)` (default `f_c` 2 kHz, see
 //! [`RigConfig::velocity_cutoff_hz`](crate::RigConfig::velocity_cutoff_hz)).
 
-use crate::config::{ConfigError, field as check};
+use crate::config_error::{ConfigError, field as check};
 
 /// Controller gains (part of a jump's configuration).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

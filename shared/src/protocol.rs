@@ -17,8 +17,8 @@ use serde::{Serialize, de::DeserializeOwned};
 use crate::command::{Command, Rejection, Reply};
 use crate::fault::FaultCode;
 use crate::replay::CRC32;
-use crate::rig::{RigState, Status};
 use crate::sample::SampleRecord;
+use crate::status::{RigState, Status};
 
 /// Protocol version carried in every frame; bump on any change to the message set.
 pub const PROTOCOL_VERSION: u8 = 2;

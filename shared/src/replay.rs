@@ -194,7 +194,7 @@ impl ReplayTable {
         if end > self.len {
             return Err(ReplayError::PastEnd { end, len: self.len });
         }
-        let stroke = crate::trajectory::STROKE_M as f32;
+        let stroke = crate::stroke::STROKE_M as f32;
         for (i, &v) in chunk.iter().enumerate() {
             if !(v.is_finite() && v.abs() <= stroke) {
                 return Err(ReplayError::BadSample {

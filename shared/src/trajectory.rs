@@ -7,8 +7,7 @@
 use core::f64::consts::PI;
 use core::fmt;
 
-/// Motor stroke limit: `|p| <= STROKE_M` (MODEL.md section 1), metres.
-pub const STROKE_M: f64 = 0.025;
+pub use crate::stroke::STROKE_M;
 /// Lowest forcing frequency accepted, Hz.
 pub const MIN_FREQ_HZ: f64 = 0.5;
 /// Highest forcing frequency accepted, Hz.
