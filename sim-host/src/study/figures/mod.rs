@@ -9,6 +9,7 @@
 //! | `penetration_force` | quasi-static `F_p(z)`, two-resistance and cone laws, and a slow re-intrusion |
 //! | `added_mass_stutter` | added mass vs depth during a stutter jump at phi = 0.57, in foot masses |
 //! | `mechanism` | one stutter jump, eq1 vs eq4: positions, spring force, ground force, added mass |
+//! | `eq1_fitted` | the paper's procedure: eq1's alpha fitted to eq4's single jumps per phi (`eq1_alpha_fit.csv`, eq1 and eq1-linear), then eq1 vs eq4 on single, stutter (push-off) and delayed-stutter jumps at phi 0.57 and 0.62 |
 //!
 //! Beside them: the full sweeps (`*_sweep.csv`, the columns of `sweep.csv`), `failures.csv`
 //! (jumps that could not be simulated, never dropped silently), `params.toml` (the phi = 0.57
@@ -16,6 +17,7 @@
 //! quotes. The directory appears complete or not at all ([`StagedDir`]).
 
 pub mod command;
+pub mod eq1_fit;
 pub mod grid;
 pub mod heights;
 pub mod laws;
@@ -194,6 +196,26 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
     w.csv("mechanism.csv", &both, &series::HEADER)?;
     w.figure("mechanism", &series::mechanism_figure(&rows1, &rows4, freq))?;
 
+    // 7: the paper's fitting procedure: eq1's alpha fitted to (eq4's) single jumps, then eq1
+    // and eq4 compared on the other jumps.
+    let fit_freqs: Vec<f64> = grids
+        .freqs_hz
+        .iter()
+        .copied()
+        .filter(|&f| f >= eq1_fit::FIT_MIN_FREQ_HZ)
+        .collect();
+    let mut alphas = eq1_fit::fit_alphas(ModelName::Eq1, &fit_freqs, opts.rtol)
+        .map_err(FiguresError::Internal)?;
+    alphas.extend(
+        eq1_fit::fit_alphas(ModelName::Eq1Linear, &fit_freqs, opts.rtol)
+            .map_err(FiguresError::Internal)?,
+    );
+    w.csv("eq1_alpha_fit.csv", &alphas, &eq1_fit::ALPHA_HEADER)?;
+    let compared =
+        eq1_fit::compare(&alphas, &fit_freqs, opts.rtol).map_err(FiguresError::Internal)?;
+    w.csv("eq1_fitted.csv", &compared, &eq1_fit::COMPARE_HEADER)?;
+    w.figure("eq1_fitted", &eq1_fit::figure(&compared))?;
+
     // Records: failures, parameters, the numbers.
     w.csv("failures.csv", &failures, &FAILURE_HEADER)?;
     let params = Params::preset(LOW_PHI).map_err(|e| FiguresError::Internal(e.to_string()))?;
@@ -207,14 +229,29 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
             params.to_toml()
         ),
     )?;
-    let findings = findings(&params, &best, &tau_best, &phi_sweep.rows, &run1, &run4);
+    let mut findings = findings(&params, &best, &tau_best, &phi_sweep.rows, &run1, &run4);
+    for a in &alphas {
+        findings.push((
+            format!("{}.fitted_alpha.phi{}", a.model, a.phi),
+            format!(
+                "{:.1} kg/m (start {} kg/m; single-jump residual RMS {:.2} mm over {} jumps)",
+                a.alpha_fitted_kg_m, a.alpha_start_kg_m, a.residual_rms_mm, a.jumps
+            ),
+        ));
+    }
+    for (kind, phi, ratio) in eq1_fit::gaps(&compared) {
+        findings.push((
+            format!("eq1_fitted_over_eq4.{kind}.phi{phi}"),
+            format!("{ratio:.3}"),
+        ));
+    }
     let summary: String = findings
         .iter()
         .map(|(k, v)| format!("{k} = {v}\n"))
         .collect();
     w.text("summary.txt", &summary)?;
 
-    let jumps = phi_sweep.rows.len() + tau_sweep.rows.len() + failures.len() + 2;
+    let jumps = phi_sweep.rows.len() + tau_sweep.rows.len() + failures.len() + 2 + compared.len();
     let Writer { dir, files } = w;
     let dir = dir.commit()?;
     Ok(FiguresReport {

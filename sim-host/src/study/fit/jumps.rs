@@ -156,13 +156,26 @@ fn simulated_height(
 pub fn fit_jumps_file(path: &Path, setup: &JumpFitSetup) -> Result<FitReport, FitError> {
     setup.param.check_model(setup.model)?;
     let all = read_jumps(path, setup.height)?;
+    fit_jumps(&all, path, setup)
+}
+
+/// Fit the parameter of `setup` per packing fraction to `all` (measured, or simulated with
+/// another model standing in for the experiment); `source` names where they came from in
+/// error messages.
+pub fn fit_jumps(
+    all: &[JumpMeasurement],
+    source: &Path,
+    setup: &JumpFitSetup,
+) -> Result<FitReport, FitError> {
+    setup.param.check_model(setup.model)?;
+    let path = source;
     let used: Vec<JumpMeasurement> = match setup.param {
         DragParam::Alpha => all
             .iter()
             .filter(|j| j.kind == JumpKind::Single)
             .copied()
             .collect(),
-        DragParam::B => all.clone(),
+        DragParam::B => all.to_vec(),
     };
     let excluded = all.len() - used.len();
     if used.is_empty() {

@@ -1,0 +1,328 @@
+//! The paper's fitting procedure, with eq4 standing in for the experiment (MODEL.md section
+//! 3, "alpha for eq1"): eq1's constant `alpha` is fitted per packing fraction to single-jump
+//! heights over forcing frequency (the existing `fit drag` code, [`fit_jumps`]), and only then
+//! are eq1 and eq4 compared on the other jumps. The paper's finding: fitted to single jumps,
+//! eq1 agrees with eq4 on single and delayed-stutter jumps but over-predicts the stutter's
+//! push-off at low packing fraction, where the added mass matters; the gap shrinks at high
+//! packing fraction.
+//!
+//! Heights compared: the single and delayed stutter by their jump height, the stutter by its
+//! final (push-off) height (its jump height is the preliminary hop's, set by the pull-up half
+//! before the laws differ much).
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use sandjumper_core::trajectory::JumpKind;
+use serde::Serialize;
+
+use super::grid::GridFigure;
+use crate::model::jump::{JumpSpec, simulate_jump};
+use crate::model::options::SimOptions;
+use crate::model::params::{ModelName, Params};
+use crate::model::trajectory::kind_name;
+use crate::plot::lines::{Line, LinePanel};
+use crate::plot::palette;
+use crate::study::fit::data::{HeightColumn, JumpMeasurement};
+use crate::study::fit::jumps::{DragParam, JumpFitSetup, fit_jumps};
+
+/// The preset rows alpha is fitted at.
+pub const FIT_PHIS: [f64; 6] = [0.57, 0.58, 0.59, 0.60, 0.61, 0.62];
+/// The packing fractions eq1 and eq4 are compared at (the paper's two ends).
+pub const COMPARE_PHIS: [f64; 2] = [0.57, 0.62];
+/// Delay of the compared delayed stutter, s (as in the other figures).
+pub const DELAY_S: f64 = 0.75;
+/// Lowest forcing frequency fitted and compared, Hz (MODEL.md section 4 speaks of 4-20 Hz;
+/// below, the slow strokes barely lift the robot and carry no information on drag).
+pub const FIT_MIN_FREQ_HZ: f64 = 4.0;
+
+/// One fitted alpha.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AlphaRow {
+    /// The law whose constant alpha was fitted (`eq1` or `eq1-linear`).
+    pub model: &'static str,
+    /// Packing fraction.
+    pub phi: f64,
+    /// The preset (MODEL.md table) alpha the fit started from, kg/m.
+    pub alpha_start_kg_m: f64,
+    /// Fitted alpha, kg/m.
+    pub alpha_fitted_kg_m: f64,
+    /// Its standard error, kg/m.
+    pub alpha_stderr_kg_m: f64,
+    /// RMS of fitted single-jump heights minus eq4's, mm.
+    pub residual_rms_mm: f64,
+    /// Single jumps fitted.
+    pub jumps: usize,
+}
+
+/// Header of `eq1_alpha_fit.csv`.
+pub const ALPHA_HEADER: [&str; 7] = [
+    "model",
+    "phi",
+    "alpha_start_kg_m",
+    "alpha_fitted_kg_m",
+    "alpha_stderr_kg_m",
+    "residual_rms_mm",
+    "jumps",
+];
+
+/// One jump of the comparison.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CompareRow {
+    /// `single`, `stutter` or `delayed`.
+    pub kind: &'static str,
+    /// Packing fraction.
+    pub phi: f64,
+    /// Forcing frequency, Hz.
+    pub freq_hz: f64,
+    /// `eq4` or `eq1-fitted`.
+    pub model: &'static str,
+    /// Jump height, m.
+    pub jump_height_m: f64,
+    /// Final (push-off) height, m.
+    pub final_jump_height_m: f64,
+}
+
+/// Header of `eq1_fitted.csv`.
+pub const COMPARE_HEADER: [&str; 6] = [
+    "kind",
+    "phi",
+    "freq_hz",
+    "model",
+    "jump_height_m",
+    "final_jump_height_m",
+];
+
+/// The compared height of a row: the stutter's push-off, the others' jump height.
+pub fn compared_height(row: &CompareRow) -> f64 {
+    if row.kind == "stutter" {
+        row.final_jump_height_m
+    } else {
+        row.jump_height_m
+    }
+}
+
+fn simulate(
+    params: &Params,
+    kind: JumpKind,
+    freq_hz: f64,
+    model: ModelName,
+    rtol: f64,
+) -> Result<(f64, f64), String> {
+    let spec = JumpSpec {
+        kind,
+        freq_hz,
+        tau_s: if kind == JumpKind::DelayedStutter {
+            DELAY_S
+        } else {
+            0.0
+        },
+        model,
+    };
+    let opts = SimOptions {
+        rtol,
+        ..SimOptions::default()
+    };
+    let s = simulate_jump(params, &spec, &opts)
+        .map_err(|e| format!("{kind:?} at {freq_hz} Hz, {model}: {e}"))?
+        .summary;
+    Ok((s.jump_height_m, s.final_jump_height_m))
+}
+
+fn preset(phi: f64) -> Result<Params, String> {
+    Params::preset(phi).map_err(|e| e.to_string())
+}
+
+/// Fit `model`'s constant alpha (eq1 or eq1-linear) at every [`FIT_PHIS`] row to eq4's
+/// single-jump heights at `freqs_hz`.
+pub fn fit_alphas(model: ModelName, freqs_hz: &[f64], rtol: f64) -> Result<Vec<AlphaRow>, String> {
+    let jobs: Vec<(f64, f64)> = FIT_PHIS
+        .iter()
+        .flat_map(|&phi| freqs_hz.iter().map(move |&f| (phi, f)))
+        .collect();
+    let measured: Vec<JumpMeasurement> = jobs
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(phi, f))| {
+            let (h, _) = simulate(&preset(phi)?, JumpKind::Single, f, ModelName::Eq4, rtol)?;
+            Ok(JumpMeasurement {
+                kind: JumpKind::Single,
+                phi,
+                freq_hz: f,
+                tau_s: 0.0,
+                height_m: h,
+                line: k as u64 + 1,
+            })
+        })
+        .collect::<Result<_, String>>()?;
+    let base = |phi: f64| preset(phi);
+    let setup = JumpFitSetup {
+        param: DragParam::Alpha,
+        model,
+        height: HeightColumn::Jump,
+        sim: SimOptions {
+            rtol,
+            ..SimOptions::default()
+        },
+        base: &base,
+    };
+    let report = fit_jumps(
+        &measured,
+        Path::new("eq4 single jumps (standing in for the experiment)"),
+        &setup,
+    )
+    .map_err(|e| format!("fitting {model}'s alpha: {e}"))?;
+    report
+        .fits
+        .iter()
+        .map(|fit| {
+            let phi = fit
+                .phi
+                .ok_or("a fitted alpha without its packing fraction")?;
+            let jumps: Vec<&JumpMeasurement> = measured
+                .iter()
+                .filter(|m| (m.phi - phi).abs() < 1e-9)
+                .collect();
+            let mut fitted = preset(phi)?;
+            fitted.sand.alpha_kg_m = fit.value;
+            let residuals: Vec<f64> = jumps
+                .par_iter()
+                .map(|m| {
+                    simulate(&fitted, JumpKind::Single, m.freq_hz, model, rtol)
+                        .map(|(h, _)| h - m.height_m)
+                })
+                .collect::<Result<_, String>>()?;
+            let rms =
+                (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
+            Ok(AlphaRow {
+                model: model.as_str(),
+                phi,
+                alpha_start_kg_m: preset(phi)?.sand.alpha_kg_m,
+                alpha_fitted_kg_m: fit.value,
+                alpha_stderr_kg_m: fit.stderr,
+                residual_rms_mm: 1e3 * rms,
+                jumps: jumps.len(),
+            })
+        })
+        .collect()
+}
+
+/// eq4 and eq1 with its fitted alpha on single, stutter and delayed-stutter jumps at
+/// [`COMPARE_PHIS`] over `freqs_hz`.
+pub fn compare(
+    alphas: &[AlphaRow],
+    freqs_hz: &[f64],
+    rtol: f64,
+) -> Result<Vec<CompareRow>, String> {
+    let kinds = [
+        JumpKind::Single,
+        JumpKind::Stutter,
+        JumpKind::DelayedStutter,
+    ];
+    let mut jobs = Vec::new();
+    for &phi in &COMPARE_PHIS {
+        let alpha = alphas
+            .iter()
+            .find(|a| a.model == "eq1" && (a.phi - phi).abs() < 1e-9)
+            .ok_or_else(|| format!("no fitted eq1 alpha at phi = {phi}"))?
+            .alpha_fitted_kg_m;
+        for kind in kinds {
+            for &f in freqs_hz {
+                jobs.push((phi, alpha, kind, f, ModelName::Eq4));
+                jobs.push((phi, alpha, kind, f, ModelName::Eq1));
+            }
+        }
+    }
+    jobs.par_iter()
+        .map(|&(phi, alpha, kind, f, model)| {
+            let mut params = preset(phi)?;
+            if model == ModelName::Eq1 {
+                params.sand.alpha_kg_m = alpha;
+            }
+            let (h, fin) = simulate(&params, kind, f, model, rtol)?;
+            Ok(CompareRow {
+                kind: kind_name(kind),
+                phi,
+                freq_hz: f,
+                model: if model == ModelName::Eq4 {
+                    "eq4"
+                } else {
+                    "eq1-fitted"
+                },
+                jump_height_m: h,
+                final_jump_height_m: fin,
+            })
+        })
+        .collect()
+}
+
+/// The best compared height of `kind` at `phi` for `model` over frequency, m.
+pub fn best_height(rows: &[CompareRow], kind: &str, phi: f64, model: &str) -> Option<f64> {
+    rows.iter()
+        .filter(|r| r.kind == kind && r.model == model && (r.phi - phi).abs() < 1e-9)
+        .map(compared_height)
+        .fold(None, |best, h| Some(best.map_or(h, |b: f64| b.max(h))))
+}
+
+/// eq1-fitted over eq4, best compared height over frequency, for each kind and phi: the
+/// paper's gap (`kind`, `phi`, ratio).
+pub fn gaps(rows: &[CompareRow]) -> Vec<(&'static str, f64, f64)> {
+    let mut out = Vec::new();
+    for kind in ["single", "stutter", "delayed"] {
+        for &phi in &COMPARE_PHIS {
+            if let (Some(e1), Some(e4)) = (
+                best_height(rows, kind, phi, "eq1-fitted"),
+                best_height(rows, kind, phi, "eq4"),
+            ) && e4 > 0.0
+            {
+                out.push((kind, phi, e1 / e4));
+            }
+        }
+    }
+    out
+}
+
+/// The figure: one panel per kind, eq4 solid and eq1 (fitted) dashed, one colour per phi.
+pub fn figure(rows: &[CompareRow]) -> GridFigure {
+    let captions = [
+        ("single", "single jump"),
+        ("stutter", "stutter: push-off (final) height"),
+        ("delayed", "delayed stutter, tau = 0.75 s"),
+    ];
+    let mut panels = Vec::new();
+    for (kind, caption) in captions {
+        let mut lines = Vec::new();
+        for (i, &phi) in COMPARE_PHIS.iter().enumerate() {
+            for (model, dashed) in [("eq4", false), ("eq1-fitted", true)] {
+                lines.push(Line {
+                    label: format!("φ = {phi}, {model}"),
+                    points: rows
+                        .iter()
+                        .filter(|r| r.kind == kind && r.model == model)
+                        .filter(|r| (r.phi - phi).abs() < 1e-9)
+                        .map(|r| (r.freq_hz, 1e3 * compared_height(r)))
+                        .collect(),
+                    color: palette(i),
+                    dashed,
+                    markers: false,
+                });
+            }
+        }
+        panels.push(LinePanel {
+            caption: caption.into(),
+            x_desc: "forcing frequency f (Hz)".into(),
+            y_desc: "height (mm)".into(),
+            lines,
+            y_from_zero: false,
+        });
+    }
+    let mut fig = GridFigure::square(
+        "eq1 with alpha fitted to eq4's single jumps (dashed) vs eq4 (solid)",
+        panels,
+    );
+    // Three panels side by side.
+    let (w, h) = crate::plot::lines::grid_size(3);
+    fig.shape = (1, 3);
+    fig.size = (w, h + 30);
+    fig
+}
