@@ -134,9 +134,25 @@ fn preset(phi: f64) -> Result<Params, String> {
 }
 
 /// Fit `model`'s constant alpha (eq1 or eq1-linear) at every [`FIT_PHIS`] row to eq4's
-/// single-jump heights at `freqs_hz`.
+/// single-jump heights at `freqs_hz`, on the presets.
 pub fn fit_alphas(model: ModelName, freqs_hz: &[f64], rtol: f64) -> Result<Vec<AlphaRow>, String> {
-    let jobs: Vec<(f64, f64)> = FIT_PHIS
+    fit_alphas_on(model, &FIT_PHIS, freqs_hz, rtol, &preset)
+}
+
+/// Base parameters of both models at a packing fraction.
+type ParamsAt<'a> = &'a (dyn Fn(f64) -> Result<Params, String> + Sync);
+
+/// [`fit_alphas`] at `phis` on the parameters `params_at` gives (eq4 with them stands in for
+/// the experiment; eq1 is fitted on them, its alpha replaced).
+fn fit_alphas_on(
+    model: ModelName,
+    phis: &[f64],
+    freqs_hz: &[f64],
+    rtol: f64,
+    params_at: ParamsAt,
+) -> Result<Vec<AlphaRow>, String> {
+    let preset = params_at;
+    let jobs: Vec<(f64, f64)> = phis
         .iter()
         .flat_map(|&phi| freqs_hz.iter().map(move |&f| (phi, f)))
         .collect();
@@ -325,4 +341,125 @@ pub fn figure(rows: &[CompareRow]) -> GridFigure {
     fig.shape = (1, 3);
     fig.size = (w, h + 30);
     fig
+}
+
+/// The eq4 parameters whose effect on the gap is asked next (MODEL.md section 3): the
+/// added-mass drag factor b, the jamming-front rate mu, the added-mass constant C, the
+/// re-intrusion stiffness kappa and length l_re (the last two are shared with eq1: they come
+/// from quasi-static intrusion tests in the paper).
+pub const SENSITIVITY_PARAMS: [(&str, &str); 5] = [
+    ("b", "sand.added_mass_drag_b"),
+    ("mu", "sand.jamming_front_rate"),
+    ("C", "sand.added_mass_c_m2"),
+    ("kappa", "sand.reintrusion_kappa_per_k1"),
+    ("l_re", "sand.reintrusion_length_m"),
+];
+/// The factors each parameter is scaled by (+-20 %).
+pub const SENSITIVITY_FACTORS: [f64; 2] = [0.8, 1.2];
+
+fn scale(p: &mut Params, name: &str, factor: f64) {
+    let s = &mut p.sand;
+    let field = match name {
+        "b" => &mut s.added_mass_drag_b,
+        "mu" => &mut s.jamming_front_rate,
+        "C" => &mut s.added_mass_c_m2,
+        "kappa" => &mut s.reintrusion_kappa_per_k1,
+        _ => &mut s.reintrusion_length_m,
+    };
+    *field *= factor;
+}
+
+/// One row of the sensitivity table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SensitivityRow {
+    /// The eq4 parameter scaled (`none` for the baseline).
+    pub param: &'static str,
+    /// Its key in a params file.
+    pub key: &'static str,
+    /// Scale factor.
+    pub factor: f64,
+    /// Packing fraction.
+    pub phi: f64,
+    /// eq1's alpha fitted to this eq4's single jumps, kg/m.
+    pub alpha_fitted_kg_m: f64,
+    /// Best stutter push-off, eq1 fitted over eq4.
+    pub stutter_gap: f64,
+    /// Change of the gap against the baseline, percentage points.
+    pub gap_change_points: f64,
+}
+
+/// Header of `eq1_gap_sensitivity.csv`.
+pub const SENSITIVITY_HEADER: [&str; 7] = [
+    "param",
+    "key",
+    "factor",
+    "phi",
+    "alpha_fitted_kg_m",
+    "stutter_gap",
+    "gap_change_points",
+];
+
+/// The stutter gap (eq1 fitted over eq4, best push-off) at `phi` on `params_at`'s parameters,
+/// with eq1's alpha fitted there first: (alpha, gap).
+fn stutter_gap(
+    phi: f64,
+    freqs_hz: &[f64],
+    rtol: f64,
+    params_at: ParamsAt,
+) -> Result<(f64, f64), String> {
+    let alpha =
+        fit_alphas_on(ModelName::Eq1, &[phi], freqs_hz, rtol, params_at)?[0].alpha_fitted_kg_m;
+    let base = params_at(phi)?;
+    let best = |model: ModelName| -> Result<f64, String> {
+        let mut p = base.clone();
+        if model == ModelName::Eq1 {
+            p.sand.alpha_kg_m = alpha;
+        }
+        let heights: Vec<f64> = freqs_hz
+            .par_iter()
+            .map(|&f| simulate(&p, JumpKind::Stutter, f, model, rtol).map(|(_, fin)| fin))
+            .collect::<Result<_, String>>()?;
+        Ok(heights.into_iter().fold(f64::NEG_INFINITY, f64::max))
+    };
+    Ok((alpha, best(ModelName::Eq1)? / best(ModelName::Eq4)?))
+}
+
+/// Which eq4 parameters move the eq1-vs-eq4 stutter gap, and by how much: each of
+/// [`SENSITIVITY_PARAMS`] scaled by each of [`SENSITIVITY_FACTORS`] at [`COMPARE_PHIS`], eq1's
+/// alpha refitted every time (the paper's procedure on a different "experiment").
+pub fn sensitivity(freqs_hz: &[f64], rtol: f64) -> Result<Vec<SensitivityRow>, String> {
+    let mut rows = Vec::new();
+    for &phi in &COMPARE_PHIS {
+        let (alpha0, gap0) = stutter_gap(phi, freqs_hz, rtol, &preset)?;
+        rows.push(SensitivityRow {
+            param: "none",
+            key: "",
+            factor: 1.0,
+            phi,
+            alpha_fitted_kg_m: alpha0,
+            stutter_gap: gap0,
+            gap_change_points: 0.0,
+        });
+        for (param, key) in SENSITIVITY_PARAMS {
+            for factor in SENSITIVITY_FACTORS {
+                let params_at = move |phi: f64| -> Result<Params, String> {
+                    let mut p = preset(phi)?;
+                    scale(&mut p, param, factor);
+                    p.validate().map_err(|e| e.to_string())?;
+                    Ok(p)
+                };
+                let (alpha, gap) = stutter_gap(phi, freqs_hz, rtol, &params_at)?;
+                rows.push(SensitivityRow {
+                    param,
+                    key,
+                    factor,
+                    phi,
+                    alpha_fitted_kg_m: alpha,
+                    stutter_gap: gap,
+                    gap_change_points: 100.0 * (gap - gap0),
+                });
+            }
+        }
+    }
+    Ok(rows)
 }

@@ -9,7 +9,7 @@
 //! | `penetration_force` | quasi-static `F_p(z)`, two-resistance and cone laws, and a slow re-intrusion |
 //! | `added_mass_stutter` | added mass vs depth during a stutter jump at phi = 0.57, in foot masses |
 //! | `mechanism` | one stutter jump, eq1 vs eq4: positions, spring force, ground force, added mass |
-//! | `eq1_fitted` | the paper's procedure: eq1's alpha fitted to eq4's single jumps per phi (`eq1_alpha_fit.csv`, eq1 and eq1-linear), then eq1 vs eq4 on single, stutter (push-off) and delayed-stutter jumps at phi 0.57 and 0.62 |
+//! | `eq1_fitted` | the paper's procedure: eq1's alpha fitted to eq4's single jumps per phi (`eq1_alpha_fit.csv`, eq1 and eq1-linear), then eq1 vs eq4 on single, stutter (push-off) and delayed-stutter jumps at phi 0.57 and 0.62; `eq1_gap_sensitivity.csv`: how b, mu, C, kappa and l_re (+-20 %) move the stutter gap |
 //!
 //! Beside them: the full sweeps (`*_sweep.csv`, the columns of `sweep.csv`), `failures.csv`
 //! (jumps that could not be simulated, never dropped silently), `params.toml` (the phi = 0.57
@@ -215,6 +215,13 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
         eq1_fit::compare(&alphas, &fit_freqs, opts.rtol).map_err(FiguresError::Internal)?;
     w.csv("eq1_fitted.csv", &compared, &eq1_fit::COMPARE_HEADER)?;
     w.figure("eq1_fitted", &eq1_fit::figure(&compared))?;
+    let sensitivity =
+        eq1_fit::sensitivity(&fit_freqs, opts.rtol).map_err(FiguresError::Internal)?;
+    w.csv(
+        "eq1_gap_sensitivity.csv",
+        &sensitivity,
+        &eq1_fit::SENSITIVITY_HEADER,
+    )?;
 
     // Records: failures, parameters, the numbers.
     w.csv("failures.csv", &failures, &FAILURE_HEADER)?;
@@ -236,6 +243,15 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
             format!(
                 "{:.1} kg/m (start {} kg/m; single-jump residual RMS {:.2} mm over {} jumps)",
                 a.alpha_fitted_kg_m, a.alpha_start_kg_m, a.residual_rms_mm, a.jumps
+            ),
+        ));
+    }
+    for r in sensitivity.iter().filter(|r| r.param != "none") {
+        findings.push((
+            format!("eq1_gap_sensitivity.{}x{}.phi{}", r.param, r.factor, r.phi),
+            format!(
+                "stutter gap {:.3} ({:+.1} points), alpha {:.1} kg/m",
+                r.stutter_gap, r.gap_change_points, r.alpha_fitted_kg_m
             ),
         ));
     }
