@@ -10,7 +10,9 @@ fn preset_rows_and_linear_interpolation() {
     assert_eq!(a.sand.k1_n_m, 1600.0);
     assert_eq!(Params::preset(0.62).unwrap().sand.k1_n_m, 10_000.0);
     assert!((mid.sand.k1_n_m - 0.5 * (a.sand.k1_n_m + b.sand.k1_n_m)).abs() < 1e-9);
-    assert!((mid.sand.alpha_kg_m - 55.0).abs() < 1e-9);
+    // eq1's alpha: the fitted table (MODEL.md section 3, "alpha for eq1"), interpolated.
+    assert!((a.sand.alpha_kg_m - 90.6).abs() < 1e-9);
+    assert!((mid.sand.alpha_kg_m - 0.5 * (90.6 + 109.4)).abs() < 1e-9);
     assert!((mid.sand.sigma_cone_n_m3 - 0.135e6).abs() < 1e-6);
     assert!((Params::preset(0.605).unwrap().sand.k1_n_m - 4600.0).abs() < 1e-9);
     for phi in [0.56, 0.63, f64::NAN] {
@@ -167,4 +169,46 @@ fn bad_jump_requests_are_errors_not_panics() {
             .to_string()
             .contains("rtol")
     );
+}
+
+/// The starting values of MODEL.md's alpha column stay reachable through the params file
+/// shipped in the repository, at every preset row and between rows; a file that sets
+/// `sand.alpha_kg_m` itself keeps it.
+#[test]
+fn the_shipped_params_file_restores_the_starting_alphas() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/params/eq1-starting-alpha.toml"
+    );
+    let text = std::fs::read_to_string(path).expect("the shipped params file");
+    for (phi, alpha) in [
+        (0.57, 50.0),
+        (0.575, 55.0),
+        (0.58, 60.0),
+        (0.59, 75.0),
+        (0.60, 90.0),
+        (0.61, 150.0),
+        (0.62, 250.0),
+    ] {
+        let p = Params::preset(phi)
+            .unwrap()
+            .with_overrides_toml(&text, path)
+            .unwrap();
+        assert!(
+            (p.sand.alpha_kg_m - alpha).abs() < 1e-9,
+            "phi {phi}: {}",
+            p.sand.alpha_kg_m
+        );
+    }
+    let explicit = format!("{text}\n[sand]\nalpha_kg_m = 42.0\n");
+    let p = Params::preset(0.57)
+        .unwrap()
+        .with_overrides_toml(&explicit, "x.toml")
+        .unwrap();
+    assert_eq!(p.sand.alpha_kg_m, 42.0);
+    let fitted = Params::preset(0.6)
+        .unwrap()
+        .with_overrides_toml("[model]\neq1_alpha = \"fitted\"\n", "y.toml")
+        .unwrap();
+    assert!((fitted.sand.alpha_kg_m - 171.7).abs() < 1e-9);
 }

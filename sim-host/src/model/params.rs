@@ -208,6 +208,22 @@ pub enum ReintrusionAnchor {
     Touchdown,
 }
 
+/// Which preset alpha eq1 and eq1-linear use (MODEL.md section 3, "alpha for eq1").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Eq1AlphaChoice {
+    /// The paper's procedure: alpha fitted per packing fraction to eq4's single-jump heights
+    /// over 4-20 Hz ([`EQ1_ALPHA_FITTED_KG_M`]; `sandjumper figures` refits it and a test
+    /// checks the table against that fit).
+    Fitted,
+    /// MODEL.md's alpha column, the fit's starting values.
+    Starting,
+}
+
+/// eq1's alpha fitted to eq4's single jumps at the preset rows 0.57..=0.62, kg/m
+/// (`sandjumper figures`, full grid: `eq1_alpha_fit.csv`).
+pub const EQ1_ALPHA_FITTED_KG_M: [f64; 6] = [90.6, 109.4, 141.5, 171.7, 281.6, 468.6];
+
 /// Overrides of the named model's ingredients (MODEL.md: "plus overrides").
 /// Ignored by the `hard` model (no sand).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -221,6 +237,10 @@ pub struct ModelOverrides {
     pub drag: DragChoice,
     /// Overshoot anchor: episode (MODEL.md, literal) | touchdown.
     pub reintrusion_anchor: ReintrusionAnchor,
+    /// The preset alpha of eq1 and eq1-linear: fitted (to eq4's single jumps, the paper's
+    /// procedure) | starting (MODEL.md's column). Setting it in a params file replaces the
+    /// preset's `sand.alpha_kg_m` unless the file sets that too.
+    pub eq1_alpha: Eq1AlphaChoice,
 }
 
 impl Default for ModelOverrides {
@@ -230,6 +250,7 @@ impl Default for ModelOverrides {
             reintrusion: ReintrusionChoice::Model,
             drag: DragChoice::Model,
             reintrusion_anchor: ReintrusionAnchor::Episode,
+            eq1_alpha: Eq1AlphaChoice::Fitted,
         }
     }
 }
@@ -293,6 +314,7 @@ struct PresetRow {
     k1_kn_m: f64,
     k2_kn_m: f64,
     delta_cm: f64,
+    /// MODEL.md's alpha column: the starting values of the fit.
     alpha_kg_m: f64,
     b: f64,
     sigma_cone_mn_m3: f64,
@@ -365,6 +387,7 @@ impl Params {
         let (a, b) = (&PRESETS[i], &PRESETS[i + 1]);
         let w = (phi - a.phi) / (b.phi - a.phi);
         let lerp = |x: f64, y: f64| x + (y - x) * w;
+        let alpha_fitted = lerp(EQ1_ALPHA_FITTED_KG_M[i], EQ1_ALPHA_FITTED_KG_M[i + 1]);
         Ok(Params {
             robot: RobotParams::MODEL,
             drive: DriveParams {
@@ -378,7 +401,7 @@ impl Params {
                 k1_n_m: 1e3 * lerp(a.k1_kn_m, b.k1_kn_m),
                 k2_n_m: 1e3 * lerp(a.k2_kn_m, b.k2_kn_m),
                 delta_m: 1e-2 * lerp(a.delta_cm, b.delta_cm),
-                alpha_kg_m: lerp(a.alpha_kg_m, b.alpha_kg_m),
+                alpha_kg_m: alpha_fitted,
                 added_mass_drag_b: lerp(a.b, b.b),
                 sigma_cone_n_m3: 1e6 * lerp(a.sigma_cone_mn_m3, b.sigma_cone_mn_m3),
                 grain_density_kg_m3: 1000.0,
@@ -391,6 +414,23 @@ impl Params {
             },
             model: ModelOverrides::default(),
         })
+    }
+
+    /// The preset alpha of eq1 at `phi` for `choice`, kg/m (interpolated like the other sand
+    /// values), or `None` outside the presets.
+    pub fn preset_eq1_alpha(phi: f64, choice: Eq1AlphaChoice) -> Option<f64> {
+        let mut p = Params::preset(phi).ok()?;
+        if choice == Eq1AlphaChoice::Starting {
+            let phi = p.sand.packing_fraction;
+            let i = PRESETS
+                .windows(2)
+                .position(|w| phi <= w[1].phi)
+                .unwrap_or(PRESETS.len() - 2);
+            let (a, b) = (&PRESETS[i], &PRESETS[i + 1]);
+            let w = (phi - a.phi) / (b.phi - a.phi);
+            p.sand.alpha_kg_m = a.alpha_kg_m + (b.alpha_kg_m - a.alpha_kg_m) * w;
+        }
+        Some(p.sand.alpha_kg_m)
     }
 
     /// Override any field from a user's TOML text (tables `[robot]`, `[drive]`, `[sand]`,
@@ -471,6 +511,29 @@ impl Params {
                 ),
             }
         })?;
+        let mut params = params;
+        // `[model] eq1_alpha` picks the preset alpha at this packing fraction, unless the file
+        // gives `sand.alpha_kg_m` itself.
+        let sets = |table: &str, key: &str| {
+            user.get(table)
+                .and_then(|t| t.as_table())
+                .is_some_and(|t| t.contains_key(key))
+        };
+        if sets("model", "eq1_alpha") && !sets("sand", "alpha_kg_m") {
+            let phi = params.sand.packing_fraction;
+            params.sand.alpha_kg_m = Params::preset_eq1_alpha(phi, params.model.eq1_alpha)
+                .ok_or_else(|| {
+                    err(
+                        Some("model.eq1_alpha".into()),
+                        key_span(&["model", "eq1_alpha"]),
+                        format!("no preset alpha at packing fraction {phi}"),
+                        format!(
+                            "phi within the presets ({PRESET_PHI_MIN}..={PRESET_PHI_MAX}), or \
+                             sand.alpha_kg_m in the same file"
+                        ),
+                    )
+                })?;
+        }
         params.validate().map_err(|mut e| {
             e.source = source.to_string();
             if let Some(key) = &e.key {

@@ -19,7 +19,7 @@ use serde::Serialize;
 use super::grid::GridFigure;
 use crate::model::jump::{JumpSpec, simulate_jump};
 use crate::model::options::SimOptions;
-use crate::model::params::{ModelName, Params};
+use crate::model::params::{Eq1AlphaChoice, ModelName, Params};
 use crate::model::trajectory::kind_name;
 use crate::plot::lines::{Line, LinePanel};
 use crate::plot::palette;
@@ -43,7 +43,7 @@ pub struct AlphaRow {
     pub model: &'static str,
     /// Packing fraction.
     pub phi: f64,
-    /// The preset (MODEL.md table) alpha the fit started from, kg/m.
+    /// MODEL.md's alpha (the table's column), where the fit started, kg/m.
     pub alpha_start_kg_m: f64,
     /// Fitted alpha, kg/m.
     pub alpha_fitted_kg_m: f64,
@@ -129,6 +129,12 @@ fn simulate(
     Ok((s.jump_height_m, s.final_jump_height_m))
 }
 
+/// MODEL.md's alpha column at `phi`, kg/m: where the fit starts.
+fn starting_alpha(phi: f64) -> Result<f64, String> {
+    Params::preset_eq1_alpha(phi, Eq1AlphaChoice::Starting)
+        .ok_or_else(|| format!("no preset alpha at phi = {phi}"))
+}
+
 fn preset(phi: f64) -> Result<Params, String> {
     Params::preset(phi).map_err(|e| e.to_string())
 }
@@ -171,7 +177,12 @@ fn fit_alphas_on(
             })
         })
         .collect::<Result<_, String>>()?;
-    let base = |phi: f64| preset(phi);
+    // The fit starts from MODEL.md's alpha column, not from the fitted presets.
+    let base = |phi: f64| -> Result<Params, String> {
+        let mut p = preset(phi)?;
+        p.sand.alpha_kg_m = starting_alpha(phi)?;
+        Ok(p)
+    };
     let setup = JumpFitSetup {
         param: DragParam::Alpha,
         model,
@@ -213,7 +224,7 @@ fn fit_alphas_on(
             Ok(AlphaRow {
                 model: model.as_str(),
                 phi,
-                alpha_start_kg_m: preset(phi)?.sand.alpha_kg_m,
+                alpha_start_kg_m: starting_alpha(phi)?,
                 alpha_fitted_kg_m: fit.value,
                 alpha_stderr_kg_m: fit.stderr,
                 residual_rms_mm: 1e3 * rms,
