@@ -340,6 +340,19 @@ const fn row(
     }
 }
 
+/// The preset rows `i` and `i + 1` around `phi` (within the presets) and the weight of row
+/// `i + 1` in the linear interpolation.
+fn preset_interval(phi: f64) -> (usize, f64) {
+    let i = PRESETS
+        .windows(2)
+        .position(|w| phi <= w[1].phi)
+        .unwrap_or(PRESETS.len() - 2);
+    (
+        i,
+        (phi - PRESETS[i].phi) / (PRESETS[i + 1].phi - PRESETS[i].phi),
+    )
+}
+
 /// MODEL.md section 3, per-packing presets.
 const PRESETS: [PresetRow; 6] = [
     row(0.57, 1.6, 1.1, 1.5, 50.0, 17.0, 0.12),
@@ -380,12 +393,8 @@ impl Params {
             });
         }
         let phi = phi.clamp(PRESET_PHI_MIN, PRESET_PHI_MAX);
-        let i = PRESETS
-            .windows(2)
-            .position(|w| phi <= w[1].phi)
-            .unwrap_or(PRESETS.len() - 2);
+        let (i, w) = preset_interval(phi);
         let (a, b) = (&PRESETS[i], &PRESETS[i + 1]);
-        let w = (phi - a.phi) / (b.phi - a.phi);
         let lerp = |x: f64, y: f64| x + (y - x) * w;
         let alpha_fitted = lerp(EQ1_ALPHA_FITTED_KG_M[i], EQ1_ALPHA_FITTED_KG_M[i + 1]);
         Ok(Params {
@@ -421,13 +430,8 @@ impl Params {
     pub fn preset_eq1_alpha(phi: f64, choice: Eq1AlphaChoice) -> Option<f64> {
         let mut p = Params::preset(phi).ok()?;
         if choice == Eq1AlphaChoice::Starting {
-            let phi = p.sand.packing_fraction;
-            let i = PRESETS
-                .windows(2)
-                .position(|w| phi <= w[1].phi)
-                .unwrap_or(PRESETS.len() - 2);
+            let (i, w) = preset_interval(p.sand.packing_fraction);
             let (a, b) = (&PRESETS[i], &PRESETS[i + 1]);
-            let w = (phi - a.phi) / (b.phi - a.phi);
             p.sand.alpha_kg_m = a.alpha_kg_m + (b.alpha_kg_m - a.alpha_kg_m) * w;
         }
         Some(p.sand.alpha_kg_m)
