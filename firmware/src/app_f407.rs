@@ -255,6 +255,7 @@ mod app {
             let _ = samples_tx.enqueue(record);
         }
         io.feed_watchdog();
+        io.toggle_heartbeat();
         if samples_tx.len() >= SAMPLE_BATCH || !outbound_tx.is_empty() {
             rtic::pend(Interrupt::OTG_FS);
         }

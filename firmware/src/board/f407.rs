@@ -7,6 +7,7 @@
 //! | encoder A / B | PA15 / PB3, TIM2 CH1 / CH2 (AF1) | 32-bit quadrature counter, x4 decoding, input filter f_CK_INT N = 8 ([`ENCODER_FILTER`]) |
 //! | force command | PA4, DAC channel 1 | 12-bit, 0..3.3 V, mid-point = zero force ([`crate::drive`]) |
 //! | drive enable | PE7, push-pull, active high | low on reset (fit a pull-down), on any fault, panic, HardFault |
+//! | tick heartbeat | PE8, push-pull | toggled by every control tick (half the tick rate): retriggers the external enable gate |
 //! | camera trigger | PE9, push-pull, active high | raised in the tick that starts a frame, for the jump configuration's `camera_pulse_ticks` (default 10 ticks = 1 ms) |
 //! | motor current sense | PA1, ADC1 channel 1 | ADC clock PCLK2/4 = 21 MHz (limit 36 MHz); sampled at the end of each tick, read by the next |
 //! | USB host link | PA11 (D-) / PA12 (D+), OTG_FS | CDC-ACM full speed |
@@ -20,7 +21,7 @@ use stm32f4xx_hal::{
         config::{AdcConfig, Clock, SampleTime, Sequence},
     },
     dac::{C1, DacExt, DacOut, DacPin},
-    gpio::{Analog, Output, PA1, PD12, PD14, PE7, PE9, PushPull},
+    gpio::{Analog, Output, PA1, PD12, PD14, PE7, PE8, PE9, PushPull},
     pac,
     prelude::*,
     qei::Qei,
@@ -126,6 +127,7 @@ pub struct RigIo {
     force_dac: C1,
     drive_enable: PE7<Output<PushPull>>,
     camera_trigger: PE9<Output<PushPull>>,
+    tick_heartbeat: PE8<Output<PushPull>>,
     current_adc: Adc<pac::ADC1>,
     _current_pin: PA1<Analog>,
     running_led: PD12<Output<PushPull>>,
@@ -160,6 +162,11 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     let mut force_dac = dp.DAC.constrain(gpioa.pa4.into_analog(), &mut rcc);
     force_dac.set_value(drive::ZERO_FORCE_CODE);
     force_dac.enable();
+    // Toggled by every control tick: a retriggerable monostable on this line gates the drive's
+    // enable, so a halted or locked-up core drops the drive within the monostable's period.
+    let tick_heartbeat = gpioe
+        .pe8
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
     let camera_trigger = gpioe
         .pe9
         .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
@@ -214,6 +221,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
             force_dac,
             drive_enable,
             camera_trigger,
+            tick_heartbeat,
             current_adc,
             _current_pin: current_pin,
             running_led: gpiod.pd12.into_push_pull_output(),
@@ -269,6 +277,13 @@ impl RigIo {
             self.drive_enable.set_low();
             self.force_dac.set_value(code);
         }
+    }
+
+    /// Toggles the tick heartbeat (PE8): a 5 kHz square wave at 10 kHz ticks while the tick
+    /// runs, for the external enable gate.
+    #[inline(always)]
+    pub fn toggle_heartbeat(&mut self) {
+        self.tick_heartbeat.toggle();
     }
 
     /// Camera trigger line level.
