@@ -242,8 +242,9 @@ fn sweep_rows_cover_every_combination_in_order() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "kind,model,phi,freq_hz,tau_s,jump_height_m,final_jump_height_m,max_depth_m,peak_added_mass_kg,peak_motor_force_n"
+        "kind,model,phi,freq_hz,tau_s,jump_height_m,final_jump_height_m,max_depth_m,peak_added_mass_kg,peak_motor_force_n,drive"
     );
+    assert!(lines.clone().all(|l| l.ends_with(",kinematic")), "{text}");
     let failures = read(&whole.join("failures.csv"));
     let failed = failures.lines().count() - 1;
     // single: 2 models x 2 phi x 3 f; delayed: 2 models x 2 phi x 2 tau x 3 f.
@@ -254,7 +255,7 @@ fn sweep_rows_cover_every_combination_in_order() {
     assert_eq!(nums, [0.57, 6.0, 0.0]);
     for line in text.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 10);
+        assert_eq!(f.len(), 11);
         let h: f64 = f[5].parse().unwrap();
         assert!(h.is_finite() && h >= 0.0, "{line}");
     }

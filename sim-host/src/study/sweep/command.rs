@@ -7,16 +7,16 @@ use std::time::Instant;
 use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
 use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::model::jump::{JumpSpec, simulate_jump};
-use crate::model::options::SimOptions;
 use crate::model::params::Params;
 use crate::output::StagedDir;
 use crate::plot::save_figure;
+use crate::study::sweep::SweepDrive;
 use crate::study::sweep::ValueRange;
+use crate::study::sweep::drive::jump_metrics;
 use crate::study::sweep::plot as sweep_plot;
 use crate::study::sweep::{
-    FAILURE_HEADER, JumpMetrics, ROW_HEADER, ShardMeta, ShardSpec, SpecMeta, SweepMeta,
-    SweepOutcome, SweepSpec, files, kind_name, run_parallel, write_csv,
+    FAILURE_HEADER, ROW_HEADER, ShardMeta, ShardSpec, SpecMeta, SweepMeta, SweepOutcome, SweepSpec,
+    files, kind_name, run_parallel, write_csv,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -52,6 +52,33 @@ pub struct SweepArgs {
     /// join the shard directories with `sandjumper merge`.
     #[arg(long, value_name = "I/N", value_parser = parse_shard)]
     pub shard: Option<ShardSpec>,
+    /// Drive each jump through the software-in-the-loop rig (the core's controller, the drive
+    /// model with its 300 N limit, the encoder) instead of imposing the stroke exactly.
+    #[arg(long, value_enum)]
+    pub link: Option<SweepLinkArg>,
+    /// With --link sil: the position gain times FACTOR during a delayed stutter's delay
+    /// (0 < FACTOR <= 1; 0.05 damps the spring's ringing ~10x), as the paper's rig did.
+    #[arg(long, value_name = "FACTOR", requires = "link", value_parser = parse_gain_factor)]
+    pub gain_lowering: Option<f64>,
+}
+
+/// The loop a sweep's jumps run through instead of the imposed stroke.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepLinkArg {
+    /// The core's controller in this process against the simulated rig.
+    Sil,
+}
+
+/// clap value parser: a gain-lowering factor, 0 < factor <= 1.
+pub fn parse_gain_factor(s: &str) -> Result<f64, String> {
+    let v = crate::command::args::parse_number(s)?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "gain-lowering factor {v} out of range (allowed: 0 < factor <= 1; e.g. 0.05)"
+        ))
+    }
 }
 
 /// Parse a range and check each of its values with `check`.
@@ -152,6 +179,12 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         freqs_hz: a.freq.values.clone(),
         taus_s: a.tau.values.clone(),
         rtol: a.source.rtol,
+        drive: match a.link {
+            None => SweepDrive::Kinematic,
+            Some(SweepLinkArg::Sil) => SweepDrive::Sil {
+                gain_lowering: a.gain_lowering,
+            },
+        },
     };
     let mut params_by_phi: HashMap<u64, Params> = HashMap::new();
     let mut params_text = String::new();
@@ -169,30 +202,14 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         .threads
         .map(|t| t as usize)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let opts = SimOptions {
-        rtol: spec.rtol,
-        ..SimOptions::default()
-    };
     let started = Instant::now();
-    let outcome = run_parallel(&combos[slice.clone()], threads, true, |c| {
-        let params = &params_by_phi[&c.phi.to_bits()];
-        let js = JumpSpec {
-            kind: c.kind,
-            freq_hz: c.freq_hz,
-            tau_s: c.tau_s,
-            model: c.model,
-        };
-        let o = simulate_jump(params, &js, &opts).map_err(|e| e.to_string())?;
-        let s = o.summary;
-        Ok(JumpMetrics {
-            jump_height_m: s.jump_height_m,
-            final_jump_height_m: s.final_jump_height_m,
-            max_depth_m: s.max_depth_m,
-            peak_added_mass_kg: s.peak_added_mass_kg,
-            peak_motor_force_n: s.peak_motor_force_n,
-        })
+    let mut outcome = run_parallel(&combos[slice.clone()], threads, true, |c| {
+        jump_metrics(spec.drive, &params_by_phi[&c.phi.to_bits()], c, spec.rtol)
     })
     .map_err(CliError::internal)?;
+    for row in &mut outcome.rows {
+        row.drive = spec.drive.name();
+    }
     let elapsed = started.elapsed();
     let meta = SweepMeta {
         format: SweepMeta::FORMAT.into(),
@@ -219,6 +236,7 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
             rtol: spec.rtol,
             params_file: file.as_ref().map(|f| f.path.display().to_string()),
             params_overrides: file.as_ref().map(|f| f.text.clone()),
+            drive: spec.drive.name(),
         },
     };
     write_sweep_files(staged.path(), &meta, &outcome)?;

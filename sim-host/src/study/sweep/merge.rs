@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crate::model::params::ModelName;
 
+use super::SweepDrive;
 use super::{
     Combination, ShardMeta, ShardSpec, SweepFailure, SweepMeta, SweepOutcome, SweepRow, SweepSpec,
     files, read_csv,
@@ -91,6 +92,8 @@ pub fn spec_of(meta: &SweepMeta) -> Result<SweepSpec, MergeError> {
         freqs_hz: meta.spec.freq_hz.clone(),
         taus_s: meta.spec.tau_s.clone(),
         rtol: meta.spec.rtol,
+        drive: SweepDrive::parse(&meta.spec.drive)
+            .ok_or_else(|| MergeError(format!("unknown drive `{}`", meta.spec.drive)))?,
     })
 }
 

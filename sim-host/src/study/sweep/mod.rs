@@ -13,6 +13,7 @@
 //!   checked and merged, and a sweep reproduced from its folder alone.
 
 pub mod command;
+pub mod drive;
 pub mod merge;
 pub mod merge_command;
 pub mod plot;
@@ -47,6 +48,57 @@ pub struct Combination {
     pub tau_s: f64,
 }
 
+/// How each jump of a sweep is driven.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SweepDrive {
+    /// The paper's method: the stroke `p(t)` imposed exactly (MODEL.md).
+    Kinematic,
+    /// Through the software-in-the-loop rig: the core's controller, the drive model with its
+    /// 300 N limit, the encoder; with the position gain lowered by `gain_lowering` during the
+    /// delay if given (`HilSpec::gain_lowering_factor`).
+    Sil {
+        /// The factor on kp (and ki) during a delayed stutter's delay.
+        gain_lowering: Option<f64>,
+    },
+}
+
+impl SweepDrive {
+    /// The drive's name in `sweep.csv` and `sweep.toml`: `kinematic`, `sil` or
+    /// `sil-gain-lowering-F`.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Kinematic => "kinematic".into(),
+            Self::Sil {
+                gain_lowering: None,
+            } => "sil".into(),
+            Self::Sil {
+                gain_lowering: Some(f),
+            } => format!("sil-gain-lowering-{f}"),
+        }
+    }
+
+    /// The drive a name of [`SweepDrive::name`] stands for.
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "kinematic" => Some(Self::Kinematic),
+            "sil" => Some(Self::Sil {
+                gain_lowering: None,
+            }),
+            _ => name
+                .strip_prefix("sil-gain-lowering-")?
+                .parse::<f64>()
+                .ok()
+                .map(|f| Self::Sil {
+                    gain_lowering: Some(f),
+                }),
+        }
+    }
+}
+
+fn kinematic() -> String {
+    SweepDrive::Kinematic.name()
+}
+
 /// What to sweep. Values are used in the order given (the CLI gives them ascending).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepSpec {
@@ -62,6 +114,8 @@ pub struct SweepSpec {
     pub taus_s: Vec<f64>,
     /// Relative tolerance of the integrator.
     pub rtol: f64,
+    /// How each jump is driven.
+    pub drive: SweepDrive,
 }
 
 impl SweepSpec {
@@ -102,6 +156,11 @@ impl SweepSpec {
             "kinds={kinds:?};models={models:?};phi={:?};freq_hz={:?};tau_s={:?};rtol={:?};params={params_text}",
             self.phis, self.freqs_hz, self.taus_s, self.rtol
         );
+        // Kinematic sweeps hash as before the drive existed.
+        let canonical = match self.drive {
+            SweepDrive::Kinematic => canonical,
+            d => format!("{canonical};drive={}", d.name()),
+        };
         format!("{:016x}", fnv1a64(canonical.as_bytes()))
     }
 }
@@ -151,6 +210,9 @@ pub struct SweepRow {
     pub peak_added_mass_kg: f64,
     /// N.
     pub peak_motor_force_n: f64,
+    /// How the jump was driven ([`SweepDrive::name`]).
+    #[serde(default = "kinematic")]
+    pub drive: String,
 }
 
 /// One row of `failures.csv`: a jump of the sweep that could not be simulated.
@@ -184,6 +246,7 @@ impl SweepRow {
             max_depth_m: m.max_depth_m,
             peak_added_mass_kg: m.peak_added_mass_kg,
             peak_motor_force_n: m.peak_motor_force_n,
+            drive: kinematic(),
         }
     }
 }
@@ -310,6 +373,9 @@ pub struct SpecMeta {
     pub params_file: Option<String>,
     /// Its text (so the folder alone reproduces the sweep).
     pub params_overrides: Option<String>,
+    /// How each jump was driven ([`SweepDrive::name`]).
+    #[serde(default = "kinematic")]
+    pub drive: String,
 }
 
 impl SweepMeta {
@@ -344,7 +410,7 @@ pub fn write_csv<T: Serialize>(path: &Path, records: &[T], header: &[&str]) -> R
 }
 
 /// Header of `sweep.csv`.
-pub const ROW_HEADER: [&str; 10] = [
+pub const ROW_HEADER: [&str; 11] = [
     "kind",
     "model",
     "phi",
@@ -355,6 +421,7 @@ pub const ROW_HEADER: [&str; 10] = [
     "max_depth_m",
     "peak_added_mass_kg",
     "peak_motor_force_n",
+    "drive",
 ];
 
 /// Header of `failures.csv`.
@@ -381,7 +448,31 @@ mod tests {
             freqs_hz: vec![5.0, 10.0, 15.0],
             taus_s: vec![0.0, 0.5],
             rtol: 1e-8,
+            drive: SweepDrive::Kinematic,
         }
+    }
+
+    #[test]
+    fn drive_names_round_trip_and_only_sil_changes_the_hash() {
+        for d in [
+            SweepDrive::Kinematic,
+            SweepDrive::Sil {
+                gain_lowering: None,
+            },
+            SweepDrive::Sil {
+                gain_lowering: Some(0.05),
+            },
+        ] {
+            assert_eq!(SweepDrive::parse(&d.name()), Some(d));
+        }
+        assert_eq!(SweepDrive::parse("pil"), None);
+        let sil = SweepSpec {
+            drive: SweepDrive::Sil {
+                gain_lowering: None,
+            },
+            ..spec()
+        };
+        assert_ne!(sil.hash(""), spec().hash(""));
     }
 
     #[test]
