@@ -207,3 +207,63 @@ pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> GridFigure {
         ],
     )
 }
+
+/// The delay curve the way the rig made it: the eq4 delayed stutter at phi = 0.57 against its
+/// delay, kinematic (the stroke imposed; the spring rings through the delay) beside the
+/// software-in-the-loop rig with gain lowering (the controller, the 300 N drive, the encoder;
+/// the lowered gain damps the ringing).
+pub fn delay_curve_sil(kinematic: &[BestRow], sil: &[BestRow], sil_label: &str) -> GridFigure {
+    let mut heights = Vec::new();
+    let mut freqs = Vec::new();
+    for (i, (rows, label)) in [(kinematic, "kinematic"), (sil, sil_label)]
+        .into_iter()
+        .enumerate()
+    {
+        heights.push(Line {
+            label: label.into(),
+            points: rows
+                .iter()
+                .map(|b| (b.tau_s, 1e3 * b.jump_height_m))
+                .collect(),
+            color: palette(i),
+            dashed: false,
+            markers: true,
+        });
+        freqs.push(Line {
+            label: label.into(),
+            points: rows.iter().map(|b| (b.tau_s, b.best_freq_hz)).collect(),
+            color: palette(i),
+            dashed: false,
+            markers: true,
+        });
+    }
+    GridFigure::row(
+        format!(
+            "Delayed stutter vs delay τ at φ = {LOW_PHI}, eq4: kinematic and through the SIL rig"
+        ),
+        vec![
+            LinePanel {
+                caption: "height at each delay's best frequency".into(),
+                x_desc: "delay τ (s)".into(),
+                y_desc: "jump height (mm)".into(),
+                lines: heights,
+                y_from_zero: true,
+            },
+            LinePanel {
+                caption: "best forcing frequency".into(),
+                x_desc: "delay τ (s)".into(),
+                y_desc: "best frequency f (Hz)".into(),
+                lines: freqs,
+                y_from_zero: true,
+            },
+        ],
+    )
+}
+
+/// The delay of the highest jump among `rows` (each at its best frequency): (tau, height,
+/// frequency).
+pub fn tau_opt(rows: &[BestRow]) -> Option<(f64, f64, f64)> {
+    rows.iter()
+        .max_by(|a, b| a.jump_height_m.total_cmp(&b.jump_height_m))
+        .map(|b| (b.tau_s, b.jump_height_m, b.best_freq_hz))
+}

@@ -6,6 +6,7 @@
 //! | `height_vs_phi` | best jump height vs phi: single, stutter, delayed stutter (tau = 0.75 s), eq1 and eq4, hard ground for reference |
 //! | `height_vs_freq` | jump height vs forcing frequency at several phi and on hard ground |
 //! | `delayed_vs_tau` | delayed-stutter height vs delay at phi = 0.57 (each delay at its best frequency) |
+//! | `delayed_vs_tau_sil` | the same for eq4 through the software-in-the-loop rig with gain lowering 0.05 (the paper's rig), beside the kinematic curve; tau_opt of each in `summary.txt` |
 //! | `penetration_force` | quasi-static `F_p(z)`, two-resistance and cone laws, and a slow re-intrusion |
 //! | `added_mass_stutter` | added mass vs depth during a stutter jump at phi = 0.57, in foot masses |
 //! | `mechanism` | one stutter jump, eq1 vs eq4: positions, spring force, ground force, added mass |
@@ -169,6 +170,26 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
     w.figure("delayed_vs_tau", &heights::height_vs_tau(&tau_best, &best))?;
     failures.extend(tau_sweep.failures.iter().cloned());
 
+    // 3b: the same delay curve the way the rig made it: eq4 through the SIL rig with the
+    // position gain lowered during the delay, beside the kinematic curve.
+    let sil_drive = crate::study::sweep::SweepDrive::Sil {
+        gain_lowering: Some(sweeps::SIL_GAIN_LOWERING),
+    };
+    let sil_sweep = sweeps::run_driven(&sweeps::tau_combinations_eq4(&grids), opts, sil_drive)?;
+    let sil_best = best_rows(&sil_sweep.rows);
+    let kin_best: Vec<BestRow> = tau_best
+        .iter()
+        .filter(|b| b.model == ModelName::Eq4.as_str())
+        .cloned()
+        .collect();
+    w.csv("delayed_vs_tau_sil_sweep.csv", &sil_sweep.rows, &ROW_HEADER)?;
+    w.csv("delayed_vs_tau_sil.csv", &sil_best, &BEST_HEADER)?;
+    w.figure(
+        "delayed_vs_tau_sil",
+        &heights::delay_curve_sil(&kin_best, &sil_best, &sil_drive.name()),
+    )?;
+    failures.extend(sil_sweep.failures.iter().cloned());
+
     // 4: quasi-static force laws.
     let law_rows = laws::curves().map_err(FiguresError::Internal)?;
     w.csv("penetration_force.csv", &law_rows, &laws::HEADER)?;
@@ -246,6 +267,22 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
             ),
         ));
     }
+    for (name, rows) in [("kinematic", &kin_best), ("sil_gain_lowering", &sil_best)] {
+        if let Some((tau, h, f)) = heights::tau_opt(rows) {
+            findings.push((
+                format!("eq4.delayed_tau_opt.phi0.57.{name}"),
+                format!("{tau} s ({} at {f} Hz)", mm(h)),
+            ));
+        }
+    }
+    findings.push((
+        "eq4.delayed_sil_failures.phi0.57".into(),
+        format!(
+            "{} of {} jumps (faults or drive limits; in failures.csv)",
+            sil_sweep.failures.len(),
+            sil_sweep.failures.len() + sil_sweep.rows.len()
+        ),
+    ));
     for r in sensitivity.iter().filter(|r| r.param != "none") {
         findings.push((
             format!("eq1_gap_sensitivity.{}x{}.phi{}", r.param, r.factor, r.phi),

@@ -5,11 +5,10 @@ use sandjumper_core::trajectory::JumpKind;
 use serde::Serialize;
 
 use super::{FiguresError, FiguresOptions};
-use crate::model::jump::{JumpSpec, simulate_jump};
-use crate::model::options::SimOptions;
 use crate::model::params::{ModelName, Params};
 use crate::model::trajectory::kind_name;
-use crate::study::sweep::{Combination, JumpMetrics, SweepOutcome, SweepRow, run_parallel};
+use crate::study::sweep::drive::jump_metrics;
+use crate::study::sweep::{Combination, SweepDrive, SweepOutcome, SweepRow, run_parallel};
 
 /// Delay of the delayed stutter in the height-vs-phi figure (the paper's), s.
 pub const DELAYED_TAU_S: f64 = 0.75;
@@ -67,33 +66,38 @@ pub fn params_for(model: ModelName, phi: f64) -> Result<Params, String> {
     .map_err(|e| e.to_string())
 }
 
-/// Simulate every combination in parallel (progress bar on a terminal).
+/// Simulate every combination in parallel (progress bar on a terminal), kinematically.
 pub fn run(combos: &[Combination], opts: &FiguresOptions) -> Result<SweepOutcome, FiguresError> {
-    let sim = SimOptions {
-        rtol: opts.rtol,
-        ..SimOptions::default()
-    };
-    run_parallel(combos, opts.threads, opts.progress, |c| {
-        let params = params_for(c.model, c.phi)?;
-        let spec = JumpSpec {
-            kind: c.kind,
-            freq_hz: c.freq_hz,
-            tau_s: c.tau_s,
-            model: c.model,
-        };
-        let s = simulate_jump(&params, &spec, &sim)
-            .map_err(|e| e.to_string())?
-            .summary;
-        Ok(JumpMetrics {
-            jump_height_m: s.jump_height_m,
-            final_jump_height_m: s.final_jump_height_m,
-            max_depth_m: s.max_depth_m,
-            peak_added_mass_kg: s.peak_added_mass_kg,
-            peak_motor_force_n: s.peak_motor_force_n,
-        })
-    })
-    .map_err(FiguresError::Internal)
+    run_driven(combos, opts, SweepDrive::Kinematic)
 }
+
+/// [`run`] with every jump driven by `drive`; the rows name the drive.
+pub fn run_driven(
+    combos: &[Combination],
+    opts: &FiguresOptions,
+    drive: SweepDrive,
+) -> Result<SweepOutcome, FiguresError> {
+    let mut outcome = run_parallel(combos, opts.threads, opts.progress, |c| {
+        jump_metrics(drive, &params_for(c.model, c.phi)?, c, opts.rtol)
+    })
+    .map_err(FiguresError::Internal)?;
+    for row in &mut outcome.rows {
+        row.drive = drive.name();
+    }
+    Ok(outcome)
+}
+
+/// The delayed stutter against its delay at phi = 0.57 on eq4 only (the SIL delay curve).
+pub fn tau_combinations_eq4(grids: &Grids) -> Vec<Combination> {
+    tau_combinations(grids)
+        .into_iter()
+        .filter(|c| c.model == ModelName::Eq4)
+        .collect()
+}
+
+/// Gain-lowering factor of the SIL delay curve (`HilSpec::gain_lowering_factor`): the
+/// position gain times 0.05 during the delay damps the spring's ringing ~10x.
+pub const SIL_GAIN_LOWERING: f64 = 0.05;
 
 /// Kinds of the height-vs-phi figure, with their delays.
 pub const KINDS: [(JumpKind, f64); 3] = [
