@@ -187,8 +187,18 @@ pub fn height_vs_tau(tau_best: &[BestRow], best: &[BestRow]) -> GridFigure {
             markers: true,
         });
     }
-    GridFigure::row(
+    delay_panels(
         format!("Delayed stutter vs delay τ at φ = {LOW_PHI}"),
+        heights,
+        freqs,
+    )
+}
+
+/// Two panels against the delay: the height at each delay's best frequency, and that
+/// frequency.
+fn delay_panels(title: String, heights: Vec<Line>, freqs: Vec<Line>) -> GridFigure {
+    GridFigure::row(
+        title,
         vec![
             LinePanel {
                 caption: "height at each delay's best frequency".into(),
@@ -237,26 +247,12 @@ pub fn delay_curve_sil(kinematic: &[BestRow], sil: &[BestRow], sil_label: &str) 
             markers: true,
         });
     }
-    GridFigure::row(
+    delay_panels(
         format!(
             "Delayed stutter vs delay τ at φ = {LOW_PHI}, eq4: kinematic and through the SIL rig"
         ),
-        vec![
-            LinePanel {
-                caption: "height at each delay's best frequency".into(),
-                x_desc: "delay τ (s)".into(),
-                y_desc: "jump height (mm)".into(),
-                lines: heights,
-                y_from_zero: true,
-            },
-            LinePanel {
-                caption: "best forcing frequency".into(),
-                x_desc: "delay τ (s)".into(),
-                y_desc: "best frequency f (Hz)".into(),
-                lines: freqs,
-                y_from_zero: true,
-            },
-        ],
+        heights,
+        freqs,
     )
 }
 
