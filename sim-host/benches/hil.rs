@@ -8,12 +8,17 @@
 //!   host's threads on one core (the default) and, side by side, unpinned. Target: at least
 //!   2x real time, i.e. under 0.43 s. Needs QEMU and the emulated firmware (built here if
 //!   missing); skipped with a message otherwise.
+//! - SIL sweep: 2,000 delayed stutters (40 frequencies 4..19.6 Hz x 50 delays 6..300 ms, eq4,
+//!   phi 0.57, gain lowering 0.05, the sweep's default rtol 1e-8) through the software-in-the-
+//!   loop rig on 2 threads, as `sweep --link sil` runs them.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use sandjumper_sim::rig::hil::emulated_firmware;
 use sandjumper_sim::rig::hil::pil::{self, PilConfig};
 use sandjumper_sim::rig::hil::run::rig_config;
 use sandjumper_sim::rig::hil::{HilSpec, RigModelConfig, SilLink, run_jump};
+use sandjumper_sim::study::sweep::drive::jump_metrics;
+use sandjumper_sim::study::sweep::{SweepDrive, SweepSpec, run_parallel};
 use sandjumper_sim::{JumpKind, ModelName, Params};
 use std::hint::black_box;
 
@@ -74,6 +79,36 @@ fn delayed_stutter_pil(c: &mut Criterion) {
     );
 }
 
+fn sil_sweep_2000(c: &mut Criterion) {
+    let params = Params::preset(0.57).unwrap();
+    let spec = SweepSpec {
+        kinds: vec![JumpKind::DelayedStutter],
+        models: vec![ModelName::Eq4],
+        phis: vec![0.57],
+        freqs_hz: (0..40).map(|k| 4.0 + 0.4 * f64::from(k)).collect(),
+        taus_s: (1..=50).map(|k| 0.006 * f64::from(k)).collect(),
+        rtol: 1e-8,
+        drive: SweepDrive::Sil {
+            gain_lowering: Some(0.05),
+        },
+    };
+    let combos = spec.combinations();
+    assert_eq!(combos.len(), 2000);
+    c.bench_function(
+        "SIL sweep: 2,000 delayed stutters (tau up to 0.3 s), 2 threads",
+        |b| {
+            b.iter(|| {
+                let out = run_parallel(&combos, 2, false, |c| {
+                    jump_metrics(spec.drive, &params, c, spec.rtol)
+                })
+                .unwrap();
+                assert_eq!(out.failures.len(), 0, "{:?}", out.failures.first());
+                out
+            })
+        },
+    );
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20).without_plots();
@@ -84,4 +119,9 @@ criterion_group! {
     config = Criterion::default().sample_size(10).without_plots();
     targets = delayed_stutter_pil
 }
-criterion_main!(benches, pil_benches);
+criterion_group! {
+    name = sweep_benches;
+    config = Criterion::default().sample_size(10).without_plots();
+    targets = sil_sweep_2000
+}
+criterion_main!(benches, pil_benches, sweep_benches);
