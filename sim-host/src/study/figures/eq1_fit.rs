@@ -17,7 +17,6 @@ use sandjumper_core::trajectory::JumpKind;
 use serde::Serialize;
 
 use super::grid::GridFigure;
-use crate::model::jump::{JumpSpec, simulate_jump};
 use crate::model::options::SimOptions;
 use crate::model::params::{Eq1AlphaChoice, ModelName, Params};
 use crate::model::trajectory::kind_name;
@@ -25,6 +24,8 @@ use crate::plot::lines::{Line, LinePanel};
 use crate::plot::palette;
 use crate::study::fit::data::{HeightColumn, JumpMeasurement};
 use crate::study::fit::jumps::{DragParam, JumpFitSetup, fit_jumps};
+use crate::study::sweep::drive::jump_metrics;
+use crate::study::sweep::{Combination, SweepDrive};
 
 /// The preset rows alpha is fitted at.
 pub const FIT_PHIS: [f64; 6] = [0.57, 0.58, 0.59, 0.60, 0.61, 0.62];
@@ -109,24 +110,20 @@ fn simulate(
     model: ModelName,
     rtol: f64,
 ) -> Result<(f64, f64), String> {
-    let spec = JumpSpec {
+    let jump = Combination {
         kind,
+        model,
+        phi: params.sand.packing_fraction,
         freq_hz,
         tau_s: if kind == JumpKind::DelayedStutter {
             DELAY_S
         } else {
             0.0
         },
-        model,
     };
-    let opts = SimOptions {
-        rtol,
-        ..SimOptions::default()
-    };
-    let s = simulate_jump(params, &spec, &opts)
-        .map_err(|e| format!("{kind:?} at {freq_hz} Hz, {model}: {e}"))?
-        .summary;
-    Ok((s.jump_height_m, s.final_jump_height_m))
+    let m = jump_metrics(SweepDrive::Kinematic, params, &jump, rtol)
+        .map_err(|e| format!("{kind:?} at {freq_hz} Hz, {model}: {e}"))?;
+    Ok((m.jump_height_m, m.final_jump_height_m))
 }
 
 /// MODEL.md's alpha column at `phi`, kg/m: where the fit starts.
@@ -193,42 +190,29 @@ fn fit_alphas_on(
         },
         base: &base,
     };
-    let report = fit_jumps(
-        &measured,
-        Path::new("eq4 single jumps (standing in for the experiment)"),
-        &setup,
-    )
-    .map_err(|e| format!("fitting {model}'s alpha: {e}"))?;
-    report
-        .fits
-        .iter()
-        .map(|fit| {
-            let phi = fit
-                .phi
-                .ok_or("a fitted alpha without its packing fraction")?;
-            let jumps: Vec<&JumpMeasurement> = measured
-                .iter()
-                .filter(|m| (m.phi - phi).abs() < 1e-9)
-                .collect();
-            let mut fitted = preset(phi)?;
-            fitted.sand.alpha_kg_m = fit.value;
-            let residuals: Vec<f64> = jumps
-                .par_iter()
-                .map(|m| {
-                    simulate(&fitted, JumpKind::Single, m.freq_hz, model, rtol)
-                        .map(|(h, _)| h - m.height_m)
-                })
-                .collect::<Result<_, String>>()?;
-            let rms =
-                (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
+    // One fit per packing fraction, so each report's residual RMS is that row's.
+    phis.iter()
+        .map(|&phi| {
+            let jumps: Vec<JumpMeasurement> =
+                measured.iter().filter(|m| m.phi == phi).copied().collect();
+            let report = fit_jumps(
+                &jumps,
+                Path::new("eq4 single jumps (standing in for the experiment)"),
+                &setup,
+            )
+            .map_err(|e| format!("fitting {model}'s alpha: {e}"))?;
+            let fit = report
+                .fits
+                .first()
+                .ok_or_else(|| format!("no fitted alpha at phi = {phi}"))?;
             Ok(AlphaRow {
                 model: model.as_str(),
                 phi,
                 alpha_start_kg_m: starting_alpha(phi)?,
                 alpha_fitted_kg_m: fit.value,
                 alpha_stderr_kg_m: fit.stderr,
-                residual_rms_mm: 1e3 * rms,
-                jumps: jumps.len(),
+                residual_rms_mm: 1e3 * report.residual_rms,
+                jumps: report.points_used,
             })
         })
         .collect()
@@ -246,14 +230,26 @@ pub fn compare(
         JumpKind::Stutter,
         JumpKind::DelayedStutter,
     ];
+    compare_on(alphas, &kinds, &COMPARE_PHIS, freqs_hz, rtol, &preset)
+}
+
+/// [`compare`] for `kinds` at `phis`, on the parameters `params_at` gives.
+fn compare_on(
+    alphas: &[AlphaRow],
+    kinds: &[JumpKind],
+    phis: &[f64],
+    freqs_hz: &[f64],
+    rtol: f64,
+    params_at: ParamsAt,
+) -> Result<Vec<CompareRow>, String> {
     let mut jobs = Vec::new();
-    for &phi in &COMPARE_PHIS {
+    for &phi in phis {
         let alpha = alphas
             .iter()
             .find(|a| a.model == "eq1" && (a.phi - phi).abs() < 1e-9)
             .ok_or_else(|| format!("no fitted eq1 alpha at phi = {phi}"))?
             .alpha_fitted_kg_m;
-        for kind in kinds {
+        for &kind in kinds {
             for &f in freqs_hz {
                 jobs.push((phi, alpha, kind, f, ModelName::Eq4));
                 jobs.push((phi, alpha, kind, f, ModelName::Eq1));
@@ -262,7 +258,7 @@ pub fn compare(
     }
     jobs.par_iter()
         .map(|&(phi, alpha, kind, f, model)| {
-            let mut params = preset(phi)?;
+            let mut params = params_at(phi)?;
             if model == ModelName::Eq1 {
                 params.sand.alpha_kg_m = alpha;
             }
@@ -343,15 +339,14 @@ pub fn figure(rows: &[CompareRow]) -> GridFigure {
             y_from_zero: false,
         });
     }
-    let mut fig = GridFigure::square(
+    let fig = GridFigure::row(
         "eq1 with alpha fitted to eq4's single jumps (dashed) vs eq4 (solid)",
         panels,
     );
-    // Three panels side by side.
-    let (w, h) = crate::plot::lines::grid_size(3);
-    fig.shape = (1, 3);
-    fig.size = (w, h + 30);
-    fig
+    GridFigure {
+        size: (fig.size.0, fig.size.1 + 30),
+        ..fig
+    }
 }
 
 /// The eq4 parameters whose effect on the gap is asked next (MODEL.md section 3): the
@@ -418,21 +413,23 @@ fn stutter_gap(
     rtol: f64,
     params_at: ParamsAt,
 ) -> Result<(f64, f64), String> {
-    let alpha =
-        fit_alphas_on(ModelName::Eq1, &[phi], freqs_hz, rtol, params_at)?[0].alpha_fitted_kg_m;
-    let base = params_at(phi)?;
-    let best = |model: ModelName| -> Result<f64, String> {
-        let mut p = base.clone();
-        if model == ModelName::Eq1 {
-            p.sand.alpha_kg_m = alpha;
-        }
-        let heights: Vec<f64> = freqs_hz
-            .par_iter()
-            .map(|&f| simulate(&p, JumpKind::Stutter, f, model, rtol).map(|(_, fin)| fin))
-            .collect::<Result<_, String>>()?;
-        Ok(heights.into_iter().fold(f64::NEG_INFINITY, f64::max))
+    let alphas = fit_alphas_on(ModelName::Eq1, &[phi], freqs_hz, rtol, params_at)?;
+    let rows = compare_on(
+        &alphas,
+        &[JumpKind::Stutter],
+        &[phi],
+        freqs_hz,
+        rtol,
+        params_at,
+    )?;
+    let best = |model| {
+        best_height(&rows, "stutter", phi, model)
+            .ok_or_else(|| format!("no stutter at phi = {phi}"))
     };
-    Ok((alpha, best(ModelName::Eq1)? / best(ModelName::Eq4)?))
+    Ok((
+        alphas[0].alpha_fitted_kg_m,
+        best("eq1-fitted")? / best("eq4")?,
+    ))
 }
 
 /// Which eq4 parameters move the eq1-vs-eq4 stutter gap, and by how much: each of
