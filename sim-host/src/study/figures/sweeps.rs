@@ -7,8 +7,8 @@ use serde::Serialize;
 use super::{FiguresError, FiguresOptions};
 use crate::model::params::{ModelName, Params};
 use crate::model::trajectory::kind_name;
-use crate::study::sweep::drive::jump_metrics;
-use crate::study::sweep::{Combination, SweepDrive, SweepOutcome, SweepRow, run_parallel};
+use crate::study::sweep::drive;
+use crate::study::sweep::{Combination, SweepDrive, SweepOutcome, SweepRow};
 
 /// Delay of the delayed stutter in the height-vs-phi figure (the paper's), s.
 pub const DELAYED_TAU_S: f64 = 0.75;
@@ -77,14 +77,10 @@ pub fn run_driven(
     opts: &FiguresOptions,
     drive: SweepDrive,
 ) -> Result<SweepOutcome, FiguresError> {
-    let mut outcome = run_parallel(combos, opts.threads, opts.progress, |c| {
-        jump_metrics(drive, &params_for(c.model, c.phi)?, c, opts.rtol)
+    drive::run_driven(combos, opts.threads, opts.progress, drive, opts.rtol, |c| {
+        params_for(c.model, c.phi)
     })
-    .map_err(FiguresError::Internal)?;
-    for row in &mut outcome.rows {
-        row.drive = drive.name();
-    }
-    Ok(outcome)
+    .map_err(FiguresError::Internal)
 }
 
 /// The delayed stutter against its delay at phi = 0.57 on eq4 only (the SIL delay curve).

@@ -12,11 +12,11 @@ use crate::output::StagedDir;
 use crate::plot::save_figure;
 use crate::study::sweep::SweepDrive;
 use crate::study::sweep::ValueRange;
-use crate::study::sweep::drive::jump_metrics;
+use crate::study::sweep::drive::run_driven;
 use crate::study::sweep::plot as sweep_plot;
 use crate::study::sweep::{
     FAILURE_HEADER, ROW_HEADER, ShardMeta, ShardSpec, SpecMeta, SweepMeta, SweepOutcome, SweepSpec,
-    files, kind_name, run_parallel, write_csv,
+    files, kind_name, write_csv,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -203,13 +203,15 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         .map(|t| t as usize)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let started = Instant::now();
-    let mut outcome = run_parallel(&combos[slice.clone()], threads, true, |c| {
-        jump_metrics(spec.drive, &params_by_phi[&c.phi.to_bits()], c, spec.rtol)
-    })
+    let outcome = run_driven(
+        &combos[slice.clone()],
+        threads,
+        true,
+        spec.drive,
+        spec.rtol,
+        |c| Ok(&params_by_phi[&c.phi.to_bits()]),
+    )
     .map_err(CliError::internal)?;
-    for row in &mut outcome.rows {
-        row.drive = spec.drive.name();
-    }
     let elapsed = started.elapsed();
     let meta = SweepMeta {
         format: SweepMeta::FORMAT.into(),

@@ -2,7 +2,9 @@
 //! (the paper's kinematic method) or through the software-in-the-loop rig, the core's
 //! controller against the force-driven plant, measured the same way.
 
-use super::{Combination, JumpMetrics, SweepDrive};
+use std::borrow::Borrow;
+
+use super::{Combination, JumpMetrics, SweepDrive, SweepOutcome, run_parallel};
 use crate::model::jump::{JumpSpec, simulate_jump};
 use crate::model::options::SimOptions;
 use crate::model::params::Params;
@@ -58,6 +60,30 @@ pub fn jump_metrics(
         peak_added_mass_kg: s.peak_added_mass_kg,
         peak_motor_force_n: s.peak_motor_force_n,
     })
+}
+
+/// Run every combination on `threads` threads (progress bar on a terminal if `progress`),
+/// driven by `drive` on the parameters `params_for` gives each, at relative tolerance `rtol`;
+/// the rows name the drive. The result is in combination order.
+pub fn run_driven<P, F>(
+    combos: &[Combination],
+    threads: usize,
+    progress: bool,
+    drive: SweepDrive,
+    rtol: f64,
+    params_for: F,
+) -> Result<SweepOutcome, String>
+where
+    P: Borrow<Params>,
+    F: Fn(&Combination) -> Result<P, String> + Sync,
+{
+    let mut outcome = run_parallel(combos, threads, progress, |c| {
+        jump_metrics(drive, params_for(c)?.borrow(), c, rtol)
+    })?;
+    for row in &mut outcome.rows {
+        row.drive = drive.name();
+    }
+    Ok(outcome)
 }
 
 /// The loop's spec for combination `c` (the rig's gains, as `hil` uses them).
