@@ -145,3 +145,16 @@ pub fn parse_rtol(s: &str) -> Result<f64, String> {
         ))
     }
 }
+
+/// clap value parser: a gain-lowering factor (the position gain's multiplier during a delayed
+/// stutter's delay), 0 < factor <= 1.
+pub fn parse_gain_lowering(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "gain-lowering factor {v} out of range (allowed: 0 < factor <= 1; e.g. 0.05)"
+        ))
+    }
+}

@@ -15,7 +15,9 @@ use super::run::{HilOutcome, HilSpec, rig_config, run_jump};
 use super::sil::SilLink;
 use super::{log, pil, serial};
 use crate::command::CliError;
-use crate::command::args::{KindArg, ModelArg, check_freq, check_phi, check_tau};
+use crate::command::args::{
+    KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
+};
 use crate::command::resolve::{ParamsFile, resolve_params};
 use crate::model::params::{ModelName, Params};
 use crate::model::record::JumpSummary;
@@ -49,35 +51,11 @@ fn parse_link(s: &str) -> Result<LinkArg, String> {
     }
 }
 
-fn number(s: &str) -> Result<f64, String> {
-    s.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("`{s}` is not a finite number"))
-}
-
-fn parse_freq(s: &str) -> Result<f64, String> {
-    check_freq(number(s)?)
-}
-fn parse_tau(s: &str) -> Result<f64, String> {
-    check_tau(number(s)?)
-}
-fn parse_phi(s: &str) -> Result<f64, String> {
-    check_phi(number(s)?)
-}
 fn parse_factor(s: &str) -> Result<f32, String> {
-    let v = number(s)?;
-    if v > 0.0 && v <= 1.0 {
-        Ok(v as f32)
-    } else {
-        Err(format!(
-            "gain-lowering factor {v} out of range (allowed: 0 < factor <= 1; e.g. 0.05)"
-        ))
-    }
+    parse_gain_lowering(s).map(|v| v as f32)
 }
 fn parse_noise(s: &str) -> Result<f64, String> {
-    let v = number(s)?;
+    let v = parse_number(s)?;
     if (0.0..=1000.0).contains(&v) {
         Ok(v)
     } else {
@@ -87,7 +65,7 @@ fn parse_noise(s: &str) -> Result<f64, String> {
     }
 }
 fn parse_rtol(s: &str) -> Result<f64, String> {
-    let v = number(s)?;
+    let v = parse_number(s)?;
     if (1e-12..=1e-3).contains(&v) {
         Ok(v)
     } else {

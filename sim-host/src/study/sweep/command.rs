@@ -58,7 +58,7 @@ pub struct SweepArgs {
     pub link: Option<SweepLinkArg>,
     /// With --link sil: the position gain times FACTOR during a delayed stutter's delay
     /// (0 < FACTOR <= 1; 0.05 damps the spring's ringing ~10x), as the paper's rig did.
-    #[arg(long, value_name = "FACTOR", requires = "link", value_parser = parse_gain_factor)]
+    #[arg(long, value_name = "FACTOR", requires = "link", value_parser = crate::command::args::parse_gain_lowering)]
     pub gain_lowering: Option<f64>,
 }
 
@@ -67,18 +67,6 @@ pub struct SweepArgs {
 pub enum SweepLinkArg {
     /// The core's controller in this process against the simulated rig.
     Sil,
-}
-
-/// clap value parser: a gain-lowering factor, 0 < factor <= 1.
-pub fn parse_gain_factor(s: &str) -> Result<f64, String> {
-    let v = crate::command::args::parse_number(s)?;
-    if v > 0.0 && v <= 1.0 {
-        Ok(v)
-    } else {
-        Err(format!(
-            "gain-lowering factor {v} out of range (allowed: 0 < factor <= 1; e.g. 0.05)"
-        ))
-    }
 }
 
 /// Parse a range and check each of its values with `check`.
