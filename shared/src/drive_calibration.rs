@@ -23,8 +23,10 @@ pub const MAX_ZERO_OFFSET_CODES: u16 = 410;
 /// Allowed gain relative to nominal: 0.8..=1.25.
 pub const GAIN_RANGE: (f32, f32) = (0.8, 1.25);
 
-/// DAC codes of the force command: the code of zero force and the codes per newton.
+/// DAC codes of the force command: the code of zero force and the codes per newton. (The
+/// host's calibration file is this struct as TOML; an unknown key there is an error.)
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DriveCalibration {
     /// The DAC code at which the drive's input reads 0 V, codes.

@@ -11,7 +11,6 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use serde::{Deserialize, Serialize};
 
 use super::session::query_status;
 use super::{TargetArgs, link_failed};
@@ -37,25 +36,6 @@ pub struct CalibrateDriveArgs {
     pub save: Option<PathBuf>,
 }
 
-/// The calibration file's contents.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CalibrationFile {
-    /// DAC code of zero force.
-    pub zero_code: u16,
-    /// DAC codes per newton.
-    pub codes_per_newton: f32,
-}
-
-impl From<CalibrationFile> for DriveCalibration {
-    fn from(f: CalibrationFile) -> Self {
-        DriveCalibration {
-            zero_code: f.zero_code,
-            codes_per_newton: f.codes_per_newton,
-        }
-    }
-}
-
 /// Read and check a calibration file: the file, the key and what is allowed on error.
 pub fn read_calibration(path: &Path) -> Result<DriveCalibration, CliError> {
     let text = std::fs::read_to_string(path).map_err(|e| {
@@ -64,13 +44,12 @@ pub fn read_calibration(path: &Path) -> Result<DriveCalibration, CliError> {
             path.display()
         ))
     })?;
-    let file: CalibrationFile = toml::from_str(&text).map_err(|e| {
+    let cal: DriveCalibration = toml::from_str(&text).map_err(|e| {
         CliError::input(format!(
             "drive calibration `{}`: {e} (allowed: zero_code = CODE, codes_per_newton = X)",
             path.display()
         ))
     })?;
-    let cal = DriveCalibration::from(file);
     cal.validate()
         .map_err(|e| CliError::input(format!("drive calibration `{}`: {e}", path.display())))?;
     Ok(cal)
@@ -99,11 +78,8 @@ pub fn run(a: &CalibrateDriveArgs) -> Result<(), CliError> {
     link.finish()
         .map_err(|e| link_failed(&name, "closing the session", e))?;
     if let Some(path) = &a.save {
-        let text = toml::to_string(&CalibrationFile {
-            zero_code: cal.zero_code,
-            codes_per_newton: cal.codes_per_newton,
-        })
-        .map_err(|e| CliError::internal(format!("cannot encode the calibration: {e}")))?;
+        let text = toml::to_string(&cal)
+            .map_err(|e| CliError::internal(format!("cannot encode the calibration: {e}")))?;
         std::fs::write(path, text)
             .map_err(|e| CliError::input(format!("cannot write `{}`: {e}", path.display())))?;
     }
