@@ -18,9 +18,9 @@
 //! divided into 0..3.3 V with the same mid-point convention, read by a 12-bit ADC.
 
 /// DAC code for zero force: the mid-point of the 12-bit range (1.65 V).
-pub const ZERO_FORCE_CODE: u16 = 2048;
+pub const ZERO_FORCE_CODE: u16 = sandjumper_core::drive_calibration::NOMINAL_ZERO_CODE;
 /// Codes either side of the mid-point that reach full scale.
-pub const HALF_RANGE_CODES: u16 = 2047;
+pub const HALF_RANGE_CODES: u16 = sandjumper_core::drive_calibration::NOMINAL_HALF_RANGE_CODES;
 /// Current-sense ADC code for 0 A: the mid-point of the 12-bit range (1.65 V).
 pub const ZERO_CURRENT_CODE: u16 = 2048;
 /// Motor current at full scale of the current monitor, A.
