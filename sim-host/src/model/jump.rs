@@ -366,6 +366,23 @@ pub fn run_kinematic<S: Stroke>(sim: &mut Simulation<Kinematic<S>, 4>) -> Result
     Ok(())
 }
 
+/// The core's one-cycle sine of `kind` at `freq_hz` (delay `tau_s`) with the robot's stroke
+/// amplitude; a request the trajectory refuses is an `InvalidInput` naming it.
+pub fn sine_stroke(
+    params: &Params,
+    kind: JumpKind,
+    freq_hz: f64,
+    tau_s: f64,
+) -> Result<SineJump, SimError> {
+    SineJump::new(kind, params.robot.stroke_amplitude_m, freq_hz, tau_s).map_err(|e| {
+        SimError::InvalidInput {
+            field: "trajectory",
+            value: format!("{kind:?} at {freq_hz} Hz, tau {tau_s} s"),
+            allowed: e.to_string(),
+        }
+    })
+}
+
 /// Simulate one kinematic jump (MODEL.md, the paper's method).
 pub fn simulate_jump(
     params: &Params,
@@ -386,20 +403,7 @@ pub fn simulate_jump(
             allowed: "a delay >= 0 s".into(),
         });
     }
-    let stroke = SineJump::new(
-        spec.kind,
-        params.robot.stroke_amplitude_m,
-        spec.freq_hz,
-        spec.tau_s,
-    )
-    .map_err(|e| SimError::InvalidInput {
-        field: "trajectory",
-        value: format!(
-            "{:?} at {} Hz, tau {} s",
-            spec.kind, spec.freq_hz, spec.tau_s
-        ),
-        allowed: e.to_string(),
-    })?;
+    let stroke = sine_stroke(params, spec.kind, spec.freq_hz, spec.tau_s)?;
     let mut sim = kinematic_at_rest(params, spec.model, stroke, opts)?;
     run_kinematic(&mut sim)?;
     let summary = sim.summary();

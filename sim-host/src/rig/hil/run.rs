@@ -9,7 +9,7 @@ use super::link::{LinkError, LinkReport, RigLink};
 use super::rig_model::{CameraFrame, EncoderInjection, RigModel, RigModelConfig};
 use crate::model::error::SimError;
 use crate::model::hybrid::GroundMode;
-use crate::model::jump::{AIRBORNE_TAIL_S, GROUNDED_TAIL_S};
+use crate::model::jump::{AIRBORNE_TAIL_S, GROUNDED_TAIL_S, sine_stroke};
 use crate::model::options::SimOptions;
 use crate::model::params::{ModelName, Params, RobotParams};
 use crate::model::record::JumpSummary;
@@ -252,20 +252,7 @@ pub fn rig_config(model: &RigModelConfig) -> RigConfig {
 
 /// The trajectory of `spec` with the robot's stroke amplitude.
 pub fn trajectory(params: &Params, spec: &HilSpec) -> Result<SineJump, SimError> {
-    SineJump::new(
-        spec.kind,
-        params.robot.stroke_amplitude_m,
-        spec.freq_hz,
-        spec.tau_s,
-    )
-    .map_err(|e| SimError::InvalidInput {
-        field: "trajectory",
-        value: format!(
-            "{:?} at {} Hz, tau {} s",
-            spec.kind, spec.freq_hz, spec.tau_s
-        ),
-        allowed: e.to_string(),
-    })
+    sine_stroke(params, spec.kind, spec.freq_hz, spec.tau_s)
 }
 
 /// The jump configuration the host sends with `Configure`.
