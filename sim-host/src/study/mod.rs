@@ -9,4 +9,5 @@ pub mod figures;
 pub mod fit;
 pub mod jump_command;
 pub mod replay;
+pub mod ringing;
 pub mod sweep;

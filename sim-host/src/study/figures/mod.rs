@@ -10,6 +10,7 @@
 //! | `penetration_force` | quasi-static `F_p(z)`, two-resistance and cone laws, and a slow re-intrusion |
 //! | `added_mass_stutter` | added mass vs depth during a stutter jump at phi = 0.57, in foot masses |
 //! | `mechanism` | one stutter jump, eq1 vs eq4: positions, spring force, ground force, added mass |
+//! | `ringing` | natural frequency after a small kick: hard ground, and on sand during intrusion (series spring) and once the foot rests, at every preset phi, beside `sqrt(k_s k1/(k_s+k1)/M)/2pi` |
 //! | `eq1_fitted` | the paper's procedure: eq1's alpha fitted to eq4's single jumps per phi (`eq1_alpha_fit.csv`, eq1 and eq1-linear), then eq1 vs eq4 on single, stutter (push-off) and delayed-stutter jumps at phi 0.57 and 0.62; `eq1_gap_sensitivity.csv`: how b, mu, C, kappa and l_re (+-20 %) move the stutter gap |
 //!
 //! Beside them: the full sweeps (`*_sweep.csv`, the columns of `sweep.csv`), `failures.csv`
@@ -22,6 +23,7 @@ pub mod eq1_fit;
 pub mod grid;
 pub mod heights;
 pub mod laws;
+pub mod ringing;
 pub mod series;
 pub mod sweeps;
 
@@ -195,6 +197,23 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
     w.csv("penetration_force.csv", &law_rows, &laws::HEADER)?;
     w.figure("penetration_force", &laws::figure(&law_rows))?;
 
+    // 4b: the natural frequencies after a small kick (hard ground ~8 Hz, ~5 Hz intruding).
+    let kicks = crate::study::ringing::kick_presets(
+        &ringing::RINGING_MODELS,
+        &ringing::RINGING_PHIS,
+        opts.rtol,
+    )
+    .map_err(FiguresError::Internal)?;
+    let ringing_rows: Vec<_> = kicks.iter().map(|k| k.ringing.clone()).collect();
+    let weight = {
+        let p = Params::preset(LOW_PHI).map_err(|e| FiguresError::Internal(e.to_string()))?;
+        p.motor_rod_mass_kg() * p.robot.gravity_m_s2
+    };
+    let kick_series = ringing::series_rows(&kicks, weight);
+    w.csv("ringing.csv", &ringing_rows, &crate::study::ringing::HEADER)?;
+    w.csv("ringing_series.csv", &kick_series, &ringing::SERIES_HEADER)?;
+    w.figure("ringing", &ringing::figure(&ringing_rows, &kick_series))?;
+
     // 5 + 6: one stutter jump at phi = 0.57, at the frequency where the eq4 stutter's
     // push-off (final) height is highest: the push-off is where the laws differ.
     let freq = find_best(&best, JumpKind::Stutter, ModelName::Eq4, Some(LOW_PHI))
@@ -264,6 +283,24 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
             format!(
                 "{:.1} kg/m (start {} kg/m; single-jump residual RMS {:.2} mm over {} jumps)",
                 a.alpha_fitted_kg_m, a.alpha_start_kg_m, a.residual_rms_mm, a.jumps
+            ),
+        ));
+    }
+    for r in &ringing_rows {
+        let key = if r.model == ModelName::Hard.as_str() {
+            "ringing.hard".to_string()
+        } else {
+            format!("ringing.{}.phi{}", r.model, r.phi)
+        };
+        findings.push((
+            key,
+            format!(
+                "intrusion {:.2} Hz (series spring: k1 {:.2} Hz, dF_p/dz {:.2} Hz), foot at rest {:.2} Hz (sqrt(k_s/M)/2pi {:.2} Hz)",
+                r.intrusion_freq_hz,
+                r.series_k1_estimate_hz,
+                r.series_local_estimate_hz,
+                r.static_freq_hz,
+                r.hard_estimate_hz
             ),
         ));
     }
