@@ -1,5 +1,6 @@
 //! Camera triggers through SIL (MODEL.md section 6): at 200 fps exactly one frame per 5 ms
-//! (50 ticks at 10 kHz), at 500 fps one per 2 ms (20 ticks); every frame the rig model's camera
+//! (50 ticks at 10 kHz), at 500 fps one per 2 ms (20 ticks), from the arm on (frames of the
+//! rod at rest come first); every frame the rig model's camera
 //! took corresponds to the controller's sample record of the same tick, in order.
 
 mod hil_common;
@@ -29,8 +30,24 @@ fn check(fps: u32, ticks_per_frame: u32) {
             "frame {k} at {fps} fps"
         );
     }
-    // The first frame starts with the trajectory.
-    assert_eq!(u64::from(first_tick), o.start_period);
+    // The camera runs from Arm: its first frame is on the armed controller's first tick, and
+    // the frames before the trajectory's start show the rod at rest (the settling time).
+    let armed_tick = o
+        .samples
+        .iter()
+        .find(|s| s.flags & sandjumper_core::sample::flags::ARMED != 0)
+        .map(|s| s.tick)
+        .unwrap();
+    assert_eq!(first_tick, armed_tick);
+    let at_rest = framed
+        .iter()
+        .filter(|(tick, _)| u64::from(*tick) < o.start_period)
+        .count() as u64;
+    assert_eq!(
+        at_rest,
+        (o.start_period - u64::from(armed_tick)).div_ceil(u64::from(ticks_per_frame))
+    );
+    assert!(at_rest >= 20, "{at_rest} frames at rest");
     // The camera (rising edges of the trigger line, seen by the rig model) took the same
     // frames on the same ticks: period index = controller tick (one frame per period).
     assert_eq!(
@@ -42,8 +59,8 @@ fn check(fps: u32, ticks_per_frame: u32) {
         assert_eq!(cam.frame, *frame);
         assert_eq!(cam.period, u64::from(*tick));
     }
-    // Frames cover the whole run after the start.
-    let run_ticks = o.ticks - o.start_period;
+    // Frames cover the whole run from the arm on.
+    let run_ticks = o.ticks - u64::from(armed_tick);
     assert_eq!(
         framed.len() as u64,
         run_ticks.div_ceil(u64::from(ticks_per_frame))

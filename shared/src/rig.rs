@@ -386,7 +386,10 @@ impl<const Q: usize> Rig<Q> {
 
     /// The camera trigger runs while the trajectory runs and after it (Running, Done).
     fn camera_tick(&mut self) -> crate::camera::TriggerTick {
-        if matches!(self.state, RigState::Running | RigState::Done) {
+        if matches!(
+            self.state,
+            RigState::Armed | RigState::Running | RigState::Done
+        ) {
             self.camera.tick()
         } else {
             crate::camera::TriggerTick {
@@ -622,19 +625,21 @@ impl<const Q: usize> Rig<Q> {
                 self.hold = j.profile.start_setpoint(&self.replay);
                 self.run_tick = 0;
                 self.phase = Phase::None;
-                self.state = Armed;
-                Ok(Reply::Ack)
-            }
-            (Command::Start, Armed) => {
-                let Some(j) = &self.jump else {
-                    return Err(CommandError::NotConfigured);
-                };
+                // The camera runs from Arm: the frames before Start show the rod at rest,
+                // the height every jump height is measured from.
                 self.camera = CameraTrigger::new(
                     j.config.camera_fps,
                     self.config.tick_hz,
                     j.config.camera_pulse_ticks,
                 );
                 self.camera.start();
+                self.state = Armed;
+                Ok(Reply::Ack)
+            }
+            (Command::Start, Armed) => {
+                if self.jump.is_none() {
+                    return Err(CommandError::NotConfigured);
+                }
                 self.run_tick = 0;
                 self.state = Running;
                 Ok(Reply::Ack)

@@ -16,6 +16,7 @@
 
 pub mod cli;
 pub mod command;
+pub mod imaging;
 pub mod model;
 pub mod output;
 pub mod plot;

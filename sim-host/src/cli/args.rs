@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use crate::command::args::parse_phi;
+use crate::imaging::command::{CameraScaleArgs, TrackArgs};
 use crate::rig::acqlog::command::LogArgs;
 use crate::rig::hil::command::HilArgs;
 use crate::rig::tool::RigArgs;
@@ -52,6 +53,11 @@ pub enum Command {
     Replay(ReplayArgs),
     /// Check (validate and summarise) or convert acquisition logs.
     Log(LogArgs),
+    /// Track the rod's ball through camera frames (sub-pixel) and measure the jump height
+    /// the paper's way: the apex of a free-flight parabola minus the rest height.
+    Track(TrackArgs),
+    /// The camera's metres per pixel from frames of a slow motor move and its encoder log.
+    CameraScale(CameraScaleArgs),
     /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
     /// rig (--link sil|pil): flash, status, jump, intrude, replay.
     Rig(RigArgs),

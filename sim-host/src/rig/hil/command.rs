@@ -19,6 +19,7 @@ use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
 use crate::command::resolve::{ParamsFile, resolve_params};
+use crate::imaging::render::CameraModel;
 use crate::model::params::{ModelName, Params};
 use crate::model::record::JumpSummary;
 use crate::model::trajectory::kind_name;
@@ -137,8 +138,13 @@ pub struct HilArgs {
         default_value = crate::rig::firmware_image::EMULATED_ELF
     )]
     pub firmware: PathBuf,
+    /// The simulated rod camera (TOML, every key of `frames/camera.toml` optional): region
+    /// size, scale, ball, exposure, lighting, noise, defocus, bits, seed.
+    #[arg(long, value_name = "FILE.toml")]
+    pub camera: Option<PathBuf>,
     /// Write acquisition.csv (the acquisition-log format), params.toml, summary.json,
-    /// hil.png and hil.svg into DIR.
+    /// hil.png and hil.svg into DIR, and with a camera rate frames/ (the rendered rod-camera
+    /// frames, frame_NNNNNN.png, and camera.toml).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Print one JSON object on stdout instead of the human summary.
@@ -264,6 +270,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     if let Some(n) = a.bench {
         return bench(a, &params, &spec, model_config, n);
     }
+    let camera = read_camera(a.camera.as_deref())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let outcome = one_run(a, &params, &spec, model_config)?;
     let phi = params.sand.packing_fraction;
@@ -321,6 +328,16 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         );
         log.write_file(&staged.file("acquisition.csv"))
             .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+        if a.camera_fps > 0 {
+            crate::rig::hil::camera::write_frames(
+                &outcome.camera_frames,
+                &crate::rig::hil::camera::heights_by_period(&outcome),
+                &camera,
+                1.0 / f64::from(model_config.tick_hz),
+                &staged.file("frames"),
+            )
+            .map_err(CliError::internal)?;
+        }
         staged.write_text("params.toml", &params.to_toml())?;
         staged.write_text("summary.json", &format!("{json}\n"))?;
         save_figure(
@@ -337,6 +354,13 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         print!("{}", human(&title, &report));
     }
     Ok(())
+}
+
+/// The camera model of `--camera` (the defaults when absent).
+pub fn read_camera(path: Option<&std::path::Path>) -> Result<CameraModel, CliError> {
+    path.map_or(Ok(CameraModel::default()), |p| {
+        CameraModel::from_toml_file(p).map_err(|e| CliError::input(format!("--camera {e}")))
+    })
 }
 
 fn human(title: &str, r: &HilReport<'_>) -> String {

@@ -11,6 +11,7 @@
 //!   on the rig, from its linear model.
 
 pub mod affinity;
+pub mod camera;
 pub mod command;
 pub mod emulated_firmware;
 pub mod framed;

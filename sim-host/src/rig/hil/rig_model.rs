@@ -117,6 +117,7 @@ pub struct RigModel {
     frames: Vec<CameraFrame>,
     period: u64,
     rod_rest_m: f64,
+    rod_heights: Vec<f64>,
     applied_command_n: f64,
     state: PlantState,
 }
@@ -177,6 +178,7 @@ impl RigModel {
             frames: Vec::new(),
             period: 0,
             rod_rest_m,
+            rod_heights: Vec::new(),
             applied_command_n: 0.0,
             state,
         })
@@ -216,6 +218,12 @@ impl RigModel {
     /// Rod height above its rest height now, m.
     pub fn rod_height_m(&self) -> f64 {
         self.state.x_r - self.rod_rest_m
+    }
+
+    /// Rod height above rest at the start of every period so far (index = period), m: what
+    /// the simulated camera renders its exposures from.
+    pub fn rod_height_history(&self) -> &[f64] {
+        &self.rod_heights
     }
 
     /// Camera frames taken so far.
@@ -299,6 +307,7 @@ impl RigModel {
             });
         }
         self.trigger_was_high = trigger;
+        self.rod_heights.push(self.rod_height_m());
         let k_f = self.plant.drive().force_constant_n_a;
         self.plant.advance_current(self.period_s, command / k_f)?;
         self.period += 1;
@@ -308,6 +317,7 @@ impl RigModel {
 
     /// Advance one period with the drive holding its last command (no actuator frame arrived).
     pub fn hold(&mut self) -> Result<(), SimError> {
+        self.rod_heights.push(self.rod_height_m());
         let k_f = self.plant.drive().force_constant_n_a;
         self.plant
             .advance_current(self.period_s, self.applied_command_n / k_f)?;

@@ -42,7 +42,12 @@ pub struct JumpArgs {
     /// Simulated rig and parameters.
     #[command(flatten)]
     pub rig: RigParamArgs,
-    /// Write acquisition.csv, params.toml, summary.json, jump.png and jump.svg into DIR.
+    /// The simulated rod camera (TOML; see `hil --camera`), for --link sil|pil.
+    #[arg(long, value_name = "FILE.toml")]
+    pub camera: Option<PathBuf>,
+    /// Write acquisition.csv, params.toml, summary.json, jump.png and jump.svg into DIR
+    /// (and, through a simulated rig with a camera rate, frames/: the rendered rod-camera
+    /// frames and camera.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Print the summary as JSON.
@@ -96,6 +101,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         tail_s: 0.5,
         max_run_s: traj.end_s() + 5.0,
     };
+    let camera = crate::rig::hil::command::read_camera(a.camera.as_deref())?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
         a.target.is_simulated(),
@@ -159,6 +165,16 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         kind_name(kind),
         spec.freq_hz
     );
+    if let Some(rig) = robot.as_ref().filter(|_| a.camera_fps > 0) {
+        crate::rig::hil::camera::write_frames(
+            rig.camera_frames(),
+            rig.rod_height_history(),
+            &camera,
+            rig.period_s(),
+            &staged.file("frames"),
+        )
+        .map_err(CliError::internal)?;
+    }
     let fig = motion_figure(&record.samples, model_config.tick_hz, mpc, title);
     let dir = write_run_files(staged, &log, &params, &json, &fig, "jump")?;
     if a.json {
