@@ -3,8 +3,8 @@
 //! parameters, the summary and the figure; bad input is an error with exit status 2.
 
 use clap::Parser;
+use sandjumper_sim::acqlog::{AcqLog, ReadOptions};
 use sandjumper_sim::cli::{Cli, EXIT_BAD_INPUT, execute};
-use sandjumper_sim::rig::acqlog::{AcqLog, ReadOptions};
 
 fn run(args: &[&str]) -> Result<(), (u8, String)> {
     let mut all = vec!["sandjumper", "hil"];

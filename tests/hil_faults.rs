@@ -8,7 +8,7 @@ mod hil_common;
 use hil_common::{params, sil};
 use sandjumper_core::FaultCode;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::rig::acqlog::{ReadOptions, read_log};
+use sandjumper_sim::acqlog::{ReadOptions, read_log};
 use sandjumper_sim::rig::hil::log::acquisition_log;
 use sandjumper_sim::rig::hil::{HilOutcome, HilSpec, InjectedFault, Injection};
 use sandjumper_sim::{ModelName, Params};

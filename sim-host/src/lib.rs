@@ -14,6 +14,7 @@
 //! The measurement science of the paper (camera tracking, PIV, DEM, automated campaigns)
 //! gets rooms of its own beside these as it is built.
 
+pub mod acqlog;
 pub mod cli;
 pub mod command;
 pub mod imaging;

@@ -2,11 +2,11 @@
 //! every kind of bad input (never a panic).
 
 use proptest::prelude::*;
-use sandjumper_sim::rig::acqlog::{
+use sandjumper_sim::acqlog::{
     AcqLog, AcqLogErrorKind as Kind, Column, JumpConfig, LogMetadata, LogRow, ReadOptions, read_log,
 };
 
-fn read(text: &str) -> Result<AcqLog, sandjumper_sim::rig::acqlog::AcqLogError> {
+fn read(text: &str) -> Result<AcqLog, sandjumper_sim::acqlog::AcqLogError> {
     read_log(text.as_bytes(), &ReadOptions::default())
 }
 

@@ -5,7 +5,7 @@ use proptest::prelude::*;
 use sandjumper_core::fault::FaultCode;
 use sandjumper_core::protocol::{FaultReport, RigMessage, SAMPLE_BATCH, encode_frame_vec};
 use sandjumper_core::sample::SampleRecord;
-use sandjumper_sim::rig::acqlog::{
+use sandjumper_sim::acqlog::{
     AcqLog, AcqLogErrorKind, BinaryLogWriter, LogMetadata, ReadOptions, SampleLogBuilder,
     convert_binary, read_log,
 };

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use sandjumper_core::protocol::{RigMessage, SAMPLE_BATCH, encode_frame_vec};
 use sandjumper_core::sample::SampleRecord;
-use sandjumper_sim::rig::acqlog::{AcqLog, BinaryLogWriter, LogMetadata, ReadOptions};
+use sandjumper_sim::acqlog::{AcqLog, BinaryLogWriter, LogMetadata, ReadOptions};
 
 fn sandjumper(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_sandjumper"))

@@ -3,10 +3,10 @@
 //! exact trajectory.
 
 use sandjumper_core::trajectory::{JumpKind, SineJump};
-use sandjumper_sim::model::trajectory::Stroke;
-use sandjumper_sim::rig::acqlog::{
+use sandjumper_sim::acqlog::{
     AcqLog, Column, JumpConfig, LogMetadata, LogRow, ReadOptions, read_log,
 };
+use sandjumper_sim::model::trajectory::Stroke;
 use sandjumper_sim::study::replay::{DEFAULT_WINDOW_S, ReplayStroke, replay_log};
 use sandjumper_sim::{JumpSpec, ModelName, Params, SimOptions, simulate_jump};
 

@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use sandjumper_sim::rig::acqlog::{ReadOptions, read_log};
+use sandjumper_sim::acqlog::{ReadOptions, read_log};
 
 fuzz_target!(|data: &[u8]| {
     for allow_gaps in [false, true] {

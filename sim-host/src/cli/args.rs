@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
+use crate::acqlog::command::LogArgs;
 use crate::command::args::parse_phi;
 use crate::imaging::command::{CameraScaleArgs, TrackArgs};
-use crate::rig::acqlog::command::LogArgs;
 use crate::rig::hil::command::HilArgs;
 use crate::rig::tool::RigArgs;
 use crate::study::figures::command::FiguresArgs;

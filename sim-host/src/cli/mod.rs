@@ -57,7 +57,7 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Figures(a) => crate::study::figures::command::run(&a),
         args::Command::Hil(a) => crate::rig::hil::command::run(&a),
         args::Command::Replay(a) => crate::study::replay::command::run(&a),
-        args::Command::Log(a) => crate::rig::acqlog::command::run(&a),
+        args::Command::Log(a) => crate::acqlog::command::run(&a),
         args::Command::Track(a) => crate::imaging::command::run(&a),
         args::Command::CameraScale(a) => crate::imaging::command::run_scale(&a),
         args::Command::Rig(a) => crate::rig::tool::run(&a),

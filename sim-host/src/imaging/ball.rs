@@ -365,7 +365,19 @@ impl BallFinder {
         };
         let candidates = match self.candidates(frame, window) {
             Ok(c) => c,
-            Err(reason) => return BallFix::flagged(FixStatus::Missing, reason),
+            Err(reason) => {
+                let reason = match prediction {
+                    Some(p) => format!(
+                        "{reason} in rows {}..{} around the predicted position ({:.0}, {:.0})",
+                        window.y,
+                        window.y + window.height,
+                        p.0,
+                        p.1
+                    ),
+                    None => reason,
+                };
+                return BallFix::flagged(FixStatus::Missing, reason);
+            }
         };
         let chosen = match prediction {
             Some(p) => {

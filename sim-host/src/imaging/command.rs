@@ -16,10 +16,10 @@ use super::track::{
     Apex, CSV_HEADER, FlagCounts, FrameClock, TrackError, TrackResult, TrackSpec, follow_ball,
     track_sequence,
 };
+use crate::acqlog::{AcqLog, Column, ReadOptions};
 use crate::command::CliError;
 use crate::output::StagedDir;
 use crate::plot::save_figure;
-use crate::rig::acqlog::{AcqLog, Column, ReadOptions};
 use sandjumper_core::sample::flags;
 
 fn positive(s: &str, what: &str) -> Result<f64, String> {

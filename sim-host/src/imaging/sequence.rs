@@ -302,6 +302,7 @@ pub fn decode_file(path: &Path) -> Result<GrayFrame, SequenceError> {
 pub fn to_gray(image: DynamicImage) -> Result<GrayFrame, String> {
     let (w, h) = (image.width(), image.height());
     let bad = || "pixel buffer size does not match the image size".to_string();
+    let luma = |p: [f32; 3]| luma_bt601(p[0], p[1], p[2]);
     match image {
         DynamicImage::ImageLuma8(i) => GrayFrame::from_u8(w, h, i.into_raw()).ok_or_else(bad),
         DynamicImage::ImageLuma16(i) => GrayFrame::from_u16(w, h, i.into_raw()).ok_or_else(bad),
@@ -311,38 +312,16 @@ pub fn to_gray(image: DynamicImage) -> Result<GrayFrame, String> {
         DynamicImage::ImageLumaA16(i) => {
             GrayFrame::from_u16(w, h, i.pixels().map(|p| p.0[0]).collect()).ok_or_else(bad)
         }
-        DynamicImage::ImageRgb8(i) => GrayFrame::from_u8(
-            w,
-            h,
-            i.pixels()
-                .map(|p| luma_bt601(p.0[0].into(), p.0[1].into(), p.0[2].into()) as u8)
-                .collect(),
-        )
-        .ok_or_else(bad),
-        DynamicImage::ImageRgba8(i) => GrayFrame::from_u8(
-            w,
-            h,
-            i.pixels()
-                .map(|p| luma_bt601(p.0[0].into(), p.0[1].into(), p.0[2].into()) as u8)
-                .collect(),
-        )
-        .ok_or_else(bad),
-        DynamicImage::ImageRgb16(i) => GrayFrame::from_u16(
-            w,
-            h,
-            i.pixels()
-                .map(|p| luma_bt601(p.0[0].into(), p.0[1].into(), p.0[2].into()) as u16)
-                .collect(),
-        )
-        .ok_or_else(bad),
-        DynamicImage::ImageRgba16(i) => GrayFrame::from_u16(
-            w,
-            h,
-            i.pixels()
-                .map(|p| luma_bt601(p.0[0].into(), p.0[1].into(), p.0[2].into()) as u16)
-                .collect(),
-        )
-        .ok_or_else(bad),
+        DynamicImage::ImageRgb8(_) | DynamicImage::ImageRgba8(_) => {
+            let rgb = image.to_rgb8();
+            let px = rgb.pixels().map(|p| luma(p.0.map(f32::from)) as u8);
+            GrayFrame::from_u8(w, h, px.collect()).ok_or_else(bad)
+        }
+        DynamicImage::ImageRgb16(_) | DynamicImage::ImageRgba16(_) => {
+            let rgb = image.to_rgb16();
+            let px = rgb.pixels().map(|p| luma(p.0.map(f32::from)) as u16);
+            GrayFrame::from_u16(w, h, px.collect()).ok_or_else(bad)
+        }
         other => Err(format!(
             "pixel type {:?} not supported (allowed: 8- or 16-bit grey, RGB, RGBA)",
             other.color()

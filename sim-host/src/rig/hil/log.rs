@@ -1,12 +1,12 @@
 //! What a run through the loop leaves behind: the acquisition log (the logs' own format and
-//! writer, [`crate::rig::acqlog`]: exactly what the rig produces) and a figure of commanded vs
+//! writer, [`crate::acqlog`]: exactly what the rig produces) and a figure of commanded vs
 //! actual motor position, spring force and foot depth.
 
 use super::run::{HilOutcome, HilSpec};
+use crate::acqlog::{AcqLog, Column, JumpConfig as LogJump, LogMetadata, LogRow};
 use crate::model::trajectory::kind_name;
 use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use crate::plot::palette;
-use crate::rig::acqlog::{AcqLog, Column, JumpConfig as LogJump, LogMetadata, LogRow};
 
 /// The acquisition log of a run: one row per controller sample record, time = tick / rate,
 /// the camera's rod height on the rows that started a frame. `firmware` names the controller.

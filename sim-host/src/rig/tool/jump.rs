@@ -12,11 +12,11 @@ use super::output::{
 };
 use super::session::{Fixture, Program, run_program};
 use super::{RigParamArgs, TargetArgs, link_failed};
+use crate::acqlog::JumpConfig as LogJump;
 use crate::command::CliError;
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use crate::model::trajectory::kind_name;
 use crate::output::StagedDir;
-use crate::rig::acqlog::JumpConfig as LogJump;
 use crate::rig::hil::rig_model::RigModelConfig;
 use crate::rig::hil::run::{HilSpec, jump_config, trajectory};
 use sandjumper_core::trajectory::JumpKind;

@@ -2,10 +2,10 @@
 //! [`SampleLogBuilder`] from the controller's sample records exactly as they arrived) and a
 //! figure of commanded vs measured motor position and the force command.
 
+use crate::acqlog::{AcqLog, LogMetadata, SampleLogBuilder};
 use crate::command::CliError;
 use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use crate::plot::palette;
-use crate::rig::acqlog::{AcqLog, LogMetadata, SampleLogBuilder};
 use sandjumper_core::SampleRecord;
 use sandjumper_core::sample::flags;
 

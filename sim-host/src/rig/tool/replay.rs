@@ -26,10 +26,10 @@ use super::output::{
 };
 use super::session::{Fixture, Program, bring_to_idle, query_status, run_program};
 use super::{RigParamArgs, TargetArgs, link_failed};
+use crate::acqlog::{AcqLog, ReadOptions};
 use crate::command::CliError;
 use crate::model::params::Params;
 use crate::output::StagedDir;
-use crate::rig::acqlog::{AcqLog, ReadOptions};
 use crate::rig::hil::link::{LinkError, RigLink};
 use crate::rig::hil::rig_model::RigModelConfig;
 use crate::rig::hil::run::HilSpec;

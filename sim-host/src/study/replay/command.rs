@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 
+use crate::acqlog::{AcqLog, ReadOptions};
 use crate::command::CliError;
 use crate::command::args::{ModelArg, ParamSource};
 use crate::command::resolve::{ParamsFile, resolve_params};
@@ -14,7 +15,6 @@ use crate::model::options::SimOptions;
 use crate::model::params::ModelName;
 use crate::model::record::JumpSummary;
 use crate::output::StagedDir;
-use crate::rig::acqlog::{AcqLog, ReadOptions};
 use crate::study::jump_command::{human_summary, write_jump_files};
 use crate::study::replay::{DEFAULT_WINDOW_S, MeasuredComparison, ReplayInfo, replay_log};
 

@@ -23,12 +23,12 @@
 pub mod command;
 pub mod differentiate;
 
+use crate::acqlog::AcqLog;
 use crate::model::jump::{JumpOutcome, kinematic_at_rest, run_kinematic};
 use crate::model::options::SimOptions;
 use crate::model::params::{ModelName, Params};
 use crate::model::record::SeriesRow;
 use crate::model::trajectory::Stroke;
-use crate::rig::acqlog::AcqLog;
 use crate::study::replay::differentiate::SavitzkyGolay;
 use sandjumper_core::sample::flags;
 use sandjumper_core::trajectory::Kinematics;
