@@ -63,6 +63,67 @@ fn out_writes_a_readable_acquisition_log_and_a_figure() {
         assert!(summary.get(key).is_some(), "summary.json lacks {key}");
     }
     assert_eq!(summary["camera_frames"].as_u64(), Some(frames.len() as u64));
+    // The simulated camera rendered one PNG per camera row, numbered like the log, and wrote
+    // its model.
+    let pngs = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "png")
+        })
+        .count();
+    assert_eq!(pngs, frames.len());
+    let last = frames.last().unwrap().camera_frame.unwrap();
+    assert!(out.join(format!("frames/frame_{last:06}.png")).is_file());
+    assert!(out.join("frames/camera.toml").is_file());
+}
+
+#[test]
+fn a_camera_file_changes_the_frames_and_a_bad_one_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cam = dir.path().join("camera.toml");
+    std::fs::write(&cam, "width_px = 128\nheight_px = 900\nbits = 16\n").unwrap();
+    let out = dir.path().join("hil");
+    run(&[
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--camera",
+        cam.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ])
+    .expect("hil runs");
+    let seq = sandjumper_sim::imaging::sequence::ImageSequence::open(
+        out.join("frames").to_str().unwrap(),
+    )
+    .unwrap();
+    let first = seq.nth(0).unwrap().unwrap().frame;
+    assert_eq!((first.width(), first.height()), (128, 900));
+    assert_eq!(first.depth().bits(), 16);
+    for (text, says) in [
+        ("widht_px = 128\n", "unknown key `widht_px`"),
+        ("m_per_px = -1.0\n", "m_per_px"),
+        ("bits = 12\n", "bits"),
+    ] {
+        std::fs::write(&cam, text).unwrap();
+        let (code, msg) = run(&[
+            "--kind",
+            "single",
+            "--freq",
+            "10",
+            "--camera",
+            cam.to_str().unwrap(),
+        ])
+        .unwrap_err();
+        assert_eq!(code, EXIT_BAD_INPUT, "{text}: {msg}");
+        assert!(msg.contains(says), "{text}: {msg}");
+    }
 }
 
 #[test]

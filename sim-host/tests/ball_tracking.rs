@@ -88,6 +88,23 @@ fn centre_error_is_under_five_hundredths_of_a_pixel_without_pixel_locking() {
 }
 
 #[test]
+fn the_renderer_is_deterministic_for_a_seed() {
+    let cam = CameraModel::default();
+    let a = cam.render_still((120.4, 333.3), 9);
+    assert_eq!(a, cam.render_still((120.4, 333.3), 9));
+    assert_ne!(
+        a,
+        cam.render_still((120.4, 333.3), 10),
+        "each frame its own noise"
+    );
+    let other = CameraModel {
+        seed: 2,
+        ..CameraModel::default()
+    };
+    assert_ne!(a, other.render_still((120.4, 333.3), 9));
+}
+
+#[test]
 fn sixteen_bits_defocus_and_dim_light_keep_the_accuracy() {
     let cam = CameraModel {
         bits: 16,

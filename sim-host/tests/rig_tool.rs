@@ -145,8 +145,19 @@ fn jump_through_sil_writes_a_complete_log_that_log_check_accepts() {
     );
     assert_eq!(sum["dropped_samples"], 0);
     assert!(sum["tracking_error_max_m"].as_f64().unwrap() < 0.002);
-    // 200 fps for at least the 0.1 s trajectory.
+    // 200 fps for at least the 0.1 s trajectory, each frame rendered by the simulated camera.
     assert!(sum["camera_frames"].as_u64().unwrap() >= 20);
+    let pngs = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "png")
+        })
+        .count() as u64;
+    assert_eq!(pngs, sum["camera_frames"].as_u64().unwrap());
     let rows = log_rows(&out.join("acquisition.csv"));
     assert_eq!(rows.len() as u64, sum["samples"].as_u64().unwrap());
     // The motor went from the bottom of the stroke to the top and back.
