@@ -226,6 +226,22 @@ pub fn write_series_csv(path: &Path, rows: &[SeriesRow]) -> Result<(), OutputErr
     w.flush().map_err(|e| err(&e))
 }
 
+/// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
+/// otherwise, so logs and pipes stay clean).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {what} (eta {{eta}})"
+    )) {
+        bar.set_style(style);
+    }
+    bar
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::acqlog::command::LogArgs;
 use crate::command::args::parse_phi;
+use crate::flow::command::{PivArgs, SyntheticArgs};
 use crate::imaging::command::{CameraScaleArgs, TrackArgs};
 use crate::rig::hil::command::HilArgs;
 use crate::rig::tool::RigArgs;
@@ -58,6 +59,12 @@ pub enum Command {
     Track(TrackArgs),
     /// The camera's metres per pixel from frames of a slow motor move and its encoder log.
     CameraScale(CameraScaleArgs),
+    /// PIV of side-wall grain videos: multipass FFT correlation with window deformation,
+    /// validation, shear rate, grain momentum and added mass.
+    Piv(Box<PivArgs>),
+    /// Grain images with a known motion (shift, shear, rotation, a descending foot's cone),
+    /// to test PIV settings against.
+    PivSynthetic(SyntheticArgs),
     /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
     /// rig (--link sil|pil): flash, status, jump, intrude, replay.
     Rig(RigArgs),

@@ -60,6 +60,8 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Log(a) => crate::acqlog::command::run(&a),
         args::Command::Track(a) => crate::imaging::command::run(&a),
         args::Command::CameraScale(a) => crate::imaging::command::run_scale(&a),
+        args::Command::Piv(a) => crate::flow::command::run(&a),
+        args::Command::PivSynthetic(a) => crate::flow::command::run_synthetic(&a),
         args::Command::Rig(a) => crate::rig::tool::run(&a),
     }
 }
