@@ -84,6 +84,7 @@ fn a_synthetic_cone_goes_through_piv_to_an_added_mass_table() {
         "speed.svg",
         "shear_rate.png",
         "added_mass.png",
+        "animation.gif",
     ] {
         assert!(out.join(name).is_file(), "{name} missing");
     }

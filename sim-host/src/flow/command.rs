@@ -481,6 +481,27 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::internal(format!("cannot encode the summary: {e}")))?;
     if let Some(staged) = staged {
+        // The animation (the paper's Supplementary Video 2): each pair's frame A with its
+        // vectors, at most 200 frames, 100 ms each.
+        let stride = (fields[0].nx / 40).max(1);
+        let max_disp = fields
+            .iter()
+            .flat_map(|f| f.u.iter().zip(&f.v).map(|(a, b)| a.hypot(*b)))
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max);
+        let scale = if max_disp > 0.0 {
+            1.5 * (stride * fields[0].step_px) as f64 / max_disp
+        } else {
+            1.0
+        };
+        let frames: Vec<image::RgbaImage> = pairs
+            .iter()
+            .zip(&fields)
+            .take(200)
+            .map(|(&(ia, _), f)| super::figure::animation_frame(&images[ia], f, stride, scale))
+            .collect();
+        super::figure::write_gif(&staged.file("animation.gif"), frames, 100)
+            .map_err(CliError::internal)?;
         write_outputs(
             &staged,
             a,

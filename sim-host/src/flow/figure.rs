@@ -162,3 +162,73 @@ impl Figure for MapFigure {
         Ok(())
     }
 }
+
+/// One animation frame: the grey frame A of a pair with its vectors drawn as yellow arrows
+/// (every `stride`-th vector, scaled by `scale`), as RGBA, reduced to at most 640 px wide.
+pub fn animation_frame(
+    img: &super::piv::Image,
+    field: &super::piv::VectorField,
+    stride: usize,
+    scale: f64,
+) -> image::RgbaImage {
+    let step = img.width.div_ceil(640).max(1);
+    let (w, h) = ((img.width / step) as u32, (img.height / step) as u32);
+    let sf = step as f64;
+    let (lo, hi) = img
+        .data
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    let span = (hi - lo).max(1.0);
+    let mut out = image::RgbaImage::from_fn(w, h, |x, y| {
+        let k = y as usize * step * img.width + x as usize * step;
+        let v = ((img.data[k] - lo) / span * 255.0) as u8;
+        image::Rgba([v, v, v, 255])
+    });
+    let mut put = |x: f64, y: f64| {
+        let (x, y) = (x / sf, y / sf);
+        if x >= 0.0 && y >= 0.0 && (x as u32) < w && (y as u32) < h {
+            out.put_pixel(x as u32, y as u32, image::Rgba([255, 220, 0, 255]));
+        }
+    };
+    for j in (0..field.ny).step_by(stride.max(1)) {
+        for i in (0..field.nx).step_by(stride.max(1)) {
+            let k = j * field.nx + i;
+            let (u, v) = (field.u[k], field.v[k]);
+            if !(u.is_finite() && v.is_finite()) {
+                continue;
+            }
+            let (x0, y0) = (field.xs[i], field.ys[j]);
+            let (dx, dy) = (u * scale, v * scale);
+            let steps = dx.hypot(dy).ceil().max(1.0) as usize;
+            for s in 0..=steps {
+                let t = s as f64 / steps as f64;
+                put(x0 + dx * t, y0 + dy * t);
+            }
+            put(x0, y0);
+            put(x0 + 1.0, y0);
+            put(x0, y0 + 1.0);
+        }
+    }
+    out
+}
+
+/// Write `frames` as a looping GIF, `delay_ms` per frame.
+pub fn write_gif(
+    path: &std::path::Path,
+    frames: Vec<image::RgbaImage>,
+    delay_ms: u32,
+) -> Result<(), String> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    let file = std::fs::File::create(path)
+        .map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 30);
+    enc.set_repeat(Repeat::Infinite)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let delay = image::Delay::from_numer_denom_ms(delay_ms, 1);
+    enc.encode_frames(
+        frames
+            .into_iter()
+            .map(|f| image::Frame::from_parts(f, 0, 0, delay)),
+    )
+    .map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
