@@ -179,3 +179,94 @@ fn bad_piv_input_is_refused_with_exit_status_2() {
     std::fs::write(&foot, "frame,x_px,y_px\n0,1,1\n0,2,2\n").unwrap();
     refused(&["piv", f, "--foot", foot.to_str().unwrap()], "at least 3");
 }
+
+#[test]
+fn the_acquisition_log_times_the_pairs() {
+    use sandjumper_sim::acqlog::{AcqLog, Column, LogMetadata, LogRow};
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("f");
+    let f = frames.to_str().unwrap();
+    ok(&[
+        "piv-synthetic",
+        "--field",
+        "shift",
+        "--size",
+        "128x96",
+        "--frames",
+        "3",
+        "--out",
+        f,
+    ]);
+    // Camera ticks at 0.5 s, 0.502 s and 0.5045 s (the trigger, not a nominal rate).
+    let mut log = AcqLog::new(LogMetadata::new(10_000.0, 1e6), &[Column::CameraFrame]);
+    for k in 0..100u64 {
+        let mut row = LogRow::new(k, 0.5 + k as f64 * 1e-4, 0);
+        row.camera_frame = match k {
+            0 => Some(0),
+            20 => Some(1),
+            45 => Some(2),
+            _ => None,
+        };
+        log.rows.push(row);
+    }
+    let path = dir.path().join("acq.csv");
+    log.write_file(&path).unwrap();
+    let out = dir.path().join("piv");
+    ok(&[
+        "piv",
+        f,
+        "--log",
+        path.to_str().unwrap(),
+        "--m-per-px",
+        "1e-4",
+        "--origin",
+        "64,0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let flow = std::fs::read_to_string(out.join("flow.csv")).unwrap();
+    let t: Vec<f64> = flow
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(3).unwrap().parse().unwrap())
+        .collect();
+    assert!(
+        (t[0] - 0.501).abs() < 1e-9 && (t[1] - 0.50325).abs() < 1e-9,
+        "{t:?}"
+    );
+    // The velocity of the shift (2.5, 1.25) px per frame follows each pair's own interval.
+    let u0 = std::fs::read_to_string(out.join("fields/0000.csv")).unwrap();
+    let u1 = std::fs::read_to_string(out.join("fields/0001.csv")).unwrap();
+    let mid = |s: &str| -> f64 {
+        let rows: Vec<&str> = s.lines().collect();
+        rows[rows.len() / 2]
+            .split(',')
+            .nth(8)
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    assert!(
+        (mid(&u0) - 2.5e-4 / 0.002).abs() < 0.01 * 0.125,
+        "{}",
+        mid(&u0)
+    );
+    assert!(
+        (mid(&u1) - 2.5e-4 / 0.0025).abs() < 0.01 * 0.1,
+        "{}",
+        mid(&u1)
+    );
+    // A log that lacks a frame.
+    let mut short = log.clone();
+    for r in &mut short.rows {
+        if r.camera_frame == Some(2) {
+            r.camera_frame = None;
+        }
+    }
+    let spath = dir.path().join("short.csv");
+    short.write_file(&spath).unwrap();
+    refused(
+        &["piv", f, "--log", spath.to_str().unwrap()],
+        "not in the log: 2",
+    );
+}
