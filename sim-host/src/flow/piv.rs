@@ -495,7 +495,7 @@ pub fn piv_pair(
     let splines = cfg
         .deform
         .then(|| (a.spline_coefficients(), b.spline_coefficients()));
-    for &n in &cfg.windows {
+    for (pass, &n) in cfg.windows.iter().enumerate() {
         let step = ((n as f64 * (1.0 - cfg.overlap)).round() as usize).max(1);
         let (aw, bw) = match (&field, &splines) {
             (Some(f), Some((sa, sb))) => deform_pair(sa, sb, f),
@@ -561,6 +561,9 @@ pub fn piv_pair(
             peak_ratio: results.iter().map(|r| r.2).collect(),
         };
         validate(&mut f, cfg);
+        if pass + 1 < cfg.windows.len() {
+            smooth(&mut f);
+        }
         field = Some(f);
     }
     field.ok_or_else(|| PivError("no passes".into()))
@@ -729,6 +732,37 @@ pub fn validate(f: &mut VectorField, cfg: &PivConfig) {
         if !done && f.flag[k] != flag::MASKED {
             f.u[k] = 0.0;
             f.v[k] = 0.0;
+        }
+    }
+}
+
+/// A 3 x 3 mean of the unmasked vectors: the predictor a later pass deforms with. A noisy
+/// predictor would otherwise add its own noise to every later pass (the new residual only
+/// corrects its average over a window), so iterating would not converge.
+fn smooth(f: &mut VectorField) {
+    let (nx, ny) = (f.nx, f.ny);
+    let (u0, v0) = (f.u.clone(), f.v.clone());
+    for j in 0..ny {
+        for i in 0..nx {
+            let k = j * nx + i;
+            if f.flag[k] == flag::MASKED {
+                continue;
+            }
+            let (mut su, mut sv, mut c) = (0.0, 0.0, 0.0);
+            for jj in j.saturating_sub(1)..(j + 2).min(ny) {
+                for ii in i.saturating_sub(1)..(i + 2).min(nx) {
+                    let kk = jj * nx + ii;
+                    if f.flag[kk] != flag::MASKED && u0[kk].is_finite() {
+                        su += u0[kk];
+                        sv += v0[kk];
+                        c += 1.0;
+                    }
+                }
+            }
+            if c > 0.0 {
+                f.u[k] = su / c;
+                f.v[k] = sv / c;
+            }
         }
     }
 }
