@@ -226,6 +226,26 @@ pub fn write_series_csv(path: &Path, rows: &[SeriesRow]) -> Result<(), OutputErr
     w.flush().map_err(|e| err(&e))
 }
 
+/// Write records (with a header, even when there are none) as CSV to `path`.
+pub fn write_csv<T: serde::Serialize>(
+    path: &Path,
+    records: &[T],
+    header: &[&str],
+) -> Result<(), String> {
+    let mut w = csv::Writer::from_path(path)
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    if records.is_empty() {
+        w.write_record(header)
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    }
+    for r in records {
+        w.serialize(r)
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    }
+    w.flush()
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+}
+
 /// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
 /// otherwise, so logs and pipes stay clean).
 pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

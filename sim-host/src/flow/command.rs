@@ -14,6 +14,7 @@ use super::preprocess::{Preprocess, apply, background};
 use super::synthetic::GrainScene;
 use crate::acqlog::{AcqLog, ReadOptions};
 use crate::command::CliError;
+use crate::command::args::parse_number;
 use crate::imaging::command::log_clock;
 use crate::imaging::render::write_png;
 use crate::imaging::sequence::{ImageSequence, decode_file};
@@ -39,15 +40,8 @@ fn parse_windows(s: &str) -> Result<Vec<usize>, String> {
         .map_err(|_| format!("`{s}` is not a list of window sizes such as 64,32,16"))
 }
 
-fn parse_f64(s: &str) -> Result<f64, String> {
-    s.parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("`{s}` is not a number"))
-}
-
 fn parse_positive(s: &str) -> Result<f64, String> {
-    parse_f64(s).and_then(|v| {
+    parse_number(s).and_then(|v| {
         if v > 0.0 {
             Ok(v)
         } else {
@@ -57,7 +51,7 @@ fn parse_positive(s: &str) -> Result<f64, String> {
 }
 
 fn parse_point(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_f64(p.trim())).collect();
+    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
     match v.as_slice() {
         [Ok(x), Ok(y)] => Ok((*x, *y)),
         _ => Err(format!("`{s}` is not a point X,Y in pixels")),
@@ -81,7 +75,7 @@ pub struct PivArgs {
     #[arg(long, value_name = "N,N,..", default_value = "64,32,16")]
     pub windows: String,
     /// Window overlap, 0..=0.9.
-    #[arg(long, value_name = "F", default_value = "0.5", value_parser = parse_f64)]
+    #[arg(long, value_name = "F", default_value = "0.5", value_parser = parse_number)]
     pub overlap: f64,
     /// Do not deform the windows (offset them by the rounded prediction instead).
     #[arg(long)]
@@ -93,7 +87,7 @@ pub struct PivArgs {
     #[arg(long, value_name = "X", default_value = "2", value_parser = parse_positive)]
     pub median_threshold: f64,
     /// Smallest accepted ratio of the first to the second correlation peak.
-    #[arg(long, value_name = "X", default_value = "1.2", value_parser = parse_f64)]
+    #[arg(long, value_name = "X", default_value = "1.2", value_parser = parse_number)]
     pub min_peak_ratio: f64,
     /// CLAHE tile size, px (0: no CLAHE).
     #[arg(long, value_name = "PX", default_value = "64")]
@@ -105,7 +99,7 @@ pub struct PivArgs {
     #[arg(long)]
     pub subtract_background: bool,
     /// Cap intensities at median + S standard deviations (0: off).
-    #[arg(long, value_name = "S", default_value = "0", value_parser = parse_f64)]
+    #[arg(long, value_name = "S", default_value = "0", value_parser = parse_number)]
     pub cap_sigma: f64,
     /// Static mask image (same size as the frames; non-zero pixels are not grain flow).
     #[arg(long, value_name = "MASK.png")]
@@ -253,8 +247,8 @@ pub fn read_foot(path: &Path) -> Result<std::collections::BTreeMap<u64, Polygon>
             ))
         };
         let frame: u64 = rec[0].trim().parse().map_err(|_| bad())?;
-        let x = parse_f64(rec[1].trim()).map_err(|_| bad())?;
-        let y = parse_f64(rec[2].trim()).map_err(|_| bad())?;
+        let x = parse_number(rec[1].trim()).map_err(|_| bad())?;
+        let y = parse_number(rec[2].trim()).map_err(|_| bad())?;
         out.entry(frame).or_default().push((x, y));
     }
     if let Some((f, p)) = out.iter().find(|(_, p)| p.len() < 3) {
@@ -383,8 +377,17 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
         let mask: Option<Vec<bool>> = if static_mask.is_some() || foot_a.is_some() {
             let mut m = static_mask.clone().unwrap_or_else(|| vec![false; w * h]);
             for poly in [foot_a, foot_b].into_iter().flatten() {
-                for y in 0..h {
-                    for x in 0..w {
+                // Only the polygon's bounding box can be inside it.
+                let (x0, x1, y0, y1) = poly.iter().fold(
+                    (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
+                    |(a, b, c, d), &(x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)),
+                );
+                let span = |lo: f64, hi: f64, n: usize| {
+                    (lo.floor().clamp(0.0, n as f64) as usize)
+                        ..(hi.ceil() + 1.0).clamp(0.0, n as f64) as usize
+                };
+                for y in span(y0, y1, h) {
+                    for x in span(x0, x1, w) {
                         if inside(poly, x as f64, y as f64) {
                             m[y * w + x] = true;
                         }
@@ -664,7 +667,7 @@ fn write_outputs(
         write_npy("vorticity_1_s.npy", &[np, ny, nx], pick(2))?;
         write_npy("shear_rate_1_s.npy", &[np, ny, nx], pick(3))?;
     }
-    crate::study::sweep::write_csv(&staged.file("flow.csv"), rows, &FLOW_HEADER)
+    crate::output::write_csv(&staged.file("flow.csv"), rows, &FLOW_HEADER)
         .map_err(CliError::internal)?;
     // The table `fit added-mass` reads: intruding pairs, depth increasing.
     let mut am = String::from("depth_m,added_mass_kg\n");
@@ -857,7 +860,7 @@ pub struct SyntheticArgs {
     #[arg(long, value_enum)]
     pub field: SyntheticField,
     /// Magnitude, px per frame.
-    #[arg(long, value_name = "PX", default_value = "2.5", value_parser = parse_f64)]
+    #[arg(long, value_name = "PX", default_value = "2.5", value_parser = parse_number)]
     pub magnitude: f64,
     /// Frame size WxH, px.
     #[arg(long, value_name = "WxH", default_value = "1280x1024", value_parser = parse_size)]
@@ -869,7 +872,7 @@ pub struct SyntheticArgs {
     #[arg(long, value_name = "PX", default_value = "5", value_parser = parse_positive)]
     pub grain_px: f64,
     /// Read noise, 8-bit levels RMS (0: none).
-    #[arg(long, value_name = "LEVELS", default_value = "0", value_parser = parse_f64)]
+    #[arg(long, value_name = "LEVELS", default_value = "0", value_parser = parse_number)]
     pub noise: f64,
     /// Seed.
     #[arg(long, value_name = "N", default_value = "1")]

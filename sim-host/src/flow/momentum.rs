@@ -103,25 +103,10 @@ pub fn grain_momentum(
             let v_px = if usable(k) {
                 field.v[k]
             } else {
-                let mut sum = 0.0;
-                let mut n = 0;
-                for dj in -1isize..=1 {
-                    for di in -1isize..=1 {
-                        let (ii, jj) = (i as isize + di, j as isize + dj);
-                        if ii < 0 || jj < 0 || ii >= field.nx as isize || jj >= field.ny as isize {
-                            continue;
-                        }
-                        let kk = jj as usize * field.nx + ii as usize;
-                        if usable(kk) {
-                            sum += field.v[kk];
-                            n += 1;
-                        }
-                    }
+                match field.block_mean(k, usable) {
+                    Some((_, v)) => v,
+                    None => continue,
                 }
-                if n == 0 {
-                    continue;
-                }
-                sum / f64::from(n)
             };
             let x = cal.x_m(xc);
             let w = -v_px * cal.m_per_px / dt_s;

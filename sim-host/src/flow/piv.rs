@@ -247,6 +247,27 @@ impl VectorField {
         (c(flag::VALID), c(flag::REPLACED), c(flag::MASKED))
     }
 
+    /// Indices of the 3 x 3 block of vectors around vector `k` (itself included) that lie on
+    /// the grid.
+    pub fn block(&self, k: usize) -> impl Iterator<Item = usize> + '_ {
+        let (i, j) = (k % self.nx, k / self.nx);
+        (j.saturating_sub(1)..(j + 2).min(self.ny)).flat_map(move |jj| {
+            (i.saturating_sub(1)..(i + 2).min(self.nx)).map(move |ii| jj * self.nx + ii)
+        })
+    }
+
+    /// Mean `(u, v)` of the vectors of the block around `k` for which `take` holds; `None`
+    /// when there is none.
+    pub fn block_mean(&self, k: usize, take: impl Fn(usize) -> bool) -> Option<(f64, f64)> {
+        let (mut su, mut sv, mut c) = (0.0, 0.0, 0u32);
+        for kk in self.block(k).filter(|&kk| take(kk)) {
+            su += self.u[kk];
+            sv += self.v[kk];
+            c += 1;
+        }
+        (c > 0).then(|| (su / f64::from(c), sv / f64::from(c)))
+    }
+
     /// Bilinear interpolation of the field at pixel `(x, y)` (clamped to the grid; masked
     /// neighbours count as zero displacement).
     fn sample(&self, x: f64, y: f64) -> (f64, f64) {
@@ -650,25 +671,14 @@ pub fn validate(f: &mut VectorField, cfg: &PivConfig) {
                 outlier[k] = true;
                 continue;
             }
-            let mut nu = Vec::with_capacity(8);
-            let mut nv = Vec::with_capacity(8);
-            for dj in -1isize..=1 {
-                for di in -1isize..=1 {
-                    if di == 0 && dj == 0 {
-                        continue;
-                    }
-                    let (ii, jj) = (i as isize + di, j as isize + dj);
-                    if ii < 0 || jj < 0 || ii >= nx as isize || jj >= ny as isize {
-                        continue;
-                    }
-                    let kk = jj as usize * nx + ii as usize;
-                    if f.flag[kk] == flag::MASKED || f.peak_ratio[kk] < cfg.min_peak_ratio {
-                        continue;
-                    }
-                    nu.push(f.u[kk]);
-                    nv.push(f.v[kk]);
-                }
-            }
+            let neighbours: Vec<usize> = f
+                .block(k)
+                .filter(|&kk| {
+                    kk != k && f.flag[kk] != flag::MASKED && f.peak_ratio[kk] >= cfg.min_peak_ratio
+                })
+                .collect();
+            let mut nu: Vec<f64> = neighbours.iter().map(|&kk| f.u[kk]).collect();
+            let mut nv: Vec<f64> = neighbours.iter().map(|&kk| f.v[kk]).collect();
             if nu.len() < 3 {
                 continue;
             }
@@ -701,24 +711,11 @@ pub fn validate(f: &mut VectorField, cfg: &PivConfig) {
                 if snapshot[k] || f.flag[k] == flag::MASKED {
                     continue;
                 }
-                let (mut su, mut sv, mut c) = (0.0, 0.0, 0);
-                for dj in -1isize..=1 {
-                    for di in -1isize..=1 {
-                        let (ii, jj) = (i as isize + di, j as isize + dj);
-                        if ii < 0 || jj < 0 || ii >= nx as isize || jj >= ny as isize {
-                            continue;
-                        }
-                        let kk = jj as usize * nx + ii as usize;
-                        if snapshot[kk] && f.flag[kk] != flag::MASKED {
-                            su += f.u[kk];
-                            sv += f.v[kk];
-                            c += 1;
-                        }
-                    }
-                }
-                if c > 0 {
-                    f.u[k] = su / f64::from(c);
-                    f.v[k] = sv / f64::from(c);
+                if let Some((u, v)) =
+                    f.block_mean(k, |kk| snapshot[kk] && f.flag[kk] != flag::MASKED)
+                {
+                    f.u[k] = u;
+                    f.v[k] = v;
                     filled[k] = true;
                     changed = true;
                 }
@@ -740,29 +737,18 @@ pub fn validate(f: &mut VectorField, cfg: &PivConfig) {
 /// predictor would otherwise add its own noise to every later pass (the new residual only
 /// corrects its average over a window), so iterating would not converge.
 fn smooth(f: &mut VectorField) {
-    let (nx, ny) = (f.nx, f.ny);
-    let (u0, v0) = (f.u.clone(), f.v.clone());
-    for j in 0..ny {
-        for i in 0..nx {
-            let k = j * nx + i;
+    let means: Vec<Option<(f64, f64)>> = (0..f.nx * f.ny)
+        .map(|k| {
             if f.flag[k] == flag::MASKED {
-                continue;
+                return None;
             }
-            let (mut su, mut sv, mut c) = (0.0, 0.0, 0.0);
-            for jj in j.saturating_sub(1)..(j + 2).min(ny) {
-                for ii in i.saturating_sub(1)..(i + 2).min(nx) {
-                    let kk = jj * nx + ii;
-                    if f.flag[kk] != flag::MASKED && u0[kk].is_finite() {
-                        su += u0[kk];
-                        sv += v0[kk];
-                        c += 1.0;
-                    }
-                }
-            }
-            if c > 0.0 {
-                f.u[k] = su / c;
-                f.v[k] = sv / c;
-            }
+            f.block_mean(k, |kk| f.flag[kk] != flag::MASKED && f.u[kk].is_finite())
+        })
+        .collect();
+    for (k, m) in means.into_iter().enumerate() {
+        if let Some((u, v)) = m {
+            f.u[k] = u;
+            f.v[k] = v;
         }
     }
 }

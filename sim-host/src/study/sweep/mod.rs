@@ -393,21 +393,7 @@ pub mod files {
     pub const META: &str = "sweep.toml";
 }
 
-/// Write records (with a header, even when there are none) as CSV to `path`.
-pub fn write_csv<T: Serialize>(path: &Path, records: &[T], header: &[&str]) -> Result<(), String> {
-    let mut w = csv::Writer::from_path(path)
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    if records.is_empty() {
-        w.write_record(header)
-            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    }
-    for r in records {
-        w.serialize(r)
-            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-    }
-    w.flush()
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
-}
+pub use crate::output::write_csv;
 
 /// Header of `sweep.csv`.
 pub const ROW_HEADER: [&str; 11] = [
