@@ -17,6 +17,7 @@
 pub mod acqlog;
 pub mod cli;
 pub mod command;
+pub mod dem;
 pub mod flow;
 pub mod imaging;
 pub mod model;

@@ -246,6 +246,21 @@ pub fn write_csv<T: serde::Serialize>(
         .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
 }
 
+/// Write `data` (row-major, `shape`) as a float64 `.npy` array.
+pub fn write_npy(path: &Path, shape: &[u64], data: Vec<f64>) -> Result<(), String> {
+    use npyz::WriterBuilder;
+    let err = |e: &dyn std::fmt::Display| format!("cannot write `{}`: {e}", path.display());
+    let file = fs::File::create(path).map_err(|e| err(&e))?;
+    let mut wr = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(shape)
+        .writer(io::BufWriter::new(file))
+        .begin_nd()
+        .map_err(|e| err(&e))?;
+    wr.extend(data).map_err(|e| err(&e))?;
+    wr.finish().map_err(|e| err(&e))
+}
+
 /// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
 /// otherwise, so logs and pipes stay clean).
 pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

@@ -65,6 +65,8 @@ pub enum Command {
     /// Grain images with a known motion (shift, shear, rotation, a descending foot's cone),
     /// to test PIV settings against.
     PivSynthetic(SyntheticArgs),
+    /// The 2-D DEM of Supplementary I: prepare a bed, intrude, check a collision
+    Dem(crate::dem::command::DemArgs),
     /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
     /// rig (--link sil|pil): flash, status, jump, intrude, replay.
     Rig(RigArgs),
