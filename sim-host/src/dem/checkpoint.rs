@@ -165,6 +165,7 @@ impl Reader<'_> {
 }
 
 /// A checkpoint read back: the world, the caller's record and extra array.
+#[derive(Debug)]
 pub struct Loaded {
     /// The world, its neighbour list rebuilt and histories restored.
     pub world: World,

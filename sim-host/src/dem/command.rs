@@ -634,7 +634,20 @@ fn run_intrude(a: &IntrudeArgs) -> Result<(), CliError> {
                 .map_err(|e| CliError::input(format!("cannot clear {}: {e}", work.display())))?;
         }
         StagedDir::create(&a.out)?; // checks the target now, before hours of work
-        intrude::start(spec, bed.world).map_err(CliError::input)?
+        let mut run = intrude::start(spec, bed.world).map_err(CliError::input)?;
+        std::fs::create_dir_all(&work)
+            .map_err(|e| CliError::input(format!("cannot create {}: {e}", work.display())))?;
+        // Step 0 is a checkpoint like any other: a run stopped before its first regular
+        // checkpoint resumes from here.
+        run.world.rebuild();
+        checkpoint::save(
+            &ckpt,
+            &run.world,
+            &intrude::record(&run),
+            &run.fields_flat(),
+        )
+        .map_err(CliError::internal)?;
+        run
     };
     std::fs::create_dir_all(work.join("frames"))
         .and_then(|()| std::fs::create_dir_all(work.join("snapshots")))
@@ -678,15 +691,12 @@ fn run_intrude(a: &IntrudeArgs) -> Result<(), CliError> {
         .map_err(CliError::internal)?;
     bar.finish_and_clear();
     if run.steps() < run.total_steps {
-        checkpoint::save(
-            &ckpt,
-            &run.world,
-            &intrude::record(&run),
-            &run.fields_flat(),
-        )
-        .map_err(CliError::internal)?;
+        // Resuming from the last regular checkpoint (not from here) repeats the
+        // uninterrupted run bit for bit; the steps since are done again.
+        let every = run.spec.checkpoint_every;
+        let from = run.steps().checked_div(every).map_or(0, |k| k * every);
         println!(
-            "dem intrude: stopped after {} of {} steps; `dem intrude --resume --out {}` continues",
+            "dem intrude: stopped after {} of {} steps; `dem intrude --resume --out {}` continues from the checkpoint at step {from}",
             run.steps(),
             run.total_steps,
             a.out.display()
