@@ -77,6 +77,17 @@ pub fn parse_number(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Parse a strictly positive number (a scale, a rate, a length).
+pub fn parse_positive(s: &str) -> Result<f64, String> {
+    parse_number(s).and_then(|v| {
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("`{s}` not allowed (allowed: > 0)"))
+        }
+    })
+}
+
 /// Check a forcing frequency: positive, within the trajectory's supported band.
 pub fn check_freq(f: f64) -> Result<f64, String> {
     if f <= 0.0 {

@@ -15,17 +15,8 @@ use super::intruder::Trajectory;
 use super::params::{Choice, DemParams, Model};
 use super::world::Integrator;
 use crate::command::CliError;
-use crate::command::args::parse_number;
+use crate::command::args::{parse_number, parse_positive as positive};
 use crate::output::{StagedDir, write_csv};
-
-fn positive(s: &str) -> Result<f64, String> {
-    let v = parse_number(s)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("{v} (allowed: a positive number)"))
-    }
-}
 
 /// `sandjumper dem`.
 #[derive(Debug, Clone, Args)]
@@ -424,7 +415,9 @@ fn run_bed(a: &BedArgs) -> Result<(), CliError> {
         "bed.toml",
         &toml::to_string(&rec).map_err(|e| CliError::internal(e.to_string()))?,
     )?;
-    let (cam, vmax) = overview_camera(&world, a.width, rep.surface_m);
+    let cam = overview_camera(a.width, rep.surface_m);
+    // A bed at rest: the colour scale only has to exist.
+    let vmax = 0.1;
     super::figure::save_snapshot(
         &world,
         &cam,
@@ -457,23 +450,15 @@ fn run_bed(a: &BedArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-fn overview_camera(
-    w: &super::world::World,
-    width: f64,
-    surface: f64,
-) -> (super::render::SideCamera, f64) {
+fn overview_camera(width: f64, surface: f64) -> super::render::SideCamera {
     let m_per_px = (width.max(surface) / 1200.0).max(1e-6);
-    let _ = w;
-    (
-        super::render::SideCamera {
-            m_per_px,
-            left_m: 0.0,
-            top_m: surface * 1.05,
-            width_px: (width / m_per_px) as u32,
-            height_px: (surface * 1.05 / m_per_px) as u32,
-        },
-        0.1,
-    )
+    super::render::SideCamera {
+        m_per_px,
+        left_m: 0.0,
+        top_m: surface * 1.05,
+        width_px: (width / m_per_px) as u32,
+        height_px: (surface * 1.05 / m_per_px) as u32,
+    }
 }
 
 fn write_grains(path: &Path, w: &super::world::World) -> Result<(), CliError> {

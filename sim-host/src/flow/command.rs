@@ -14,7 +14,7 @@ use super::preprocess::{Preprocess, apply, background};
 use super::synthetic::GrainScene;
 use crate::acqlog::{AcqLog, ReadOptions};
 use crate::command::CliError;
-use crate::command::args::parse_number;
+use crate::command::args::{parse_number, parse_positive};
 use crate::imaging::command::log_clock;
 use crate::imaging::render::write_png;
 use crate::imaging::sequence::{ImageSequence, decode_file};
@@ -38,16 +38,6 @@ fn parse_windows(s: &str) -> Result<Vec<usize>, String> {
         .map(|p| p.trim().parse::<usize>())
         .collect::<Result<Vec<_>, _>>()
         .map_err(|_| format!("`{s}` is not a list of window sizes such as 64,32,16"))
-}
-
-fn parse_positive(s: &str) -> Result<f64, String> {
-    parse_number(s).and_then(|v| {
-        if v > 0.0 {
-            Ok(v)
-        } else {
-            Err(format!("`{s}` not allowed (allowed: > 0)"))
-        }
-    })
 }
 
 fn parse_point(s: &str) -> Result<(f64, f64), String> {
@@ -625,16 +615,7 @@ fn write_outputs(
         fields.len() as u64,
     );
     let write_npy = |name: &str, shape: &[u64], data: Vec<f64>| -> Result<(), CliError> {
-        use npyz::WriterBuilder;
-        let file = std::fs::File::create(staged.file(name)).map_err(|e| err(&e))?;
-        let mut wr = npyz::WriteOptions::new()
-            .default_dtype()
-            .shape(shape)
-            .writer(std::io::BufWriter::new(file))
-            .begin_nd()
-            .map_err(|e| err(&e))?;
-        wr.extend(data).map_err(|e| err(&e))?;
-        wr.finish().map_err(|e| err(&e))
+        crate::output::write_npy(&staged.file(name), shape, data).map_err(CliError::internal)
     };
     write_npy("x_px.npy", &[nx], fields[0].xs.clone())?;
     write_npy("y_px.npy", &[ny], fields[0].ys.clone())?;
