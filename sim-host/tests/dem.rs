@@ -14,6 +14,9 @@ use sandjumper_sim::dem::params::{Choice, Model};
 use sandjumper_sim::dem::structure::hexatic_order;
 use sandjumper_sim::dem::world::Integrator;
 
+#[path = "dem/closed_loop.rs"]
+mod closed_loop;
+
 fn sandjumper(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args)
@@ -292,6 +295,27 @@ fn intrude(bed: &str, out: &Path, extra: &[&str]) -> (i32, String, String) {
     sandjumper(&args)
 }
 
+/// A packed bed (no gravity) 5 cm wide and 1.2 cm deep, wide against an 8 mm foot.
+fn wide_bed(dir: &Path) -> std::path::PathBuf {
+    let bed = dir.join("wide");
+    let (c, _, e) = sandjumper(&[
+        "dem",
+        "bed",
+        "--pack",
+        "0.8",
+        "--width",
+        "0.05",
+        "--height",
+        "0.012",
+        "--overlap",
+        "0.02",
+        "--out",
+        bed.to_str().unwrap(),
+    ]);
+    assert_eq!(c, 0, "{e}");
+    bed
+}
+
 fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
@@ -303,9 +327,20 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
     let one = tmp.path().join("one");
     let two = tmp.path().join("two");
     let res = tmp.path().join("res");
-    let (c, _, e) = intrude(&b, &one, &["--threads", "1", "--no-frames"]);
+    // A checkpoint rebuilds the neighbour list (which orders the force sums), so the runs
+    // compared share the checkpoint interval.
+    let every = ["--checkpoint-every", "1000"];
+    let (c, _, e) = intrude(
+        &b,
+        &one,
+        &[&["--threads", "1", "--no-frames"][..], &every].concat(),
+    );
     assert_eq!(c, 0, "{e}");
-    let (c, _, e) = intrude(&b, &two, &["--threads", "2", "--no-frames"]);
+    let (c, _, e) = intrude(
+        &b,
+        &two,
+        &[&["--threads", "2", "--no-frames"][..], &every].concat(),
+    );
     assert_eq!(c, 0, "{e}");
     // Stopped twice (once between checkpoints), resumed twice.
     let (c, out, e) = intrude(
@@ -367,23 +402,8 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
     // The paper's model: no gravity, no walls, a bed wide against the foot (in a narrow box
     // the displaced grains rise along the walls and, weighted by r, outweigh the cone).
     let tmp = tempfile::tempdir().unwrap();
-    let bed_dir = tmp.path().join("wide");
+    let bed_dir = wide_bed(tmp.path());
     let bd = bed_dir.to_str().unwrap();
-    let (c, _, e) = sandjumper(&[
-        "dem",
-        "bed",
-        "--pack",
-        "0.8",
-        "--width",
-        "0.05",
-        "--height",
-        "0.012",
-        "--overlap",
-        "0.02",
-        "--out",
-        bd,
-    ]);
-    assert_eq!(c, 0, "{e}");
     let out = tmp.path().join("run");
     let (c, _, e) = sandjumper(&[
         "dem",

@@ -251,9 +251,7 @@ pub fn prepare(
                 world.step();
                 if world.steps % check_every == 0 {
                     progress(0.5 + 0.5 * world.steps as f64 / max_steps as f64);
-                    if world.agitation() < spec.rest_agitation
-                        && world.last.max_overlap_ratio < 0.02
-                    {
+                    if world.agitation() < spec.rest_agitation && world.max_overlap_ratio() < 0.02 {
                         settled = true;
                         break;
                     }
@@ -265,7 +263,7 @@ pub fn prepare(
     let steps = world.steps;
     let time_s = world.t_s;
     let agitation = world.agitation();
-    let max_overlap_ratio = world.last.max_overlap_ratio;
+    let max_overlap_ratio = world.max_overlap_ratio();
     for v in [
         &mut world.g.vx,
         &mut world.g.vy,

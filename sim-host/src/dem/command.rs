@@ -407,9 +407,7 @@ fn run_bed(a: &BedArgs) -> Result<(), CliError> {
         params: &p,
         spec: &spec,
         report: &rep,
-        bytes_per_grain: super::grains::Grains::BYTES_PER_GRAIN as f64
-            + world.nl.bytes_per_grain()
-            + 8.0 * 12.0,
+        bytes_per_grain: world.bytes_per_grain(),
     };
     staged.write_text(
         "bed.toml",

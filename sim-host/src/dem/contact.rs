@@ -57,6 +57,29 @@ impl Default for Friction {
     }
 }
 
+/// `gamma_n` as a function of the effective mass, with constants worked out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GammaRule {
+    /// The same for every pair, N s/m.
+    Constant(f64),
+    /// `c sqrt(m_eff)`, c in N s/(m kg^0.5) (a fixed restitution).
+    SqrtMass(f64),
+    /// `gamma_n m_eff`, 1/s (LAMMPS's).
+    PerMass(f64),
+}
+
+impl GammaRule {
+    /// `gamma_n` for effective mass `m_eff_kg`, N s/m.
+    #[inline(always)]
+    pub fn at(self, m_eff_kg: f64) -> f64 {
+        match self {
+            Self::Constant(g) => g,
+            Self::SqrtMass(c) => c * m_eff_kg.sqrt(),
+            Self::PerMass(g) => g * m_eff_kg,
+        }
+    }
+}
+
 /// The contact law of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactLaw {
@@ -84,6 +107,27 @@ impl ContactLaw {
                 Self::restitution_factor(e) * (self.kn_n_per_m * m_eff_kg).sqrt()
             }
             Damping::PerMass { gamma_n_per_s } => gamma_n_per_s * m_eff_kg,
+        }
+    }
+
+    /// `gamma_n` when it does not depend on the pair ([`Damping::Force`], the paper's).
+    #[inline]
+    pub fn constant_gamma_n(&self) -> Option<f64> {
+        match self.damping {
+            Damping::Force { gamma_n_s_per_m } => Some(gamma_n_s_per_m),
+            _ => None,
+        }
+    }
+
+    /// [`Self::gamma_n`] with the restitution's factor worked out once (for a step's inner
+    /// loop).
+    pub fn gamma_rule(&self) -> GammaRule {
+        match self.damping {
+            Damping::Force { gamma_n_s_per_m } => GammaRule::Constant(gamma_n_s_per_m),
+            Damping::Restitution { e } => {
+                GammaRule::SqrtMass(Self::restitution_factor(e) * self.kn_n_per_m.sqrt())
+            }
+            Damping::PerMass { gamma_n_per_s } => GammaRule::PerMass(gamma_n_per_s),
         }
     }
 

@@ -120,6 +120,20 @@ pub struct Run {
     pub camera: SideCamera,
     /// Total steps.
     pub total_steps: u64,
+    /// Stepping speed in this process (not checkpointed: it is a property of the machine).
+    pub performance: Performance,
+}
+
+/// How fast this process stepped: wall time inside [`World::step`] only (no sampling,
+/// frames or checkpoints), as LAMMPS's "Performance" line reports its run loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Performance {
+    /// Steps taken by this process.
+    pub steps: u64,
+    /// Wall time spent in them, s.
+    pub wall_s: f64,
+    /// Grains times steps over wall time, 1/s.
+    pub atom_steps_per_s: f64,
 }
 
 impl IntrudeSpec {
@@ -232,7 +246,12 @@ impl Run {
             let t_next = (self.world.steps + 1) as f64 * dt;
             let d = traj.depth(t_next);
             self.world.intruder_next = Some((self.spec.surface_m - d, -traj.speed(t_next)));
+            let t0 = std::time::Instant::now();
             self.world.step();
+            let perf = &mut self.performance;
+            perf.wall_s += t0.elapsed().as_secs_f64();
+            perf.steps += 1;
+            perf.atom_steps_per_s = perf.steps as f64 * self.world.g.len() as f64 / perf.wall_s;
             self.state.force_sum_n += self.world.last.intruder_fy_n;
             self.state.force_steps += 1;
             let s = self.world.steps;
@@ -410,6 +429,7 @@ pub fn start(spec: IntrudeSpec, bed: World) -> Result<Run, String> {
         grid,
         camera,
         total_steps,
+        performance: Performance::default(),
     })
 }
 
@@ -439,6 +459,7 @@ pub fn resume(world: World, record: &serde_json::Value, extra: &[f64]) -> Result
         grid,
         camera,
         total_steps,
+        performance: Performance::default(),
     })
 }
 

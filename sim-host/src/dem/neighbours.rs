@@ -1,24 +1,40 @@
 //! Verlet neighbour lists with a skin, built from a cell grid.
 //!
-//! The list is *full* (each pair appears under both grains) and stored CSR-style
-//! (`start`, `j`): every grain sums its own forces from its own list, so the force pass runs
-//! in parallel without atomics or a reduction, and gives the same bits for any thread count.
-//! Each entry carries the pair's tangential history (the accumulated slip, m), which both
-//! grains of a pair update identically. At a rebuild the grains are reordered along the cell
-//! grid (a stable counting sort, so the order is a function of the state alone) and every
-//! contact's history is carried over by grain identity.
+//! The list is a *half* list (each pair once, under its lower slot `i < j`), stored
+//! CSR-style (`start`, `j`), so each pair's force is computed once (Newton's third law, as
+//! LAMMPS's `newton on`). A reverse index (`rev_start`, `rev_entry`) lists, for every grain,
+//! the entries in which it is the partner `j`: a grain's total force is the sum of its own
+//! entries' pair forces minus the sum of its reverse entries', gathered in a fixed order, so
+//! the step runs in parallel without atomics and gives the same bits for any thread count.
+//! Each entry carries the pair's tangential history (the accumulated slip, m) and the pair
+//! force of the last step. At a rebuild the grains are reordered along the cell grid (a
+//! stable counting sort, so the order is a function of the state alone) and every contact's
+//! history is carried over by grain identity.
 
 use super::grains::Grains;
 
-/// A full neighbour list.
+/// A half neighbour list with its reverse index and per-pair forces.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NeighbourList {
     /// Grain `i`'s entries are `start[i]..start[i + 1]`.
     pub start: Vec<u32>,
-    /// Neighbour slot of each entry.
+    /// Neighbour slot of each entry (always above the owner's).
     pub j: Vec<u32>,
+    /// Grain `j`'s reverse entries are `rev_entry[rev_start[j]..rev_start[j + 1]]`.
+    pub rev_start: Vec<u32>,
+    /// Entries in which the grain is the partner, in increasing entry order.
+    pub rev_entry: Vec<u32>,
+    /// Owner slot of each reverse entry (the `i` of `rev_entry`).
+    pub rev_owner: Vec<u32>,
     /// Tangential history of each entry, m (empty when friction is off).
     pub hist: Vec<f64>,
+    /// Force on the owner from the partner in the last step, N (x).
+    pub pair_fx: Vec<f64>,
+    /// Force on the owner from the partner in the last step, N (y).
+    pub pair_fy: Vec<f64>,
+    /// Tangential force of the pair in the last step (along `(-n_y, n_x)`, `n` from owner
+    /// to partner), N; both grains feel the torque `r ft` (empty when friction is off).
+    pub pair_ft: Vec<f64>,
     /// Positions at the build, m (a rebuild is due once a grain moved half the skin).
     pub x_ref: Vec<f64>,
     /// Positions at the build, m.
@@ -141,7 +157,7 @@ impl NeighbourList {
                 for nx in cx.saturating_sub(1)..(cx + 2).min(grid.nx) {
                     let c = ny * grid.nx + nx;
                     for j in cell_start[c]..cell_start[c + 1] {
-                        if j == i || (intruder_i && g.kind[j] != super::grains::FREE) {
+                        if j <= i || (intruder_i && g.kind[j] != super::grains::FREE) {
                             continue;
                         }
                         let dx = g.x[j] - xi;
@@ -155,29 +171,61 @@ impl NeighbourList {
             }
             start.push(js.len() as u32);
         }
+        // Reverse index: a stable counting sort of the entries by partner.
+        let mut rev_start = vec![0u32; n + 1];
+        for &j in &js {
+            rev_start[j as usize + 1] += 1;
+        }
+        for k in 0..n {
+            rev_start[k + 1] += rev_start[k];
+        }
+        let mut rev_fill: Vec<u32> = rev_start[..n].to_vec();
+        let mut rev_entry = vec![0u32; js.len()];
+        let mut rev_owner = vec![0u32; js.len()];
+        for i in 0..n {
+            for e in start[i]..start[i + 1] {
+                let j = js[e as usize] as usize;
+                let slot = rev_fill[j] as usize;
+                rev_entry[slot] = e;
+                rev_owner[slot] = i as u32;
+                rev_fill[j] += 1;
+            }
+        }
         let mut hist = Vec::new();
         if with_history {
             hist = vec![0.0; js.len()];
-            let carried = !old.hist.is_empty() && old.start.len() == n + 1;
-            if carried {
+            if !old.hist.is_empty() && old.start.len() == n + 1 {
+                // The pair may sit under either grain in the old list; its slip is the same
+                // seen from either side.
+                let find = |owner: usize, partner_id: u32| {
+                    (old.start[owner] as usize..old.start[owner + 1] as usize)
+                        .find(|&oe| old.hist[oe] != 0.0 && old_id[old.j[oe] as usize] == partner_id)
+                };
                 for s in 0..n {
-                    let os = perm[s];
-                    let (o0, o1) = (old.start[os] as usize, old.start[os + 1] as usize);
                     for e in start[s] as usize..start[s + 1] as usize {
-                        let idj = g.id[js[e] as usize];
-                        for oe in o0..o1 {
-                            if old.hist[oe] != 0.0 && old_id[old.j[oe] as usize] == idj {
-                                hist[e] = old.hist[oe];
-                                break;
-                            }
+                        let t = js[e] as usize;
+                        let found = find(perm[s], g.id[t]).or_else(|| find(perm[t], g.id[s]));
+                        if let Some(oe) = found {
+                            hist[e] = old.hist[oe];
                         }
                     }
                 }
             }
         }
+        let pair_ft = if with_history {
+            vec![0.0; js.len()]
+        } else {
+            Vec::new()
+        };
         *self = Self {
             start,
+            pair_fx: vec![0.0; js.len()],
+            pair_fy: vec![0.0; js.len()],
+            pair_ft,
             j: js,
+            rev_start,
+            rev_entry,
+            rev_owner,
             hist,
             x_ref: g.x.clone(),
             y_ref: g.y.clone(),
@@ -220,20 +268,37 @@ impl NeighbourList {
             if i == usize::MAX || j == usize::MAX {
                 continue;
             }
-            for e in self.start[i] as usize..self.start[i + 1] as usize {
-                if self.j[e] as usize == j {
+            let (lo, hi) = if i < j { (i, j) } else { (j, i) };
+            for e in self.start[lo] as usize..self.start[lo + 1] as usize {
+                if self.j[e] as usize == hi {
                     self.hist[e] = h;
                 }
             }
         }
     }
 
-    /// Bytes held per grain (list, history, reference positions), at the current fill.
+    /// Every neighbour of `i` (partners of its own entries, then owners of its reverse
+    /// entries).
+    pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let own = self.start[i] as usize..self.start[i + 1] as usize;
+        let rev = self.rev_start[i] as usize..self.rev_start[i + 1] as usize;
+        own.map(|e| self.j[e] as usize)
+            .chain(rev.map(|r| self.rev_owner[r] as usize))
+    }
+
+    /// Bytes held per grain (list, reverse index, history, pair forces, reference
+    /// positions), at the current fill.
     pub fn bytes_per_grain(&self) -> f64 {
         let n = self.start.len().saturating_sub(1).max(1) as f64;
-        (4.0 * self.start.len() as f64
-            + 4.0 * self.j.capacity() as f64
-            + 8.0 * self.hist.capacity() as f64
+        (4.0 * (self.start.len() + self.rev_start.len()) as f64
+            + 4.0
+                * (self.j.capacity() + self.rev_entry.capacity() + self.rev_owner.capacity())
+                    as f64
+            + 8.0
+                * (self.hist.capacity()
+                    + self.pair_fx.capacity()
+                    + self.pair_fy.capacity()
+                    + self.pair_ft.capacity()) as f64
             + 16.0 * n)
             / n
     }

@@ -49,15 +49,17 @@ pub struct Summary {
     pub samples: usize,
     /// Side-wall frames written.
     pub frames: usize,
-    /// Largest overlap over a radius in the last step.
+    /// Largest overlap over a radius at the end.
     pub max_overlap_ratio: f64,
+    /// Stepping speed of this process (the steps since the start or the resume).
+    pub performance: super::intrude::Performance,
 }
 
 impl Summary {
     /// One line for the terminal.
     pub fn line(&self) -> String {
         format!(
-            "dem intrude: {} grains, {} steps, depth {:.2} mm, peak force {:.3} N, added mass {:.4} kg ({:.2}x the model's eq. 6), jammed region side {:.1} deg, hexatic order {:.2}; t_c v/d {:.2e}, Froude {:.2}; written to {}",
+            "dem intrude: {} grains, {} steps, depth {:.2} mm, peak force {:.3} N, added mass {:.4} kg ({:.2}x the model's eq. 6), jammed region side {:.1} deg, hexatic order {:.2}; t_c v/d {:.2e}, Froude {:.2}; {:.1} M atom-steps/s; written to {}",
             self.grains,
             self.steps,
             1e3 * self.max_depth_m,
@@ -68,6 +70,7 @@ impl Summary {
             self.hexatic_order,
             self.contact_time_speed_over_d,
             self.froude,
+            1e-6 * self.performance.atom_steps_per_s,
             self.out
         )
     }
@@ -328,7 +331,8 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
         jammed,
         samples: run.state.flow.len(),
         frames,
-        max_overlap_ratio: run.world.last.max_overlap_ratio,
+        performance: run.performance,
+        max_overlap_ratio: run.world.max_overlap_ratio(),
     };
     #[derive(Serialize)]
     struct Record<'a> {

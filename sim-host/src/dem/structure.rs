@@ -19,8 +19,7 @@ pub fn hexatic_order(w: &World) -> f64 {
             continue;
         }
         let (mut re, mut im, mut c) = (0.0, 0.0, 0usize);
-        for e in w.nl.start[i] as usize..w.nl.start[i + 1] as usize {
-            let j = w.nl.j[e] as usize;
+        for j in w.nl.neighbours(i) {
             if g.kind[j] != FREE {
                 continue;
             }

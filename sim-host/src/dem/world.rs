@@ -1,13 +1,15 @@
 //! One DEM world and its time step: contact forces, walls, gravity, per-grain drag and the
-//! integrator in **one fused pass** over the grains.
+//! integrator in **two passes** over memory.
 //!
-//! Each grain gathers the forces of its own neighbour list (see [`super::neighbours`]),
-//! integrates itself and writes its next state into a second buffer; the buffers are then
-//! swapped. LAMMPS runs the pair force, each fix (gravity, walls, the move of the intruder,
-//! `enforce2d`) and the integrator as separate passes over memory; here they are one loop
-//! body, kept readable by small inline functions. The pass runs on rayon in fixed chunks of
-//! grains, and per-chunk sums (forces on the intruder and the floor, kinetic energy) are
-//! added in chunk order: the same bits for any number of threads.
+//! Pass 1 walks the half neighbour list (see [`super::neighbours`]) and computes each
+//! pair's force once, into the pair's entry. Pass 2 has each grain gather its pairs' forces
+//! (its own entries, and the entries it is the partner of, reversed), add walls, drag and
+//! gravity, and integrate itself in place. LAMMPS runs the pair force, each fix (gravity,
+//! walls, the move of the intruder, `enforce2d`) and the integrator's two halves as
+//! separate passes; here the fixes and the integrator are one loop body, kept readable by
+//! small inline functions. Both passes run on rayon in fixed chunks of grains, and per-chunk
+//! sums (forces on the intruder and the floor) are added in chunk order: the same bits for
+//! any number of threads.
 //!
 //! Integrators:
 //! - forward Euler (Supplementary I): `x' = x + v dt`, `v' = v + a(x, v) dt`;
@@ -21,8 +23,8 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::contact::ContactLaw;
-use super::grains::{Grains, INTRUDER, permute};
+use super::contact::{ContactLaw, GammaRule};
+use super::grains::{FREE, Grains, INTRUDER, permute};
 use super::neighbours::NeighbourList;
 
 /// Which integrator.
@@ -76,10 +78,6 @@ pub struct StepSums {
     pub intruder_fy_n: f64,
     /// Force of the grains on the floor, N (down positive).
     pub floor_n: f64,
-    /// Kinetic energy of the free grains (translation and rotation), J.
-    pub kinetic_j: f64,
-    /// Largest overlap over the two radii's mean, of any contact.
-    pub max_overlap_ratio: f64,
     /// Largest squared displacement since the list's build, m^2.
     max_disp2: f64,
 }
@@ -89,8 +87,6 @@ impl StepSums {
         self.intruder_fx_n += o.intruder_fx_n;
         self.intruder_fy_n += o.intruder_fy_n;
         self.floor_n += o.floor_n;
-        self.kinetic_j += o.kinetic_j;
-        self.max_overlap_ratio = self.max_overlap_ratio.max(o.max_overlap_ratio);
         self.max_disp2 = self.max_disp2.max(o.max_disp2);
         self
     }
@@ -122,8 +118,6 @@ pub struct World {
     /// Velocities the contact forces see (forward Euler: `v`; Verlet: the full-step
     /// prediction), m/s and rad/s; what outputs report.
     pub u: Velocities,
-    next: NextState,
-    next_u: Velocities,
     rebuild_due: bool,
 }
 
@@ -136,15 +130,6 @@ pub struct Velocities {
     pub y: Vec<f64>,
     /// rad/s.
     pub w: Vec<f64>,
-}
-
-#[derive(Clone, Debug, Default)]
-struct NextState {
-    x: Vec<f64>,
-    y: Vec<f64>,
-    vx: Vec<f64>,
-    vy: Vec<f64>,
-    w: Vec<f64>,
 }
 
 /// Constants of one step, read by every grain.
@@ -201,8 +186,6 @@ impl World {
             intruder_next: None,
             last: StepSums::default(),
             u: Velocities::default(),
-            next: NextState::default(),
-            next_u: Velocities::default(),
             rebuild_due: true,
         };
         w.u = Velocities {
@@ -236,13 +219,12 @@ impl World {
             self.rebuild();
         }
         let n = self.g.len();
-        let nx = &mut self.next;
-        let nu = &mut self.next_u;
-        for v in [
-            &mut nx.x, &mut nx.y, &mut nx.vx, &mut nx.vy, &mut nx.w, &mut nu.x, &mut nu.y,
-            &mut nu.w,
-        ] {
-            v.resize(n, 0.0);
+        if self.u.x.len() != n {
+            self.u = Velocities {
+                x: self.g.vx.clone(),
+                y: self.g.vy.clone(),
+                w: self.g.w.clone(),
+            };
         }
         let f = self.cfg.law.friction;
         let c = StepConst {
@@ -260,99 +242,150 @@ impl World {
             walls: self.cfg.walls,
             intruder: self.intruder_next,
         };
-        // Split the history into the chunks' slices.
+        // Pass 1: each pair's force once, into the entries (chunks own contiguous entries).
         let nchunks = n.div_ceil(CHUNK);
-        let mut hist_parts: Vec<&mut [f64]> = Vec::with_capacity(nchunks);
-        {
-            let mut rest: &mut [f64] = &mut self.nl.hist;
-            for k in 0..nchunks {
+        let bounds: Vec<(usize, usize)> = (0..nchunks)
+            .map(|k| {
                 let (a, b) = (k * CHUNK, ((k + 1) * CHUNK).min(n));
-                let len = if rest.is_empty() {
-                    0
-                } else {
-                    (self.nl.start[b] - self.nl.start[a]) as usize
-                };
-                let (head, tail) = rest.split_at_mut(len);
-                hist_parts.push(head);
-                rest = tail;
-            }
-        }
+                (self.nl.start[a] as usize, self.nl.start[b] as usize)
+            })
+            .collect();
+        let nl = &mut self.nl;
+        let hist_parts = split_by(&mut nl.hist, &bounds);
+        let fx_parts = split_by(&mut nl.pair_fx, &bounds);
+        let fy_parts = split_by(&mut nl.pair_fy, &bounds);
+        let ft_parts = split_by(&mut nl.pair_ft, &bounds);
         let g = &self.g;
         let u = &self.u;
-        let nl_start = &self.nl.start;
-        let nl_j = &self.nl.j;
-        let (x_ref, y_ref) = (&self.nl.x_ref, &self.nl.y_ref);
-        let sums: Vec<StepSums> = nx
-            .x
+        let (nl_start, nl_j) = (&nl.start, &nl.j);
+        let gamma_const = c.law.constant_gamma_n();
+        let gamma_rule = c.law.gamma_rule();
+        hist_parts
+            .into_par_iter()
+            .zip(fx_parts)
+            .zip(fy_parts)
+            .zip(ft_parts)
+            .enumerate()
+            .for_each(|(k, (((hist, pfx), pfy), pft))| {
+                let base = k * CHUNK;
+                let e0 = nl_start[base] as usize;
+                for i in base..((k + 1) * CHUNK).min(n) {
+                    let (xi, yi, ri, imi) = (g.x[i], g.y[i], g.radius[i], g.inv_mass[i]);
+                    let (vxi, vyi, wi) = (u.x[i], u.y[i], u.w[i]);
+                    let (e_lo, e_hi) = (nl_start[i] as usize, nl_start[i + 1] as usize);
+                    for (e, &j) in (e_lo..e_hi).zip(&nl_j[e_lo..e_hi]) {
+                        let l = e - e0;
+                        let j = j as usize;
+                        let dx = g.x[j] - xi;
+                        let dy = g.y[j] - yi;
+                        let rsum = ri + g.radius[j];
+                        let d2 = dx * dx + dy * dy;
+                        if d2 >= rsum * rsum || d2 == 0.0 {
+                            pfx[l] = 0.0;
+                            pfy[l] = 0.0;
+                            if c.friction {
+                                hist[l] = 0.0;
+                                pft[l] = 0.0;
+                            }
+                            continue;
+                        }
+                        let d = d2.sqrt();
+                        let inv_d = 1.0 / d;
+                        let (nxu, nyu) = (dx * inv_d, dy * inv_d);
+                        let delta = rsum - d;
+                        let (rvx, rvy) = (vxi - u.x[j], vyi - u.y[j]);
+                        let vn = rvx * nxu + rvy * nyu;
+                        let gamma = match gamma_const {
+                            Some(gm) => gm,
+                            None => pair_gamma(gamma_rule, imi + g.inv_mass[j]),
+                        };
+                        let fn_ = c.kn * delta + gamma * vn;
+                        let (mut fx, mut fy) = (-fn_ * nxu, -fn_ * nyu);
+                        if c.friction {
+                            let (tx, ty) = (-nyu, nxu);
+                            let vt = rvx * tx + rvy * ty + (wi * ri + u.w[j] * g.radius[j]);
+                            let ft = c.tangential(&mut hist[l], vt, fn_, gamma, c.mu);
+                            fx += ft * tx;
+                            fy += ft * ty;
+                            pft[l] = ft;
+                        }
+                        pfx[l] = fx;
+                        pfy[l] = fy;
+                    }
+                }
+            });
+        // Pass 2: each grain gathers its pairs' forces (own entries plus, reversed, the
+        // entries it is the partner of), adds walls, drag and gravity, and integrates in
+        // place (no grain reads another's state here).
+        let nl = &self.nl;
+        let (pfx, pfy, pft) = (&nl.pair_fx, &nl.pair_fy, &nl.pair_ft);
+        let Grains {
+            x: gx,
+            y: gy,
+            vx: gvx,
+            vy: gvy,
+            w: gw,
+            radius,
+            inv_mass,
+            inv_inertia,
+            kind,
+            ..
+        } = &mut self.g;
+        let (radius, inv_mass, inv_inertia, kind) = (&*radius, &*inv_mass, &*inv_inertia, &*kind);
+        let Velocities {
+            x: ux,
+            y: uy,
+            w: uw,
+        } = &mut self.u;
+        let sums: Vec<StepSums> = gx
             .par_chunks_mut(CHUNK)
-            .zip(nx.y.par_chunks_mut(CHUNK))
-            .zip(nx.vx.par_chunks_mut(CHUNK))
-            .zip(nx.vy.par_chunks_mut(CHUNK))
-            .zip(nx.w.par_chunks_mut(CHUNK))
-            .zip(nu.x.par_chunks_mut(CHUNK))
-            .zip(nu.y.par_chunks_mut(CHUNK))
-            .zip(nu.w.par_chunks_mut(CHUNK))
+            .zip(gy.par_chunks_mut(CHUNK))
+            .zip(gvx.par_chunks_mut(CHUNK))
+            .zip(gvy.par_chunks_mut(CHUNK))
+            .zip(gw.par_chunks_mut(CHUNK))
+            .zip(ux.par_chunks_mut(CHUNK))
+            .zip(uy.par_chunks_mut(CHUNK))
+            .zip(uw.par_chunks_mut(CHUNK))
             .zip(self.wall_hist.par_chunks_mut(CHUNK))
-            .zip(hist_parts.into_par_iter())
             .enumerate()
             .map(
-                |(k, (((((((((ox, oy), ovx), ovy), ow), oux), ouy), ouw), wh), hist))| {
+                |(k, ((((((((cx, cy), cvx), cvy), cw), cux), cuy), cuw), wh))| {
                     let base = k * CHUNK;
-                    let hist_base = nl_start[base] as usize;
                     let mut s = StepSums::default();
-                    for l in 0..ox.len() {
+                    for l in 0..cx.len() {
                         let i = base + l;
-                        let (xi, yi, ri, imi) = (g.x[i], g.y[i], g.radius[i], g.inv_mass[i]);
-                        // Velocities the forces see.
-                        let (vxi, vyi, wi) = (u.x[i], u.y[i], u.w[i]);
-                        let (mut fx, mut fy, mut tq) = (0.0, 0.0, 0.0);
-                        for e in nl_start[i] as usize..nl_start[i + 1] as usize {
-                            let j = nl_j[e] as usize;
-                            let dx = g.x[j] - xi;
-                            let dy = g.y[j] - yi;
-                            let rsum = ri + g.radius[j];
-                            let d2 = dx * dx + dy * dy;
-                            if d2 >= rsum * rsum || d2 == 0.0 {
-                                if c.friction {
-                                    hist[e - hist_base] = 0.0;
-                                }
-                                continue;
-                            }
-                            let d = d2.sqrt();
-                            let (nxu, nyu) = (dx / d, dy / d);
-                            let delta = rsum - d;
-                            let (rvx, rvy) = (vxi - u.x[j], vyi - u.y[j]);
-                            let vn = rvx * nxu + rvy * nyu;
-                            let meff = 1.0 / (imi + g.inv_mass[j]);
-                            let gamma = c.law.gamma_n(meff);
-                            let fn_ = c.kn * delta + gamma * vn;
-                            fx -= fn_ * nxu;
-                            fy -= fn_ * nyu;
-                            s.max_overlap_ratio = s.max_overlap_ratio.max(delta / (0.5 * rsum));
-                            if c.friction {
-                                let (tx, ty) = (-nyu, nxu);
-                                let vt = rvx * tx + rvy * ty + (wi * ri + u.w[j] * g.radius[j]);
-                                let ft =
-                                    c.tangential(&mut hist[e - hist_base], vt, fn_, gamma, c.mu);
-                                fx += ft * tx;
-                                fy += ft * ty;
-                                tq += ri * ft;
-                            }
+                        let (xi, yi, ri, imi) = (cx[l], cy[l], radius[i], inv_mass[i]);
+                        let (vxi, vyi, wi) = (cux[l], cuy[l], cuw[l]);
+                        let own = nl.start[i] as usize..nl.start[i + 1] as usize;
+                        let rev =
+                            &nl.rev_entry[nl.rev_start[i] as usize..nl.rev_start[i + 1] as usize];
+                        let (mut fx, mut fy) = (0.0, 0.0);
+                        for e in own.clone() {
+                            fx += pfx[e];
+                            fy += pfy[e];
                         }
-                        if g.kind[i] == INTRUDER {
+                        for &e in rev {
+                            fx -= pfx[e as usize];
+                            fy -= pfy[e as usize];
+                        }
+                        let mut tq = 0.0;
+                        if c.friction {
+                            let ft_sum: f64 = own.map(|e| pft[e]).sum::<f64>()
+                                + rev.iter().map(|&e| pft[e as usize]).sum::<f64>();
+                            tq = ri * ft_sum;
+                        }
+                        if kind[i] == INTRUDER {
                             s.intruder_fx_n += fx;
                             s.intruder_fy_n += fy;
-                            ox[l] = xi;
-                            (ovx[l], oux[l], ow[l], ouw[l]) = (0.0, 0.0, 0.0, 0.0);
-                            (oy[l], ovy[l]) = match c.intruder {
-                                Some((bottom, v)) => (bottom + ri, v),
-                                None => (yi, 0.0),
-                            };
-                            ouy[l] = ovy[l];
+                            (cvx[l], cux[l], cw[l], cuw[l]) = (0.0, 0.0, 0.0, 0.0);
+                            if let Some((bottom, v)) = c.intruder {
+                                (cy[l], cvy[l]) = (bottom + ri, v);
+                            } else {
+                                cvy[l] = 0.0;
+                            }
+                            cuy[l] = cvy[l];
                         } else {
                             // Walls: (overlap, outward normal from grain to wall, index).
-                            let mi = 1.0 / imi;
-                            let gamma_w = c.law.gamma_n(mi);
                             let walls = [
                                 c.walls.floor_m.map(|w| (ri - (yi - w), 0.0, -1.0)),
                                 c.walls.left_m.map(|w| (ri - (xi - w), -1.0, 0.0)),
@@ -367,6 +400,10 @@ impl World {
                                     wh[l][kw] = 0.0;
                                     continue;
                                 }
+                                let gamma_w = match gamma_const {
+                                    Some(gm) => gm,
+                                    None => pair_gamma(gamma_rule, imi),
+                                };
                                 let vn = vxi * wnx + vyi * wny;
                                 let fn_ = c.kn * delta + gamma_w * vn;
                                 fx -= fn_ * wnx;
@@ -374,7 +411,6 @@ impl World {
                                 if kw == 0 {
                                     s.floor_n += fn_;
                                 }
-                                s.max_overlap_ratio = s.max_overlap_ratio.max(delta / ri);
                                 if c.friction {
                                     let (tx, ty) = (-wny, wnx);
                                     let vt = vxi * tx + vyi * ty + wi * ri;
@@ -387,29 +423,24 @@ impl World {
                             }
                             let ax = fx * imi - c.drag * vxi;
                             let ay = fy * imi - c.g - c.drag * vyi;
-                            let al = tq * g.inv_inertia[i];
-                            let (hx, hy, hw) = (g.vx[i], g.vy[i], g.w[i]);
+                            let al = tq * inv_inertia[i];
+                            let (hx, hy, hw) = (cvx[l], cvy[l], cw[l]);
                             let (nvx, nvy, nw) = (hx + ax * c.dt, hy + ay * c.dt, hw + al * c.dt);
                             if c.euler {
-                                ox[l] = xi + hx * c.dt;
-                                oy[l] = yi + hy * c.dt;
-                                (oux[l], ouy[l], ouw[l]) = (nvx, nvy, nw);
+                                cx[l] = xi + hx * c.dt;
+                                cy[l] = yi + hy * c.dt;
+                                (cux[l], cuy[l], cuw[l]) = (nvx, nvy, nw);
                             } else {
-                                ox[l] = xi + nvx * c.dt;
-                                oy[l] = yi + nvy * c.dt;
+                                cx[l] = xi + nvx * c.dt;
+                                cy[l] = yi + nvy * c.dt;
                                 let h = 0.5 * c.dt;
-                                (oux[l], ouy[l], ouw[l]) =
+                                (cux[l], cuy[l], cuw[l]) =
                                     (nvx + ax * h, nvy + ay * h, nw + al * h);
                             }
-                            ovx[l] = nvx;
-                            ovy[l] = nvy;
-                            ow[l] = nw;
-                            let (kx, ky, kw) = (oux[l], ouy[l], ouw[l]);
-                            s.kinetic_j +=
-                                0.5 * mi * (kx * kx + ky * ky) + 0.5 * kw * kw / g.inv_inertia[i];
+                            (cvx[l], cvy[l], cw[l]) = (nvx, nvy, nw);
                         }
-                        let ddx = ox[l] - x_ref[i];
-                        let ddy = oy[l] - y_ref[i];
+                        let ddx = cx[l] - nl.x_ref[i];
+                        let ddy = cy[l] - nl.y_ref[i];
                         s.max_disp2 = s.max_disp2.max(ddx * ddx + ddy * ddy);
                     }
                     s
@@ -417,69 +448,115 @@ impl World {
             )
             .collect();
         let total = sums.iter().fold(StepSums::default(), |acc, s| acc.add(s));
-        std::mem::swap(&mut self.g.x, &mut self.next.x);
-        std::mem::swap(&mut self.g.y, &mut self.next.y);
-        std::mem::swap(&mut self.g.vx, &mut self.next.vx);
-        std::mem::swap(&mut self.g.vy, &mut self.next.vy);
-        std::mem::swap(&mut self.g.w, &mut self.next.w);
-        std::mem::swap(&mut self.u, &mut self.next_u);
         self.rebuild_due = total.max_disp2 > 0.25 * self.cfg.skin_m * self.cfg.skin_m;
         self.last = total;
         self.steps += 1;
         self.t_s = self.steps as f64 * self.cfg.dt_s;
     }
 
-    /// Free grains: kinetic energy per grain over `m g d` of the mean grain (settling
-    /// measure); `g` at least 9.81 m/s^2 for a gravity-free world.
+    /// Free grains: kinetic energy per grain (translation and rotation, at the velocities
+    /// the forces see) over `m g d` of the mean grain (settling measure); `g` at least
+    /// 9.81 m/s^2 for a gravity-free world.
     pub fn agitation(&self) -> f64 {
         let (n, m) = self.g.free_mass();
         if n == 0 {
             return 0.0;
         }
-        let d = 2.0 * mean(&self.g.radius);
-        self.last.kinetic_j / (m * self.cfg.gravity_m_s2.max(9.81) * d)
+        let g = &self.g;
+        let kinetic_j: f64 = (0..g.len())
+            .filter(|&i| g.kind[i] == FREE)
+            .map(|i| {
+                let (vx, vy, w) = (self.u.x[i], self.u.y[i], self.u.w[i]);
+                0.5 * (vx * vx + vy * vy) / g.inv_mass[i] + 0.5 * w * w / g.inv_inertia[i]
+            })
+            .sum();
+        let d = 2.0 * mean(&g.radius);
+        kinetic_j / (m * self.cfg.gravity_m_s2.max(9.81) * d)
+    }
+
+    /// Bytes the engine holds per grain: the grains, the neighbour list with its pair
+    /// forces, the predicted velocities and the wall histories.
+    pub fn bytes_per_grain(&self) -> f64 {
+        Grains::BYTES_PER_GRAIN as f64 + self.nl.bytes_per_grain() + 8.0 * (3.0 + 4.0)
+    }
+
+    /// Largest overlap now, over the pair's mean radius (or the grain's radius at a wall).
+    pub fn max_overlap_ratio(&self) -> f64 {
+        let g = &self.g;
+        let w = &self.cfg.walls;
+        let mut worst = 0.0f64;
+        for i in 0..g.len().min(self.nl.start.len().saturating_sub(1)) {
+            let (xi, yi, ri) = (g.x[i], g.y[i], g.radius[i]);
+            for e in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
+                let j = self.nl.j[e] as usize;
+                let rsum = ri + g.radius[j];
+                let delta = rsum - (g.x[j] - xi).hypot(g.y[j] - yi);
+                worst = worst.max(delta / (0.5 * rsum));
+            }
+            if g.kind[i] == FREE {
+                for delta in [
+                    w.floor_m.map(|f| ri - (yi - f)),
+                    w.left_m.map(|l| ri - (xi - l)),
+                    w.right_m.map(|r| ri - (r - xi)),
+                    w.lid_m.map(|t| ri - (t - yi)),
+                ]
+                .into_iter()
+                .flatten()
+                {
+                    worst = worst.max(delta / ri);
+                }
+            }
+        }
+        worst
     }
 
     /// The vertical force carried across each height in `heights_m` by the contacts whose
-    /// centres lie on both sides of it (the lower grain pushing the upper one up), N. In a
-    /// bed at rest this is the weight of the grains above the height.
+    /// centres lie on both sides of it (the lower grain pushing the upper one up), N, from
+    /// the pair forces of the last step (the step's own kernel, tangential part included).
+    /// In a bed at rest this is the weight of the grains above the height.
     pub fn vertical_load_across(&self, heights_m: &[f64]) -> Vec<f64> {
         let g = &self.g;
-        let kn = self.cfg.law.kn_n_per_m;
+        let nl = &self.nl;
         let mut out = vec![0.0; heights_m.len()];
-        for i in 0..g.len() {
-            for e in self.nl.start[i] as usize..self.nl.start[i + 1] as usize {
-                let j = self.nl.j[e] as usize;
-                if g.y[j] <= g.y[i] {
-                    continue;
-                }
-                let (dx, dy) = (g.x[j] - g.x[i], g.y[j] - g.y[i]);
-                let d = dx.hypot(dy);
-                let delta = g.radius[i] + g.radius[j] - d;
-                if delta <= 0.0 {
-                    continue;
-                }
-                let ny = dy / d;
-                let (rvx, rvy) = (self.u.x[i] - self.u.x[j], self.u.y[i] - self.u.y[j]);
-                let vn = rvx * dx / d + rvy * ny;
-                let meff = 1.0 / (g.inv_mass[i] + g.inv_mass[j]);
-                let fn_ = kn * delta + self.cfg.law.gamma_n(meff) * vn;
-                let mut fy_on_j = fn_ * ny;
-                if let Some(h) = self.nl.hist.get(e) {
-                    let kt = self.cfg.law.friction.map_or(0.0, |f| f.kt_over_kn * kn);
-                    // The tangential spring part (the dashpot is negligible at rest).
-                    let ft = -(kt * h);
-                    fy_on_j -= ft * (dx / d);
-                }
+        for i in 0..g.len().min(nl.start.len().saturating_sub(1)) {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.j[e] as usize;
+                // pair_fy is the force on i from j: on the upper grain, from the lower one.
+                let (lower_y, upper_y, up_force) = if g.y[i] < g.y[j] {
+                    (g.y[i], g.y[j], -nl.pair_fy[e])
+                } else {
+                    (g.y[j], g.y[i], nl.pair_fy[e])
+                };
                 for (k, &h) in heights_m.iter().enumerate() {
-                    if g.y[i] < h && g.y[j] >= h {
-                        out[k] += fy_on_j;
+                    if lower_y < h && upper_y >= h {
+                        out[k] += up_force;
                     }
                 }
             }
         }
         out
     }
+}
+
+/// `gamma_n` for a pair whose inverse masses sum to `inv_mass_sum` (1/kg). Kept out of
+/// line: inlined, the compiler hoists its division and square root out of the branch that
+/// needs them and pays them for every pair even when `gamma_n` is a constant.
+#[inline(never)]
+fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
+    rule.at(1.0 / inv_mass_sum)
+}
+
+/// `v` cut into the consecutive ranges `bounds` (empty slices when `v` is empty, as the
+/// history of a frictionless run).
+fn split_by<'a>(mut v: &'a mut [f64], bounds: &[(usize, usize)]) -> Vec<&'a mut [f64]> {
+    let mut out = Vec::with_capacity(bounds.len());
+    for &(a, b) in bounds {
+        let len = if v.is_empty() { 0 } else { b - a };
+        let (head, tail) = v.split_at_mut(len);
+        out.push(head);
+        v = tail;
+    }
+    out
 }
 
 /// Mean of a slice (0 when empty).
