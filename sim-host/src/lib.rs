@@ -15,6 +15,7 @@
 //! gets rooms of its own beside these as it is built.
 
 pub mod acqlog;
+pub mod campaign;
 pub mod cli;
 pub mod command;
 pub mod dem;

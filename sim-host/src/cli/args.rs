@@ -67,6 +67,9 @@ pub enum Command {
     PivSynthetic(SyntheticArgs),
     /// The 2-D DEM of Supplementary I: prepare a bed, intrude, check a collision
     Dem(crate::dem::command::DemArgs),
+    /// Automated campaigns: prepare the bed to a target phi, jump, record and analyse over a
+    /// parameter space; resumable after a crash
+    Campaign(crate::campaign::command::CampaignArgs),
     /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
     /// rig (--link sil|pil): flash, status, jump, intrude, replay.
     Rig(RigArgs),

@@ -64,5 +64,6 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::PivSynthetic(a) => crate::flow::command::run_synthetic(&a),
         args::Command::Rig(a) => crate::rig::tool::run(&a),
         args::Command::Dem(a) => crate::dem::command::run(&a),
+        args::Command::Campaign(a) => crate::campaign::command::run(&a),
     }
 }

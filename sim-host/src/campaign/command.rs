@@ -1,0 +1,405 @@
+//! `sandjumper campaign run|resume|status`.
+//!
+//! A campaign writes into `<out>.incomplete` and becomes `<out>` when its last point is
+//! done: a folder named `<out>` is always a finished campaign. The journal
+//! (`journal.jsonl`) is locked while a session runs, so two sessions cannot drive one
+//! campaign; the lock dies with its process, so a killed session leaves nothing to clean.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+use serde::Serialize;
+
+use super::file::{CampaignFile, FailurePolicy};
+use super::journal::{Event, Journal, read};
+use super::plan::points;
+use super::point::{Link, run_point};
+use super::records::{State, write_documents, write_results};
+use crate::command::CliError;
+use crate::rig::hil::command::LinkArg;
+
+/// `campaign`.
+#[derive(Args, Debug)]
+pub struct CampaignArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: CampaignCommand,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum CampaignCommand {
+    /// Run a campaign file: for each point prepare the bed, jump, record, analyse.
+    Run(RunArgs),
+    /// Carry on a campaign that stopped (crash, kill, power cut, `--stop-after`).
+    Resume(ResumeArgs),
+    /// Where a campaign stands, without disturbing it.
+    Status(StatusArgs),
+}
+
+/// `campaign run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// The campaign file (TOML).
+    pub file: PathBuf,
+    /// The controller: `sil` (the core in this process) or `pil` (the firmware in QEMU),
+    /// with the simulated bed.
+    #[arg(
+        long,
+        value_name = "sil|pil",
+        conflicts_with = "port",
+        required_unless_present = "port"
+    )]
+    pub link: Option<String>,
+    /// The rig's board on a serial port (with the real bed apparatus).
+    #[arg(long, value_name = "PATH")]
+    pub port: Option<PathBuf>,
+    /// Firmware image for `--link pil`.
+    #[arg(long, value_name = "ELF", default_value = crate::rig::firmware_image::EMULATED_ELF)]
+    pub firmware: PathBuf,
+    /// Output folder (written as `<out>.incomplete` until the campaign finishes).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// End this session after N points (the campaign stays resumable).
+    #[arg(long, value_name = "N")]
+    pub stop_after: Option<usize>,
+}
+
+/// `campaign resume`.
+#[derive(Args, Debug)]
+pub struct ResumeArgs {
+    /// The campaign's output folder (as given to `run --out`).
+    pub dir: PathBuf,
+    /// Firmware image for a `pil` campaign.
+    #[arg(long, value_name = "ELF", default_value = crate::rig::firmware_image::EMULATED_ELF)]
+    pub firmware: PathBuf,
+    /// End this session after N points.
+    #[arg(long, value_name = "N")]
+    pub stop_after: Option<usize>,
+}
+
+/// `campaign status`.
+#[derive(Args, Debug)]
+pub struct StatusArgs {
+    /// The campaign's output folder (as given to `run --out`).
+    pub dir: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Run `campaign`.
+pub fn run(a: &CampaignArgs) -> Result<(), CliError> {
+    match &a.command {
+        CampaignCommand::Run(r) => run_new(r),
+        CampaignCommand::Resume(r) => resume(r),
+        CampaignCommand::Status(s) => status(s),
+    }
+}
+
+fn work_dir(out: &Path) -> PathBuf {
+    let mut s = out.as_os_str().to_owned();
+    s.push(".incomplete");
+    PathBuf::from(s)
+}
+
+fn link_arg(name: &str) -> Result<LinkArg, CliError> {
+    match name {
+        "sil" => Ok(LinkArg::Sil),
+        "pil" => Ok(LinkArg::Pil),
+        _ => Err(CliError::input(format!(
+            "--link {name} (allowed: sil, pil; a board is --port PATH)"
+        ))),
+    }
+}
+
+/// Lock the journal for this session.
+fn lock(journal: &Path) -> Result<File, CliError> {
+    let f = File::open(journal)
+        .map_err(|e| CliError::input(format!("cannot open {}: {e}", journal.display())))?;
+    match f.try_lock() {
+        Ok(()) => Ok(f),
+        Err(std::fs::TryLockError::WouldBlock) => Err(CliError::input(format!(
+            "{} is being run by another session (its journal is locked); `campaign status` shows where it stands",
+            journal.parent().unwrap_or(journal).display()
+        ))),
+        Err(std::fs::TryLockError::Error(e)) => Err(CliError::internal(format!(
+            "cannot lock {}: {e}",
+            journal.display()
+        ))),
+    }
+}
+
+fn run_new(a: &RunArgs) -> Result<(), CliError> {
+    let file = CampaignFile::read(&a.file).map_err(CliError::input)?;
+    if let Some(port) = &a.port {
+        return Err(CliError::input(format!(
+            "--port {}: the bed apparatus's commands (blower, shaker, lift, bed height) are not in the board's protocol yet; campaigns run through --link sil|pil with the simulated bed",
+            port.display()
+        )));
+    }
+    let link_name = a.link.clone().unwrap_or_default();
+    let link = Link {
+        arg: link_arg(&link_name)?,
+        firmware: a.firmware.clone(),
+    };
+    let work = work_dir(&a.out);
+    for d in [&a.out, &work] {
+        if d.exists() {
+            return Err(CliError::input(format!(
+                "--out {}: {} exists (allowed: a new folder; `campaign resume {}` carries on a stopped campaign)",
+                a.out.display(),
+                d.display(),
+                a.out.display()
+            )));
+        }
+    }
+    std::fs::create_dir_all(work.join("points"))
+        .map_err(|e| CliError::input(format!("cannot create {}: {e}", work.display())))?;
+    let text = std::fs::read_to_string(&a.file)
+        .map_err(|e| CliError::input(format!("cannot read {}: {e}", a.file.display())))?;
+    std::fs::write(work.join("campaign.toml"), &text)
+        .map_err(|e| CliError::internal(format!("cannot copy the campaign file: {e}")))?;
+    let jpath = work.join("journal.jsonl");
+    let mut journal = Journal::create(&jpath).map_err(CliError::internal)?;
+    let _lock = lock(&jpath)?;
+    journal
+        .append(Event::Planned {
+            name: file.name.clone(),
+            file_text: text,
+            points: points(&file),
+            link: link_name,
+        })
+        .map_err(CliError::internal)?;
+    drive(&file, &link, &work, &a.out, journal, a.stop_after)
+}
+
+fn resume(a: &ResumeArgs) -> Result<(), CliError> {
+    let work = work_dir(&a.dir);
+    if !work.is_dir() {
+        return Err(CliError::input(if a.dir.join("journal.jsonl").is_file() {
+            format!(
+                "{}: the campaign is finished; nothing to resume",
+                a.dir.display()
+            )
+        } else {
+            format!(
+                "{}: no stopped campaign here (no {}; allowed: the --out of a `campaign run`)",
+                a.dir.display(),
+                work.display()
+            )
+        }));
+    }
+    let jpath = work.join("journal.jsonl");
+    let _lock = lock(&jpath)?;
+    let mut journal = Journal::open(&jpath).map_err(CliError::input)?;
+    if journal.dropped_partial_bytes > 0 {
+        eprintln!(
+            "campaign: dropped the journal's last line, cut by the crash ({} bytes)",
+            journal.dropped_partial_bytes
+        );
+    }
+    let state = State::from_records(&journal.records).map_err(CliError::input)?;
+    let file = CampaignFile::parse(
+        &state.file_text,
+        &work.join("campaign.toml").display().to_string(),
+    )
+    .map_err(CliError::input)?;
+    let link = Link {
+        arg: link_arg(&state.link)?,
+        firmware: a.firmware.clone(),
+    };
+    if let Some((point, phase)) = &state.in_progress {
+        eprintln!(
+            "campaign: point {point} was interrupted after `{phase}`; it starts again from fluidization"
+        );
+        journal
+            .append(Event::Interrupted {
+                point: *point,
+                phase: phase.clone(),
+            })
+            .map_err(CliError::internal)?;
+    }
+    drive(&file, &link, &work, &a.dir, journal, a.stop_after)
+}
+
+/// Run the points not done yet, then finish the campaign.
+fn drive(
+    file: &CampaignFile,
+    link: &Link,
+    work: &Path,
+    out: &Path,
+    mut journal: Journal,
+    stop_after: Option<usize>,
+) -> Result<(), CliError> {
+    let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+    journal
+        .append(Event::SessionStarted {
+            session: state.sessions + 1,
+        })
+        .map_err(CliError::internal)?;
+    let total = state.points.len();
+    let bar = crate::output::progress_bar(total as u64, "points");
+    bar.set_position(state.done() as u64);
+    let mut this_session = 0usize;
+    loop {
+        let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+        write_results(work, &state).map_err(CliError::internal)?;
+        write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+        let Some(point) = state.next_point().cloned() else {
+            break;
+        };
+        if stop_after.is_some_and(|n| this_session >= n) {
+            bar.finish_and_clear();
+            println!(
+                "campaign: stopped after {this_session} point(s) this session, {} of {total} done; `campaign resume {}` carries on",
+                state.done(),
+                out.display()
+            );
+            return Ok(());
+        }
+        let label = format!(
+            "point {} ({} {} Hz{}, phi {})",
+            point.index,
+            point.kind,
+            point.freq_hz,
+            if point.kind == "delayed" {
+                format!(" tau {} s", point.tau_s)
+            } else {
+                String::new()
+            },
+            point.target_phi
+        );
+        let mut on_phase = |phase: &str| bar.set_message(format!("{label}: {phase}"));
+        let row = run_point(file, &point, link, work, &mut journal, &mut on_phase)
+            .map_err(CliError::input)?;
+        let failed = row.status == "bed-not-prepared";
+        journal
+            .append(Event::Done { row })
+            .map_err(CliError::internal)?;
+        this_session += 1;
+        bar.inc(1);
+        if failed && file.on_failed_preparation == FailurePolicy::Stop {
+            let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+            write_results(work, &state).map_err(CliError::internal)?;
+            write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+            bar.finish_and_clear();
+            return Err(CliError::internal(format!(
+                "campaign: point {} failed its bed preparation and the campaign's policy is `stop`; the failure is recorded, `campaign resume {}` goes on with the next point",
+                point.index,
+                out.display()
+            )));
+        }
+    }
+    bar.finish_and_clear();
+    journal
+        .append(Event::Finished {
+            exit_status: "success".into(),
+            reason: String::new(),
+        })
+        .map_err(CliError::internal)?;
+    let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+    write_results(work, &state).map_err(CliError::internal)?;
+    write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+    super::figure::write(work, &state).map_err(CliError::internal)?;
+    drop(journal);
+    std::fs::rename(work, out).map_err(|e| {
+        CliError::internal(format!(
+            "cannot rename {} to {}: {e}",
+            work.display(),
+            out.display()
+        ))
+    })?;
+    let failed = state.rows.values().filter(|r| r.status != "done").count();
+    println!(
+        "campaign {}: {} points done ({} failed or faulted) over {} session(s), {} interruption(s); written to {}",
+        state.name,
+        state.done(),
+        failed,
+        state.sessions,
+        state.interruptions,
+        out.display()
+    );
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct StatusReport<'a> {
+    dir: String,
+    name: &'a str,
+    link: &'a str,
+    state: &'a str,
+    points: usize,
+    done: usize,
+    failed: usize,
+    in_progress: Option<(usize, String)>,
+    sessions: u32,
+    interruptions: u32,
+    dropped_partial_journal_bytes: usize,
+}
+
+fn status(a: &StatusArgs) -> Result<(), CliError> {
+    let work = work_dir(&a.dir);
+    let (dir, finished_dir) = if work.is_dir() {
+        (work, false)
+    } else {
+        (a.dir.clone(), true)
+    };
+    let jpath = dir.join("journal.jsonl");
+    if !jpath.is_file() {
+        return Err(CliError::input(format!(
+            "{}: no campaign here (no journal.jsonl in it or in {}.incomplete)",
+            a.dir.display(),
+            a.dir.display()
+        )));
+    }
+    let (records, dropped) = read(&jpath).map_err(CliError::input)?;
+    let st = State::from_records(&records).map_err(CliError::input)?;
+    let running = File::open(&jpath)
+        .map(|f| matches!(f.try_lock_shared(), Err(std::fs::TryLockError::WouldBlock)))
+        .unwrap_or(false);
+    let state = if finished_dir {
+        "finished"
+    } else if running {
+        "running"
+    } else {
+        "stopped (resumable)"
+    };
+    let rep = StatusReport {
+        dir: a.dir.display().to_string(),
+        name: &st.name,
+        link: &st.link,
+        state,
+        points: st.points.len(),
+        done: st.done(),
+        failed: st.rows.values().filter(|r| r.status != "done").count(),
+        in_progress: st.in_progress.clone(),
+        sessions: st.sessions,
+        interruptions: st.interruptions,
+        dropped_partial_journal_bytes: dropped,
+    };
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rep).map_err(|e| CliError::internal(e.to_string()))?
+        );
+    } else {
+        println!(
+            "campaign {} ({}): {}; {} of {} points done, {} failed or faulted; {} session(s), {} interruption(s){}",
+            rep.name,
+            rep.link,
+            rep.state,
+            rep.done,
+            rep.points,
+            rep.failed,
+            rep.sessions,
+            rep.interruptions,
+            rep.in_progress
+                .as_ref()
+                .map(|(p, ph)| format!("; point {p} at `{ph}`"))
+                .unwrap_or_default()
+        );
+    }
+    Ok(())
+}
