@@ -98,10 +98,14 @@ pub fn run(a: &CampaignArgs) -> Result<(), CliError> {
     }
 }
 
-fn work_dir(out: &Path) -> PathBuf {
+fn with_suffix(out: &Path, suffix: &str) -> PathBuf {
     let mut s = out.as_os_str().to_owned();
-    s.push(".incomplete");
+    s.push(suffix);
     PathBuf::from(s)
+}
+
+fn work_dir(out: &Path) -> PathBuf {
+    with_suffix(out, ".incomplete")
 }
 
 fn link_arg(name: &str) -> Result<LinkArg, CliError> {
@@ -155,23 +159,41 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
             )));
         }
     }
-    std::fs::create_dir_all(work.join("points"))
-        .map_err(|e| CliError::input(format!("cannot create {}: {e}", work.display())))?;
+    // The folder takes its `.incomplete` name only once its plan is on the disk, so a
+    // campaign killed at its very start leaves no folder that looks resumable.
+    let starting = with_suffix(&a.out, ".starting");
+    if starting.exists() {
+        std::fs::remove_dir_all(&starting)
+            .map_err(|e| CliError::input(format!("cannot clear {}: {e}", starting.display())))?;
+    }
+    std::fs::create_dir_all(starting.join("points"))
+        .map_err(|e| CliError::input(format!("cannot create {}: {e}", starting.display())))?;
     let text = std::fs::read_to_string(&a.file)
         .map_err(|e| CliError::input(format!("cannot read {}: {e}", a.file.display())))?;
-    std::fs::write(work.join("campaign.toml"), &text)
+    std::fs::write(starting.join("campaign.toml"), &text)
         .map_err(|e| CliError::internal(format!("cannot copy the campaign file: {e}")))?;
+    {
+        let mut journal =
+            Journal::create(&starting.join("journal.jsonl")).map_err(CliError::internal)?;
+        journal
+            .append(Event::Planned {
+                name: file.name.clone(),
+                file_text: text,
+                points: points(&file),
+                link: link_name,
+            })
+            .map_err(CliError::internal)?;
+    }
+    std::fs::rename(&starting, &work).map_err(|e| {
+        CliError::internal(format!(
+            "cannot rename {} to {}: {e}",
+            starting.display(),
+            work.display()
+        ))
+    })?;
     let jpath = work.join("journal.jsonl");
-    let mut journal = Journal::create(&jpath).map_err(CliError::internal)?;
     let _lock = lock(&jpath)?;
-    journal
-        .append(Event::Planned {
-            name: file.name.clone(),
-            file_text: text,
-            points: points(&file),
-            link: link_name,
-        })
-        .map_err(CliError::internal)?;
+    let journal = Journal::open(&jpath).map_err(CliError::internal)?;
     drive(&file, &link, &work, &a.out, journal, a.stop_after)
 }
 
@@ -293,12 +315,18 @@ fn drive(
         }
     }
     bar.finish_and_clear();
-    journal
-        .append(Event::Finished {
-            exit_status: "success".into(),
-            reason: String::new(),
-        })
-        .map_err(CliError::internal)?;
+    if State::from_records(&journal.records)
+        .map_err(CliError::internal)?
+        .finished
+        .is_none()
+    {
+        journal
+            .append(Event::Finished {
+                exit_status: "success".into(),
+                reason: String::new(),
+            })
+            .map_err(CliError::internal)?;
+    }
     let state = State::from_records(&journal.records).map_err(CliError::internal)?;
     write_results(work, &state).map_err(CliError::internal)?;
     write_documents(work, &state, file.seed).map_err(CliError::internal)?;

@@ -46,6 +46,11 @@ pub enum Event {
         /// 1 for `run`, 2.. for each `resume`.
         session: u32,
     },
+    /// A point started (from fluidization).
+    PointStarted {
+        /// Point index.
+        point: usize,
+    },
     /// A point's bed was prepared (or could not be).
     BedPrepared {
         /// Point index.
@@ -73,7 +78,7 @@ pub enum Event {
     Interrupted {
         /// Point index.
         point: usize,
-        /// The last phase it had reached: `planned`, `bed-prepared`, `jumped`, `analysed`.
+        /// The last phase it had reached: `started`, `bed-prepared`, `jumped`, `analysed`.
         phase: String,
     },
     /// The campaign ended.

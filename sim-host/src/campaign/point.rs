@@ -60,6 +60,7 @@ pub fn run_point(
     on_phase: &mut dyn FnMut(&str),
 ) -> Result<ResultRow, String> {
     let b = &f.bed;
+    journal.append(Event::PointStarted { point: point.index })?;
     on_phase("bed");
     let mut bed = SimulatedBed::new(
         &f.simulated_bed,
@@ -93,6 +94,7 @@ pub fn run_point(
     };
     if !prep.ok {
         row.status = "bed-not-prepared".into();
+        row.faults = prep.failure.clone().unwrap_or_default();
         row.folder = String::new();
         return Ok(row);
     }

@@ -41,7 +41,8 @@ pub struct ResultRow {
     pub predicted_jump_height_m: Option<f64>,
     /// Jump height of the simulated plant (the twin's truth), m.
     pub plant_jump_height_m: Option<f64>,
-    /// Faults the controller latched (names, `;`-separated).
+    /// Faults the controller latched (names, `;`-separated), or why the bed could not be
+    /// prepared.
     pub faults: String,
     /// The point's folder.
     pub folder: String,
@@ -123,6 +124,9 @@ impl State {
                     s.link = link.clone();
                 }
                 Event::SessionStarted { session } => s.sessions = *session,
+                Event::PointStarted { point } => {
+                    s.in_progress = Some((*point, "started".into()));
+                }
                 Event::BedPrepared { point, .. } => {
                     s.in_progress = Some((*point, "bed-prepared".into()));
                 }
