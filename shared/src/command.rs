@@ -1,5 +1,6 @@
 //! Host commands to the rig, the rig's replies, and why a command can be rejected.
 
+use crate::bed::{BedCommand, BedError};
 use crate::drive_calibration::{CalibrationError, DriveCalibration};
 use crate::reset::ResetCause;
 use core::fmt;
@@ -48,6 +49,9 @@ pub enum Command {
     /// The DAC codes of the force command measured on the rig (drive disabled: Idle or
     /// Faulted only). Checked, then used for every force command and reported in `Status`.
     SetDriveCalibration(DriveCalibration),
+    /// A bed-apparatus command (blower, shaker, lift), in any state, under the interlocks of
+    /// [`crate::bed`].
+    Bed(BedCommand),
 }
 
 /// Which command (for rejections).
@@ -67,6 +71,7 @@ pub enum CommandKind {
     Heartbeat,
     AcknowledgeReset,
     SetDriveCalibration,
+    Bed,
 }
 
 impl Command {
@@ -86,6 +91,7 @@ impl Command {
             Self::Heartbeat => CommandKind::Heartbeat,
             Self::AcknowledgeReset => CommandKind::AcknowledgeReset,
             Self::SetDriveCalibration(_) => CommandKind::SetDriveCalibration,
+            Self::Bed(_) => CommandKind::Bed,
         }
     }
 }
@@ -120,6 +126,8 @@ pub enum CommandError {
     ResetNotAcknowledged { cause: ResetCause },
     /// The drive calibration failed its check.
     InvalidCalibration(CalibrationError),
+    /// A bed interlock refused the command (or `Arm`).
+    Interlock(BedError),
 }
 
 impl fmt::Display for CommandError {
@@ -137,6 +145,7 @@ impl fmt::Display for CommandError {
                  or check the carriage, then send AcknowledgeReset"
             ),
             Self::InvalidCalibration(e) => write!(f, "drive calibration refused: {e}"),
+            Self::Interlock(e) => write!(f, "bed interlock: {e}"),
         }
     }
 }
@@ -162,6 +171,8 @@ pub enum Rejection {
     ResetNotAcknowledged { cause: ResetCause },
     /// See [`CommandError::InvalidCalibration`].
     InvalidCalibration(CalibrationError),
+    /// See [`CommandError::Interlock`].
+    Interlock(BedError),
 }
 
 impl From<&CommandError> for Rejection {
@@ -180,6 +191,7 @@ impl From<&CommandError> for Rejection {
             },
             CommandError::ResetNotAcknowledged { cause } => Self::ResetNotAcknowledged { cause },
             CommandError::InvalidCalibration(e) => Self::InvalidCalibration(e),
+            CommandError::Interlock(e) => Self::Interlock(e),
         }
     }
 }

@@ -37,11 +37,13 @@ pub enum FaultCode {
     LinkCorrupted = 7,
     /// Lockstep sensor frames stopped arriving (raised by the glue).
     LinkLost = 8,
+    /// The emergency stop was pressed (the bed apparatus's input).
+    EmergencyStop = 9,
 }
 
 impl FaultCode {
     /// Every code, in table order.
-    pub const ALL: [FaultCode; 8] = [
+    pub const ALL: [FaultCode; 9] = [
         Self::StrokeLimit,
         Self::TrackingError,
         Self::EncoderFault,
@@ -50,6 +52,7 @@ impl FaultCode {
         Self::InvalidConfiguration,
         Self::LinkCorrupted,
         Self::LinkLost,
+        Self::EmergencyStop,
     ];
 
     /// The stable number.
@@ -73,6 +76,7 @@ impl FaultCode {
             Self::InvalidConfiguration => "invalid_configuration",
             Self::LinkCorrupted => "link_corrupted",
             Self::LinkLost => "link_lost",
+            Self::EmergencyStop => "emergency_stop",
         }
     }
 }
@@ -89,12 +93,12 @@ mod tests {
 
     #[test]
     fn codes_are_stable_and_round_trip() {
-        let numbers: [u8; 8] = FaultCode::ALL.map(FaultCode::code);
-        assert_eq!(numbers, [1, 2, 3, 4, 5, 6, 7, 8]);
+        let numbers: [u8; 9] = FaultCode::ALL.map(FaultCode::code);
+        assert_eq!(numbers, [1, 2, 3, 4, 5, 6, 7, 8, 9]);
         for f in FaultCode::ALL {
             assert_eq!(FaultCode::from_code(f.code()), Some(f));
         }
         assert_eq!(FaultCode::from_code(0), None);
-        assert_eq!(FaultCode::from_code(9), None);
+        assert_eq!(FaultCode::from_code(10), None);
     }
 }

@@ -14,12 +14,14 @@
 //! * [`controller`]: PD + feedforward (+I) with gain-lowering damping.
 //! * [`encoder`], [`camera`], [`sample`]: acquisition.
 //! * [`fault`]: the fault-code table; [`rig`]: the state machine and control loop.
+//! * [`bed`]: the bed apparatus (blower, shaker, lift) and its interlocks.
 //! * [`config`], [`command`], [`protocol`]: configuration, commands, wire format.
 #![no_std]
 
 #[cfg(test)]
 extern crate std;
 
+pub mod bed;
 pub mod camera;
 pub mod command;
 pub mod config;

@@ -11,10 +11,16 @@
 //!   Idle/Done --Configure--> Idle
 //! ```
 //!
+//! The bed apparatus ([`crate::bed`]) rides along: its inputs arrive with
+//! [`Rig::set_bed_inputs`], its commands as [`Command::Bed`] in any state; `Arm` needs its
+//! interlock; the emergency stop latches [`FaultCode::EmergencyStop`], and any latched fault
+//! turns the apparatus off.
+//!
 //! Per tick, in order: deadline check, encoder extension (and velocity estimate), host-link
 //! watchdog, setpoint, camera trigger, position controller, stroke and tracking checks, sample
 //! record. Any fault found on a tick makes that same tick's force command exactly 0.
 
+use crate::bed::{BedApparatus, BedInputs, BedOutputs, BedStatus};
 use crate::camera::CameraTrigger;
 use crate::command::{Command, CommandError, CommandKind, Reply};
 use crate::config::{ConfigError, JumpConfig, RigConfig, Trajectory};
@@ -78,6 +84,8 @@ pub struct TickOutput {
     pub fault: Option<FaultCode>,
     /// This tick's number since start-up.
     pub tick: u32,
+    /// The bed apparatus's outputs.
+    pub bed: BedOutputs,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -123,6 +131,7 @@ pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     replay: ReplayTable,
     samples: SampleQueue<Q>,
     counters: Counters,
+    bed: BedApparatus,
 }
 
 impl<const Q: usize> Rig<Q> {
@@ -162,6 +171,7 @@ impl<const Q: usize> Rig<Q> {
             replay: ReplayTable::new(),
             samples: SampleQueue::new(),
             counters: Counters::default(),
+            bed: BedApparatus::new(),
         })
     }
 
@@ -219,7 +229,19 @@ impl<const Q: usize> Rig<Q> {
             reset_cause: self.reset_cause,
             reset_acknowledged: self.reset_acknowledged,
             drive_calibration: self.drive_calibration,
+            bed: BedStatus::from(&self.bed),
         }
+    }
+
+    /// The bed apparatus's inputs of this tick (the glue calls this before [`Self::tick`] on a
+    /// board that has the apparatus).
+    pub fn set_bed_inputs(&mut self, inputs: BedInputs) {
+        self.bed.read_inputs(inputs);
+    }
+
+    /// The bed apparatus.
+    pub fn bed(&self) -> &BedApparatus {
+        &self.bed
     }
 
     /// Latch `code` (the first fault wins; later ones are counted). Zero force from the current
@@ -261,6 +283,9 @@ impl<const Q: usize> Rig<Q> {
         self.tick = tick.wrapping_add(1);
 
         self.check_timing(input.timing, tick);
+        if self.bed.emergency_stop() {
+            self.fault_at(FaultCode::EmergencyStop, tick);
+        }
         let (count, position_m) = self.read_encoder(input.encoder_raw, tick);
         self.watch_host(tick);
         let target = self.advance_setpoint();
@@ -286,8 +311,10 @@ impl<const Q: usize> Rig<Q> {
             flags: record_flags,
         });
 
+        let bed = self.bed.update(self.state == RigState::Faulted);
         TickOutput {
             force_n,
+            bed,
             drive_enabled,
             camera_trigger,
             camera_frame,
@@ -609,6 +636,7 @@ impl<const Q: usize> Rig<Q> {
                 let Some(j) = self.jump else {
                     return Err(CommandError::NotConfigured);
                 };
+                self.bed.arm_check().map_err(CommandError::Interlock)?;
                 // A replay table re-uploaded since Configure makes the jump stale.
                 if let TickProfile::Replay(r) = j.profile
                     && self.replay.committed_checksum() != Some(r.checksum())
@@ -644,11 +672,18 @@ impl<const Q: usize> Rig<Q> {
                 self.state = Running;
                 Ok(Reply::Ack)
             }
+            (Command::Bed(c), state) => {
+                self.bed
+                    .command(c, matches!(state, Armed | Running))
+                    .map_err(CommandError::Interlock)?;
+                Ok(Reply::Ack)
+            }
             (Command::Abort, Idle | Armed | Running | Done) => {
                 self.stop_motion();
                 Ok(Reply::Ack)
             }
             (Command::ClearFault, Faulted) => {
+                self.bed.clear().map_err(CommandError::Interlock)?;
                 self.fault = None;
                 self.stop_motion();
                 Ok(Reply::Ack)
@@ -743,6 +778,7 @@ impl<const Q: usize> Rig<Q> {
                 K::SetGains,
                 K::StatusQuery,
                 K::Heartbeat,
+                K::Bed,
             ],
             RigState::Armed => &[
                 K::Start,
@@ -750,8 +786,9 @@ impl<const Q: usize> Rig<Q> {
                 K::SetGains,
                 K::StatusQuery,
                 K::Heartbeat,
+                K::Bed,
             ],
-            RigState::Running => &[K::Abort, K::StatusQuery, K::Heartbeat],
+            RigState::Running => &[K::Abort, K::StatusQuery, K::Heartbeat, K::Bed],
             RigState::Done => &[
                 K::Configure,
                 K::Abort,
@@ -761,6 +798,7 @@ impl<const Q: usize> Rig<Q> {
                 K::SetGains,
                 K::StatusQuery,
                 K::Heartbeat,
+                K::Bed,
             ],
             RigState::Faulted => &[
                 K::ClearFault,
@@ -769,6 +807,7 @@ impl<const Q: usize> Rig<Q> {
                 K::ReplayCommit,
                 K::StatusQuery,
                 K::Heartbeat,
+                K::Bed,
             ],
         }
     }

@@ -87,4 +87,6 @@ pub struct Status {
     pub reset_acknowledged: bool,
     /// The DAC codes of the force command in use.
     pub drive_calibration: DriveCalibration,
+    /// The bed apparatus.
+    pub bed: crate::bed::BedStatus,
 }

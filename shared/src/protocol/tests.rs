@@ -118,6 +118,22 @@ fn worst_case_rig_messages_fit_a_frame() {
             zero_code: u16::MAX,
             codes_per_newton: f32::MAX,
         },
+        bed: crate::bed::BedStatus {
+            present: true,
+            inputs: crate::bed::BedInputs {
+                lift_up_limit: true,
+                lift_down_limit: true,
+                emergency_stop: true,
+                height_raw: u16::MAX,
+            },
+            outputs: crate::bed::BedOutputs {
+                blower_v: f32::MAX,
+                shaker_duty: f32::MAX,
+                lift_enable: true,
+                lift_up: true,
+            },
+            tripped: true,
+        },
     };
     for msg in [
         full_batch(),
