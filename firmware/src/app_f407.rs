@@ -192,6 +192,7 @@ mod app {
         // The sensors first, at a fixed time after the tick starts, whatever the host sent.
         let encoder_raw = io.encoder_count();
         let current_code = io.current_sense_code();
+        rig.set_bed_inputs(io.bed_inputs());
         let fault_before = rig.fault();
         let dropped = INBOUND_DROPPED.swap(0, Ordering::Relaxed);
         if dropped > 0 {
@@ -237,6 +238,7 @@ mod app {
             let code = rig.drive_calibration().force_to_code(out.force_n);
             io.set_drive(code, out.drive_enabled);
             io.set_camera_trigger(out.camera_trigger);
+            io.set_bed(&out.bed);
             io.start_current_sample();
             io.set_leds(out.drive_enabled, out.fault.is_some());
             ticked = true;

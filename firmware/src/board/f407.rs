@@ -12,6 +12,12 @@
 //! | motor current sense | PA1, ADC1 channel 1 | ADC clock PCLK2/4 = 21 MHz (limit 36 MHz); sampled at the end of each tick, read by the next |
 //! | USB host link | PA11 (D-) / PA12 (D+), OTG_FS | CDC-ACM full speed |
 //! | status LEDs | PD12 green (running), PD14 red (fault) | the Discovery board's LEDs |
+//! | blower flow command | PA5, DAC channel 2 | 12-bit, 0..3.3 V for 0..10 V through a x3.03 stage like the drive's ([`blower_code`]); PA5 also reaches the Discovery's LIS3DSH SCK: its chip select PE3 is held high |
+//! | shaker motor | PC6, TIM3 CH1 (AF2) | PWM at [`SHAKER_PWM_HZ`], duty = the core's shaker duty |
+//! | lift motor enable / direction | PE10 / PE11, push-pull | enable active high (low on reset, fit a pull-down); direction high = up |
+//! | lift limit switches up / down | PE12 / PE13, inputs with pull-up | switch closes to ground at its limit (low = at the limit) |
+//! | emergency stop | PE14, input with pull-up | normally-closed contact to ground: pressed **or a broken wire** reads high = stop |
+//! | bed height sensor | PA2, ADC2 channel 2 | the laser distance sensor's 0..3.3 V output, raw 12-bit code to the host (sampled at the end of each tick) |
 //! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
 //! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick; keeps counting while the core is halted by a debugger |
 
@@ -20,19 +26,36 @@ use stm32f4xx_hal::{
         Adc,
         config::{AdcConfig, Clock, SampleTime, Sequence},
     },
-    dac::{C1, DacExt, DacOut, DacPin},
-    gpio::{Analog, Output, PA1, PD12, PD14, PE7, PE8, PE9, PushPull},
+    dac::{C1, C2, DacExt, DacOut, DacPin},
+    gpio::{
+        Analog, Input, Output, PA1, PA2, PD12, PD14, PE3, PE7, PE8, PE9, PE10, PE11, PE12, PE13,
+        PE14, PushPull,
+    },
     pac,
     prelude::*,
     qei::Qei,
     rcc::{Config, Rcc},
-    timer::{CounterHz, Event, Flag},
+    timer::{CounterHz, Event, Flag, PwmChannel},
     watchdog::IndependentWatchdog,
 };
 
 use crate::drive;
 use crate::reset_flags;
 use sandjumper_core::ResetCause;
+use sandjumper_core::bed::{BLOWER_MAX_V, BedInputs, BedOutputs};
+
+/// Shaker PWM frequency, Hz (above hearing, within a motor driver's usual range).
+pub const SHAKER_PWM_HZ: u32 = 20_000;
+
+/// The DAC code of a blower command, V (0..10 V over the full 12-bit scale).
+pub fn blower_code(volts: f32) -> u16 {
+    let v = if volts.is_finite() {
+        volts.clamp(0.0, BLOWER_MAX_V)
+    } else {
+        0.0
+    };
+    (v / BLOWER_MAX_V * 4095.0 + 0.5) as u16
+}
 
 /// External crystal, Hz.
 pub const HSE_HZ: u32 = 8_000_000;
@@ -121,6 +144,47 @@ pub fn force_safe_state() {
     }
 }
 
+/// ADC2 converting channel 2 (PA2, the bed-height sensor) once per software start. The HAL
+/// only constructs ADC1 (its calibration reads ADC1's internal reference), so ADC2 is set up
+/// here on its registers; the ADC clock prescaler (PCLK2/4) is ADC1's common setting.
+pub struct BedHeightAdc {
+    adc: pac::ADC2,
+}
+
+impl BedHeightAdc {
+    /// Clock on, channel 2 alone in the regular sequence, 84-cycle sampling, on, first
+    /// conversion started. Call after ADC1's setup (which sets the common prescaler).
+    fn init(adc: pac::ADC2) -> Self {
+        // SAFETY: one read-modify-write of RCC's APB2 enable register, setting only ADC2's
+        // clock bit; nothing else touches ADC2's bit.
+        unsafe {
+            (*pac::RCC::ptr())
+                .apb2enr()
+                .modify(|_, w| w.adc2en().set_bit());
+        }
+        adc.smpr2().modify(|_, w| w.smp2().cycles84());
+        // SAFETY: 2 is a valid channel number for SQ1 (0..=18).
+        adc.sqr3().write(|w| unsafe { w.sq1().bits(2) });
+        adc.sqr1().write(|w| w.l().set(0));
+        adc.cr2().modify(|_, w| w.adon().set_bit());
+        let s = Self { adc };
+        s.start();
+        s
+    }
+
+    /// Start a conversion (done long before the next tick).
+    #[inline(always)]
+    fn start(&self) {
+        self.adc.cr2().modify(|_, w| w.swstart().set_bit());
+    }
+
+    /// The last conversion's 12-bit code.
+    #[inline(always)]
+    fn read(&self) -> u16 {
+        self.adc.dr().read().data().bits()
+    }
+}
+
 /// The rig's peripherals, owned by the control tick.
 pub struct RigIo {
     encoder: Qei<pac::TIM2>,
@@ -132,6 +196,16 @@ pub struct RigIo {
     _current_pin: PA1<Analog>,
     running_led: PD12<Output<PushPull>>,
     fault_led: PD14<Output<PushPull>>,
+    blower_dac: C2,
+    shaker: PwmChannel<pac::TIM3, 0>,
+    lift_enable: PE10<Output<PushPull>>,
+    lift_up: PE11<Output<PushPull>>,
+    lift_up_limit: PE12<Input>,
+    lift_down_limit: PE13<Input>,
+    emergency_stop: PE14<Input>,
+    height_adc: BedHeightAdc,
+    _height_pin: PA2<Analog>,
+    _mems_cs: PE3<Output<PushPull>>,
     tick_timer: CounterHz<pac::TIM7>,
     watchdog: IndependentWatchdog,
 }
@@ -159,9 +233,28 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     let drive_enable = gpioe
         .pe7
         .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
-    let mut force_dac = dp.DAC.constrain(gpioa.pa4.into_analog(), &mut rcc);
+    let (mut force_dac, mut blower_dac) = dp
+        .DAC
+        .constrain((gpioa.pa4.into_analog(), gpioa.pa5.into_analog()), &mut rcc);
     force_dac.set_value(drive::ZERO_FORCE_CODE);
     force_dac.enable();
+    // The bed apparatus: everything off.
+    blower_dac.set_value(0);
+    blower_dac.enable();
+    let lift_enable = gpioe
+        .pe10
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+    let lift_up = gpioe
+        .pe11
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
+    let mems_cs = gpioe
+        .pe3
+        .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::High);
+    let gpioc = dp.GPIOC.split(&mut rcc);
+    let (_, (shaker_ch, ..)) = dp.TIM3.pwm_hz(SHAKER_PWM_HZ.Hz(), &mut rcc);
+    let mut shaker = shaker_ch.with(gpioc.pc6);
+    shaker.set_duty(0);
+    shaker.enable();
     // Toggled by every control tick: a retriggerable monostable on this line gates the drive's
     // enable, so a halted or locked-up core drops the drive within the monostable's period.
     let tick_heartbeat = gpioe
@@ -200,6 +293,9 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     current_adc.enable();
     current_adc.start_conversion();
 
+    let height_pin = gpioa.pa2.into_analog();
+    let height_adc = BedHeightAdc::init(dp.ADC2);
+
     let mut tick_timer = dp.TIM7.counter_hz(&mut rcc);
     tick_timer.listen(Event::Update);
 
@@ -226,6 +322,16 @@ pub fn init(dp: pac::Peripherals) -> Parts {
             _current_pin: current_pin,
             running_led: gpiod.pd12.into_push_pull_output(),
             fault_led: gpiod.pd14.into_push_pull_output(),
+            blower_dac,
+            shaker,
+            lift_enable,
+            lift_up,
+            lift_up_limit: gpioe.pe12.into_pull_up_input(),
+            lift_down_limit: gpioe.pe13.into_pull_up_input(),
+            emergency_stop: gpioe.pe14.into_pull_up_input(),
+            height_adc,
+            _height_pin: height_pin,
+            _mems_cs: mems_cs,
             tick_timer,
             watchdog,
         },
@@ -297,6 +403,36 @@ impl RigIo {
     pub fn set_leds(&mut self, running: bool, fault: bool) {
         self.running_led.set_state(running.into());
         self.fault_led.set_state(fault.into());
+    }
+
+    /// The bed apparatus's inputs (limit switches low at their limit; the emergency stop's
+    /// normally-closed contact reads high when pressed or broken), and starts the next
+    /// bed-height conversion.
+    #[inline(always)]
+    pub fn bed_inputs(&mut self) -> BedInputs {
+        let inputs = BedInputs {
+            lift_up_limit: self.lift_up_limit.is_low(),
+            lift_down_limit: self.lift_down_limit.is_low(),
+            emergency_stop: self.emergency_stop.is_high(),
+            height_raw: self.height_adc.read(),
+        };
+        self.height_adc.start();
+        inputs
+    }
+
+    /// Applies the bed apparatus's outputs.
+    #[inline(always)]
+    pub fn set_bed(&mut self, out: &BedOutputs) {
+        self.blower_dac.set_value(blower_code(out.blower_v));
+        let duty = if out.shaker_duty.is_finite() {
+            out.shaker_duty.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let max = self.shaker.get_max_duty();
+        self.shaker.set_duty((f32::from(max) * duty) as u16);
+        self.lift_up.set_state(out.lift_up.into());
+        self.lift_enable.set_state(out.lift_enable.into());
     }
 
     /// Feeds the independent watchdog.

@@ -139,7 +139,7 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
     let file = CampaignFile::read(&a.file).map_err(CliError::input)?;
     if let Some(port) = &a.port {
         return Err(CliError::input(format!(
-            "--port {}: the bed apparatus's commands (blower, shaker, lift, bed height) are not in the board's protocol yet; campaigns run through --link sil|pil with the simulated bed",
+            "--port {}: campaigns on a board are not available yet (the board has the bed apparatus and its commands; the host side that drives them and jumps through the rig tool is not written); allowed: --link sil|pil with the simulated bed",
             port.display()
         )));
     }
