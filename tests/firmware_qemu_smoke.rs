@@ -246,6 +246,7 @@ fn a_lockstep_session_over_fifos_answers_every_sensor_frame_and_ends_cleanly() {
             encoder_count,
             current_a: None,
             overrun: false,
+            bed: None,
         }));
         loop {
             match s.next() {
@@ -318,6 +319,7 @@ fn closing_the_link_mid_jump_latches_link_lost_and_exits_with_its_code() {
         encoder_count,
         current_a: None,
         overrun: false,
+        bed: None,
     }));
     assert!(matches!(s.next(), Some(RigMessage::Actuator(a)) if a.fault.is_none()));
     s.to_firmware = None;

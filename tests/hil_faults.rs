@@ -125,6 +125,15 @@ fn simulated_control_overrun_is_a_deadline_fault_on_the_same_tick() {
 }
 
 #[test]
+fn the_emergency_stop_in_the_sensor_frames_is_a_fault_on_the_same_tick() {
+    let p = params(0.57);
+    let spec = spec_with(InjectedFault::EmergencyStop);
+    let o = sil(&p, &spec);
+    let tick = check_fault(&p, &spec, &o, FaultCode::EmergencyStop);
+    assert_eq!(u64::from(tick), o.start_period + 300);
+}
+
+#[test]
 fn link_that_stops_is_a_link_lost_fault_and_zero_force() {
     let p = params(0.57);
     let spec = spec_with(InjectedFault::LinkStops);

@@ -48,6 +48,7 @@ fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
             encoder_count: 0,
             current_a: None,
             overrun: false,
+            bed: None,
         })
         .expect("lockstep answer");
         let Reply::Status(status) = link.command(&Command::StatusQuery).expect("status") else {

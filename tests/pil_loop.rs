@@ -100,6 +100,8 @@ fn faults_through_pil_match_sil() {
             FaultCode::LinkCorrupted,
         ),
         (InjectedFault::EncoderFrozen, FaultCode::TrackingError),
+        // The bed apparatus's inputs ride in the lockstep frames.
+        (InjectedFault::EmergencyStop, FaultCode::EmergencyStop),
     ] {
         let mut spec = delayed(0.75, ModelName::Eq4);
         spec.injections.push(Injection { at_s: 0.03, fault });

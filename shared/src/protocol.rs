@@ -41,6 +41,8 @@ pub struct SensorFrame {
     pub current_a: Option<f32>,
     /// Fault injection: treat this tick as a deadline overrun.
     pub overrun: bool,
+    /// The bed apparatus's inputs (None: the simulated rig has no apparatus).
+    pub bed: Option<crate::bed::BedInputs>,
 }
 
 /// Lockstep HIL: the controller's outputs for one control tick.
@@ -61,6 +63,8 @@ pub struct ActuatorFrame {
     pub state: RigState,
     /// Latched fault.
     pub fault: Option<FaultCode>,
+    /// The bed apparatus's outputs.
+    pub bed: crate::bed::BedOutputs,
 }
 
 /// A latched fault, as reported in telemetry.

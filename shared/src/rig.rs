@@ -510,6 +510,9 @@ impl<const Q: usize> Rig<Q> {
         } else {
             timing
         };
+        if let Some(b) = frame.bed {
+            self.set_bed_inputs(b);
+        }
         let out = self.tick(&TickInput {
             encoder_raw: frame.encoder_count,
             current_a: frame.current_a,
@@ -523,6 +526,7 @@ impl<const Q: usize> Rig<Q> {
             camera_frame: out.camera_frame,
             state: out.state,
             fault: out.fault,
+            bed: out.bed,
         }
     }
 

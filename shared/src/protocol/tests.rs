@@ -41,12 +41,19 @@ fn sample_messages() -> [HostMessage; 5] {
             encoder_count: u32::MAX,
             current_a: Some(1.5),
             overrun: false,
+            bed: None,
         }),
         HostMessage::Sensor(SensorFrame {
             frame: 8,
             encoder_count: 0,
             current_a: None,
             overrun: true,
+            bed: Some(crate::bed::BedInputs {
+                lift_up_limit: false,
+                lift_down_limit: true,
+                emergency_stop: true,
+                height_raw: 4095,
+            }),
         }),
     ]
 }
@@ -259,7 +266,7 @@ proptest! {
     /// Sensor frames round-trip bit-exactly.
     #[test]
     fn sensor_frames_round_trip(frame in any::<u32>(), count in any::<u32>(), cur in proptest::option::of(-100f32..100.0), overrun in any::<bool>()) {
-        let msg = HostMessage::Sensor(SensorFrame { frame, encoder_count: count, current_a: cur, overrun });
+        let msg = HostMessage::Sensor(SensorFrame { frame, encoder_count: count, current_a: cur, overrun, bed: None });
         let mut f = encode_frame_vec(&msg).unwrap();
         let n = f.len() - 1;
         prop_assert_eq!(decode_frame::<HostMessage>(&mut f[..n]), Ok(msg));

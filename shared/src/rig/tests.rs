@@ -420,6 +420,7 @@ fn lockstep_counts_lost_frames_and_mirrors_the_tick() {
         encoder_count: raw,
         current_a: Some(0.5),
         overrun: false,
+        bed: None,
     };
     let a = r.lockstep(&f(10), TickTiming::Unknown);
     assert_eq!(
@@ -630,6 +631,7 @@ fn host_frame(frame: u32, encoder_count: u32) -> SensorFrame {
         encoder_count,
         current_a: None,
         overrun: false,
+        bed: None,
     }
 }
 

@@ -289,6 +289,7 @@ impl RigLink for FramedLink {
             camera_frame: None,
             state: sandjumper_core::RigState::Faulted,
             fault: Some(report.code),
+            bed: sandjumper_core::bed::BedOutputs::default(),
         }))
     }
 

@@ -120,6 +120,8 @@ pub struct RigModel {
     rod_heights: Vec<f64>,
     applied_command_n: f64,
     state: PlantState,
+    /// The bed apparatus's inputs sent with every sensor frame (None: no apparatus).
+    pub bed: Option<sandjumper_core::bed::BedInputs>,
 }
 
 impl RigModel {
@@ -174,6 +176,7 @@ impl RigModel {
             rng: StdRng::seed_from_u64(config.noise_seed),
             frozen_count: None,
             encoder_offset: 0,
+            bed: None,
             trigger_was_high: false,
             frames: Vec::new(),
             period: 0,
@@ -280,6 +283,7 @@ impl RigModel {
             encoder_count: count as i32 as u32,
             current_a,
             overrun: false,
+            bed: self.bed,
         }
     }
 

@@ -47,6 +47,9 @@ pub enum InjectedFault {
     LinkStops,
     /// `count` consecutive sensor frames are corrupted on the wire.
     CorruptFrames { count: u32 },
+    /// The bed apparatus's emergency stop is pressed (and stays pressed); the rig gains the
+    /// apparatus (lift down) if it had none.
+    EmergencyStop,
 }
 
 /// An injection at a time after the trajectory starts.
@@ -491,6 +494,14 @@ impl LockstepRun {
                 InjectedFault::Overrun => self.overrun_next = true,
                 InjectedFault::LinkStops => self.link_stopped = true,
                 InjectedFault::CorruptFrames { count } => self.corrupt_left = count,
+                InjectedFault::EmergencyStop => {
+                    let mut b = rig.bed.unwrap_or(sandjumper_core::bed::BedInputs {
+                        lift_down_limit: true,
+                        ..Default::default()
+                    });
+                    b.emergency_stop = true;
+                    rig.bed = Some(b);
+                }
             }
             self.next_injection += 1;
         }

@@ -126,6 +126,7 @@ impl RigLink for SilLink {
             camera_frame: None,
             state: status.state,
             fault: status.fault,
+            bed: status.bed.outputs,
         }))
     }
 

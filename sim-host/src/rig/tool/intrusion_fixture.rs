@@ -145,6 +145,7 @@ impl Fixture for IntrusionFixture {
             encoder_count: count as i32 as u32,
             current_a: Some((self.motor_force_n / self.force_constant_n_a) as f32),
             overrun: false,
+            bed: None,
         }
     }
 
