@@ -137,6 +137,28 @@ fn a_small_campaign_runs_end_to_end_through_sil() {
             assert!(!ev["timestamps"][key].is_null(), "{key} has no timestamp");
         }
     }
+    // Valid against the event-model package's own schemas (vendored in tests/fixtures).
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/event-model");
+    let validator = |name: &str| {
+        let schema: serde_json::Value =
+            serde_json::from_str(&read(&fixtures.join(format!("{name}.json")))).unwrap();
+        jsonschema::validator_for(&schema).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let schemas = [
+        ("start", validator("run_start")),
+        ("descriptor", validator("event_descriptor")),
+        ("event", validator("event")),
+        ("stop", validator("run_stop")),
+    ];
+    for d in &docs {
+        let (_, v) = schemas.iter().find(|(n, _)| d[0] == *n).unwrap();
+        let errors: Vec<String> = v.iter_errors(&d[1]).map(|e| e.to_string()).collect();
+        assert!(errors.is_empty(), "{}: {errors:?}", d[0]);
+    }
+    // The validator catches what it should: a stop without its exit status.
+    let mut bad = docs[docs.len() - 1][1].clone();
+    bad.as_object_mut().unwrap().remove("exit_status");
+    assert!(!schemas[3].1.is_valid(&bad));
     let stop = &docs[docs.len() - 1][1];
     assert_eq!(stop["exit_status"], "success");
     assert_eq!(stop["run_start"], start["uid"]);

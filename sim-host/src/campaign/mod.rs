@@ -1,7 +1,7 @@
 //! Automated campaigns (`sandjumper campaign`): prepare the bed to a target packing
 //! fraction, jump, record, analyse, over a parameter space; resumable after a crash.
 //!
-//! - [`file`]: the campaign file and its checks.
+//! - [`mod@file`]: the campaign file and its checks.
 //! - [`plan`]: the grid expanded into points, in order or shuffled.
 //! - [`bed`]: the bed apparatus the preparation drives, and its simulated twin.
 //! - [`prepare`]: the closed-loop bed preparation.
