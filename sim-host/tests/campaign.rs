@@ -94,8 +94,17 @@ fn a_small_campaign_runs_end_to_end_through_sil() {
             (predicted - plant).abs() < 0.05 * plant,
             "replay {predicted} vs plant {plant}: {r:?}"
         );
+        // The camera measures the plant's jump where the ball stayed in view.
         let measured: f64 = r[col("measured_jump_height_m")].parse().unwrap();
-        assert!(measured > 0.02, "{r:?}");
+        let flagged: usize = r[col("frames_flagged")].parse().unwrap();
+        if flagged == 0 {
+            assert!(
+                (measured - plant).abs() < 0.02 * plant,
+                "camera {measured} vs plant {plant}: {r:?}"
+            );
+        } else {
+            assert!(measured < plant, "a ball out of view reads low: {r:?}");
+        }
     }
     assert_eq!(kinds_phis.len(), 4, "two kinds x two phis");
 
@@ -195,8 +204,11 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(11);
     let mut kills = 0;
     let mut sessions = 0;
+    // Eight kills at random moments (on a slow machine a session may not finish a point
+    // before its kill), then a last session runs to the end.
+    const KILLS: usize = 8;
     loop {
-        assert!(sessions < 60, "the campaign never finished");
+        assert!(sessions <= KILLS, "the campaign never finished");
         let started = with_suffix(&killed, ".incomplete").is_dir();
         let args: Vec<&str> = if started {
             vec!["campaign", "resume", k]
@@ -210,6 +222,11 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
             .spawn()
             .unwrap();
         sessions += 1;
+        if kills == KILLS {
+            let status = child.wait().unwrap();
+            assert!(status.success(), "{args:?}: {status}");
+            break;
+        }
         let wait = Duration::from_millis(rng.random_range(20..600));
         std::thread::sleep(wait);
         match child.try_wait().unwrap() {

@@ -87,6 +87,7 @@ pub fn run_point(
         doses: prep.doses,
         status: "done".into(),
         measured_jump_height_m: None,
+        frames_flagged: None,
         predicted_jump_height_m: None,
         plant_jump_height_m: None,
         faults: String::new(),
@@ -163,6 +164,7 @@ pub fn run_point(
             Ok(r) => {
                 row.measured_jump_height_m = Some(r.apex.jump_height_m);
                 flagged = Some(r.frames_flagged());
+                row.frames_flagged = flagged;
             }
             Err(e) => row.faults.push_str(&format!("tracking failed: {e};")),
         }

@@ -37,6 +37,9 @@ pub struct ResultRow {
     pub status: String,
     /// Jump height from the rod camera, m.
     pub measured_jump_height_m: Option<f64>,
+    /// Camera frames the tracker flagged (the ball out of view, or not found): a measured
+    /// height with flagged frames around the apex reads low.
+    pub frames_flagged: Option<usize>,
     /// Jump height from replaying the encoder log in the simulator, m.
     pub predicted_jump_height_m: Option<f64>,
     /// Jump height of the simulated plant (the twin's truth), m.
@@ -62,6 +65,7 @@ pub const RESULT_HEADER: &[&str] = &[
     "doses",
     "status",
     "measured_jump_height_m",
+    "frames_flagged",
     "predicted_jump_height_m",
     "plant_jump_height_m",
     "faults",
@@ -234,6 +238,7 @@ pub fn documents(state: &State, seed: u64) -> Vec<serde_json::Value> {
             "attempts": key("integer", None, "bed preparation"),
             "status": key("string", None, "campaign"),
             "measured_jump_height_m": key("number", Some("m"), "rod camera (tracked)"),
+            "frames_flagged": key("integer", None, "rod camera (tracked)"),
             "predicted_jump_height_m": key("number", Some("m"), "encoder log replayed in the simulator"),
             "faults": key("string", None, "controller"),
             "folder": key("string", None, "campaign"),
@@ -260,6 +265,7 @@ pub fn documents(state: &State, seed: u64) -> Vec<serde_json::Value> {
             "attempts": row.attempts,
             "status": row.status,
             "measured_jump_height_m": nan(row.measured_jump_height_m),
+            "frames_flagged": row.frames_flagged.map_or(json!(null), |n| json!(n)),
             "predicted_jump_height_m": nan(row.predicted_jump_height_m),
             "faults": row.faults,
             "folder": row.folder,
