@@ -125,6 +125,30 @@ fn simulated_control_overrun_is_a_deadline_fault_on_the_same_tick() {
 }
 
 #[test]
+fn a_rig_whose_lift_is_not_down_refuses_to_arm_and_one_whose_lift_is_down_jumps() {
+    use sandjumper_core::bed::BedInputs;
+    use sandjumper_sim::rig::hil::run::rig_config;
+    use sandjumper_sim::rig::hil::{RigModelConfig, SilLink, run_jump};
+    let p = params(0.57);
+    let mut spec = HilSpec::new(JumpKind::Single, 10.0, 0.0, ModelName::Eq4);
+    let config = RigModelConfig::default();
+    spec.bed = Some(BedInputs {
+        lift_up_limit: true,
+        ..BedInputs::default()
+    });
+    let mut link = SilLink::new(rig_config(&config)).unwrap();
+    let err = run_jump(&p, &spec, config, &mut link).expect_err("the interlock refuses Arm");
+    assert!(err.to_string().contains("LiftNotDown"), "{err}");
+    spec.bed = Some(BedInputs {
+        lift_down_limit: true,
+        ..BedInputs::default()
+    });
+    let o = sil(&p, &spec);
+    assert!(o.faults.is_empty(), "{:?}", o.faults);
+    assert!(o.summary.jump_height_m > 0.03);
+}
+
+#[test]
 fn the_emergency_stop_in_the_sensor_frames_is_a_fault_on_the_same_tick() {
     let p = params(0.57);
     let spec = spec_with(InjectedFault::EmergencyStop);

@@ -208,6 +208,9 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
     // before its kill), then a last session runs to the end.
     const KILLS: usize = 8;
     loop {
+        if killed.is_dir() {
+            break; // finished, and killed before it could exit
+        }
         assert!(sessions <= KILLS, "the campaign never finished");
         let started = with_suffix(&killed, ".incomplete").is_dir();
         let args: Vec<&str> = if started {
@@ -223,15 +226,19 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
             .unwrap();
         sessions += 1;
         if kills == KILLS {
-            let status = child.wait().unwrap();
-            assert!(status.success(), "{args:?}: {status}");
+            let o = child.wait_with_output().unwrap();
+            let e = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{args:?}: {}: {e}", o.status);
             break;
         }
         let wait = Duration::from_millis(rng.random_range(20..600));
         std::thread::sleep(wait);
         match child.try_wait().unwrap() {
             Some(status) => {
-                assert!(status.success(), "{args:?}: {status}");
+                let mut e = String::new();
+                use std::io::Read;
+                child.stderr.take().unwrap().read_to_string(&mut e).unwrap();
+                assert!(status.success(), "{args:?}: {status}: {e}");
                 break;
             }
             None => {

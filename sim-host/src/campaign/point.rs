@@ -25,6 +25,7 @@ use crate::rig::hil::log::acquisition_log;
 use crate::rig::hil::{HilSpec, RigModelConfig, run_jump};
 use crate::study::replay::{DEFAULT_WINDOW_S, replay_log};
 use crate::{ModelName, Params, SimOptions};
+use sandjumper_core::bed::BedInputs;
 
 /// How to reach the controller.
 #[derive(Clone, Debug)]
@@ -109,6 +110,12 @@ pub fn run_point(
     let mut spec = HilSpec::new(kind, point.freq_hz, point.tau_s, model);
     spec.gain_lowering = f.grid.gain_lowering.map(HilSpec::gain_lowering_factor);
     spec.camera_fps = f.camera.fps;
+    // The rig has the apparatus: the lift is down in the bed and (the preparation over)
+    // blower and shaker are off, so the controller's interlocks let it arm.
+    spec.bed = Some(BedInputs {
+        lift_down_limit: true,
+        ..BedInputs::default()
+    });
     let model_config = RigModelConfig::default();
     let mut l = open_link(&link.arg, &model_config, &link.firmware).map_err(|e| e.message)?;
     let outcome = run_jump(&params, &spec, model_config, l.as_mut()).map_err(|e| {

@@ -87,6 +87,10 @@ pub struct HilSpec {
     pub injections: Vec<Injection>,
     /// Relative tolerance of the plant's Dormand-Prince integration inside each period.
     pub rtol: f64,
+    /// The bed apparatus's inputs the simulated rig reports in every sensor frame (None: a
+    /// rig without the apparatus). With them the controller's bed interlocks apply (`Arm`
+    /// needs the lift down, blower and shaker off).
+    pub bed: Option<sandjumper_core::bed::BedInputs>,
 }
 
 impl HilSpec {
@@ -104,6 +108,7 @@ impl HilSpec {
             camera_fps: 200,
             settle_s: 0.2,
             injections: Vec::new(),
+            bed: None,
             rtol: DEFAULT_RTOL,
         }
     }
@@ -297,6 +302,7 @@ pub fn run_jump(
         &opts,
     )?;
     rig.set_push_off_start(plan.time_from_start_s(plan.push_off_period));
+    rig.bed = spec.bed;
     let wall = Instant::now();
     open_session(params, spec, &mut rig, link)?;
     let mut run = LockstepRun::new(&plan);
