@@ -401,6 +401,7 @@ fn bad_campaign_files_are_refused_with_file_and_line() {
     assert!(e.contains("allowed: sil, pil"), "{e}");
     let (c, _, e) = sandjumper(&["campaign", "run", SMALL, "--port", "/dev/null", "--out", x]);
     assert_eq!(c, 2, "{e}");
+    assert!(e.contains("[bed.height_sensor]"), "{e}");
     let (c, _, e) = sandjumper(&["campaign", "status", x]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("no campaign here"), "{e}");

@@ -14,7 +14,7 @@ use serde::Serialize;
 use super::file::{CampaignFile, FailurePolicy};
 use super::journal::{Event, Journal, read};
 use super::plan::points;
-use super::point::{Link, run_point};
+use super::point::{Connect, Link, run_point, run_point_on_board};
 use super::records::{State, write_documents, write_results};
 use crate::command::CliError;
 use crate::rig::hil::command::LinkArg;
@@ -52,7 +52,8 @@ pub struct RunArgs {
         required_unless_present = "port"
     )]
     pub link: Option<String>,
-    /// The rig's board on a serial port (with the real bed apparatus).
+    /// The rig's board on a serial port, with its bed apparatus (needs `[bed.height_sensor]`
+    /// and `analysis.track = false`).
     #[arg(long, value_name = "PATH")]
     pub port: Option<PathBuf>,
     /// Firmware image for `--link pil`.
@@ -136,40 +137,102 @@ fn lock(journal: &Path) -> Result<File, CliError> {
 }
 
 fn run_new(a: &RunArgs) -> Result<(), CliError> {
-    let file = CampaignFile::read(&a.file).map_err(CliError::input)?;
-    if let Some(port) = &a.port {
-        return Err(CliError::input(format!(
-            "--port {}: campaigns on a board are not available yet (the board has the bed apparatus and its commands; the host side that drives them and jumps through the rig tool is not written); allowed: --link sil|pil with the simulated bed",
-            port.display()
-        )));
-    }
-    let link_name = a.link.clone().unwrap_or_default();
-    let link = Link {
-        arg: link_arg(&link_name)?,
-        firmware: a.firmware.clone(),
+    let (link_name, mut target) = match &a.port {
+        Some(port) => {
+            let port = port.display().to_string();
+            (format!("serial:{port}"), Target::Board(board_connect(port)))
+        }
+        None => {
+            let name = a.link.clone().unwrap_or_default();
+            let link = Link {
+                arg: link_arg(&name)?,
+                firmware: a.firmware.clone(),
+            };
+            (name, Target::Simulated(link))
+        }
     };
-    let work = work_dir(&a.out);
-    for d in [&a.out, &work] {
+    start(&a.file, &a.out, &link_name, &mut target, a.stop_after)
+}
+
+/// Run the campaign file `file` on a board reached by `connect` (a fresh link per point),
+/// into `out` (the library entry for boards that are not serial ports, e.g. a stand-in).
+pub fn run_on_board(
+    file: &Path,
+    out: &Path,
+    connect: Box<Connect<'_>>,
+    stop_after: Option<usize>,
+) -> Result<(), CliError> {
+    start(file, out, "board", &mut Target::Board(connect), stop_after)
+}
+
+/// Resume the campaign in `dir` on a board reached by `connect`.
+pub fn resume_on_board(
+    dir: &Path,
+    connect: Box<Connect<'_>>,
+    stop_after: Option<usize>,
+) -> Result<(), CliError> {
+    let (file, work, journal, _lock, _) = reopen(dir)?;
+    drive(
+        &file,
+        &mut Target::Board(connect),
+        &work,
+        dir,
+        journal,
+        stop_after,
+    )
+}
+
+/// Where the jumps happen.
+enum Target<'a> {
+    /// A simulated controller (sil, pil) with the simulated bed.
+    Simulated(Link),
+    /// A board with its own bed apparatus.
+    Board(Box<Connect<'a>>),
+}
+
+fn board_connect(port: String) -> Box<Connect<'static>> {
+    Box::new(move || {
+        crate::rig::hil::serial::start(&port, std::time::Duration::from_secs(2))
+            .map(|l| Box::new(l) as Box<dyn crate::rig::hil::link::RigLink>)
+            .map_err(|e| format!("cannot open the board on {port}: {e}"))
+    })
+}
+
+/// Plan a new campaign from `file` into `out` and drive it.
+fn start(
+    file_path: &Path,
+    out: &Path,
+    link_name: &str,
+    target: &mut Target<'_>,
+    stop_after: Option<usize>,
+) -> Result<(), CliError> {
+    let file = CampaignFile::read(file_path).map_err(CliError::input)?;
+    if matches!(target, Target::Board(_)) {
+        file.check_for_board(&file_path.display().to_string())
+            .map_err(CliError::input)?;
+    }
+    let work = work_dir(out);
+    for d in [out, work.as_path()] {
         if d.exists() {
             return Err(CliError::input(format!(
                 "--out {}: {} exists (allowed: a new folder; `campaign resume {}` carries on a stopped campaign)",
-                a.out.display(),
+                out.display(),
                 d.display(),
-                a.out.display()
+                out.display()
             )));
         }
     }
     // The folder takes its `.incomplete` name only once its plan is on the disk, so a
     // campaign killed at its very start leaves no folder that looks resumable.
-    let starting = with_suffix(&a.out, ".starting");
+    let starting = with_suffix(out, ".starting");
     if starting.exists() {
         std::fs::remove_dir_all(&starting)
             .map_err(|e| CliError::input(format!("cannot clear {}: {e}", starting.display())))?;
     }
     std::fs::create_dir_all(starting.join("points"))
         .map_err(|e| CliError::input(format!("cannot create {}: {e}", starting.display())))?;
-    let text = std::fs::read_to_string(&a.file)
-        .map_err(|e| CliError::input(format!("cannot read {}: {e}", a.file.display())))?;
+    let text = std::fs::read_to_string(file_path)
+        .map_err(|e| CliError::input(format!("cannot read {}: {e}", file_path.display())))?;
     std::fs::write(starting.join("campaign.toml"), &text)
         .map_err(|e| CliError::internal(format!("cannot copy the campaign file: {e}")))?;
     {
@@ -180,7 +243,7 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
                 name: file.name.clone(),
                 file_text: text,
                 points: points(&file),
-                link: link_name,
+                link: link_name.to_string(),
             })
             .map_err(CliError::internal)?;
     }
@@ -194,27 +257,29 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
     let jpath = work.join("journal.jsonl");
     let _lock = lock(&jpath)?;
     let journal = Journal::open(&jpath).map_err(CliError::internal)?;
-    drive(&file, &link, &work, &a.out, journal, a.stop_after)
+    drive(&file, target, &work, out, journal, stop_after)
 }
 
-fn resume(a: &ResumeArgs) -> Result<(), CliError> {
-    let work = work_dir(&a.dir);
+/// A stopped campaign's file, work folder, journal (the point in progress recorded as
+/// interrupted) and its lock.
+fn reopen(dir: &Path) -> Result<(CampaignFile, PathBuf, Journal, File, String), CliError> {
+    let work = work_dir(dir);
     if !work.is_dir() {
-        return Err(CliError::input(if a.dir.join("journal.jsonl").is_file() {
+        return Err(CliError::input(if dir.join("journal.jsonl").is_file() {
             format!(
                 "{}: the campaign is finished; nothing to resume",
-                a.dir.display()
+                dir.display()
             )
         } else {
             format!(
                 "{}: no stopped campaign here (no {}; allowed: the --out of a `campaign run`)",
-                a.dir.display(),
+                dir.display(),
                 work.display()
             )
         }));
     }
     let jpath = work.join("journal.jsonl");
-    let _lock = lock(&jpath)?;
+    let lock = lock(&jpath)?;
     let mut journal = Journal::open(&jpath).map_err(CliError::input)?;
     if journal.dropped_partial_bytes > 0 {
         eprintln!(
@@ -228,10 +293,6 @@ fn resume(a: &ResumeArgs) -> Result<(), CliError> {
         &work.join("campaign.toml").display().to_string(),
     )
     .map_err(CliError::input)?;
-    let link = Link {
-        arg: link_arg(&state.link)?,
-        firmware: a.firmware.clone(),
-    };
     if let Some((point, phase)) = &state.in_progress {
         eprintln!(
             "campaign: point {point} was interrupted after `{phase}`; it starts again from fluidization"
@@ -243,13 +304,25 @@ fn resume(a: &ResumeArgs) -> Result<(), CliError> {
             })
             .map_err(CliError::internal)?;
     }
-    drive(&file, &link, &work, &a.dir, journal, a.stop_after)
+    Ok((file, work, journal, lock, state.link))
+}
+
+fn resume(a: &ResumeArgs) -> Result<(), CliError> {
+    let (file, work, journal, _lock, link_name) = reopen(&a.dir)?;
+    let mut target = match link_name.strip_prefix("serial:") {
+        Some(port) => Target::Board(board_connect(port.to_string())),
+        None => Target::Simulated(Link {
+            arg: link_arg(&link_name)?,
+            firmware: a.firmware.clone(),
+        }),
+    };
+    drive(&file, &mut target, &work, &a.dir, journal, a.stop_after)
 }
 
 /// Run the points not done yet, then finish the campaign.
 fn drive(
     file: &CampaignFile,
-    link: &Link,
+    target: &mut Target<'_>,
     work: &Path,
     out: &Path,
     mut journal: Journal,
@@ -294,8 +367,20 @@ fn drive(
             point.target_phi
         );
         let mut on_phase = |phase: &str| bar.set_message(format!("{label}: {phase}"));
-        let row = run_point(file, &point, link, work, &mut journal, &mut on_phase)
-            .map_err(CliError::input)?;
+        let row = match target {
+            Target::Simulated(link) => {
+                run_point(file, &point, link, work, &mut journal, &mut on_phase)
+            }
+            Target::Board(connect) => run_point_on_board(
+                file,
+                &point,
+                connect.as_mut(),
+                work,
+                &mut journal,
+                &mut on_phase,
+            ),
+        }
+        .map_err(CliError::input)?;
         let failed = row.status == "bed-not-prepared";
         journal
             .append(Event::Done { row })

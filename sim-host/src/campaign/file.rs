@@ -121,6 +121,27 @@ pub struct BedSettings {
     pub shaker_duty: f64,
     /// Height readings averaged across the bed per measurement.
     pub height_readings: u32,
+    /// The board's bed-height sensor (needed with `--port`).
+    #[serde(default)]
+    pub height_sensor: Option<HeightSensor>,
+    /// Longest wait for the lift to reach a limit switch, s.
+    #[serde(default = "lift_timeout")]
+    pub lift_timeout_s: f64,
+}
+
+fn lift_timeout() -> f64 {
+    60.0
+}
+
+/// The bed-height sensor's calibration: `height = height_at_zero_code_m + metres_per_code *
+/// code` (a distance sensor looking down has a negative slope).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeightSensor {
+    /// m per ADC code.
+    pub metres_per_code: f64,
+    /// Bed height at code 0, m.
+    pub height_at_zero_code_m: f64,
 }
 
 /// The simulated bed's behaviour.
@@ -193,6 +214,21 @@ fn line_of(text: &str, at: usize) -> usize {
 }
 
 impl CampaignFile {
+    /// What a campaign on a board (`--port`) needs beyond a simulated one.
+    pub fn check_for_board(&self, name: &str) -> Result<(), String> {
+        if self.bed.height_sensor.is_none() {
+            return Err(format!(
+                "{name}: a campaign on a board needs [bed.height_sensor] (metres_per_code, height_at_zero_code_m) to turn the sensor's code into a bed height"
+            ));
+        }
+        if self.analysis.track {
+            return Err(format!(
+                "{name}: analysis.track with --port: the lab's camera frames are not collected by the campaign yet (allowed: track = false; the jump height is then the replay's)"
+            ));
+        }
+        Ok(())
+    }
+
     /// Read and check `path`.
     pub fn read(path: &Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path)
@@ -338,6 +374,22 @@ impl CampaignFile {
                     "{name}: {key} = {v} (allowed: positive; blower_v 0-10 V, shaker_duty above 0 up to 1)"
                 ));
             }
+        }
+        if !(b.lift_timeout_s.is_finite() && b.lift_timeout_s > 0.0) {
+            return Err(format!(
+                "{name}: bed.lift_timeout_s = {} (allowed: positive)",
+                b.lift_timeout_s
+            ));
+        }
+        if let Some(h) = b.height_sensor
+            && !(h.metres_per_code.is_finite()
+                && h.metres_per_code != 0.0
+                && h.height_at_zero_code_m.is_finite())
+        {
+            return Err(format!(
+                "{name}: bed.height_sensor: metres_per_code {} and height_at_zero_code_m {} (allowed: a non-zero slope and a finite offset)",
+                h.metres_per_code, h.height_at_zero_code_m
+            ));
         }
         if b.height_readings == 0 {
             return Err(format!(

@@ -4,6 +4,7 @@
 //! - [`mod@file`]: the campaign file and its checks.
 //! - [`plan`]: the grid expanded into points, in order or shuffled.
 //! - [`bed`]: the bed apparatus the preparation drives, and its simulated twin.
+//! - [`board_bed`]: the apparatus of a real board, over its link.
 //! - [`prepare`]: the closed-loop bed preparation.
 //! - [`point`]: one point, from fluidization to its analysed folder.
 //! - [`journal`]: the append-only journal, the campaign's only source of truth.
@@ -12,6 +13,7 @@
 //! - [`command`]: `campaign run|resume|status`.
 
 pub mod bed;
+pub mod board_bed;
 pub mod command;
 pub mod figure;
 pub mod file;

@@ -75,41 +75,20 @@ pub fn run_point(
         point: point.index,
         preparation: prep.clone(),
     })?;
-    let mut row = ResultRow {
-        point: point.index,
-        repeat: point.repeat,
-        kind: point.kind.clone(),
-        freq_hz: point.freq_hz,
-        tau_s: point.tau_s,
-        target_phi: point.target_phi,
-        achieved_phi: prep.achieved_phi,
-        attempts: prep.attempts,
-        fluidizations: prep.fluidizations,
-        doses: prep.doses,
-        status: "done".into(),
-        measured_jump_height_m: None,
-        frames_flagged: None,
-        predicted_jump_height_m: None,
-        plant_jump_height_m: None,
-        faults: String::new(),
-        folder: point.folder(),
-    };
+    let mut row = new_row(point, &prep);
     if !prep.ok {
-        row.status = "bed-not-prepared".into();
-        row.faults = prep.failure.clone().unwrap_or_default();
-        row.folder = String::new();
         return Ok(row);
     }
 
     // The jump, on sand at the achieved phi (the presets interpolated there).
     on_phase("jump");
-    let phi = prep.achieved_phi.clamp(PRESET_PHI_MIN, PRESET_PHI_MAX);
-    let params = Params::preset(phi).map_err(|e| e.to_string())?;
-    let model: ModelName = f.model.parse().map_err(|e| format!("{e}"))?;
-    let kind = parse_kind(&point.kind).ok_or_else(|| format!("kind `{}`", point.kind))?;
-    let mut spec = HilSpec::new(kind, point.freq_hz, point.tau_s, model);
-    spec.gain_lowering = f.grid.gain_lowering.map(HilSpec::gain_lowering_factor);
-    spec.camera_fps = f.camera.fps;
+    let JumpSetup {
+        phi,
+        params,
+        model,
+        kind: _,
+        mut spec,
+    } = jump_setup(f, point, &prep)?;
     // The rig has the apparatus: the lift is down in the bed and (the preparation over)
     // blower and shaker are off, so the controller's interlocks let it arm.
     spec.bed = Some(BedInputs {
@@ -124,15 +103,7 @@ pub fn run_point(
             point.index
         )
     })?;
-    let target = dir.join(point.folder());
-    let staging = dir.join(format!("{}.partial", point.folder()));
-    for d in [&target, &staging] {
-        if d.exists() {
-            std::fs::remove_dir_all(d).map_err(|e| format!("cannot clear {}: {e}", d.display()))?;
-        }
-    }
-    std::fs::create_dir_all(&staging)
-        .map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
+    let (target, staging) = fresh_folders(dir, point)?;
     let log = acquisition_log(
         &outcome,
         &spec,
@@ -205,13 +176,246 @@ pub fn run_point(
         faults,
         track_frames_flagged: flagged,
     };
-    let json = serde_json::to_string_pretty(&rec).map_err(|e| e.to_string())?;
+    finish_folder(&rec, &params, &staging, &target)?;
+    journal.append(Event::Analysed { point: point.index })?;
+    Ok(row)
+}
+
+/// Opens a fresh link to the board (a session ends its link).
+pub type Connect<'a> = dyn FnMut() -> Result<Box<dyn crate::rig::hil::link::RigLink>, String> + 'a;
+
+/// Run `point` on a real board: the bed prepared through the board's apparatus, the lift
+/// lowered, the jump run free on the board's own rig (the rig tool's session), its samples
+/// saved as the acquisition log and replayed for the predicted height. No camera frames are
+/// collected (the lab's camera writes them elsewhere), so there is no measured height.
+pub fn run_point_on_board(
+    f: &CampaignFile,
+    point: &Point,
+    connect: &mut Connect<'_>,
+    dir: &Path,
+    journal: &mut Journal,
+    on_phase: &mut dyn FnMut(&str),
+) -> Result<ResultRow, String> {
+    use super::board_bed::BoardBed;
+    use crate::acqlog::JumpConfig as LogJump;
+    use crate::model::trajectory::kind_name;
+    use crate::rig::hil::run::{jump_config, trajectory};
+    use crate::rig::tool::output::{firmware_name, samples_log};
+    use crate::rig::tool::session::{Program, run_program};
+
+    let b = &f.bed;
+    let sensor = b
+        .height_sensor
+        .ok_or("a campaign on a board needs [bed.height_sensor]")?;
+    journal.append(Event::PointStarted { point: point.index })?;
+    on_phase("bed");
+    let mut link = connect()?;
+    let name = link.name();
+    let prep = {
+        let mut bed = BoardBed::new(link.as_mut(), sensor, b.lift_timeout_s);
+        let prep = match prepare(&mut bed, b, point.target_phi) {
+            Ok(p) => p,
+            Err(e) => {
+                bed.all_off();
+                return Err(format!("point {}: bed preparation: {e}", point.index));
+            }
+        };
+        bed.all_off();
+        if prep.ok {
+            bed.lift(false)
+                .map_err(|e| format!("point {}: lowering the jumper: {e}", point.index))?;
+        }
+        prep
+    };
+    journal.append(Event::BedPrepared {
+        point: point.index,
+        preparation: prep.clone(),
+    })?;
+    let mut row = new_row(point, &prep);
+    if !prep.ok {
+        return Ok(row);
+    }
+
+    on_phase("jump");
+    let JumpSetup {
+        phi,
+        params,
+        model,
+        kind,
+        spec,
+    } = jump_setup(f, point, &prep)?;
+    let traj = trajectory(&params, &spec).map_err(|e| e.to_string())?;
+    let model_config = RigModelConfig::default();
+    let program = Program {
+        config: jump_config(&params, &spec),
+        tick_hz: model_config.tick_hz,
+        settle_s: spec.settle_s,
+        tail_s: 0.5,
+        max_run_s: traj.end_s() + 5.0,
+    };
+    let record = run_program(link.as_mut(), None, &program)
+        .map_err(|e| format!("point {}: the jump on {name}: {e}", point.index))?;
+    let (target, staging) = fresh_folders(dir, point)?;
+    let log = samples_log(
+        &record.samples,
+        model_config.tick_hz,
+        model_config.metres_per_count,
+        firmware_name(&name),
+        format!("sandjumper campaign ({name})"),
+        |m| {
+            m.jump = Some(LogJump {
+                kind: kind_name(kind).to_string(),
+                amplitude_m: Some(params.robot.stroke_amplitude_m),
+                freq_hz: Some(spec.freq_hz),
+                tau_s: Some(spec.tau_s),
+            });
+            m.phi = Some(prep.achieved_phi);
+        },
+    )
+    .map_err(|e| e.message)?;
+    log.write_file(&staging.join("acquisition.csv"))
+        .map_err(|e| format!("cannot write the acquisition log: {e}"))?;
+    journal.append(Event::Jumped { point: point.index })?;
+
+    on_phase("analyse");
+    if f.analysis.replay {
+        let r = replay_log(
+            &log,
+            &params,
+            model,
+            DEFAULT_WINDOW_S,
+            &SimOptions::default(),
+        )
+        .map_err(|e| format!("point {}: replay: {e}", point.index))?;
+        row.predicted_jump_height_m = Some(r.outcome.summary.jump_height_m);
+    }
+    let faults: Vec<&'static str> = record.faults.iter().map(|f| f.code.name()).collect();
+    if !faults.is_empty() {
+        row.status = "faulted".into();
+        row.faults = faults.join(";");
+    } else if !record.completed {
+        row.status = "faulted".into();
+        row.faults = "the board did not report Done".into();
+    }
+    let rec = PointRecord {
+        point,
+        preparation: &prep,
+        phi_used_by_the_plant: phi,
+        plant_jump_height_m: f64::NAN,
+        measured_jump_height_m: None,
+        predicted_jump_height_m: row.predicted_jump_height_m,
+        camera_frames: record
+            .samples
+            .iter()
+            .filter(|s| s.camera_frame.is_some())
+            .count(),
+        frames_lost: u32::try_from(log.meta.dropped_samples).unwrap_or(u32::MAX),
+        faults,
+        track_frames_flagged: None,
+    };
+    finish_folder(&rec, &params, &staging, &target)?;
+    journal.append(Event::Analysed { point: point.index })?;
+    Ok(row)
+}
+
+/// What a point's jump runs with.
+struct JumpSetup {
+    /// The achieved phi, within the presets.
+    phi: f64,
+    /// The sand at that phi.
+    params: Params,
+    /// The replay's (and the simulated rig's) model.
+    model: ModelName,
+    /// The kind.
+    kind: sandjumper_core::trajectory::JumpKind,
+    /// The jump.
+    spec: HilSpec,
+}
+
+/// The jump of `point` on sand at the achieved phi (the presets interpolated there, not the
+/// target).
+fn jump_setup(f: &CampaignFile, point: &Point, prep: &Preparation) -> Result<JumpSetup, String> {
+    let phi = prep.achieved_phi.clamp(PRESET_PHI_MIN, PRESET_PHI_MAX);
+    let params = Params::preset(phi).map_err(|e| e.to_string())?;
+    let model: ModelName = f.model.parse().map_err(|e| format!("{e}"))?;
+    let kind = parse_kind(&point.kind).ok_or_else(|| format!("kind `{}`", point.kind))?;
+    let mut spec = HilSpec::new(kind, point.freq_hz, point.tau_s, model);
+    spec.gain_lowering = f.grid.gain_lowering.map(HilSpec::gain_lowering_factor);
+    spec.camera_fps = f.camera.fps;
+    Ok(JumpSetup {
+        phi,
+        params,
+        model,
+        kind,
+        spec,
+    })
+}
+
+/// A point's row before its jump (a failed preparation's final row).
+fn new_row(point: &Point, prep: &Preparation) -> ResultRow {
+    if !prep.ok {
+        return ResultRow {
+            status: "bed-not-prepared".into(),
+            faults: prep.failure.clone().unwrap_or_default(),
+            folder: String::new(),
+            ..new_row(
+                point,
+                &Preparation {
+                    ok: true,
+                    ..prep.clone()
+                },
+            )
+        };
+    }
+    ResultRow {
+        point: point.index,
+        repeat: point.repeat,
+        kind: point.kind.clone(),
+        freq_hz: point.freq_hz,
+        tau_s: point.tau_s,
+        target_phi: point.target_phi,
+        achieved_phi: prep.achieved_phi,
+        attempts: prep.attempts,
+        fluidizations: prep.fluidizations,
+        doses: prep.doses,
+        status: "done".into(),
+        measured_jump_height_m: None,
+        frames_flagged: None,
+        predicted_jump_height_m: None,
+        plant_jump_height_m: None,
+        faults: String::new(),
+        folder: point.folder(),
+    }
+}
+
+/// The point's folder and its staging folder, both cleared (a point run again starts clean).
+fn fresh_folders(
+    dir: &Path,
+    point: &Point,
+) -> Result<(std::path::PathBuf, std::path::PathBuf), String> {
+    let target = dir.join(point.folder());
+    let staging = dir.join(format!("{}.partial", point.folder()));
+    for d in [&target, &staging] {
+        if d.exists() {
+            std::fs::remove_dir_all(d).map_err(|e| format!("cannot clear {}: {e}", d.display()))?;
+        }
+    }
+    std::fs::create_dir_all(&staging)
+        .map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
+    Ok((target, staging))
+}
+
+/// Write `point.json` and `params.toml`, then give the folder its name.
+fn finish_folder(
+    rec: &PointRecord<'_>,
+    params: &Params,
+    staging: &Path,
+    target: &Path,
+) -> Result<(), String> {
+    let json = serde_json::to_string_pretty(rec).map_err(|e| e.to_string())?;
     std::fs::write(staging.join("point.json"), json + "\n")
         .map_err(|e| format!("cannot write point.json: {e}"))?;
     std::fs::write(staging.join("params.toml"), params.to_toml())
         .map_err(|e| format!("cannot write params.toml: {e}"))?;
-    std::fs::rename(&staging, &target)
-        .map_err(|e| format!("cannot finish {}: {e}", target.display()))?;
-    journal.append(Event::Analysed { point: point.index })?;
-    Ok(row)
+    std::fs::rename(staging, target).map_err(|e| format!("cannot finish {}: {e}", target.display()))
 }
