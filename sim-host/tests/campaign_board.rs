@@ -18,6 +18,9 @@ use sandjumper_core::{
     FrameDecoder, HostMessage, Rig, RigConfig, RigMessage, TickInput, TickTiming,
 };
 use sandjumper_sim::campaign::command::run_on_board;
+use sandjumper_sim::imaging::render::CameraModel;
+use sandjumper_sim::rig::hil::CameraFrame;
+use sandjumper_sim::rig::hil::camera::write_frames;
 use sandjumper_sim::rig::hil::framed::FramedLink;
 use sandjumper_sim::rig::hil::link::RigLink;
 
@@ -89,13 +92,83 @@ struct Seen {
     arms_with_lift_down: AtomicU32,
 }
 
-/// Serve one connection until the host goes away; the rig and the bed persist.
+/// The rod camera of the stand-in: during a session it notes each frame the controller
+/// triggers and the rod's height, which leaves the rest height [`LIFT_OFF_S`] after the
+/// trajectory starts and flies a free parabola to [`APEX_M`]; when the session ends it writes
+/// the frames into the capture folder, as a lab's camera software would.
+struct Camera {
+    frames: Vec<CameraFrame>,
+    heights: Vec<f64>,
+    start_tick: Option<u64>,
+}
+
+/// The stand-in jump's apex above rest, m, and its lift-off after the start, s.
+const APEX_M: f64 = 0.05;
+const LIFT_OFF_S: f64 = 0.05;
+
+impl Camera {
+    fn note(&mut self, tick: u64, out: &sandjumper_core::rig::TickOutput) {
+        if out.state == sandjumper_core::RigState::Running && self.start_tick.is_none() {
+            self.start_tick = Some(tick);
+        }
+        let h = self.start_tick.map_or(0.0, |t0| {
+            let tau = (tick - t0) as f64 * 1e-4 - LIFT_OFF_S;
+            let v0 = (2.0 * 9.81 * APEX_M).sqrt();
+            if tau > 0.0 {
+                (v0 * tau - 0.5 * 9.81 * tau * tau).max(0.0)
+            } else {
+                0.0
+            }
+        });
+        self.heights.push(h);
+        if let Some(n) = out.camera_frame {
+            self.frames.push(CameraFrame {
+                frame: n,
+                period: tick,
+                t_s: tick as f64 * 1e-4,
+                rod_height_m: h,
+            });
+        }
+    }
+}
+
+/// Serve one connection until the host goes away; the rig and the bed persist; the jump's
+/// frames go to `capture`.
 fn serve(
+    stream: UnixStream,
+    rig: &mut Rig,
+    bed: &mut Bed,
+    encoder_counts: &mut i64,
+    seen: &Seen,
+    capture: &std::path::Path,
+) {
+    let mut camera = Camera {
+        frames: Vec::new(),
+        heights: Vec::new(),
+        start_tick: None,
+    };
+    serve_link(stream, rig, bed, encoder_counts, seen, &mut camera);
+    if !camera.frames.is_empty() {
+        write_frames(
+            &camera.frames,
+            &camera.heights,
+            &CameraModel::default(),
+            1e-4,
+            capture,
+        )
+        .unwrap();
+        // The camera's own description stays with the lab's software.
+        let _ = std::fs::remove_file(capture.join("camera.toml"));
+    }
+}
+
+fn serve_link(
     mut stream: UnixStream,
     rig: &mut Rig,
     bed: &mut Bed,
     encoder_counts: &mut i64,
     seen: &Seen,
+    camera: &mut Camera,
 ) {
     let mut decoder = FrameDecoder::new();
     stream
@@ -146,6 +219,7 @@ fn serve(
                 timing: TickTiming::Unknown,
             });
             bed.step(&out.bed, 1e-4);
+            camera.note(ticks - 1, &out);
             if out.bed.blower_v > 0.0 {
                 seen.blower_on_ticks.fetch_add(1, Ordering::Relaxed);
             }
@@ -198,8 +272,12 @@ lift_timeout_s = 2.0
 metres_per_code = 2e-5
 height_at_zero_code_m = 0.2
 
+[camera]
+fps = 200
+capture_dir = "CAPTURE"
+
 [analysis]
-track = false
+track = true
 replay = true
 "#;
 
@@ -209,10 +287,12 @@ fn a_campaign_on_a_board_prepares_its_bed_through_the_controller_and_jumps() {
     let sock = tmp.path().join("board.sock");
     let listener = UnixListener::bind(&sock).unwrap();
     listener.set_nonblocking(true).unwrap();
+    let capture = tmp.path().join("camera");
+    std::fs::create_dir_all(&capture).unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     let seen = Arc::new(Seen::default());
     let board = {
-        let (stop, seen) = (stop.clone(), seen.clone());
+        let (stop, seen, capture) = (stop.clone(), seen.clone(), capture.clone());
         std::thread::spawn(move || {
             let mut rig: Rig = Rig::new(RigConfig::default()).unwrap();
             // Loose and lifted out, where the last session left it.
@@ -229,7 +309,7 @@ fn a_campaign_on_a_board_prepares_its_bed_through_the_controller_and_jumps() {
                 match listener.accept() {
                     Ok((s, _)) => {
                         s.set_nonblocking(false).unwrap();
-                        serve(s, &mut rig, &mut bed, &mut counts, &seen);
+                        serve(s, &mut rig, &mut bed, &mut counts, &seen, &capture);
                     }
                     Err(_) => std::thread::sleep(Duration::from_millis(5)),
                 }
@@ -237,7 +317,11 @@ fn a_campaign_on_a_board_prepares_its_bed_through_the_controller_and_jumps() {
         })
     };
     let file = tmp.path().join("board.toml");
-    std::fs::write(&file, CAMPAIGN).unwrap();
+    std::fs::write(
+        &file,
+        CAMPAIGN.replace("CAPTURE", capture.to_str().unwrap()),
+    )
+    .unwrap();
     let out = tmp.path().join("campaign");
     let sock2 = sock.clone();
     let connect = Box::new(move || {
@@ -271,11 +355,18 @@ fn a_campaign_on_a_board_prepares_its_bed_through_the_controller_and_jumps() {
         assert!((achieved - target).abs() <= 0.005, "{r:?}");
         let predicted: f64 = r[col("predicted_jump_height_m")].parse().unwrap();
         assert!(predicted > 0.02, "{r:?}");
+        // The lab's frames, moved into the point's folder and tracked: the stand-in camera's
+        // apex within 0.2 mm.
+        let measured: f64 = r[col("measured_jump_height_m")].parse().unwrap();
         assert!(
-            r[col("measured_jump_height_m")].is_empty(),
-            "no frames, no camera height"
+            (measured - APEX_M).abs() < 2e-4,
+            "camera {measured} m: {r:?}"
         );
-        assert!(out.join(r[col("folder")]).join("acquisition.csv").is_file());
+        assert_eq!(r[col("frames_flagged")], "0", "{r:?}");
+        assert!(r[col("faults")].is_empty(), "{r:?}");
+        let folder = out.join(r[col("folder")]);
+        assert!(folder.join("acquisition.csv").is_file());
+        assert!(folder.join("frames/frame_000000.png").is_file());
     }
     // The bed was worked through the controller: blown, shaken; each jump armed with the lift
     // down, and nothing refused.
@@ -283,4 +374,9 @@ fn a_campaign_on_a_board_prepares_its_bed_through_the_controller_and_jumps() {
     assert!(seen.shaker_on_ticks.load(Ordering::Relaxed) > 0);
     assert_eq!(seen.arms_with_lift_down.load(Ordering::Relaxed), 2);
     assert_eq!(seen.commands_rejected.load(Ordering::Relaxed), 0);
+    assert_eq!(
+        std::fs::read_dir(&capture).unwrap().count(),
+        0,
+        "every frame moved out of the capture folder"
+    );
 }

@@ -52,8 +52,8 @@ pub struct RunArgs {
         required_unless_present = "port"
     )]
     pub link: Option<String>,
-    /// The rig's board on a serial port, with its bed apparatus (needs `[bed.height_sensor]`
-    /// and `analysis.track = false`).
+    /// The rig's board on a serial port, with its bed apparatus (needs `[bed.height_sensor]`;
+    /// tracking needs `camera.capture_dir`, where the lab's camera writes the frames).
     #[arg(long, value_name = "PATH")]
     pub port: Option<PathBuf>,
     /// Firmware image for `--link pil`.

@@ -181,11 +181,27 @@ impl Default for SimulatedBedSettings {
 pub struct CameraSettings {
     /// Frame rate, frames/s (the paper's rod camera: 200).
     pub fps: u32,
+    /// On a board: the folder the lab's camera software writes a jump's frames into (named
+    /// by camera frame number, `frame_NNNNNN.png` as `track` reads them); the campaign moves
+    /// them into the point's folder after each jump.
+    pub capture_dir: Option<std::path::PathBuf>,
+    /// On a board: the camera's scale, m/px.
+    pub m_per_px: f64,
+    /// On a board: the exposure, s.
+    pub exposure_s: f64,
+    /// On a board: how long to wait for the frames after a jump, s.
+    pub capture_timeout_s: f64,
 }
 
 impl Default for CameraSettings {
     fn default() -> Self {
-        Self { fps: 200 }
+        Self {
+            fps: 200,
+            capture_dir: None,
+            m_per_px: 1.2e-4,
+            exposure_s: 1e-3,
+            capture_timeout_s: 10.0,
+        }
     }
 }
 
@@ -221,9 +237,22 @@ impl CampaignFile {
                 "{name}: a campaign on a board needs [bed.height_sensor] (metres_per_code, height_at_zero_code_m) to turn the sensor's code into a bed height"
             ));
         }
-        if self.analysis.track {
+        if self.analysis.track && self.camera.capture_dir.is_none() {
             return Err(format!(
-                "{name}: analysis.track with --port: the lab's camera frames are not collected by the campaign yet (allowed: track = false; the jump height is then the replay's)"
+                "{name}: analysis.track with --port needs camera.capture_dir, the folder the lab's camera software writes each jump's frames into (allowed: set it, or track = false)"
+            ));
+        }
+        let c = &self.camera;
+        let ok = c.m_per_px.is_finite()
+            && c.m_per_px > 0.0
+            && c.exposure_s.is_finite()
+            && c.exposure_s >= 0.0
+            && c.capture_timeout_s.is_finite()
+            && c.capture_timeout_s > 0.0;
+        if !ok {
+            return Err(format!(
+                "{name}: camera: m_per_px {}, exposure_s {}, capture_timeout_s {} (allowed: positive; exposure may be 0)",
+                c.m_per_px, c.exposure_s, c.capture_timeout_s
             ));
         }
         Ok(())

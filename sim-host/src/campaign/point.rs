@@ -132,20 +132,13 @@ pub fn run_point(
         .map_err(|e| format!("cannot read back the acquisition log: {e}"))?;
     let mut flagged = None;
     if f.analysis.track {
-        let seq = ImageSequence::open(staging.join("frames").to_str().unwrap_or_default())
-            .map_err(|e| format!("point {}: frames: {e}", point.index))?;
         let ts = TrackSpec {
             exposure_s: camera.exposure_s,
             ..TrackSpec::new(camera.m_per_px)
         };
-        match track_sequence(&seq, &ts, &log_clock(&log)) {
-            Ok(r) => {
-                row.measured_jump_height_m = Some(r.apex.jump_height_m);
-                flagged = Some(r.frames_flagged());
-                row.frames_flagged = flagged;
-            }
-            Err(e) => row.faults.push_str(&format!("tracking failed: {e};")),
-        }
+        let (m, fl, err) = track(&staging.join("frames"), &ts, &log);
+        (row.measured_jump_height_m, row.frames_flagged, flagged) = (m, fl, fl);
+        row.faults.push_str(&err);
     }
     if f.analysis.replay {
         let r = replay_log(
@@ -255,6 +248,8 @@ pub fn run_point_on_board(
     };
     let record = run_program(link.as_mut(), None, &program)
         .map_err(|e| format!("point {}: the jump on {name}: {e}", point.index))?;
+    // The session is over: the board's link closes before the frames are collected.
+    drop(link);
     let (target, staging) = fresh_folders(dir, point)?;
     let log = samples_log(
         &record.samples,
@@ -277,7 +272,36 @@ pub fn run_point_on_board(
         .map_err(|e| format!("cannot write the acquisition log: {e}"))?;
     journal.append(Event::Jumped { point: point.index })?;
 
+    let expected_frames = record
+        .samples
+        .iter()
+        .filter(|s| s.camera_frame.is_some())
+        .count();
+    let mut camera_note = String::new();
+    if let Some(capture) = &f.camera.capture_dir {
+        on_phase("frames");
+        let got = collect_frames(
+            capture,
+            &staging.join("frames"),
+            expected_frames,
+            f.camera.capture_timeout_s,
+        )?;
+        if got < expected_frames {
+            camera_note = format!("camera: {got} of {expected_frames} frames;");
+        }
+    }
+
     on_phase("analyse");
+    let mut flagged = None;
+    if f.analysis.track {
+        let ts = TrackSpec {
+            exposure_s: f.camera.exposure_s,
+            ..TrackSpec::new(f.camera.m_per_px)
+        };
+        let (m, fl, err) = track(&staging.join("frames"), &ts, &log);
+        (row.measured_jump_height_m, row.frames_flagged, flagged) = (m, fl, fl);
+        camera_note.push_str(&err);
+    }
     if f.analysis.replay {
         let r = replay_log(
             &log,
@@ -289,10 +313,11 @@ pub fn run_point_on_board(
         .map_err(|e| format!("point {}: replay: {e}", point.index))?;
         row.predicted_jump_height_m = Some(r.outcome.summary.jump_height_m);
     }
+    row.faults.push_str(&camera_note);
     let faults: Vec<&'static str> = record.faults.iter().map(|f| f.code.name()).collect();
     if !faults.is_empty() {
         row.status = "faulted".into();
-        row.faults = faults.join(";");
+        row.faults.push_str(&faults.join(";"));
     } else if !record.completed {
         row.status = "faulted".into();
         row.faults = "the board did not report Done".into();
@@ -304,18 +329,74 @@ pub fn run_point_on_board(
         plant_jump_height_m: f64::NAN,
         measured_jump_height_m: None,
         predicted_jump_height_m: row.predicted_jump_height_m,
-        camera_frames: record
-            .samples
-            .iter()
-            .filter(|s| s.camera_frame.is_some())
-            .count(),
+        camera_frames: expected_frames,
         frames_lost: u32::try_from(log.meta.dropped_samples).unwrap_or(u32::MAX),
         faults,
-        track_frames_flagged: None,
+        track_frames_flagged: flagged,
     };
     finish_folder(&rec, &params, &staging, &target)?;
     journal.append(Event::Analysed { point: point.index })?;
     Ok(row)
+}
+
+/// Track the rod in `frames` against the log's camera clock: (jump height, frames flagged,
+/// what went wrong as a note for `faults`).
+fn track(frames: &Path, ts: &TrackSpec, log: &AcqLog) -> (Option<f64>, Option<usize>, String) {
+    let seq = match ImageSequence::open(frames.to_str().unwrap_or_default()) {
+        Ok(s) => s,
+        Err(e) => return (None, None, format!("frames: {e};")),
+    };
+    match track_sequence(&seq, ts, &log_clock(log)) {
+        Ok(r) => (
+            Some(r.apex.jump_height_m),
+            Some(r.frames_flagged()),
+            String::new(),
+        ),
+        Err(e) => (None, None, format!("tracking failed: {e};")),
+    }
+}
+
+/// Move the frames the lab's camera software wrote into `capture` into `frames`, waiting up
+/// to `timeout_s` for `expected` image files; returns how many images were moved.
+fn collect_frames(
+    capture: &Path,
+    frames: &Path,
+    expected: usize,
+    timeout_s: f64,
+) -> Result<usize, String> {
+    let is_image = |p: &Path| {
+        p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+            matches!(
+                e.to_ascii_lowercase().as_str(),
+                "png" | "tif" | "tiff" | "bmp"
+            )
+        })
+    };
+    let list = || -> Result<Vec<std::path::PathBuf>, String> {
+        let rd = std::fs::read_dir(capture)
+            .map_err(|e| format!("camera.capture_dir {}: {e}", capture.display()))?;
+        Ok(rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
+    };
+    let until = std::time::Instant::now() + std::time::Duration::from_secs_f64(timeout_s);
+    while list()?.iter().filter(|p| is_image(p)).count() < expected
+        && std::time::Instant::now() < until
+    {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    std::fs::create_dir_all(frames)
+        .map_err(|e| format!("cannot create {}: {e}", frames.display()))?;
+    let mut moved = 0;
+    for p in list()? {
+        let Some(name) = p.file_name() else { continue };
+        let to = frames.join(name);
+        if std::fs::rename(&p, &to).is_err() {
+            std::fs::copy(&p, &to)
+                .and_then(|_| std::fs::remove_file(&p))
+                .map_err(|e| format!("cannot move {} into the point's folder: {e}", p.display()))?;
+        }
+        moved += usize::from(is_image(&to));
+    }
+    Ok(moved)
 }
 
 /// What a point's jump runs with.
