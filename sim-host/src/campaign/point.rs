@@ -12,7 +12,7 @@ use super::journal::{Event, Journal};
 use super::plan::Point;
 use super::prepare::{Preparation, prepare};
 use super::records::ResultRow;
-use crate::acqlog::{AcqLog, ReadOptions};
+use crate::acqlog::AcqLog;
 use crate::imaging::command::log_clock;
 use crate::imaging::render::CameraModel;
 use crate::imaging::sequence::ImageSequence;
@@ -71,11 +71,7 @@ pub fn run_point(
         point.seed(f.seed),
     );
     let prep = prepare(&mut bed, b, point.target_phi)?;
-    journal.append(Event::BedPrepared {
-        point: point.index,
-        preparation: prep.clone(),
-    })?;
-    let mut row = new_row(point, &prep);
+    let mut row = record_preparation(journal, point, &prep)?;
     if !prep.ok {
         return Ok(row);
     }
@@ -86,7 +82,6 @@ pub fn run_point(
         phi,
         params,
         model,
-        kind: _,
         mut spec,
     } = jump_setup(f, point, &prep)?;
     // The rig has the apparatus: the lift is down in the bed and (the preparation over)
@@ -128,8 +123,6 @@ pub fn run_point(
 
     // Analyses.
     on_phase("analyse");
-    let log = AcqLog::read_file(&staging.join("acquisition.csv"), &ReadOptions::default())
-        .map_err(|e| format!("cannot read back the acquisition log: {e}"))?;
     let mut flagged = None;
     if f.analysis.track {
         let ts = TrackSpec {
@@ -190,8 +183,6 @@ pub fn run_point_on_board(
     on_phase: &mut dyn FnMut(&str),
 ) -> Result<ResultRow, String> {
     use super::board_bed::BoardBed;
-    use crate::acqlog::JumpConfig as LogJump;
-    use crate::model::trajectory::kind_name;
     use crate::rig::hil::run::{jump_config, trajectory};
     use crate::rig::tool::output::{firmware_name, samples_log};
     use crate::rig::tool::session::{Program, run_program};
@@ -220,11 +211,7 @@ pub fn run_point_on_board(
         }
         prep
     };
-    journal.append(Event::BedPrepared {
-        point: point.index,
-        preparation: prep.clone(),
-    })?;
-    let mut row = new_row(point, &prep);
+    let mut row = record_preparation(journal, point, &prep)?;
     if !prep.ok {
         return Ok(row);
     }
@@ -234,7 +221,6 @@ pub fn run_point_on_board(
         phi,
         params,
         model,
-        kind,
         spec,
     } = jump_setup(f, point, &prep)?;
     let traj = trajectory(&params, &spec).map_err(|e| e.to_string())?;
@@ -258,12 +244,7 @@ pub fn run_point_on_board(
         firmware_name(&name),
         format!("sandjumper campaign ({name})"),
         |m| {
-            m.jump = Some(LogJump {
-                kind: kind_name(kind).to_string(),
-                amplitude_m: Some(params.robot.stroke_amplitude_m),
-                freq_hz: Some(spec.freq_hz),
-                tau_s: Some(spec.tau_s),
-            });
+            m.jump = Some(spec.log_jump(params.robot.stroke_amplitude_m));
             m.phi = Some(prep.achieved_phi);
         },
     )
@@ -407,8 +388,6 @@ struct JumpSetup {
     params: Params,
     /// The replay's (and the simulated rig's) model.
     model: ModelName,
-    /// The kind.
-    kind: sandjumper_core::trajectory::JumpKind,
     /// The jump.
     spec: HilSpec,
 }
@@ -427,28 +406,27 @@ fn jump_setup(f: &CampaignFile, point: &Point, prep: &Preparation) -> Result<Jum
         phi,
         params,
         model,
-        kind,
         spec,
     })
 }
 
+/// Journal `point`'s preparation; its row before the jump (a failed preparation's final
+/// row).
+fn record_preparation(
+    journal: &mut Journal,
+    point: &Point,
+    prep: &Preparation,
+) -> Result<ResultRow, String> {
+    journal.append(Event::BedPrepared {
+        point: point.index,
+        preparation: prep.clone(),
+    })?;
+    Ok(new_row(point, prep))
+}
+
 /// A point's row before its jump (a failed preparation's final row).
 fn new_row(point: &Point, prep: &Preparation) -> ResultRow {
-    if !prep.ok {
-        return ResultRow {
-            status: "bed-not-prepared".into(),
-            faults: prep.failure.clone().unwrap_or_default(),
-            folder: String::new(),
-            ..new_row(
-                point,
-                &Preparation {
-                    ok: true,
-                    ..prep.clone()
-                },
-            )
-        };
-    }
-    ResultRow {
+    let mut row = ResultRow {
         point: point.index,
         repeat: point.repeat,
         kind: point.kind.clone(),
@@ -466,7 +444,13 @@ fn new_row(point: &Point, prep: &Preparation) -> ResultRow {
         plant_jump_height_m: None,
         faults: String::new(),
         folder: point.folder(),
+    };
+    if !prep.ok {
+        row.status = "bed-not-prepared".into();
+        row.faults = prep.failure.clone().unwrap_or_default();
+        row.folder = String::new();
     }
+    row
 }
 
 /// The point's folder and its staging folder, both cleared (a point run again starts clean).

@@ -3,8 +3,7 @@
 //! actual motor position, spring force and foot depth.
 
 use super::run::{HilOutcome, HilSpec};
-use crate::acqlog::{AcqLog, Column, JumpConfig as LogJump, LogMetadata, LogRow};
-use crate::model::trajectory::kind_name;
+use crate::acqlog::{AcqLog, Column, LogMetadata, LogRow};
 use crate::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use crate::plot::palette;
 
@@ -30,12 +29,7 @@ pub fn acquisition_log(
         ),
     });
     meta.source = Some(format!("sandjumper hil --link {}", outcome.link_name));
-    meta.jump = Some(LogJump {
-        kind: kind_name(spec.kind).to_string(),
-        amplitude_m: Some(amplitude_m),
-        freq_hz: Some(spec.freq_hz),
-        tau_s: Some(spec.tau_s),
-    });
+    meta.jump = Some(spec.log_jump(amplitude_m));
     meta.phi = Some(phi);
     meta.dropped_samples = outcome.samples_missing();
     let mut log = AcqLog::new(

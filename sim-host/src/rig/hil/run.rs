@@ -113,6 +113,17 @@ impl HilSpec {
         }
     }
 
+    /// The jump as an acquisition log's metadata records it, with stroke amplitude
+    /// `amplitude_m`.
+    pub fn log_jump(&self, amplitude_m: f64) -> crate::acqlog::JumpConfig {
+        crate::acqlog::JumpConfig {
+            kind: crate::model::trajectory::kind_name(self.kind).to_string(),
+            amplitude_m: Some(amplitude_m),
+            freq_hz: Some(self.freq_hz),
+            tau_s: Some(self.tau_s),
+        }
+    }
+
     /// Gains for the robot's motor carriage `m_m` on its thrust rod `m_r`.
     ///
     /// - `kp = m_m (2 pi 50 Hz)^2`: stiff enough for stance, where the spring holds the rod and

@@ -12,7 +12,6 @@ use super::output::{
 };
 use super::session::{Fixture, Program, run_program};
 use super::{RigParamArgs, TargetArgs, link_failed};
-use crate::acqlog::JumpConfig as LogJump;
 use crate::command::CliError;
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use crate::model::trajectory::kind_name;
@@ -128,12 +127,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         firmware_name(&name),
         format!("sandjumper rig jump ({name})"),
         |m| {
-            m.jump = Some(LogJump {
-                kind: kind_name(kind).to_string(),
-                amplitude_m: Some(params.robot.stroke_amplitude_m),
-                freq_hz: Some(spec.freq_hz),
-                tau_s: Some(spec.tau_s),
-            });
+            m.jump = Some(spec.log_jump(params.robot.stroke_amplitude_m));
             if a.target.is_simulated() {
                 m.phi = Some(phi);
             }
