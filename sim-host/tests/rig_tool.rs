@@ -187,6 +187,7 @@ fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
         "eq1",
         "--out",
         s(&out),
+        "--mcap",
     ]));
     assert_files(
         &out,
@@ -194,12 +195,29 @@ fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
             "intrusion.csv",
             "reintrusion.csv",
             "acquisition.csv",
+            "acquisition.mcap",
             "params.toml",
             "summary.json",
             "intrusion.png",
             "intrusion.svg",
         ],
     );
+    // The MCAP beside the CSV holds one /encoder message per row, and ends cleanly.
+    let log = sandjumper_sim::acqlog::AcqLog::read_file(
+        &out.join("acquisition.csv"),
+        &sandjumper_sim::acqlog::ReadOptions::default(),
+    )
+    .unwrap();
+    let mcap = sandjumper_sim::acqlog::read_messages(
+        &std::fs::read(out.join("acquisition.mcap")).unwrap(),
+    );
+    assert!(mcap.complete, "{:?}", mcap.stopped);
+    let encoder = mcap
+        .messages
+        .iter()
+        .filter(|m| m.topic == "/encoder")
+        .count();
+    assert_eq!(encoder, log.rows.len());
     let first = curve(&out.join("intrusion.csv"));
     assert!(first.len() >= 60, "{} points", first.len());
     for w in first.windows(2) {

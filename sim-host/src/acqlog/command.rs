@@ -26,7 +26,9 @@ pub enum LogAction {
     /// Validate a log (CSV or binary) and summarise it: duration, rate, gaps, faults, camera
     /// frames, dropped samples. Exit status 2 if it is not a valid log.
     Check(CheckArgs),
-    /// Convert a binary log (the rig's frames as received) to the CSV form, losslessly.
+    /// Convert a binary log (the rig's frames as received) to the CSV form, losslessly; or a
+    /// CSV or binary log to MCAP (OUT ending in `.mcap`, or `--to mcap`) for Foxglove,
+    /// Lichtblick and PlotJuggler.
     Convert(ConvertArgs),
 }
 
@@ -47,12 +49,16 @@ pub struct CheckArgs {
 /// `sandjumper log convert`.
 #[derive(Debug, Clone, Args)]
 pub struct ConvertArgs {
-    /// The binary log.
+    /// The log to convert: binary for `--to csv`, CSV or binary for `--to mcap`.
     #[arg(value_name = "IN")]
     pub input: PathBuf,
-    /// The CSV log to write (not overwritten if it exists, unless --force).
-    #[arg(value_name = "OUT.csv")]
+    /// The file to write (not overwritten if it exists, unless --force).
+    #[arg(value_name = "OUT")]
     pub output: PathBuf,
+    /// What to write: `csv` (the default, unless OUT ends in `.mcap`) or `mcap` (one channel
+    /// per quantity group, JSON messages with JSON schemas, chunked and indexed).
+    #[arg(long, value_enum, value_name = "FORM")]
+    pub to: Option<ConvertTo>,
     /// Convert even if sequence numbers show lost samples (the CSV's tick column shows the
     /// gaps and `dropped_samples` counts them).
     #[arg(long)]
@@ -60,6 +66,15 @@ pub struct ConvertArgs {
     /// Replace OUT if it exists.
     #[arg(long)]
     pub force: bool,
+}
+
+/// What `log convert` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ConvertTo {
+    /// The CSV form (`sandjumper-acqlog 1`).
+    Csv,
+    /// MCAP (see [`super::mcap_file`]).
+    Mcap,
 }
 
 /// Run `log`.
@@ -157,6 +172,19 @@ fn check(a: &CheckArgs) -> Result<(), CliError> {
 }
 
 fn convert(a: &ConvertArgs) -> Result<(), CliError> {
+    let to = a.to.unwrap_or(
+        if a.output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+        {
+            ConvertTo::Mcap
+        } else {
+            ConvertTo::Csv
+        },
+    );
+    if to == ConvertTo::Mcap {
+        return convert_to_mcap(a);
+    }
     if !is_binary(&a.input)? {
         return Err(bad(
             &a.input,
@@ -187,5 +215,48 @@ fn convert(a: &ConvertArgs) -> Result<(), CliError> {
         report.frames_rejected,
         report.samples_lost
     );
+    Ok(())
+}
+
+fn convert_to_mcap(a: &ConvertArgs) -> Result<(), CliError> {
+    if a.output.exists() && !a.force {
+        return Err(CliError::input(format!(
+            "`{}` exists: choose another name or pass --force",
+            a.output.display()
+        )));
+    }
+    // The same reader and the same refusals as `log check` and `replay`.
+    let (log, conversion) = load(&a.input, a.allow_gaps)?;
+    // Write next to the target, then rename: a failed conversion leaves no half file.
+    let tmp = a.output.with_extension("mcap.partial");
+    let report = log
+        .write_mcap_file(&tmp, conversion.as_ref())
+        .and_then(|r| {
+            std::fs::rename(&tmp, &a.output).map_err(|e| super::AcqLogError::io(&e))?;
+            Ok(r)
+        })
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            CliError::input(format!("cannot write `{}`: {e}", a.output.display()))
+        })?;
+    let counts: Vec<String> = report
+        .messages
+        .iter()
+        .map(|(topic, n)| format!("{topic} {n}"))
+        .collect();
+    eprintln!(
+        "wrote {} ({} samples, {} interpolated; {} chunks; messages: {})",
+        a.output.display(),
+        log.rows.len(),
+        log.interpolated_samples(),
+        report.chunks,
+        counts.join(", ")
+    );
+    if let Some(c) = &conversion {
+        eprintln!(
+            "from binary: {} frames, {} rejected, {} samples lost by sequence number",
+            c.frames_ok, c.frames_rejected, c.samples_lost
+        );
+    }
     Ok(())
 }

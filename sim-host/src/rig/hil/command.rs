@@ -147,6 +147,10 @@ pub struct HilArgs {
     /// frames, frame_NNNNNN.png, and camera.toml).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// With --out, also write the acquisition log as acquisition.mcap (for Foxglove,
+    /// Lichtblick and PlotJuggler; see `sandjumper log convert`).
+    #[arg(long, requires = "out")]
+    pub mcap: bool,
     /// Print one JSON object on stdout instead of the human summary.
     #[arg(long)]
     pub json: bool,
@@ -328,6 +332,10 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         );
         log.write_file(&staged.file("acquisition.csv"))
             .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+        if a.mcap {
+            log.write_mcap_file(&staged.file("acquisition.mcap"), None)
+                .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
+        }
         if a.camera_fps > 0 {
             crate::rig::hil::camera::write_frames(
                 &outcome.camera_frames,

@@ -83,6 +83,10 @@ pub struct IntrudeArgs {
     /// intrusion.png and intrusion.svg into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Also write the acquisition log as acquisition.mcap (for Foxglove, Lichtblick and
+    /// PlotJuggler; see `sandjumper log convert`).
+    #[arg(long)]
+    pub mcap: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -378,7 +382,7 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         1e3 * a.reintrusion_depth
     );
     let fig = figure(&all, &first, &re, title);
-    let dir = write_run_files(staged, &log, &params, &json, &fig, "intrusion")?;
+    let dir = write_run_files(staged, &log, &params, &json, &fig, "intrusion", a.mcap)?;
     if a.json {
         println!("{json}");
     } else {

@@ -49,6 +49,10 @@ pub struct JumpArgs {
     /// frames and camera.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Also write the acquisition log as acquisition.mcap (for Foxglove, Lichtblick and
+    /// PlotJuggler; see `sandjumper log convert`).
+    #[arg(long)]
+    pub mcap: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -170,7 +174,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         .map_err(CliError::internal)?;
     }
     let fig = motion_figure(&record.samples, model_config.tick_hz, mpc, title);
-    let dir = write_run_files(staged, &log, &params, &json, &fig, "jump")?;
+    let dir = write_run_files(staged, &log, &params, &json, &fig, "jump", a.mcap)?;
     if a.json {
         println!("{json}");
     } else {

@@ -108,8 +108,9 @@ pub fn motion_figure(
     }
 }
 
-/// Write `acquisition.csv`, `params.toml`, `summary.json` and `<stem>.png`/`.svg` into the
-/// staged directory, then commit it. Returns the directory.
+/// Write `acquisition.csv` (and with `mcap` `acquisition.mcap`), `params.toml`,
+/// `summary.json` and `<stem>.png`/`.svg` into the staged directory, then commit it. Returns
+/// the directory.
 pub fn write_run_files(
     staged: crate::output::StagedDir,
     log: &AcqLog,
@@ -117,9 +118,14 @@ pub fn write_run_files(
     summary_json: &str,
     figure: &LineFigure,
     stem: &str,
+    mcap: bool,
 ) -> Result<std::path::PathBuf, CliError> {
     log.write_file(&staged.file("acquisition.csv"))
         .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+    if mcap {
+        log.write_mcap_file(&staged.file("acquisition.mcap"), None)
+            .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
+    }
     staged.write_text("params.toml", &params.to_toml())?;
     staged.write_text("summary.json", &format!("{summary_json}\n"))?;
     crate::plot::save_figure(

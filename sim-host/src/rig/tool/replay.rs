@@ -101,6 +101,10 @@ pub struct ReplayArgs {
     /// summary.json, replay.png and replay.svg into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Also write the acquisition log as acquisition.mcap (for Foxglove, Lichtblick and
+    /// PlotJuggler; see `sandjumper log convert`).
+    #[arg(long)]
+    pub mcap: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -452,7 +456,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     staged.write_text("table.csv", &table_csv(&plan))?;
     let title = format!("rig replay of {} through {name}", a.log.display());
     let fig = motion_figure(&run.samples, model_config.tick_hz, mpc, title);
-    let dir = write_run_files(staged, &log, &params, &json, &fig, "replay")?;
+    let dir = write_run_files(staged, &log, &params, &json, &fig, "replay", a.mcap)?;
     if a.json {
         println!("{json}");
     } else {

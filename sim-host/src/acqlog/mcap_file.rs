@@ -1,0 +1,538 @@
+//! Acquisition logs as MCAP files, for Foxglove, Lichtblick and PlotJuggler.
+//!
+//! One channel per quantity group, each message JSON with a JSON schema (MCAP's `json` message
+//! encoding and `jsonschema` schema encoding, both in the MCAP well-known registry):
+//!
+//! | topic | when | fields |
+//! |---|---|---|
+//! | `/encoder` | every tick | `tick`, `t_s`, `encoder_counts`, `position_m`, `p_cmd_m` |
+//! | `/drive` | every tick, if the log has `force_cmd_n` or `current_a` | `force_cmd_n`, `current_a` |
+//! | `/status` | every tick, if the log has `flags` | `flags` and one boolean per flag bit |
+//! | `/camera` | ticks with a camera frame or a measured rod height | `frame`, `rod_height_m` |
+//! | `/faults` | when the latched-fault flag sets or clears, and each fault the rig reported | `event`, `code`, `name` |
+//!
+//! Every message also carries `tick` and `t_s` as in the CSV, so each value can be compared
+//! with the CSV row it came from. A value the CSV leaves empty is `null`.
+//!
+//! **Timestamps.** `log_time` and `publish_time` are the control tick times in nanoseconds:
+//! `tick × 10⁹ / rate_hz` when the log has a `tick` column, otherwise `t_s` in nanoseconds
+//! (shifted so the first sample is at 0 if `t_s` starts below 0). They count from the start of
+//! the acquisition, not from the Unix epoch, so Foxglove shows them as times in January 1970.
+//!
+//! **Metadata.** The log's `# key: value` lines become the MCAP metadata record
+//! `sandjumper-acqlog` (same keys, same text); a second record, `sandjumper-conversion`, says
+//! what the file was made from and what was filled in or lost on the way.
+//!
+//! **Layout.** Chunked (about [`CHUNK_SIZE`] bytes per chunk) with message, chunk and metadata
+//! indexes and statistics in the summary, so a viewer opens and seeks a long log quickly.
+//! Chunks are *not compressed*: JSON shrinks well under zstd, but the crate's compression
+//! features build the zstd and lz4 C libraries, and an uncompressed chunk can be read up to the
+//! last complete message when a file is cut short (a recorder killed mid-write): see
+//! [`read_messages`].
+
+use super::columns::Column;
+use super::error::{AcqLogError, AcqLogErrorKind};
+use super::{AcqLog, ConvertReport};
+use mcap::records::MessageHeader;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use sandjumper_core::sample::flags;
+use serde::Serialize;
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::io::{Seek, Write};
+
+/// Target uncompressed size of one chunk, bytes (about 0.1 s of a 10 kHz log).
+pub const CHUNK_SIZE: u64 = 256 * 1024;
+
+/// The flag bits and the names `/status` gives them.
+pub const FLAG_NAMES: [(u16, &str); 11] = [
+    (flags::DRIVE_ENABLED, "drive_enabled"),
+    (flags::ARMED, "armed"),
+    (flags::RUNNING, "running"),
+    (flags::DONE, "done"),
+    (flags::FAULTED, "faulted"),
+    (flags::SATURATED, "saturated"),
+    (flags::INTEGRATOR_HELD, "integrator_held"),
+    (flags::GAINS_LOWERED, "gains_lowered"),
+    (flags::CAMERA_HIGH, "camera_high"),
+    (flags::DELAY, "delay"),
+    (flags::PUSH_OFF, "push_off"),
+];
+
+/// What was written.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct McapReport {
+    /// Messages per topic.
+    pub messages: BTreeMap<String, u64>,
+    /// Chunks in the file.
+    pub chunks: u64,
+}
+
+fn mcap_err(e: impl std::fmt::Display) -> AcqLogError {
+    AcqLogError::whole(AcqLogErrorKind::Io, format!("cannot write MCAP: {e}"))
+}
+
+/// A JSON schema for one topic: an object with these `(name, type, description)` properties.
+fn schema(title: &str, props: &[(&str, &str, &str)]) -> Vec<u8> {
+    let properties: serde_json::Map<String, serde_json::Value> = props
+        .iter()
+        .map(|(name, ty, description)| {
+            let ty = match *ty {
+                "number?" => json!(["number", "null"]),
+                "integer?" => json!(["integer", "null"]),
+                "string?" => json!(["string", "null"]),
+                t => json!(t),
+            };
+            (
+                (*name).to_string(),
+                json!({ "type": ty, "description": description }),
+            )
+        })
+        .collect();
+    let required: Vec<&str> = props.iter().map(|p| p.0).collect();
+    serde_json::to_vec(&json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": title,
+        "type": "object",
+        "properties": properties,
+        "required": required,
+    }))
+    .unwrap_or_default()
+}
+
+const TICK: (&str, &str, &str) = ("tick", "integer?", "control tick number");
+const TIME: (&str, &str, &str) = ("t_s", "number", "sample time, s");
+
+/// Control tick time of a row in nanoseconds (see the module docs).
+struct Clock {
+    rate_hz: f64,
+    t_shift_s: f64,
+}
+
+impl Clock {
+    fn new(log: &AcqLog) -> Self {
+        let t0 = log.rows.first().map_or(0.0, |r| r.t_s);
+        Self {
+            rate_hz: log.meta.rate_hz,
+            t_shift_s: if t0 < 0.0 { -t0 } else { 0.0 },
+        }
+    }
+
+    fn ns(&self, tick: Option<u64>, t_s: f64) -> u64 {
+        let s = match tick {
+            Some(k) => k as f64 / self.rate_hz,
+            None => t_s + self.t_shift_s,
+        };
+        // In range: ticks and times of a log that the reader accepted are finite and >= 0.
+        (s * 1e9).round().max(0.0) as u64
+    }
+}
+
+/// One channel being written: its id and the sequence number of its next message.
+struct Topic {
+    id: u16,
+    name: &'static str,
+    sequence: u32,
+}
+
+struct Out<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    report: McapReport,
+}
+
+impl<W: Write + Seek> Out<W> {
+    fn topic(
+        &mut self,
+        name: &'static str,
+        title: &str,
+        props: &[(&str, &str, &str)],
+    ) -> Result<Topic, AcqLogError> {
+        let schema_id = self
+            .writer
+            .add_schema(title, "jsonschema", &schema(title, props))
+            .map_err(mcap_err)?;
+        let id = self
+            .writer
+            .add_channel(schema_id, name, "json", &BTreeMap::new())
+            .map_err(mcap_err)?;
+        self.report.messages.insert(name.to_string(), 0);
+        Ok(Topic {
+            id,
+            name,
+            sequence: 0,
+        })
+    }
+
+    fn send(
+        &mut self,
+        topic: &mut Topic,
+        time_ns: u64,
+        value: &serde_json::Value,
+    ) -> Result<(), AcqLogError> {
+        let data = serde_json::to_vec(value).map_err(mcap_err)?;
+        self.writer
+            .write_to_known_channel(
+                &MessageHeader {
+                    channel_id: topic.id,
+                    sequence: topic.sequence,
+                    log_time: time_ns,
+                    publish_time: time_ns,
+                },
+                &data,
+            )
+            .map_err(mcap_err)?;
+        topic.sequence = topic.sequence.wrapping_add(1);
+        *self
+            .report
+            .messages
+            .entry(topic.name.to_string())
+            .or_default() += 1;
+        Ok(())
+    }
+}
+
+impl<W: Write + Seek> Out<W> {
+    /// A fault the rig reported, `(code, name, tick)`, on `/faults` at its tick.
+    fn reported_fault(
+        &mut self,
+        topic: Option<&mut Topic>,
+        clock: &Clock,
+        (code, name, tick): (u8, &str, u32),
+    ) -> Result<(), AcqLogError> {
+        let topic = topic.ok_or_else(|| mcap_err("no fault topic"))?;
+        let tick = u64::from(tick);
+        let value = json!({"tick": tick, "t_s": tick as f64 / clock.rate_hz,
+                           "event": "reported", "code": code, "name": name});
+        self.send(topic, clock.ns(Some(tick), 0.0), &value)
+    }
+}
+
+/// The `# key: value` lines of a log as a map (the `sandjumper-acqlog` metadata record).
+fn metadata_map(log: &AcqLog) -> BTreeMap<String, String> {
+    log.meta
+        .to_lines()
+        .lines()
+        .filter_map(|l| l.strip_prefix("# "))
+        .filter_map(|l| l.split_once(": "))
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
+}
+
+/// Writes `log` as MCAP to `out` (see the module docs). `conversion` is the report of the binary
+/// log it came from, if it came from one: its faults go to `/faults` and its counts to the
+/// `sandjumper-conversion` metadata record.
+pub fn write_mcap<W: Write + Seek>(
+    log: &AcqLog,
+    conversion: Option<&ConvertReport>,
+    out: W,
+) -> Result<(W, McapReport), AcqLogError> {
+    let options = mcap::WriteOptions::new()
+        .compression(None)
+        .profile("")
+        .library(concat!("sandjumper ", env!("CARGO_PKG_VERSION")))
+        .chunk_size(Some(CHUNK_SIZE));
+    let writer = options.create(out).map_err(mcap_err)?;
+    let mut out = Out {
+        writer,
+        report: McapReport::default(),
+    };
+    let has = |c: Column| log.columns.contains(c);
+
+    let mut encoder = out.topic(
+        "/encoder",
+        "sandjumper.Encoder",
+        &[
+            TICK,
+            TIME,
+            ("encoder_counts", "integer", "encoder count"),
+            (
+                "position_m",
+                "number",
+                "motor position relative to the rod, m (from the count and the log's scale)",
+            ),
+            (
+                "p_cmd_m",
+                "number?",
+                "commanded motor position relative to the rod, m",
+            ),
+        ],
+    )?;
+    let mut drive = if has(Column::ForceCmdN) || has(Column::CurrentA) {
+        Some(out.topic(
+            "/drive",
+            "sandjumper.Drive",
+            &[
+                TICK,
+                TIME,
+                (
+                    "force_cmd_n",
+                    "number?",
+                    "force command sent to the drive, N",
+                ),
+                ("current_a", "number?", "measured motor current, A"),
+            ],
+        )?)
+    } else {
+        None
+    };
+    let mut status = if has(Column::Flags) {
+        let mut props = vec![TICK, TIME, ("flags", "integer", "status flags word")];
+        props.extend(
+            FLAG_NAMES
+                .iter()
+                .map(|(_, name)| (*name, "boolean", "one bit of `flags`")),
+        );
+        Some(out.topic("/status", "sandjumper.Status", &props)?)
+    } else {
+        None
+    };
+    let mut camera = if has(Column::CameraFrame) || has(Column::RodHeightM) {
+        Some(out.topic(
+            "/camera",
+            "sandjumper.Camera",
+            &[
+                TICK,
+                TIME,
+                ("frame", "integer?", "camera frame triggered at this tick"),
+                (
+                    "rod_height_m",
+                    "number?",
+                    "camera-measured rod height above rest, m",
+                ),
+            ],
+        )?)
+    } else {
+        None
+    };
+    let reported_faults = conversion.map_or(&[][..], |c| c.faults.as_slice());
+    let mut faults = if has(Column::Flags) || !reported_faults.is_empty() {
+        Some(out.topic(
+            "/faults",
+            "sandjumper.Fault",
+            &[
+                TICK,
+                TIME,
+                (
+                    "event",
+                    "string",
+                    "`latched` or `cleared` (the faulted flag) or `reported` (by the rig)",
+                ),
+                ("code", "integer?", "fault code (reported faults)"),
+                ("name", "string?", "fault name (reported faults)"),
+            ],
+        )?)
+    } else {
+        None
+    };
+
+    let clock = Clock::new(log);
+    let mut pending_faults = reported_faults.iter().peekable();
+    let mut was_faulted = false;
+    for row in &log.rows {
+        let ns = clock.ns(row.tick, row.t_s);
+        let (tick, t_s) = (row.tick, row.t_s);
+        // Faults the rig reported at or before this tick go out first.
+        while let Some(&&(code, name, at)) = pending_faults.peek() {
+            if row.tick.is_some_and(|k| k < u64::from(at)) {
+                break;
+            }
+            out.reported_fault(faults.as_mut(), &clock, (code, name, at))?;
+            pending_faults.next();
+        }
+        out.send(
+            &mut encoder,
+            ns,
+            &json!({"tick": tick, "t_s": t_s, "encoder_counts": row.encoder_counts,
+                    "position_m": log.meta.position_m(row.encoder_counts),
+                    "p_cmd_m": row.p_cmd_m}),
+        )?;
+        if let Some(topic) = drive.as_mut() {
+            out.send(
+                topic,
+                ns,
+                &json!({"tick": tick, "t_s": t_s, "force_cmd_n": row.force_cmd_n,
+                        "current_a": row.current_a}),
+            )?;
+        }
+        if let Some(word) = row.flags {
+            if let Some(topic) = status.as_mut() {
+                let mut value = json!({"tick": tick, "t_s": t_s, "flags": word});
+                for (bit, name) in FLAG_NAMES {
+                    value[name] = json!(word & u32::from(bit) != 0);
+                }
+                out.send(topic, ns, &value)?;
+            }
+            let faulted = word & u32::from(flags::FAULTED) != 0;
+            if faulted != was_faulted {
+                if let Some(topic) = faults.as_mut() {
+                    let event = if faulted { "latched" } else { "cleared" };
+                    out.send(
+                        topic,
+                        ns,
+                        &json!({"tick": tick, "t_s": t_s, "event": event,
+                                "code": null, "name": null}),
+                    )?;
+                }
+                was_faulted = faulted;
+            }
+        }
+        if let Some(topic) = camera
+            .as_mut()
+            .filter(|_| row.camera_frame.is_some() || row.rod_height_m.is_some())
+        {
+            out.send(
+                topic,
+                ns,
+                &json!({"tick": tick, "t_s": t_s, "frame": row.camera_frame,
+                        "rod_height_m": row.rod_height_m}),
+            )?;
+        }
+    }
+    // Faults reported after the last sample (a rig that faulted and stopped streaming).
+    for fault in pending_faults {
+        out.reported_fault(faults.as_mut(), &clock, *fault)?;
+    }
+
+    out.writer
+        .write_metadata(&mcap::records::Metadata {
+            name: "sandjumper-acqlog".into(),
+            metadata: metadata_map(log),
+        })
+        .map_err(mcap_err)?;
+    let mut conv = BTreeMap::new();
+    conv.insert(
+        "source_form".to_string(),
+        if conversion.is_some() {
+            "binary"
+        } else {
+            "csv"
+        }
+        .to_string(),
+    );
+    conv.insert("rows".to_string(), log.rows.len().to_string());
+    conv.insert("gaps".to_string(), log.gaps.len().to_string());
+    conv.insert(
+        "interpolated_samples".to_string(),
+        log.interpolated_samples().to_string(),
+    );
+    if let Some(c) = conversion {
+        conv.insert("frames_ok".to_string(), c.frames_ok.to_string());
+        conv.insert("frames_rejected".to_string(), c.frames_rejected.to_string());
+        conv.insert("samples_lost".to_string(), c.samples_lost.to_string());
+    }
+    out.writer
+        .write_metadata(&mcap::records::Metadata {
+            name: "sandjumper-conversion".into(),
+            metadata: conv,
+        })
+        .map_err(mcap_err)?;
+    let summary = out.writer.finish().map_err(mcap_err)?;
+    out.report.chunks = summary.chunk_indexes.len() as u64;
+    let report = out.report;
+    Ok((out.writer.into_inner(), report))
+}
+
+impl AcqLog {
+    /// Writes the log as MCAP to `path` (see [`write_mcap`]).
+    pub fn write_mcap_file(
+        &self,
+        path: &std::path::Path,
+        conversion: Option<&ConvertReport>,
+    ) -> Result<McapReport, AcqLogError> {
+        let file = std::fs::File::create(path).map_err(|e| AcqLogError::io(&e))?;
+        let (file, report) = write_mcap(self, conversion, std::io::BufWriter::new(file))?;
+        file.into_inner()
+            .map_err(|e| AcqLogError::io(e.error()))?
+            .sync_all()
+            .map_err(|e| AcqLogError::io(&e))?;
+        Ok(report)
+    }
+}
+
+/// One message read back from an MCAP file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadMessage {
+    /// Its channel's topic.
+    pub topic: String,
+    /// Per-channel sequence number.
+    pub sequence: u32,
+    /// Log time, ns.
+    pub log_time_ns: u64,
+    /// The message bytes (JSON for sandjumper's files).
+    pub data: Vec<u8>,
+}
+
+/// Messages read from an MCAP file in file order, and whether the file ended cleanly.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReadBack {
+    /// Every complete message, in file order.
+    pub messages: Vec<ReadMessage>,
+    /// Metadata records by name.
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// Whether the file ended with its footer and closing magic.
+    pub complete: bool,
+    /// Why reading stopped early (a cut file or a damaged record), if it did.
+    pub stopped: Option<String>,
+}
+
+/// Reads every complete message of an MCAP file with the crate's linear reader, in file order,
+/// recovering what a cut file holds: reading stops at the first incomplete or damaged record
+/// and keeps every message before it (in an uncompressed chunk, messages are records too, so a
+/// chunk cut in the middle still yields its complete messages). Chunk CRCs are not checked (a
+/// cut chunk has no valid CRC to check against).
+pub fn read_messages(bytes: &[u8]) -> ReadBack {
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_validate_chunk_crcs(false)
+            .with_validate_data_section_crc(false)
+            .with_validate_summary_section_crc(false),
+    );
+    let mut out = ReadBack::default();
+    let mut topics: BTreeMap<u16, String> = BTreeMap::new();
+    let mut fed = 0usize;
+    let mut saw_footer = false;
+    while let Some(event) = reader.next_event() {
+        match event {
+            Err(e) => {
+                out.stopped = Some(e.to_string());
+                return out;
+            }
+            Ok(LinearReadEvent::ReadRequest(n)) => {
+                let take = n.min(bytes.len() - fed);
+                if take == 0 {
+                    out.stopped = Some(format!("the file ends after {} bytes", bytes.len()));
+                    return out;
+                }
+                reader.insert(take).copy_from_slice(&bytes[fed..fed + take]);
+                reader.notify_read(take);
+                fed += take;
+            }
+            Ok(LinearReadEvent::Record { data, opcode }) => {
+                match mcap::parse_record(opcode, data) {
+                    Ok(mcap::records::Record::Channel(c)) => {
+                        topics.insert(c.id, c.topic);
+                    }
+                    Ok(mcap::records::Record::Message { header, data }) => {
+                        out.messages.push(ReadMessage {
+                            topic: topics.get(&header.channel_id).cloned().unwrap_or_default(),
+                            sequence: header.sequence,
+                            log_time_ns: header.log_time,
+                            data: data.into_owned(),
+                        });
+                    }
+                    Ok(mcap::records::Record::Metadata(m)) => {
+                        out.metadata.insert(m.name, m.metadata);
+                    }
+                    Ok(mcap::records::Record::Footer(_)) => saw_footer = true,
+                    Ok(_) => {}
+                    Err(e) => {
+                        out.stopped = Some(e.to_string());
+                        return out;
+                    }
+                }
+            }
+        }
+    }
+    out.complete = saw_footer;
+    out
+}
