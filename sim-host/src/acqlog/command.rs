@@ -129,23 +129,39 @@ fn load(path: &Path, allow_gaps: bool) -> Result<(AcqLog, Option<ConvertReport>)
     }
 }
 
+/// Reads and checks a log (CSV or binary) as `log check` does: the log and the JSON object
+/// `log check --json` prints. Errors are the CLI's.
+pub fn load_checked(path: &Path, allow_gaps: bool) -> Result<(AcqLog, String), CliError> {
+    let (log, conversion) = load(path, allow_gaps)?;
+    let json = check_json(path, &log, conversion.as_ref())?;
+    Ok((log, json))
+}
+
+fn check_json(
+    path: &Path,
+    log: &AcqLog,
+    conversion: Option<&ConvertReport>,
+) -> Result<String, CliError> {
+    let summary = log.summary();
+    let report = CheckReport {
+        file: path.display().to_string(),
+        form: if conversion.is_some() {
+            "binary"
+        } else {
+            "csv"
+        },
+        summary: &summary,
+        conversion,
+    };
+    serde_json::to_string_pretty(&report)
+        .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))
+}
+
 fn check(a: &CheckArgs) -> Result<(), CliError> {
     let (log, conversion) = load(&a.file, a.allow_gaps)?;
     let summary = log.summary();
     if a.json {
-        let report = CheckReport {
-            file: a.file.display().to_string(),
-            form: if conversion.is_some() {
-                "binary"
-            } else {
-                "csv"
-            },
-            summary: &summary,
-            conversion: conversion.as_ref(),
-        };
-        let json = serde_json::to_string_pretty(&report)
-            .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
-        println!("{json}");
+        println!("{}", check_json(&a.file, &log, conversion.as_ref())?);
         return Ok(());
     }
     println!(

@@ -85,10 +85,17 @@ impl Collision {
             ("--d2", if self.wall { 1.0 } else { self.d2_m }),
             ("--speed", self.speed_m_s),
             ("--density", self.density_kg_m3),
+            ("--kn", self.kn_n_per_m),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("{name} {v} (allowed: a positive number)"));
             }
+        }
+        if !(self.damping_n_s_per_m.is_finite() && self.damping_n_s_per_m >= 0.0) {
+            return Err(format!(
+                "--damping {} N s/m (allowed: 0 or more)",
+                self.damping_n_s_per_m
+            ));
         }
         let law = ContactLaw {
             kn_n_per_m: self.kn_n_per_m,

@@ -297,7 +297,16 @@ fn with_threads(n: usize, f: impl FnOnce() -> Result<(), CliError> + Send) -> Re
     pool.install(f)
 }
 
-fn run_collide(a: &CollideArgs) -> Result<(), CliError> {
+/// The JSON object `dem collide --json` prints, for `dem collide` arguments (bad input, and
+/// any other `dem` subcommand, is an error).
+pub fn collide_json(a: &DemArgs) -> Result<String, CliError> {
+    let DemCommand::Collide(c) = &a.command else {
+        return Err(CliError::input("not a `dem collide` command"));
+    };
+    serde_json::to_string_pretty(&collide(c)?).map_err(|e| CliError::internal(e.to_string()))
+}
+
+fn collide(a: &CollideArgs) -> Result<CollisionResult, CliError> {
     let c = Collision {
         d1_m: a.d1,
         d2_m: a.d2.unwrap_or(a.d1),
@@ -309,7 +318,11 @@ fn run_collide(a: &CollideArgs) -> Result<(), CliError> {
         dt_s: a.dt,
         integrator: a.integrator,
     };
-    let r: CollisionResult = c.run(a.force_step).map_err(CliError::input)?;
+    c.run(a.force_step).map_err(CliError::input)
+}
+
+fn run_collide(a: &CollideArgs) -> Result<(), CliError> {
+    let r = collide(a)?;
     if a.json {
         println!(
             "{}",

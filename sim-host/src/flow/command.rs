@@ -253,6 +253,12 @@ pub fn read_foot(path: &Path) -> Result<std::collections::BTreeMap<u64, Polygon>
 
 /// Run `sandjumper piv`.
 pub fn run(a: &PivArgs) -> Result<(), CliError> {
+    analyse(a)?.print(a.json);
+    Ok(())
+}
+
+/// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
+pub fn analyse(a: &PivArgs) -> Result<crate::command::Analysed, CliError> {
     let seq = ImageSequence::open(&a.frames).map_err(|e| input(format!("frames: {e}")))?;
     if seq.len() < 2 {
         return Err(input(format!(
@@ -514,31 +520,27 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
             valid + replaced
         );
     }
-    if a.json {
-        println!("{json}");
-    } else {
-        println!(
-            "piv: {} pairs, grid {}x{} every {} px, {} vectors ({} replaced, {} masked), median peak ratio {:.2}",
-            report.pairs,
-            report.grid.0,
-            report.grid.1,
-            report.grid.2,
-            report.vectors,
-            replaced,
-            masked,
-            report.median_peak_ratio
+    let mut human = format!(
+        "piv: {} pairs, grid {}x{} every {} px, {} vectors ({} replaced, {} masked), median peak ratio {:.2}\n",
+        report.pairs,
+        report.grid.0,
+        report.grid.1,
+        report.grid.2,
+        report.vectors,
+        replaced,
+        masked,
+        report.median_peak_ratio
+    );
+    if let Some(r) = rows.iter().rfind(|r| r.added_mass_kg.is_finite()) {
+        human += &format!(
+            "  last pair with the foot: depth {:.2} mm, foot velocity {:.3} m/s, momentum {:.4} kg m/s, added mass {:.4} kg\n",
+            1e3 * r.foot_depth_m,
+            r.foot_velocity_m_s,
+            r.momentum_kg_m_s,
+            r.added_mass_kg
         );
-        if let Some(r) = rows.iter().rfind(|r| r.added_mass_kg.is_finite()) {
-            println!(
-                "  last pair with the foot: depth {:.2} mm, foot velocity {:.3} m/s, momentum {:.4} kg m/s, added mass {:.4} kg",
-                1e3 * r.foot_depth_m,
-                r.foot_velocity_m_s,
-                r.momentum_kg_m_s,
-                r.added_mass_kg
-            );
-        }
     }
-    Ok(())
+    Ok(crate::command::Analysed { json, human })
 }
 
 fn csv_num(v: f64) -> String {

@@ -172,6 +172,12 @@ pub fn log_clock(log: &AcqLog) -> FrameClock {
 
 /// Run `sandjumper track`.
 pub fn run(a: &TrackArgs) -> Result<(), CliError> {
+    analyse(a)?.print(a.json);
+    Ok(())
+}
+
+/// Track the frames `a` names (writing `--out` if given) without printing the summary.
+pub fn analyse(a: &TrackArgs) -> Result<crate::command::Analysed, CliError> {
     let seq = ImageSequence::open(&a.frames).map_err(|e| input(format!("frames: {e}")))?;
     let log = a.log.as_deref().map(read_log).transpose()?;
     let clock = match (&log, a.fps) {
@@ -221,12 +227,8 @@ pub fn run(a: &TrackArgs) -> Result<(), CliError> {
             result.flagged.ambiguous
         );
     }
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", human(&report));
-    }
-    Ok(())
+    let human = human(&report);
+    Ok(crate::command::Analysed { json, human })
 }
 
 fn human(r: &TrackReport<'_>) -> String {

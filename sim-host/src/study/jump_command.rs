@@ -156,10 +156,28 @@ pub(crate) fn write_jump_files(
     Ok(())
 }
 
-/// Run `jump`.
-pub fn run(a: &JumpArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    let params = resolve_params(a.phi, file.as_ref())?;
+/// One jump as `sandjumper jump` runs it: the resolved parameters, the request, the outcome
+/// and the JSON object `jump --json` prints.
+pub struct JumpRun {
+    /// Parameters after the preset and the overrides.
+    pub params: crate::model::params::Params,
+    /// Kind, frequency, delay and model.
+    pub spec: JumpSpec,
+    /// The simulation's outcome (with its series when asked for).
+    pub outcome: JumpOutcome,
+    /// `jump --json`'s object, pretty-printed.
+    pub json: String,
+}
+
+/// Simulate the jump `a` asks for, with the overrides `file` (in place of `a.source.params`,
+/// which is not read here) on top of the `--phi` preset; `record_series` keeps every output
+/// step (`trajectory.csv`). Errors are the CLI's.
+pub fn simulate_run(
+    a: &JumpArgs,
+    file: Option<&ParamsFile>,
+    record_series: bool,
+) -> Result<JumpRun, CliError> {
+    let params = resolve_params(a.phi, file)?;
     let kind: JumpKind = a.kind.into();
     let model: ModelName = a.model.into();
     let spec = JumpSpec {
@@ -168,26 +186,17 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         tau_s: a.tau.unwrap_or(0.0),
         model,
     };
-    if kind != JumpKind::DelayedStutter && spec.tau_s != 0.0 {
-        eprintln!(
-            "warning: --tau {} is ignored: only --kind delayed has a delay",
-            spec.tau_s
-        );
-    }
-    // Fail on an unwritable output directory before spending time on the simulation.
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let opts = SimOptions {
         rtol: a.source.rtol,
-        record_series: staged.is_some(),
+        record_series,
         ..SimOptions::default()
     };
     let outcome = simulate_jump(&params, &spec, &opts)
         .map_err(|e| CliError::input(format!("simulation of the jump failed: {e}")))?;
-    let phi = params.sand.packing_fraction;
     let report = JumpReport {
         kind: kind_name(kind),
         model: model.as_str(),
-        phi,
+        phi: params.sand.packing_fraction,
         freq_hz: spec.freq_hz,
         tau_s: spec.tau_s,
         rtol: opts.rtol,
@@ -197,6 +206,34 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
+    Ok(JumpRun {
+        params,
+        spec,
+        outcome,
+        json,
+    })
+}
+
+/// Run `jump`.
+pub fn run(a: &JumpArgs) -> Result<(), CliError> {
+    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    // Bad parameters are refused before an output directory is touched.
+    resolve_params(a.phi, file.as_ref())?;
+    if a.kind != KindArg::Delayed && a.tau.is_some_and(|t| t != 0.0) {
+        eprintln!(
+            "warning: --tau {} is ignored: only --kind delayed has a delay",
+            a.tau.unwrap_or(0.0)
+        );
+    }
+    // Fail on an unwritable output directory before spending time on the simulation.
+    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
+    let JumpRun {
+        params,
+        spec,
+        outcome,
+        json,
+    } = simulate_run(a, file.as_ref(), staged.is_some())?;
+    let phi = params.sand.packing_fraction;
     let title = jump_title(&spec, phi);
     if let Some(staged) = staged {
         write_jump_files(&staged, &title, &params, &json, &outcome)?;

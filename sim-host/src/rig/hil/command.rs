@@ -259,23 +259,48 @@ fn one_run(
     })
 }
 
-/// Run `hil`.
-pub fn run(a: &HilArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.params.as_deref())?;
-    let params = resolve_params(a.phi, file.as_ref())?;
-    let spec = spec_of(a);
-    if spec.kind != JumpKind::DelayedStutter && a.gain_lowering.is_some() {
-        eprintln!("warning: --gain-lowering only acts during a delayed stutter's delay");
+/// One jump through the loop as `sandjumper hil` runs it: the resolved parameters, the
+/// request, the outcome, the JSON object `hil --json` prints and its text summary.
+pub struct HilRun {
+    /// Parameters after the preset and the overrides.
+    pub params: Params,
+    /// The jump and the loop's settings.
+    pub spec: HilSpec,
+    /// The rig model (tick rate, encoder scale, noise).
+    pub model_config: RigModelConfig,
+    /// The run's outcome.
+    pub outcome: HilOutcome,
+    /// `hil --json`'s object, pretty-printed.
+    pub json: String,
+    /// The title of the summary and the figure.
+    pub title: String,
+    /// The human summary `hil` prints without `--json`.
+    pub human: String,
+}
+
+impl HilRun {
+    /// The acquisition log of the run (what `hil --out` writes as acquisition.csv).
+    pub fn acquisition_log(&self) -> crate::acqlog::AcqLog {
+        log::acquisition_log(
+            &self.outcome,
+            &self.spec,
+            self.model_config.tick_hz,
+            self.model_config.metres_per_count,
+            self.params.robot.stroke_amplitude_m,
+            self.params.sand.packing_fraction,
+        )
     }
+}
+
+/// Run the jump `a` asks for through its link, with the overrides `file` (in place of
+/// `a.params`, which is not read here) on top of the `--phi` preset. Errors are the CLI's.
+pub fn simulate_run(a: &HilArgs, file: Option<&ParamsFile>) -> Result<HilRun, CliError> {
+    let params = resolve_params(a.phi, file)?;
+    let spec = spec_of(a);
     let model_config = RigModelConfig {
         encoder_noise_counts: a.encoder_noise,
         ..RigModelConfig::default()
     };
-    if let Some(n) = a.bench {
-        return bench(a, &params, &spec, model_config, n);
-    }
-    let camera = read_camera(a.camera.as_deref())?;
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let outcome = one_run(a, &params, &spec, model_config)?;
     let phi = params.sand.packing_fraction;
     let report = HilReport {
@@ -321,15 +346,38 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         },
         spec.model
     );
+    let human = human(&title, &report);
+    Ok(HilRun {
+        params,
+        spec,
+        model_config,
+        outcome,
+        json,
+        title,
+        human,
+    })
+}
+
+/// Run `hil`.
+pub fn run(a: &HilArgs) -> Result<(), CliError> {
+    let file = ParamsFile::read_opt(a.params.as_deref())?;
+    let params = resolve_params(a.phi, file.as_ref())?;
+    let spec = spec_of(a);
+    if spec.kind != JumpKind::DelayedStutter && a.gain_lowering.is_some() {
+        eprintln!("warning: --gain-lowering only acts during a delayed stutter's delay");
+    }
+    if let Some(n) = a.bench {
+        let model_config = RigModelConfig {
+            encoder_noise_counts: a.encoder_noise,
+            ..RigModelConfig::default()
+        };
+        return bench(a, &params, &spec, model_config, n);
+    }
+    let camera = read_camera(a.camera.as_deref())?;
+    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
+    let run = simulate_run(a, file.as_ref())?;
     if let Some(staged) = staged {
-        let log = log::acquisition_log(
-            &outcome,
-            &spec,
-            model_config.tick_hz,
-            model_config.metres_per_count,
-            params.robot.stroke_amplitude_m,
-            phi,
-        );
+        let log = run.acquisition_log();
         log.write_file(&staged.file("acquisition.csv"))
             .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
         if a.mcap {
@@ -338,18 +386,18 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         }
         if a.camera_fps > 0 {
             crate::rig::hil::camera::write_frames(
-                &outcome.camera_frames,
-                &crate::rig::hil::camera::heights_by_period(&outcome),
+                &run.outcome.camera_frames,
+                &crate::rig::hil::camera::heights_by_period(&run.outcome),
                 &camera,
-                1.0 / f64::from(model_config.tick_hz),
+                1.0 / f64::from(run.model_config.tick_hz),
                 &staged.file("frames"),
             )
             .map_err(CliError::internal)?;
         }
-        staged.write_text("params.toml", &params.to_toml())?;
-        staged.write_text("summary.json", &format!("{json}\n"))?;
+        staged.write_text("params.toml", &run.params.to_toml())?;
+        staged.write_text("summary.json", &format!("{}\n", run.json))?;
         save_figure(
-            &log::figure(&outcome, title.clone()),
+            &log::figure(&run.outcome, run.title.clone()),
             &staged.file("hil.png"),
             Some(&staged.file("hil.svg")),
         )?;
@@ -357,9 +405,9 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         eprintln!("wrote {}", dir.display());
     }
     if a.json {
-        println!("{json}");
+        println!("{}", run.json);
     } else {
-        print!("{}", human(&title, &report));
+        print!("{}", run.human);
     }
     Ok(())
 }

@@ -89,8 +89,27 @@ pub fn read_log_file(path: &Path, allow_gaps: bool) -> Result<AcqLog, CliError> 
         .map_err(|e| CliError::input(format!("log `{}`: {e}", path.display())))
 }
 
-/// Run `replay`.
-pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
+/// One replay as `sandjumper replay` runs it: the resolved parameters, the replay, the JSON
+/// object `replay --json` prints and the title of its summary.
+pub struct ReplayRun {
+    /// Parameters after the preset and the overrides.
+    pub params: crate::model::params::Params,
+    /// The replay and its outcome.
+    pub replayed: crate::study::replay::ReplayOutcome,
+    /// `replay --json`'s object, pretty-printed.
+    pub json: String,
+    /// Title of the summary and the figure.
+    pub title: String,
+}
+
+/// Replay the log `a` names, with the overrides `file` (in place of `a.source.params`, which
+/// is not read here); `record_series` keeps every output step (`trajectory.csv`). Errors are
+/// the CLI's.
+pub fn replay_run(
+    a: &ReplayArgs,
+    file: Option<&ParamsFile>,
+    record_series: bool,
+) -> Result<ReplayRun, CliError> {
     let log = read_log_file(&a.log, a.allow_gaps)?;
     let phi = match (a.phi, log.meta.phi) {
         (Some(phi), _) => phi,
@@ -102,13 +121,11 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
             )));
         }
     };
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    let params = resolve_params(phi, file.as_ref())?;
+    let params = resolve_params(phi, file)?;
     let model: ModelName = a.model.into();
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let opts = SimOptions {
         rtol: a.source.rtol,
-        record_series: staged.is_some(),
+        record_series,
         ..SimOptions::default()
     };
     let replayed = replay_log(&log, &params, model, a.window_ms * 1e-3, &opts)
@@ -134,6 +151,27 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         "replay of {name}, model {model}, φ = {}",
         params.sand.packing_fraction
     );
+    Ok(ReplayRun {
+        params,
+        replayed,
+        json,
+        title,
+    })
+}
+
+/// Run `replay`.
+pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
+    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    // The log and the parameters are checked before an output directory is touched.
+    read_log_file(&a.log, a.allow_gaps)?;
+    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
+    let ReplayRun {
+        params,
+        replayed,
+        json,
+        title,
+    } = replay_run(a, file.as_ref(), staged.is_some())?;
+    let outcome = &replayed.outcome;
     if let Some(staged) = staged {
         write_jump_files(&staged, &title, &params, &json, outcome)?;
         let dir = staged.commit()?;

@@ -157,6 +157,22 @@ pub(super) fn write_sweep_plots(dir: &Path, out: &SweepOutcome) -> Result<Vec<St
     Ok(written)
 }
 
+/// The parameters of each packing fraction of `spec` (keyed by `phi.to_bits()`), with the
+/// overrides `file` on top of each preset, and their TOML text (what the sweep's hash covers).
+pub fn resolve_sweep_params(
+    spec: &SweepSpec,
+    file: Option<&ParamsFile>,
+) -> Result<(HashMap<u64, Params>, String), CliError> {
+    let mut params_by_phi: HashMap<u64, Params> = HashMap::new();
+    let mut params_text = String::new();
+    for &phi in &spec.phis {
+        let p = resolve_params(phi, file)?;
+        params_text += &format!("# phi = {phi}\n{}", p.to_toml());
+        params_by_phi.insert(phi.to_bits(), p);
+    }
+    Ok((params_by_phi, params_text))
+}
+
 /// Run `sweep`.
 pub fn run(a: &SweepArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
@@ -174,13 +190,7 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
             },
         },
     };
-    let mut params_by_phi: HashMap<u64, Params> = HashMap::new();
-    let mut params_text = String::new();
-    for &phi in &spec.phis {
-        let p = resolve_params(phi, file.as_ref())?;
-        params_text += &format!("# phi = {phi}\n{}", p.to_toml());
-        params_by_phi.insert(phi.to_bits(), p);
-    }
+    let (params_by_phi, params_text) = resolve_sweep_params(&spec, file.as_ref())?;
     let shard = a.shard.unwrap_or(ShardSpec::WHOLE);
     let combos = spec.combinations();
     let total = combos.len();

@@ -1,0 +1,197 @@
+"""Simulate the spring-mass jumping robot on granular media (Aguilar & Goldman, Nature
+Physics 2016) and analyse its measurements, from Python.
+
+Every function calls the same library code as the ``sandjumper`` command line (no
+subprocess), with the CLI's defaults, checks and messages. Bad input raises ``ValueError``
+with the CLI's message (the flag replaced by the argument's name); a wrong type raises
+``TypeError`` naming the argument; a failure after the input was accepted raises
+``RuntimeError``. Units are SI unless a name says otherwise (``freq_hz``, ``window_ms``).
+"""
+
+import os
+from typing import Any, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+PathLike = Union[str, "os.PathLike[str]"]
+Params = Union[Dict[str, Dict[str, Any]], PathLike]
+Axis = Union[float, str, Sequence[float]]
+
+class JumpResult:
+    """One jump: ``summary`` and ``series``."""
+
+    summary: Dict[str, Any]
+    """Request and metrics, the same keys and values as ``sandjumper jump --json``
+    (``jump_height_m``, ``final_jump_height_m``, ``max_depth_m``, ``peak_added_mass_kg``,
+    ``peak_motor_force_n``, ``liftoff_time_s``, ``events``, ...)."""
+    series: Dict[str, npt.NDArray[Any]]
+    """The columns of ``trajectory.csv`` (same names): ``t_s`` (s), ``x_m_m`` (motor, m),
+    ``x_r_m`` (rod, m), ``x_f_m`` (foot, m), ``p_m`` (m), ``f_s_n`` (spring force, N),
+    ``f_gm_n`` (ground force, N), ``m_a_kg`` (added mass, kg) as float64, and ``mode``
+    (ground mode, str)."""
+
+class SweepResult:
+    """A sweep: ``columns`` and ``failures``."""
+
+    columns: Dict[str, npt.NDArray[Any]]
+    """The columns of ``sweep.csv``: ``kind``, ``model``, ``drive`` (str) and ``phi``,
+    ``freq_hz`` (Hz), ``tau_s`` (s), ``jump_height_m``, ``final_jump_height_m``,
+    ``max_depth_m`` (m), ``peak_added_mass_kg`` (kg), ``peak_motor_force_n`` (N) as float64,
+    in combination order. ``pandas.DataFrame(result.columns)`` is the table."""
+    failures: List[Dict[str, Any]]
+    """The rows of ``failures.csv``: the combinations that failed, with ``error``."""
+
+class HilResult:
+    """One jump through the control loop: ``summary``, ``log``, ``log_metadata``."""
+
+    summary: Dict[str, Any]
+    """The same keys and values as ``sandjumper hil --json`` (``wall_time_s`` and
+    ``realtime_factor`` are this run's timings)."""
+    log: Dict[str, npt.NDArray[Any]]
+    """The acquisition log's columns: ``tick``, ``encoder_counts``, ``flags`` (int64;
+    ``flags`` is -1 where the log has no value), ``t_s`` (s), ``position_m`` (motor relative
+    to the rod, m), ``p_cmd_m`` (m), ``force_cmd_n`` (N), ``current_a`` (A),
+    ``camera_frame``, ``rod_height_m`` (m) as float64 with NaN where the log has no value."""
+    log_metadata: Dict[str, str]
+    """The log's ``# key: value`` lines."""
+
+class FolderResult:
+    """What a folder-writing analysis wrote, loaded."""
+
+    summary: Any
+    """The JSON summary (what ``--json`` prints or ``summary.json`` holds), or None."""
+    tables: Dict[str, Dict[str, npt.NDArray[Any]]]
+    """Each CSV file of the folder by stem, as columns (float64, NaN for empty cells, or
+    str)."""
+    arrays: Dict[str, npt.NDArray[np.float64]]
+    """Each ``.npy`` file of the folder by stem."""
+    path: Optional[str]
+    """The output folder, or None when it was temporary (and is gone)."""
+
+def params(phi: float = 0.57, overrides: Optional[Params] = None) -> Dict[str, Dict[str, Any]]:
+    """The resolved parameters for packing fraction ``phi`` (presets 0.57..=0.62) with
+    ``overrides`` on top: the tables ``robot``, ``drive``, ``sand``, ``model`` as
+    ``sandjumper params`` prints them (SI units). Round-trips:
+    ``params(phi, overrides=params(phi)) == params(phi)``."""
+
+def jump(
+    kind: str,
+    freq_hz: float,
+    model: str = "eq4",
+    phi: float = 0.57,
+    tau_s: Optional[float] = None,
+    params: Optional[Params] = None,
+    rtol: float = 1e-8,
+) -> JumpResult:
+    """Simulate one jump as ``sandjumper jump`` does.
+
+    kind: ``"single"``, ``"stutter"`` or ``"delayed"``. freq_hz: forcing frequency, Hz.
+    model: ``"hard"``, ``"eq1-linear"``, ``"eq1"`` or ``"eq4"``. phi: packing fraction.
+    tau_s: the delayed stutter's delay, s (required for ``"delayed"``). params: overrides
+    (a dict as ``params()`` returns, or a TOML file). rtol: the integrator's relative
+    tolerance."""
+
+def sweep(
+    kinds: Union[str, Sequence[str]],
+    freqs_hz: Axis,
+    phis: Optional[Axis] = None,
+    taus_s: Optional[Axis] = None,
+    models: Optional[Union[str, Sequence[str]]] = None,
+    params: Optional[Params] = None,
+    rtol: float = 1e-8,
+    link: Optional[str] = None,
+    gain_lowering: Optional[float] = None,
+    threads: Optional[int] = None,
+) -> SweepResult:
+    """Every combination of kinds, models, packing fractions (default 0.57), delays (s,
+    default 0) and frequencies (Hz), in parallel with the GIL released, as
+    ``sandjumper sweep`` does. An axis is a number, a sequence, or a range ``"A:B:STEP"``
+    (inclusive). link: None (the stroke imposed) or ``"sil"`` (through the controller);
+    gain_lowering: with ``"sil"``, the position gain factor during a delay, (0, 1];
+    threads: default one per core."""
+
+def hil(
+    kind: str,
+    freq_hz: float,
+    link: str = "sil",
+    tau_s: Optional[float] = None,
+    gain_lowering: Optional[float] = None,
+    model: str = "eq4",
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    rtol: Optional[float] = None,
+    camera_fps: int = 200,
+    encoder_noise: float = 0.0,
+    firmware: Optional[PathLike] = None,
+) -> HilResult:
+    """One jump through the control loop against the simulated rig, as ``sandjumper hil``
+    does, with the GIL released. link: ``"sil"`` (the core in this process), ``"pil"`` (the
+    firmware ELF ``firmware`` in QEMU) or ``"serial:PATH"`` (a board). rtol: the plant's
+    tolerance inside each control period (default 1e-6). camera_fps: frames/s (0: none).
+    encoder_noise: counts (standard deviation, seeded)."""
+
+def replay(
+    log: PathLike,
+    model: str = "eq4",
+    phi: Optional[float] = None,
+    params: Optional[Params] = None,
+    rtol: float = 1e-8,
+    window_ms: Optional[float] = None,
+    allow_gaps: bool = False,
+) -> JumpResult:
+    """Replay a CSV acquisition log's encoder record in the simulator (the paper's method),
+    as ``sandjumper replay`` does. phi defaults to the log's; window_ms: the Savitzky-Golay
+    window for p'' (default 1 ms); allow_gaps: interpolate missing samples (reported)."""
+
+def track(
+    frames: PathLike, m_per_px: float, out: Optional[PathLike] = None, **options: Any
+) -> FolderResult:
+    """Track the rod's ball through camera frames and measure the jump height, as
+    ``sandjumper track`` does. m_per_px: the camera's scale, m/px. options: the CLI's flags
+    by name (``fps=200``, ``log="acquisition.csv"``, ``ball_diameter=0.0127`` (m), ...).
+    ``tables["track"]`` holds one row per frame."""
+
+def piv(frames: PathLike, out: Optional[PathLike] = None, **options: Any) -> FolderResult:
+    """PIV of side-wall grain videos, as ``sandjumper piv`` does. options: the CLI's flags by
+    name (``windows=[64, 32, 16]`` (px), ``overlap=0.5``, ``fps=500``, ``m_per_px=...``,
+    ``origin=[x_px, y_px]``, ``foot=...``, ...). ``arrays`` holds the fields as stacks of
+    2-D arrays (pair, row, column): ``u_px``, ``v_px`` (px per pair), ``flag``, ``s2n`` and,
+    when calibrated, SI velocities, vorticity and shear rate; ``tables["flow"]`` the grain
+    momentum and added mass per pair."""
+
+def dem_collide(
+    d1_m: float,
+    kn: float,
+    damping: float,
+    speed: float,
+    d2_m: Optional[float] = None,
+    wall: bool = False,
+    **options: Any,
+) -> Dict[str, Any]:
+    """One head-on binary collision (disk-disk, or disk-wall with ``wall=True``) with the
+    paper's contact law, as ``sandjumper dem collide --json`` does. d1_m, d2_m: diameters,
+    m (d2_m required unless ``wall``); kn: N/m; damping: N s/m; speed: m/s. options: ``dt=...`` (s), ``density=...``
+    (kg/m^3), ``force_step=True``. Returns ``restitution``, ``contact_time_s``,
+    ``effective_mass_kg``, ``dt_s``, the analytic values and the errors."""
+
+def dem_bed(out: PathLike, **options: Any) -> FolderResult:
+    """Prepare a DEM bed, as ``sandjumper dem bed --out OUT`` does. options: the CLI's flags
+    by name (``width=0.23``, ``height=0.08`` (m), ``pack=0.8``, ``seed=1``, ``threads=2``,
+    ...)."""
+
+def dem_intrude(bed: PathLike, out: PathLike, **options: Any) -> FolderResult:
+    """Run a DEM intrusion, as ``sandjumper dem intrude --bed BED --out OUT`` does. options:
+    the CLI's flags by name (``speed=0.1`` (m/s) or ``trajectory="trajectory.csv"``,
+    ``depth=0.03`` (m), ``no_frames=True``, ``threads=2``, ``resume=True``, ...)."""
+
+def read_log(path: PathLike, allow_gaps: bool = False) -> Dict[str, Any]:
+    """Read and check an acquisition log (CSV or binary) as ``sandjumper log check`` does:
+    ``columns`` (as ``HilResult.log``), ``metadata`` and ``summary`` (as
+    ``log check --json``)."""
+
+def log_to_mcap(log: PathLike, out: PathLike, allow_gaps: bool = False, force: bool = False) -> None:
+    """Convert an acquisition log (CSV or binary) to MCAP for Foxglove, Lichtblick and
+    PlotJuggler, as ``sandjumper log convert IN OUT --to mcap`` does."""

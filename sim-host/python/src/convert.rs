@@ -1,0 +1,124 @@
+//! Between Rust and Python: errors, JSON objects, numpy columns, parameter overrides.
+
+use numpy::PyArray1;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+use sandjumper_sim::command::resolve::ParamsFile;
+use sandjumper_sim::command::{CliError, EXIT_BAD_INPUT};
+
+/// The CLI's error as a Python exception: bad input (exit 2) is `ValueError`, anything else
+/// `RuntimeError`; the message is the CLI's.
+pub fn py_err(e: CliError) -> PyErr {
+    if e.exit == EXIT_BAD_INPUT {
+        PyValueError::new_err(e.message)
+    } else {
+        PyRuntimeError::new_err(e.message)
+    }
+}
+
+/// A JSON text (one of the CLI's summaries) as Python objects, through `json.loads`: the
+/// same keys and values a Python user gets from `json.loads(cli_output)`.
+pub fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A Python object as JSON (through `json.dumps`), for parameter overrides.
+fn py_to_json(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+    let text: String = obj
+        .py()
+        .import("json")?
+        .call_method1("dumps", (obj,))
+        .map_err(|e| PyTypeError::new_err(format!("{name}: cannot be written as TOML: {e}")))?
+        .extract()?;
+    serde_json::from_str(&text)
+        .map_err(|e| PyValueError::new_err(format!("{name}: not a table of parameters: {e}")))
+}
+
+/// Drops `null`s (a key left unset) so the rest converts to TOML.
+fn without_nulls(v: serde_json::Value) -> Option<serde_json::Value> {
+    match v {
+        serde_json::Value::Null => None,
+        serde_json::Value::Object(map) => Some(serde_json::Value::Object(
+            map.into_iter()
+                .filter_map(|(k, v)| without_nulls(v).map(|v| (k, v)))
+                .collect(),
+        )),
+        serde_json::Value::Array(items) => Some(serde_json::Value::Array(
+            items.into_iter().filter_map(without_nulls).collect(),
+        )),
+        other => Some(other),
+    }
+}
+
+/// A dict of overrides (tables `robot`, `drive`, `sand`, `model`, keys as `params()` gives
+/// them) as the TOML text of a params file.
+pub fn overrides_toml(name: &str, dict: &Bound<'_, PyAny>) -> PyResult<String> {
+    if !dict.is_instance_of::<PyDict>() {
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected a dict of tables (robot, drive, sand, model), got {}",
+            dict.get_type().name()?
+        )));
+    }
+    let json = without_nulls(py_to_json(name, dict)?).unwrap_or_default();
+    let table: toml::Table = serde_json::from_value(json)
+        .map_err(|e| PyValueError::new_err(format!("{name}: not a table of parameters: {e}")))?;
+    toml::to_string(&table).map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
+}
+
+/// The `params=` argument: `None`, a dict of overrides, or the path of a TOML file (read as
+/// the CLI reads `--params`).
+pub fn params_source(
+    name: &str,
+    params: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<ParamsFile>> {
+    let Some(p) = params.filter(|p| !p.is_none()) else {
+        return Ok(None);
+    };
+    if p.is_instance_of::<PyDict>() {
+        return Ok(Some(ParamsFile {
+            path: format!("<{name} dict>").into(),
+            text: overrides_toml(name, p)?,
+        }));
+    }
+    let path = path_arg(name, p)?;
+    ParamsFile::read(&path).map(Some).map_err(py_err)
+}
+
+/// A `str` or `os.PathLike` argument as a path.
+pub fn path_arg(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<std::path::PathBuf> {
+    if obj.is_instance_of::<PyString>() {
+        return Ok(obj.extract::<String>()?.into());
+    }
+    let fspath = obj
+        .py()
+        .import("os")?
+        .call_method1("fspath", (obj,))
+        .map_err(|_| {
+            PyTypeError::new_err(format!(
+                "{name}: expected a path (str or os.PathLike), got {}",
+                obj.get_type()
+                    .name()
+                    .map_or_else(|_| "?".to_string(), |n| n.to_string())
+            ))
+        })?;
+    fspath
+        .extract::<String>()
+        .map(Into::into)
+        .map_err(|_| PyTypeError::new_err(format!("{name}: expected a text path, got bytes")))
+}
+
+/// A float64 numpy array.
+pub fn f64_array(py: Python<'_>, values: Vec<f64>) -> Bound<'_, PyAny> {
+    PyArray1::from_vec(py, values).into_any()
+}
+
+/// An int64 numpy array.
+pub fn i64_array(py: Python<'_>, values: Vec<i64>) -> Bound<'_, PyAny> {
+    PyArray1::from_vec(py, values).into_any()
+}
+
+/// A numpy array of strings (`numpy.asarray` of the list: dtype `<U…`).
+pub fn str_array<'py>(py: Python<'py>, values: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
+    py.import("numpy")?.call_method1("asarray", (values,))
+}

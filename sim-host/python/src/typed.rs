@@ -1,0 +1,73 @@
+//! Typed arguments that name themselves: a wrong type raises `TypeError("freq_hz: expected
+//! a number (Hz), got str")` on every Python version (PyO3 itself names the argument only in
+//! an exception note, which Python 3.9 and 3.10 do not have).
+
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map_or_else(|_| "?".to_string(), |n| n.to_string())
+}
+
+fn typed<T: for<'a, 'py> FromPyObject<'a, 'py>>(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    what: &str,
+) -> PyResult<T> {
+    obj.extract::<T>().map_err(|_| {
+        PyTypeError::new_err(format!("{name}: expected {what}, got {}", type_name(obj)))
+    })
+}
+
+macro_rules! extractors {
+    ($($fn:ident: $ty:ty, $what:literal;)*) => {$(
+        #[doc = concat!("`", stringify!($fn), "`: ", $what, ".")]
+        pub fn $fn(obj: &Bound<'_, PyAny>) -> PyResult<$ty> {
+            typed::<$ty>(obj, stringify!($fn), $what)
+        }
+    )*};
+}
+
+macro_rules! optional_extractors {
+    ($($fn:ident($name:literal): $ty:ty, $what:literal;)*) => {$(
+        #[doc = concat!("`", $name, "`: ", $what, ", or None.")]
+        pub fn $fn(obj: &Bound<'_, PyAny>) -> PyResult<Option<$ty>> {
+            if obj.is_none() {
+                return Ok(None);
+            }
+            typed::<$ty>(obj, $name, concat!($what, " or None")).map(Some)
+        }
+    )*};
+}
+
+extractors! {
+    kind: String, "a jump kind name (str)";
+    model: String, "a ground model name (str)";
+    link: String, "a link name (str)";
+    freq_hz: f64, "a number (Hz)";
+    phi: f64, "a number (packing fraction)";
+    rtol: f64, "a number (relative tolerance)";
+    encoder_noise: f64, "a number (counts)";
+    camera_fps: i64, "an integer (frames/s)";
+    m_per_px: f64, "a number (m/px)";
+    d1_m: f64, "a number (m)";
+    kn: f64, "a number (N/m)";
+    damping: f64, "a number (N s/m)";
+    speed: f64, "a number (m/s)";
+    wall: bool, "a bool";
+    allow_gaps: bool, "a bool";
+    force: bool, "a bool";
+}
+
+optional_extractors! {
+    tau_s("tau_s"): f64, "a number (s)";
+    gain_lowering("gain_lowering"): f64, "a number (position gain factor)";
+    phi_opt("phi"): f64, "a number (packing fraction)";
+    rtol_opt("rtol"): f64, "a number (relative tolerance)";
+    window_ms("window_ms"): f64, "a number (ms)";
+    d2_m("d2_m"): f64, "a number (m)";
+    link_opt("link"): String, "a link name (str)";
+    threads("threads"): usize, "a positive integer";
+}
