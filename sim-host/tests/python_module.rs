@@ -2,8 +2,8 @@
 //! installs it the way the README says (`pip install ./sim-host/python`) and runs its pytest
 //! suite against this build's `sandjumper` binary.
 //!
-//! The environment is `target/python-venv` (made once, with maturin, numpy and pytest from
-//! PyPI); the wheel builds in `target/python` (the outer `cargo test` holds the lock on
+//! The environment is `target/python-venv` (made once, with maturin, numpy, pytest and
+//! matplotlib (for the notebook) from PyPI); the wheel builds in `target/python` (the outer `cargo test` holds the lock on
 //! `target/`'s own build). Skips with a message when there is no `python3` or PyPI cannot be
 //! reached, unless `CI` is set (then it fails).
 
@@ -48,7 +48,9 @@ fn venv(root: &Path) -> Result<PathBuf, String> {
     if !python.exists() {
         run(Command::new("python3").args(["-m", "venv"]).arg(&venv))?;
     }
-    let ready = run(Command::new(&python).args(["-c", "import maturin, numpy, pytest"])).is_ok();
+    let ready =
+        run(Command::new(&python).args(["-c", "import maturin, numpy, pytest, matplotlib"]))
+            .is_ok();
     if !ready {
         run(Command::new(&python).args([
             "-m",
@@ -58,6 +60,7 @@ fn venv(root: &Path) -> Result<PathBuf, String> {
             "maturin>=1.9.4,<2",
             "numpy",
             "pytest",
+            "matplotlib",
         ]))?;
     }
     Ok(python)
@@ -100,4 +103,6 @@ fn python_module_builds_installs_and_passes_its_tests() {
     eprintln!("{report}");
     assert!(report.contains(" passed"), "{report}");
     assert!(!report.contains("failed"), "{report}");
+    // Every test ran: the environment has everything they need (tomllib, matplotlib).
+    assert!(!report.contains("skipped"), "{report}");
 }

@@ -337,3 +337,15 @@ def test_wrong_types_raise_type_error_naming_the_argument(call, name):
     with pytest.raises(TypeError) as raised:
         call()
     assert str(raised.value).startswith(name + ":"), str(raised.value)
+
+
+def test_the_notebook_reproduces_height_vs_phi(tmp_path, monkeypatch):
+    """docs/notebook.py runs top to bottom (its own asserts check the paper's findings) and
+    draws the figure."""
+    pytest.importorskip("matplotlib")
+    import runpy
+
+    monkeypatch.setenv("SANDJUMPER_NOTEBOOK_OUT", str(tmp_path))
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    runpy.run_path(str(REPO / "docs" / "notebook.py"), run_name="__main__")
+    assert (tmp_path / "height_vs_phi.png").stat().st_size > 10_000
