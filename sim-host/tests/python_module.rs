@@ -3,7 +3,8 @@
 //! suite against this build's `sandjumper` binary.
 //!
 //! The environment is `target/python-venv` (made once, with maturin, numpy, pytest and
-//! matplotlib (for the notebook) from PyPI); the wheel builds in `target/python` (the outer `cargo test` holds the lock on
+//! matplotlib (for the notebook) and mcap (Foxglove's reader, to check our MCAP files) from
+//! PyPI); the wheel builds in `target/python` (the outer `cargo test` holds the lock on
 //! `target/`'s own build). Skips with a message when there is no `python3` or PyPI cannot be
 //! reached, unless `CI` is set (then it fails).
 
@@ -61,6 +62,8 @@ fn venv(root: &Path) -> Result<PathBuf, String> {
             "numpy",
             "pytest",
             "matplotlib",
+            "mcap",
+            "tomli; python_version < '3.11'",
         ]))?;
     }
     Ok(python)

@@ -98,7 +98,10 @@ def test_params_round_trip_and_equal_the_cli():
     changed = sandjumper.params(0.6, overrides={"sand": {"k1_n_m": 1234.0}})
     assert changed["sand"]["k1_n_m"] == 1234.0
     assert sandjumper.params(0.6, overrides=changed) == changed
-    tomllib = pytest.importorskip("tomllib")
+    try:
+        import tomllib
+    except ImportError:  # Python < 3.11
+        tomllib = pytest.importorskip("tomli")
     assert tomllib.loads(cli("params", "--phi", 0.6).stdout) == p
 
 
@@ -191,6 +194,36 @@ def test_replay_equals_the_cli(tmp_path):
     assert mcap.read_bytes()[:8] == b"\x89MCAP0\r\n"
     with pytest.raises(ValueError, match="exists"):
         sandjumper.log_to_mcap(log, mcap)
+
+
+def test_mcap_reads_with_foxglove_s_own_python_reader(tmp_path):
+    """An independent reader (the `mcap` package Foxglove publishes) opens the file through
+    its summary and indexes, seeks a time window, and finds every value of the CSV."""
+    reader_module = pytest.importorskip("mcap.reader")
+    out = tmp_path / "h"
+    cli("hil", "--kind", "stutter", "--freq", 12, "--out", out, "--mcap")
+    table = read_csv(out / "acquisition.csv")
+    with open(out / "acquisition.mcap", "rb") as f:
+        reader = reader_module.make_reader(f)
+        summary = reader.get_summary()
+        topics = {c.topic for c in summary.channels.values()}
+        assert topics == {"/encoder", "/drive", "/status", "/camera", "/faults"}
+        assert len(summary.chunk_indexes) > 1
+        assert {s.encoding for s in summary.schemas.values()} == {"jsonschema"}
+        encoder = [json.loads(m.data) for _, _, m in reader.iter_messages(topics=["/encoder"])]
+        assert [e["encoder_counts"] for e in encoder] == [int(t) for t in table["encoder_counts"]]
+        assert [e["t_s"] for e in encoder] == [float(t) for t in table["t_s"]]
+        # 0.1 s to 0.2 s: ticks 1000..=1999 at 10 kHz, found through the chunk indexes.
+        try:
+            window = list(reader.iter_messages(topics=["/encoder"], starting_at=100_000_000,
+                                               ending_before=200_000_000))
+        except TypeError:  # mcap < 1.3 names them start_time, end_time
+            window = list(reader.iter_messages(topics=["/encoder"], start_time=100_000_000,
+                                               end_time=200_000_000))
+        assert len(window) == 1000
+        assert json.loads(window[0][2].data)["tick"] == 1000
+        names = [m.name for m in reader.iter_metadata()]
+        assert names == ["sandjumper-acqlog", "sandjumper-conversion"]
 
 
 def test_dem_collide_equals_the_cli():
