@@ -85,11 +85,16 @@ impl Collision {
             ("--d2", if self.wall { 1.0 } else { self.d2_m }),
             ("--speed", self.speed_m_s),
             ("--density", self.density_kg_m3),
-            ("--kn", self.kn_n_per_m),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("{name} {v} (allowed: a positive number)"));
             }
+        }
+        if !(self.kn_n_per_m.is_finite() && self.kn_n_per_m > 0.0) {
+            return Err(format!(
+                "--kn {} N/m: the normal stiffness must be positive",
+                self.kn_n_per_m
+            ));
         }
         if !(self.damping_n_s_per_m.is_finite() && self.damping_n_s_per_m >= 0.0) {
             return Err(format!(

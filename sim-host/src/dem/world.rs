@@ -355,7 +355,8 @@ impl World {
                     for l in 0..cx.len() {
                         let i = base + l;
                         let (xi, yi, ri, imi) = (cx[l], cy[l], radius[i], inv_mass[i]);
-                        let (vxi, vyi, wi) = (cux[l], cuy[l], cuw[l]);
+                        let (vxi, vyi) = (cux[l], cuy[l]);
+                        let wi = if c.friction { cuw[l] } else { 0.0 };
                         let own = nl.start[i] as usize..nl.start[i + 1] as usize;
                         let rev =
                             &nl.rev_entry[nl.rev_start[i] as usize..nl.rev_start[i + 1] as usize];
@@ -397,7 +398,11 @@ impl World {
                                     continue;
                                 };
                                 if delta <= 0.0 {
-                                    wh[l][kw] = 0.0;
+                                    // Frictionless: no history to clear (and no write
+                                    // stream through `wall_hist` every step).
+                                    if c.friction {
+                                        wh[l][kw] = 0.0;
+                                    }
                                     continue;
                                 }
                                 let gamma_w = match gamma_const {
@@ -423,25 +428,36 @@ impl World {
                             }
                             let ax = fx * imi - c.drag * vxi;
                             let ay = fy * imi - c.g - c.drag * vyi;
-                            let al = tq * inv_inertia[i];
-                            let (hx, hy, hw) = (cvx[l], cvy[l], cw[l]);
-                            let (nvx, nvy, nw) = (hx + ax * c.dt, hy + ay * c.dt, hw + al * c.dt);
+                            let (hx, hy) = (cvx[l], cvy[l]);
+                            let (nvx, nvy) = (hx + ax * c.dt, hy + ay * c.dt);
                             if c.euler {
                                 cx[l] = xi + hx * c.dt;
                                 cy[l] = yi + hy * c.dt;
-                                (cux[l], cuy[l], cuw[l]) = (nvx, nvy, nw);
+                                (cux[l], cuy[l]) = (nvx, nvy);
                             } else {
                                 cx[l] = xi + nvx * c.dt;
                                 cy[l] = yi + nvy * c.dt;
                                 let h = 0.5 * c.dt;
-                                (cux[l], cuy[l], cuw[l]) =
-                                    (nvx + ax * h, nvy + ay * h, nw + al * h);
+                                (cux[l], cuy[l]) = (nvx + ax * h, nvy + ay * h);
                             }
-                            (cvx[l], cvy[l], cw[l]) = (nvx, nvy, nw);
+                            (cvx[l], cvy[l]) = (nvx, nvy);
+                            // Without friction there is no torque: the spin stays as it is
+                            // (and its two arrays are neither read nor written).
+                            if c.friction {
+                                let al = tq * inv_inertia[i];
+                                let nw = cw[l] + al * c.dt;
+                                cuw[l] = if c.euler { nw } else { nw + al * (0.5 * c.dt) };
+                                cw[l] = nw;
+                            }
                         }
                         let ddx = cx[l] - nl.x_ref[i];
                         let ddy = cy[l] - nl.y_ref[i];
-                        s.max_disp2 = s.max_disp2.max(ddx * ddx + ddy * ddy);
+                        // A plain comparison, not `f64::max` (whose NaN rule costs a
+                        // dependent select per grain); a NaN never wins either way.
+                        let disp2 = ddx * ddx + ddy * ddy;
+                        if disp2 > s.max_disp2 {
+                            s.max_disp2 = disp2;
+                        }
                     }
                     s
                 },
