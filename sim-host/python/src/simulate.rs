@@ -255,8 +255,9 @@ pub fn jump(
         unreachable!("`sandjumper jump` parses as Command::Jump")
     };
     let file = params_source("params", params)?;
+    let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_sim::study::jump_command::simulate_run(&a, file.as_ref(), true))
+        .detach(|| sandjumper_sim::study::jump_command::simulate_run(&a, params, true))
         .map_err(|e| argv.error(e))?;
     Ok(JumpResult {
         summary: json_to_py(py, &run.json)?.unbind(),
@@ -507,8 +508,9 @@ pub fn hil(
         unreachable!("`sandjumper hil` parses as Command::Hil")
     };
     let file = params_source("params", params)?;
+    let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_sim::rig::hil::command::simulate_run(&a, file.as_ref()))
+        .detach(|| sandjumper_sim::rig::hil::command::simulate_run(&a, params))
         .map_err(|e| argv.error(e))?;
     let log = run.acquisition_log();
     Ok(HilResult {
@@ -546,8 +548,12 @@ pub fn replay(
         unreachable!("`sandjumper replay` parses as Command::Replay")
     };
     let file = params_source("params", params)?;
+    let log = sandjumper_sim::study::replay::command::read_log_file(&a.log, a.allow_gaps)
+        .map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_sim::study::replay::command::replay_run(&a, file.as_ref(), true))
+        .detach(|| {
+            sandjumper_sim::study::replay::command::replay_run(&a, &log, file.as_ref(), true)
+        })
         .map_err(|e| argv.error(e))?;
     Ok(JumpResult {
         summary: json_to_py(py, &run.json)?.unbind(),

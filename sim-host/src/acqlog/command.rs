@@ -187,6 +187,36 @@ fn check(a: &CheckArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// An existing OUT is replaced only with `--force`.
+fn refuse_overwrite(a: &ConvertArgs) -> Result<(), CliError> {
+    if a.output.exists() && !a.force {
+        return Err(CliError::input(format!(
+            "`{}` exists: choose another name or pass --force",
+            a.output.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Write `out` through `write` into `out` with extension `tmp_extension`, then rename it into
+/// place: a failed conversion leaves no half file.
+fn write_then_rename<T>(
+    out: &Path,
+    tmp_extension: &str,
+    write: impl FnOnce(&Path) -> Result<T, super::AcqLogError>,
+) -> Result<T, CliError> {
+    let tmp = out.with_extension(tmp_extension);
+    write(&tmp)
+        .and_then(|r| {
+            std::fs::rename(&tmp, out).map_err(|e| super::AcqLogError::io(&e))?;
+            Ok(r)
+        })
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            CliError::input(format!("cannot write `{}`: {e}", out.display()))
+        })
+}
+
 fn convert(a: &ConvertArgs) -> Result<(), CliError> {
     let to = a.to.unwrap_or(
         if a.output
@@ -207,22 +237,10 @@ fn convert(a: &ConvertArgs) -> Result<(), CliError> {
             "not a binary log (no `SJACQBIN` header); a CSV log needs no conversion (check it with `sandjumper log check`)",
         ));
     }
-    if a.output.exists() && !a.force {
-        return Err(CliError::input(format!(
-            "`{}` exists: choose another name or pass --force",
-            a.output.display()
-        )));
-    }
+    refuse_overwrite(a)?;
     let (log, report) = load(&a.input, a.allow_gaps)?;
     let report = report.unwrap_or_default();
-    // Write next to the target, then rename: a failed conversion leaves no half file.
-    let tmp = a.output.with_extension("csv.partial");
-    log.write_file(&tmp)
-        .and_then(|()| std::fs::rename(&tmp, &a.output).map_err(|e| super::AcqLogError::io(&e)))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            CliError::input(format!("cannot write `{}`: {e}", a.output.display()))
-        })?;
+    write_then_rename(&a.output, "csv.partial", |tmp| log.write_file(tmp))?;
     eprintln!(
         "wrote {} ({} samples from {} frames; {} rejected frames; {} samples lost by sequence number)",
         a.output.display(),
@@ -235,26 +253,12 @@ fn convert(a: &ConvertArgs) -> Result<(), CliError> {
 }
 
 fn convert_to_mcap(a: &ConvertArgs) -> Result<(), CliError> {
-    if a.output.exists() && !a.force {
-        return Err(CliError::input(format!(
-            "`{}` exists: choose another name or pass --force",
-            a.output.display()
-        )));
-    }
+    refuse_overwrite(a)?;
     // The same reader and the same refusals as `log check` and `replay`.
     let (log, conversion) = load(&a.input, a.allow_gaps)?;
-    // Write next to the target, then rename: a failed conversion leaves no half file.
-    let tmp = a.output.with_extension("mcap.partial");
-    let report = log
-        .write_mcap_file(&tmp, conversion.as_ref())
-        .and_then(|r| {
-            std::fs::rename(&tmp, &a.output).map_err(|e| super::AcqLogError::io(&e))?;
-            Ok(r)
-        })
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            CliError::input(format!("cannot write `{}`: {e}", a.output.display()))
-        })?;
+    let report = write_then_rename(&a.output, "mcap.partial", |tmp| {
+        log.write_mcap_file(tmp, conversion.as_ref())
+    })?;
     let counts: Vec<String> = report
         .messages
         .iter()

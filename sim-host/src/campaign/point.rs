@@ -183,7 +183,7 @@ pub fn run_point_on_board(
     on_phase: &mut dyn FnMut(&str),
 ) -> Result<ResultRow, String> {
     use super::board_bed::BoardBed;
-    use crate::rig::hil::run::{jump_config, trajectory};
+    use crate::rig::hil::run::trajectory;
     use crate::rig::tool::output::{firmware_name, samples_log};
     use crate::rig::tool::session::{Program, run_program};
 
@@ -225,13 +225,7 @@ pub fn run_point_on_board(
     } = jump_setup(f, point, &prep)?;
     let traj = trajectory(&params, &spec).map_err(|e| e.to_string())?;
     let model_config = RigModelConfig::default();
-    let program = Program {
-        config: jump_config(&params, &spec),
-        tick_hz: model_config.tick_hz,
-        settle_s: spec.settle_s,
-        tail_s: 0.5,
-        max_run_s: traj.end_s() + 5.0,
-    };
+    let program = Program::jump(&params, &spec, &traj, model_config.tick_hz);
     let record = run_program(link.as_mut(), None, &program)
         .map_err(|e| format!("point {}: the jump on {name}: {e}", point.index))?;
     // The session is over: the board's link closes before the frames are collected.

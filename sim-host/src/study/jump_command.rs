@@ -169,15 +169,14 @@ pub struct JumpRun {
     pub json: String,
 }
 
-/// Simulate the jump `a` asks for, with the overrides `file` (in place of `a.source.params`,
-/// which is not read here) on top of the `--phi` preset; `record_series` keeps every output
-/// step (`trajectory.csv`). Errors are the CLI's.
+/// Simulate the jump `a` asks for with `params` (resolved from `a.phi` and the overrides by
+/// [`resolve_params`]; `a.source.params` is not read here); `record_series` keeps every
+/// output step (`trajectory.csv`). Errors are the CLI's.
 pub fn simulate_run(
     a: &JumpArgs,
-    file: Option<&ParamsFile>,
+    params: crate::model::params::Params,
     record_series: bool,
 ) -> Result<JumpRun, CliError> {
-    let params = resolve_params(a.phi, file)?;
     let kind: JumpKind = a.kind.into();
     let model: ModelName = a.model.into();
     let spec = JumpSpec {
@@ -218,7 +217,7 @@ pub fn simulate_run(
 pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
     // Bad parameters are refused before an output directory is touched.
-    resolve_params(a.phi, file.as_ref())?;
+    let params = resolve_params(a.phi, file.as_ref())?;
     if a.kind != KindArg::Delayed && a.tau.is_some_and(|t| t != 0.0) {
         eprintln!(
             "warning: --tau {} is ignored: only --kind delayed has a delay",
@@ -232,7 +231,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         spec,
         outcome,
         json,
-    } = simulate_run(a, file.as_ref(), staged.is_some())?;
+    } = simulate_run(a, params, staged.is_some())?;
     let phi = params.sand.packing_fraction;
     let title = jump_title(&spec, phi);
     if let Some(staged) = staged {

@@ -292,15 +292,19 @@ impl HilRun {
     }
 }
 
-/// Run the jump `a` asks for through its link, with the overrides `file` (in place of
-/// `a.params`, which is not read here) on top of the `--phi` preset. Errors are the CLI's.
-pub fn simulate_run(a: &HilArgs, file: Option<&ParamsFile>) -> Result<HilRun, CliError> {
-    let params = resolve_params(a.phi, file)?;
-    let spec = spec_of(a);
-    let model_config = RigModelConfig {
+/// The rig model `a` asks for (its encoder noise; the rest the defaults).
+fn rig_model_config(a: &HilArgs) -> RigModelConfig {
+    RigModelConfig {
         encoder_noise_counts: a.encoder_noise,
         ..RigModelConfig::default()
-    };
+    }
+}
+
+/// Run the jump `a` asks for through its link with `params` (resolved from `a.phi` and the
+/// overrides by [`resolve_params`]; `a.params` is not read here). Errors are the CLI's.
+pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
+    let spec = spec_of(a);
+    let model_config = rig_model_config(a);
     let outcome = one_run(a, &params, &spec, model_config)?;
     let phi = params.sand.packing_fraction;
     let report = HilReport {
@@ -367,15 +371,11 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         eprintln!("warning: --gain-lowering only acts during a delayed stutter's delay");
     }
     if let Some(n) = a.bench {
-        let model_config = RigModelConfig {
-            encoder_noise_counts: a.encoder_noise,
-            ..RigModelConfig::default()
-        };
-        return bench(a, &params, &spec, model_config, n);
+        return bench(a, &params, &spec, rig_model_config(a), n);
     }
     let camera = read_camera(a.camera.as_deref())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let run = simulate_run(a, file.as_ref())?;
+    let run = simulate_run(a, params)?;
     if let Some(staged) = staged {
         let log = run.acquisition_log();
         log.write_file(&staged.file("acquisition.csv"))

@@ -17,7 +17,7 @@ use crate::command::args::{KindArg, parse_freq, parse_tau};
 use crate::model::trajectory::kind_name;
 use crate::output::StagedDir;
 use crate::rig::hil::rig_model::RigModelConfig;
-use crate::rig::hil::run::{HilSpec, jump_config, trajectory};
+use crate::rig::hil::run::{HilSpec, trajectory};
 use sandjumper_core::trajectory::JumpKind;
 
 /// `rig jump`.
@@ -97,13 +97,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     spec.camera_fps = a.camera_fps;
     let traj = trajectory(&params, &spec).map_err(|e| CliError::input(e.to_string()))?;
     let model_config = RigModelConfig::default();
-    let program = Program {
-        config: jump_config(&params, &spec),
-        tick_hz: model_config.tick_hz,
-        settle_s: spec.settle_s,
-        tail_s: 0.5,
-        max_run_s: traj.end_s() + 5.0,
-    };
+    let program = Program::jump(&params, &spec, &traj, model_config.tick_hz);
     let camera = crate::rig::hil::command::read_camera(a.camera.as_deref())?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(

@@ -59,6 +59,27 @@ pub struct Program {
     pub max_run_s: f64,
 }
 
+impl Program {
+    /// The program of one sine jump (MODEL.md section 2) as `rig jump` runs it: the jump's
+    /// controller configuration, the spec's settle time, 0.5 s kept running after `Done`,
+    /// and up to 5 s past the trajectory's end before the host gives up.
+    /// `traj` is the jump's trajectory (`rig::hil::run::trajectory`).
+    pub fn jump(
+        params: &crate::model::params::Params,
+        spec: &crate::rig::hil::run::HilSpec,
+        traj: &sandjumper_core::trajectory::SineJump,
+        tick_hz: u32,
+    ) -> Self {
+        Self {
+            config: crate::rig::hil::run::jump_config(params, spec),
+            tick_hz,
+            settle_s: spec.settle_s,
+            tail_s: 0.5,
+            max_run_s: traj.end_s() + 5.0,
+        }
+    }
+}
+
 /// What a run leaves behind.
 #[derive(Debug, Default)]
 pub struct RunRecord {

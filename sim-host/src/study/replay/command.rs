@@ -102,15 +102,15 @@ pub struct ReplayRun {
     pub title: String,
 }
 
-/// Replay the log `a` names, with the overrides `file` (in place of `a.source.params`, which
-/// is not read here); `record_series` keeps every output step (`trajectory.csv`). Errors are
-/// the CLI's.
+/// Replay `log` (the file `a` names, read by [`read_log_file`]) with the overrides `file` (in
+/// place of `a.source.params`, which is not read here); `record_series` keeps every output
+/// step (`trajectory.csv`). Errors are the CLI's.
 pub fn replay_run(
     a: &ReplayArgs,
+    log: &AcqLog,
     file: Option<&ParamsFile>,
     record_series: bool,
 ) -> Result<ReplayRun, CliError> {
-    let log = read_log_file(&a.log, a.allow_gaps)?;
     let phi = match (a.phi, log.meta.phi) {
         (Some(phi), _) => phi,
         (None, Some(phi)) => phi,
@@ -128,7 +128,7 @@ pub fn replay_run(
         record_series,
         ..SimOptions::default()
     };
-    let replayed = replay_log(&log, &params, model, a.window_ms * 1e-3, &opts)
+    let replayed = replay_log(log, &params, model, a.window_ms * 1e-3, &opts)
         .map_err(|e| CliError::input(format!("log `{}`: {e}", a.log.display())))?;
     let outcome = &replayed.outcome;
     let report = ReplayReport {
@@ -162,15 +162,15 @@ pub fn replay_run(
 /// Run `replay`.
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    // The log and the parameters are checked before an output directory is touched.
-    read_log_file(&a.log, a.allow_gaps)?;
+    // The log is checked before an output directory is touched.
+    let log = read_log_file(&a.log, a.allow_gaps)?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let ReplayRun {
         params,
         replayed,
         json,
         title,
-    } = replay_run(a, file.as_ref(), staged.is_some())?;
+    } = replay_run(a, &log, file.as_ref(), staged.is_some())?;
     let outcome = &replayed.outcome;
     if let Some(staged) = staged {
         write_jump_files(&staged, &title, &params, &json, outcome)?;
