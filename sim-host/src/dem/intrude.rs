@@ -134,6 +134,9 @@ pub struct Performance {
     pub wall_s: f64,
     /// Grains times steps over wall time, 1/s.
     pub atom_steps_per_s: f64,
+    /// Neighbour-list builds in these steps (one per grain drift of half the skin, and
+    /// one at each checkpoint).
+    pub list_builds: u64,
 }
 
 impl IntrudeSpec {
@@ -247,8 +250,10 @@ impl Run {
             let d = traj.depth(t_next);
             self.world.intruder_next = Some((self.spec.surface_m - d, -traj.speed(t_next)));
             let t0 = std::time::Instant::now();
+            let builds = self.world.nl.builds;
             self.world.step();
             let perf = &mut self.performance;
+            perf.list_builds += self.world.nl.builds - builds;
             perf.wall_s += t0.elapsed().as_secs_f64();
             perf.steps += 1;
             perf.atom_steps_per_s = perf.steps as f64 * self.world.g.len() as f64 / perf.wall_s;

@@ -19,5 +19,6 @@ pub mod neighbours;
 pub mod outputs;
 pub mod params;
 pub mod render;
+pub mod step;
 pub mod structure;
 pub mod world;

@@ -2,14 +2,17 @@
 //!
 //! The list is a *half* list (each pair once, under its lower slot `i < j`), stored
 //! CSR-style (`start`, `j`), so each pair's force is computed once (Newton's third law, as
-//! LAMMPS's `newton on`). A reverse index (`rev_start`, `rev_entry`) lists, for every grain,
-//! the entries in which it is the partner `j`: a grain's total force is the sum of its own
-//! entries' pair forces minus the sum of its reverse entries', gathered in a fixed order, so
-//! the step runs in parallel without atomics and gives the same bits for any thread count.
-//! Each entry carries the pair's tangential history (the accumulated slip, m) and the pair
-//! force of the last step. At a rebuild the grains are reordered along the cell grid (a
-//! stable counting sort, so the order is a function of the state alone) and every contact's
-//! history is carried over by grain identity.
+//! LAMMPS's `newton on`). At a rebuild the grains are reordered along the cell grid, row by
+//! row (a stable counting sort, so the order is a function of the state alone), and every
+//! contact's tangential history is carried over by grain identity.
+//!
+//! The step walks the grains in slot order and scatters each pair's force to the partner
+//! (see [`super::step`]). For that to run in parallel with the same bits on any thread
+//! count, the slots are cut into **chunks** of whole cell rows (`chunk_start`): a partner
+//! lies in its owner's row or the next one, so in the owner's chunk or the next chunk.
+//! Entries whose partner lies in the next chunk are *spills*: their force goes to a spill
+//! slot (numbered in entry order, chunk `k`'s are `spill_base[k]..spill_base[k + 1]`) that
+//! the partner gathers (`spill_in`, in increasing slot order).
 
 use super::grains::Grains;
 
@@ -20,30 +23,32 @@ pub struct NeighbourList {
     pub start: Vec<u32>,
     /// Neighbour slot of each entry (always above the owner's).
     pub j: Vec<u32>,
-    /// Grain `j`'s reverse entries are `rev_entry[rev_start[j]..rev_start[j + 1]]`.
-    pub rev_start: Vec<u32>,
-    /// Entries in which the grain is the partner, in increasing entry order.
-    pub rev_entry: Vec<u32>,
-    /// Owner slot of each reverse entry (the `i` of `rev_entry`).
-    pub rev_owner: Vec<u32>,
+    /// Chunk `k` holds slots `chunk_start[k]..chunk_start[k + 1]` (whole cell rows).
+    pub chunk_start: Vec<u32>,
+    /// Chunk `k`'s spill slots are `spill_base[k]..spill_base[k + 1]`.
+    pub spill_base: Vec<u32>,
+    /// Grain `j` gathers the spill slots `spill_in[spill_in_start[j]..spill_in_start[j + 1]]`.
+    pub spill_in_start: Vec<u32>,
+    /// Spill slots by receiving grain, in increasing slot order.
+    pub spill_in: Vec<u32>,
     /// Tangential history of each entry, m (empty when friction is off).
     pub hist: Vec<f64>,
-    /// Force on the owner from the partner in the last step, N (x).
-    pub pair_fx: Vec<f64>,
-    /// Force on the owner from the partner in the last step, N (y).
-    pub pair_fy: Vec<f64>,
-    /// Tangential force of the pair in the last step (along `(-n_y, n_x)`, `n` from owner
-    /// to partner), N; both grains feel the torque `r ft` (empty when friction is off).
-    pub pair_ft: Vec<f64>,
-    /// Positions at the build, m (a rebuild is due once a grain moved half the skin).
-    pub x_ref: Vec<f64>,
-    /// Positions at the build, m.
-    pub y_ref: Vec<f64>,
     /// Skin, m.
     pub skin_m: f64,
     /// Builds so far.
     pub builds: u64,
 }
+
+/// Fewest grains in a chunk of `n` (more when a cell row holds more): chunks are the unit
+/// of parallel work (about `CHUNKS` of them, for load balance), and half of them wait for
+/// their first row's spills (fewer rows per chunk, more waiting).
+pub fn min_chunk(n: usize) -> usize {
+    const CHUNKS: usize = 16;
+    (n / CHUNKS).clamp(MIN_CHUNK.0, MIN_CHUNK.1)
+}
+
+/// Bounds of [`min_chunk`].
+const MIN_CHUNK: (usize, usize) = (256, 4096);
 
 /// Grid bounds: cells of side `cell_m` over the grains' bounding box.
 struct CellGrid {
@@ -98,19 +103,6 @@ impl CellGrid {
 }
 
 impl NeighbourList {
-    /// Whether some grain moved more than half the skin since the build.
-    pub fn due(&self, g: &Grains) -> bool {
-        if self.x_ref.len() != g.len() {
-            return true;
-        }
-        let lim = 0.25 * self.skin_m * self.skin_m;
-        (0..g.len()).any(|i| {
-            let dx = g.x[i] - self.x_ref[i];
-            let dy = g.y[i] - self.y_ref[i];
-            dx * dx + dy * dy > lim
-        })
-    }
-
     /// Reorder `g` along the cell grid, rebuild the list for interaction range
     /// `r_i + r_j + skin`, and carry every tangential history over (`with_history`: friction
     /// on). Returns the permutation applied (new slot `s` took old slot `perm[s]`), which the
@@ -171,25 +163,48 @@ impl NeighbourList {
             }
             start.push(js.len() as u32);
         }
-        // Reverse index: a stable counting sort of the entries by partner.
-        let mut rev_start = vec![0u32; n + 1];
-        for &j in &js {
-            rev_start[j as usize + 1] += 1;
+        // Chunks of whole cell rows, at least `min_chunk` grains each (a short tail joins the
+        // chunk before it).
+        let min_chunk = min_chunk(n);
+        let mut chunk_start = vec![0u32];
+        for row in 1..=grid.ny {
+            let end = cell_start[row * grid.nx];
+            let last = *chunk_start.last().unwrap_or(&0) as usize;
+            if end - last >= min_chunk || (row == grid.ny && end > last) {
+                chunk_start.push(end as u32);
+            }
+        }
+        let k = chunk_start.len();
+        if k >= 3 && ((chunk_start[k - 1] - chunk_start[k - 2]) as usize) < min_chunk / 2 {
+            chunk_start.remove(k - 2);
+        }
+        if chunk_start.len() == 1 {
+            chunk_start.push(n as u32);
+        }
+        // Spills: entries whose partner lies beyond the owner's chunk (always the next one).
+        let mut spill_base = vec![0u32];
+        let mut spill_to: Vec<u32> = Vec::new();
+        for c in chunk_start.windows(2) {
+            let (c0, c1) = (c[0] as usize, c[1] as usize);
+            for &j in &js[start[c0] as usize..start[c1] as usize] {
+                if j as usize >= c1 {
+                    spill_to.push(j);
+                }
+            }
+            spill_base.push(spill_to.len() as u32);
+        }
+        let mut spill_in_start = vec![0u32; n + 1];
+        for &j in &spill_to {
+            spill_in_start[j as usize + 1] += 1;
         }
         for k in 0..n {
-            rev_start[k + 1] += rev_start[k];
+            spill_in_start[k + 1] += spill_in_start[k];
         }
-        let mut rev_fill: Vec<u32> = rev_start[..n].to_vec();
-        let mut rev_entry = vec![0u32; js.len()];
-        let mut rev_owner = vec![0u32; js.len()];
-        for i in 0..n {
-            for e in start[i]..start[i + 1] {
-                let j = js[e as usize] as usize;
-                let slot = rev_fill[j] as usize;
-                rev_entry[slot] = e;
-                rev_owner[slot] = i as u32;
-                rev_fill[j] += 1;
-            }
+        let mut fill: Vec<u32> = spill_in_start[..n].to_vec();
+        let mut spill_in = vec![0u32; spill_to.len()];
+        for (slot, &j) in spill_to.iter().enumerate() {
+            spill_in[fill[j as usize] as usize] = slot as u32;
+            fill[j as usize] += 1;
         }
         let mut hist = Vec::new();
         if with_history {
@@ -212,23 +227,14 @@ impl NeighbourList {
                 }
             }
         }
-        let pair_ft = if with_history {
-            vec![0.0; js.len()]
-        } else {
-            Vec::new()
-        };
         *self = Self {
             start,
-            pair_fx: vec![0.0; js.len()],
-            pair_fy: vec![0.0; js.len()],
-            pair_ft,
             j: js,
-            rev_start,
-            rev_entry,
-            rev_owner,
+            chunk_start,
+            spill_base,
+            spill_in_start,
+            spill_in,
             hist,
-            x_ref: g.x.clone(),
-            y_ref: g.y.clone(),
             skin_m,
             builds: old.builds + 1,
         };
@@ -277,29 +283,26 @@ impl NeighbourList {
         }
     }
 
-    /// Every neighbour of `i` (partners of its own entries, then owners of its reverse
-    /// entries).
-    pub fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        let own = self.start[i] as usize..self.start[i + 1] as usize;
-        let rev = self.rev_start[i] as usize..self.rev_start[i + 1] as usize;
-        own.map(|e| self.j[e] as usize)
-            .chain(rev.map(|r| self.rev_owner[r] as usize))
+    /// Number of chunks.
+    pub fn chunks(&self) -> usize {
+        self.chunk_start.len().saturating_sub(1)
     }
 
-    /// Bytes held per grain (list, reverse index, history, pair forces, reference
-    /// positions), at the current fill.
+    /// Number of spill slots.
+    pub fn spills(&self) -> usize {
+        self.spill_in.len()
+    }
+
+    /// Bytes held per grain (list, chunks, spill index, history), at the current fill.
     pub fn bytes_per_grain(&self) -> f64 {
         let n = self.start.len().saturating_sub(1).max(1) as f64;
-        (4.0 * (self.start.len() + self.rev_start.len()) as f64
-            + 4.0
-                * (self.j.capacity() + self.rev_entry.capacity() + self.rev_owner.capacity())
-                    as f64
-            + 8.0
-                * (self.hist.capacity()
-                    + self.pair_fx.capacity()
-                    + self.pair_fy.capacity()
-                    + self.pair_ft.capacity()) as f64
-            + 16.0 * n)
+        (4.0 * (self.start.len()
+            + self.j.capacity()
+            + self.chunk_start.len()
+            + self.spill_base.len()
+            + self.spill_in_start.len()
+            + self.spill_in.capacity()) as f64
+            + 8.0 * self.hist.capacity() as f64)
             / n
     }
 }

@@ -13,13 +13,17 @@ use super::world::World;
 /// radii (grains at rest in a packing barely overlap).
 pub fn hexatic_order(w: &World) -> f64 {
     let g = &w.g;
-    let (mut sum, mut n) = (0.0, 0usize);
-    for i in 0..g.len() {
+    let n = g.len().min(w.nl.start.len().saturating_sub(1));
+    // Per grain: sum of exp(6 i theta) over its contacts, and their count. The bond seen
+    // from the partner points the other way, theta + pi, and 6 pi is a whole turn: the
+    // same term for both grains.
+    let mut acc = vec![(0.0f64, 0.0f64, 0usize); n];
+    for i in 0..n {
         if g.kind[i] != FREE {
             continue;
         }
-        let (mut re, mut im, mut c) = (0.0, 0.0, 0usize);
-        for j in w.nl.neighbours(i) {
+        for e in w.nl.start[i] as usize..w.nl.start[i + 1] as usize {
+            let j = w.nl.j[e] as usize;
             if g.kind[j] != FREE {
                 continue;
             }
@@ -27,17 +31,23 @@ pub fn hexatic_order(w: &World) -> f64 {
             let reach = 1.1 * (g.radius[i] + g.radius[j]);
             if dx * dx + dy * dy < reach * reach {
                 let th = 6.0 * dy.atan2(dx);
-                re += th.cos();
-                im += th.sin();
-                c += 1;
+                let (s, c) = th.sin_cos();
+                for k in [i, j] {
+                    acc[k].0 += c;
+                    acc[k].1 += s;
+                    acc[k].2 += 1;
+                }
             }
         }
+    }
+    let (mut sum, mut count) = (0.0, 0usize);
+    for &(re, im, c) in &acc {
         if c >= 2 {
             sum += re.hypot(im) / c as f64;
-            n += 1;
+            count += 1;
         }
     }
-    if n == 0 { 0.0 } else { sum / n as f64 }
+    if count == 0 { 0.0 } else { sum / count as f64 }
 }
 
 /// The jammed region under the intruder, from the grains moving down with it.
