@@ -35,9 +35,8 @@
 use rayon::prelude::*;
 
 use super::contact::GammaRule;
-use super::grains::INTRUDER;
 use super::neighbours::NeighbourList;
-use super::world::{Integrator, StepSums, Walls, World};
+use super::world::{Integrator, NEAR_WALL, PRESCRIBED, StepSums, Walls, World};
 
 /// Constants of one step, read by every grain.
 pub(super) struct StepConst {
@@ -200,8 +199,7 @@ struct Fixed<'a> {
     radius: &'a [f64],
     inv_mass: &'a [f64],
     inv_inertia: &'a [f64],
-    kind: &'a [u8],
-    near_wall: &'a [bool],
+    class: &'a [u8],
     start: &'a [u32],
     j: &'a [u32],
     spill_in_start: &'a [u32],
@@ -267,8 +265,7 @@ pub(super) fn advance(w: &mut World) {
         radius: &g.radius,
         inv_mass: &g.inv_mass,
         inv_inertia: &g.inv_inertia,
-        kind: &g.kind,
-        near_wall: &w.near_wall,
+        class: &w.class,
         start,
         j,
         spill_in_start,
@@ -388,6 +385,26 @@ fn run_chunk<const FRICTION: bool>(
     let mut sums = StepSums::default();
     let (c0, c1) = (p.c0, p.c1);
     let mut slot = 0usize;
+    // Every array of a part covers its grains (cut at the same bounds); the unchecked
+    // partner reads below rely on it.
+    let len = c1 - c0;
+    let n = f.radius.len();
+    assert!(
+        [
+            p.x.len(),
+            p.y.len(),
+            p.ux.len(),
+            p.uy.len(),
+            p.fx.len(),
+            p.fy.len()
+        ] == [len; 6]
+            && f.inv_mass.len() == n
+            && next.is_none_or(|q| {
+                let l = q.c1 - q.c0;
+                [q.x.len(), q.y.len(), q.ux.len(), q.uy.len()] == [l; 4]
+            }),
+        "a chunk's arrays disagree in length"
+    );
     for i in c0..c1 {
         let l = i - c0;
         let (xi, yi, ri, imi) = (p.x[l], p.y[l], f.radius[i], f.inv_mass[i]);
@@ -398,18 +415,41 @@ fn run_chunk<const FRICTION: bool>(
         let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
         for (e, &j) in (e_lo..e_hi).zip(&f.j[e_lo..e_hi]) {
             let j = j as usize;
+            // The partner's state, from this chunk or the next. The read of `x` is bounds
+            // checked; the part's other arrays have its length (checked on entry), so the
+            // same index needs no second check.
             let here = j < c1;
             let (xj, yj, uxj, uyj, wj) = if here {
-                let m = j - c0;
+                let m = j.wrapping_sub(c0);
+                let xj = p.x[m];
                 let wj = if FRICTION { p.uw[m] } else { 0.0 };
-                (p.x[m], p.y[m], p.ux[m], p.uy[m], wj)
+                // SAFETY: m < p.x.len(), the length of these three slices too.
+                unsafe {
+                    (
+                        xj,
+                        *p.y.get_unchecked(m),
+                        *p.ux.get_unchecked(m),
+                        *p.uy.get_unchecked(m),
+                        wj,
+                    )
+                }
             } else {
                 let Some(q) = next else { continue };
-                let m = j - q.c0;
+                let m = j.wrapping_sub(q.c0);
+                let xj = q.x[m];
                 let wj = if FRICTION { q.uw[m] } else { 0.0 };
-                (q.x[m], q.y[m], q.ux[m], q.uy[m], wj)
+                // SAFETY: m < q.x.len(), the length of these three slices too.
+                unsafe {
+                    (
+                        xj,
+                        *q.y.get_unchecked(m),
+                        *q.ux.get_unchecked(m),
+                        *q.uy.get_unchecked(m),
+                        wj,
+                    )
+                }
             };
-            let rj = f.radius[j];
+            let (rj, imj) = (f.radius[j], f.inv_mass[j]);
             let mut none = 0.0;
             let hist = if FRICTION {
                 &mut p.hist[e - p.e0]
@@ -423,7 +463,7 @@ fn run_chunk<const FRICTION: bool>(
                 uxi - uxj,
                 uyi - uyj,
                 wri + wj * rj,
-                imi + f.inv_mass[j],
+                imi + imj,
                 hist,
             );
             let (pfx, pfy, pft) = force.unwrap_or((0.0, 0.0, 0.0));
@@ -434,9 +474,12 @@ fn run_chunk<const FRICTION: bool>(
             }
             if here {
                 if force.is_some() {
-                    let m = j - c0;
-                    p.fx[m] -= pfx;
-                    p.fy[m] -= pfy;
+                    let m = j.wrapping_sub(c0);
+                    // SAFETY: m < p.x.len() (read above), the length of both.
+                    unsafe {
+                        *p.fx.get_unchecked_mut(m) -= pfx;
+                        *p.fy.get_unchecked_mut(m) -= pfy;
+                    }
                     if FRICTION {
                         p.ft[m] += pft;
                     }
@@ -536,7 +579,8 @@ fn finish<const FRICTION: bool>(
         tq = ri * ft_sum;
         wi = p.uw[l];
     }
-    if f.kind[i] == INTRUDER {
+    let class = f.class[i];
+    if class == PRESCRIBED {
         s.intruder_fx_n += fx;
         s.intruder_fy_n += fy;
         (p.vx[l], p.ux[l], p.w[l], p.uw[l]) = (0.0, 0.0, 0.0, 0.0);
@@ -552,7 +596,7 @@ fn finish<const FRICTION: bool>(
         }
     } else {
         // Walls (only for grains that were within a skin of one at the build).
-        if f.near_wall[i] {
+        if class == NEAR_WALL {
             // Walls: (overlap, outward normal from grain to wall, index).
             let walls = [
                 c.walls.floor_m.map(|w| (ri - (yi - w), 0.0, -1.0)),

@@ -9,6 +9,13 @@ use super::grains::{FREE, Grains, permute};
 use super::neighbours::NeighbourList;
 use super::step::{Scratch, StepConst, advance};
 
+/// A free grain that cannot touch a wall before the next list build.
+pub const INTERIOR: u8 = 0;
+/// A free grain that may touch a wall before the next list build.
+pub const NEAR_WALL: u8 = 1;
+/// A grain on a prescribed trajectory (the intruder's).
+pub const PRESCRIBED: u8 = 2;
+
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
@@ -99,9 +106,10 @@ pub struct World {
     pub u: Velocities,
     /// Force accumulators of the step.
     pub(super) scratch: Scratch,
-    /// Per grain: whether it may touch a wall before the next rebuild (free grains within
-    /// a skin of one at the build; the step skips the walls for the others).
-    pub(super) near_wall: Vec<bool>,
+    /// Per grain, what the step does with it: [`INTERIOR`], [`NEAR_WALL`] (a free grain
+    /// within a skin of a wall at the build: the only ones that may touch one before the
+    /// next build) or [`PRESCRIBED`] (an intruder grain).
+    pub(super) class: Vec<u8>,
     /// The walls the flags were computed for.
     walls_at_build: Walls,
     pub(super) rebuild_due: bool,
@@ -136,7 +144,7 @@ impl World {
             last: StepSums::default(),
             u: Velocities::default(),
             scratch: Scratch::default(),
-            near_wall: Vec::new(),
+            class: Vec::new(),
             walls_at_build: Walls::default(),
             rebuild_due: true,
             drift_m: 0.0,
@@ -169,14 +177,20 @@ impl World {
             self.cfg.law.friction.is_some(),
         );
         let (g, w, reach) = (&self.g, self.cfg.walls, self.cfg.skin_m);
-        self.near_wall = (0..g.len())
+        self.class = (0..g.len())
             .map(|i| {
                 let (x, y, r) = (g.x[i], g.y[i], g.radius[i] + reach);
-                g.kind[i] == FREE
-                    && (w.floor_m.is_some_and(|f| y - f < r)
-                        || w.left_m.is_some_and(|l| x - l < r)
-                        || w.right_m.is_some_and(|rt| rt - x < r)
-                        || w.lid_m.is_some_and(|t| t - y < r))
+                if g.kind[i] != FREE {
+                    PRESCRIBED
+                } else if w.floor_m.is_some_and(|f| y - f < r)
+                    || w.left_m.is_some_and(|l| x - l < r)
+                    || w.right_m.is_some_and(|rt| rt - x < r)
+                    || w.lid_m.is_some_and(|t| t - y < r)
+                {
+                    NEAR_WALL
+                } else {
+                    INTERIOR
+                }
             })
             .collect();
         self.walls_at_build = w;
