@@ -413,78 +413,51 @@ fn run_chunk<const FRICTION: bool>(
         let (mut fx, mut fy) = (p.fx[l], p.fy[l]);
         let mut ft = if FRICTION { p.ft[l] } else { 0.0 };
         let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
-        for (e, &j) in (e_lo..e_hi).zip(&f.j[e_lo..e_hi]) {
+        // An owner's partners come in increasing slot order (the build scans the cells
+        // in order), so those in this chunk come first: two loops, no branch per pair on
+        // where the partner lies.
+        let js = &f.j[e_lo..e_hi];
+        let n_here = js.iter().filter(|&&j| (j as usize) < c1).count();
+        let own = Own {
+            x: xi,
+            y: yi,
+            r: ri,
+            inv_mass: imi,
+            ux: uxi,
+            uy: uyi,
+            spin: wri,
+        };
+        for (e, &j) in (e_lo..).zip(&js[..n_here]) {
             let j = j as usize;
-            // The partner's state, from this chunk or the next. The read of `x` is bounds
-            // checked; the part's other arrays have its length (checked on entry), so the
-            // same index needs no second check.
-            let here = j < c1;
-            let (xj, yj, uxj, uyj, wj) = if here {
-                let m = j.wrapping_sub(c0);
-                let xj = p.x[m];
-                let wj = if FRICTION { p.uw[m] } else { 0.0 };
-                // SAFETY: m < p.x.len(), the length of these three slices too.
-                unsafe {
-                    (
-                        xj,
-                        *p.y.get_unchecked(m),
-                        *p.ux.get_unchecked(m),
-                        *p.uy.get_unchecked(m),
-                        wj,
-                    )
-                }
-            } else {
-                let Some(q) = next else { continue };
-                let m = j.wrapping_sub(q.c0);
-                let xj = q.x[m];
-                let wj = if FRICTION { q.uw[m] } else { 0.0 };
-                // SAFETY: m < q.x.len(), the length of these three slices too.
-                unsafe {
-                    (
-                        xj,
-                        *q.y.get_unchecked(m),
-                        *q.ux.get_unchecked(m),
-                        *q.uy.get_unchecked(m),
-                        wj,
-                    )
-                }
+            let m = j.wrapping_sub(c0);
+            let partner = state::<FRICTION>(p, m);
+            let Some((pfx, pfy, pft)) = pair_with::<FRICTION>(c, f, &own, partner, j, p, e) else {
+                continue;
             };
-            let (rj, imj) = (f.radius[j], f.inv_mass[j]);
-            let mut none = 0.0;
-            let hist = if FRICTION {
-                &mut p.hist[e - p.e0]
-            } else {
-                &mut none
-            };
-            let force = c.pair::<FRICTION>(
-                xj - xi,
-                yj - yi,
-                ri + rj,
-                uxi - uxj,
-                uyi - uyj,
-                wri + wj * rj,
-                imi + imj,
-                hist,
-            );
-            let (pfx, pfy, pft) = force.unwrap_or((0.0, 0.0, 0.0));
-            if force.is_some() {
-                fx += pfx;
-                fy += pfy;
-                ft += pft;
+            fx += pfx;
+            fy += pfy;
+            ft += pft;
+            // SAFETY: m < p.x.len() (read by `state`), the length of both.
+            unsafe {
+                *p.fx.get_unchecked_mut(m) -= pfx;
+                *p.fy.get_unchecked_mut(m) -= pfy;
             }
-            if here {
+            if FRICTION {
+                p.ft[m] += pft;
+            }
+        }
+        // Partners in the next chunk: the reaction goes to a spill slot.
+        if let Some(q) = next {
+            for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
+                let j = j as usize;
+                let partner = state::<FRICTION>(q, j.wrapping_sub(q.c0));
+                let force = pair_with::<FRICTION>(c, f, &own, partner, j, p, e);
+                let (pfx, pfy, pft) = force.unwrap_or((0.0, 0.0, 0.0));
                 if force.is_some() {
-                    let m = j.wrapping_sub(c0);
-                    // SAFETY: m < p.x.len() (read above), the length of both.
-                    unsafe {
-                        *p.fx.get_unchecked_mut(m) -= pfx;
-                        *p.fy.get_unchecked_mut(m) -= pfy;
-                    }
-                    if FRICTION {
-                        p.ft[m] += pft;
-                    }
+                    fx += pfx;
+                    fy += pfy;
+                    ft += pft;
                 }
-            } else {
                 p.spill_x[slot] = -pfx;
                 p.spill_y[slot] = -pfy;
                 if FRICTION {
@@ -509,6 +482,67 @@ fn run_chunk<const FRICTION: bool>(
         finish::<FRICTION>(c, f, p, i, force, &mut sums);
     }
     sums
+}
+
+/// The owner of the pairs being computed: position, m; radius, m; inverse mass, 1/kg;
+/// velocity the forces see, m/s; surface speed of its spin `w r`, m/s.
+struct Own {
+    x: f64,
+    y: f64,
+    r: f64,
+    inv_mass: f64,
+    ux: f64,
+    uy: f64,
+    spin: f64,
+}
+
+/// Grain `m` of part `q`: position, m; velocity the forces see, m/s; spin, rad/s (0
+/// without friction). Called only on parts whose arrays [`run_chunk`] checked to share one
+/// length.
+#[inline(always)]
+fn state<const FRICTION: bool>(q: &Part, m: usize) -> [f64; 5] {
+    let x = q.x[m];
+    let w = if FRICTION { q.uw[m] } else { 0.0 };
+    // SAFETY: m < q.x.len() (the read above), the length of these three slices too.
+    let (y, ux, uy) = unsafe {
+        (
+            *q.y.get_unchecked(m),
+            *q.ux.get_unchecked(m),
+            *q.uy.get_unchecked(m),
+        )
+    };
+    [x, y, ux, uy, w]
+}
+
+/// The pair of `own` and grain `j` (its `state`), entry `e` of part `p`: see
+/// [`StepConst::pair`].
+#[inline(always)]
+fn pair_with<const FRICTION: bool>(
+    c: &StepConst,
+    f: &Fixed,
+    own: &Own,
+    [xj, yj, uxj, uyj, wj]: [f64; 5],
+    j: usize,
+    p: &mut Part,
+    e: usize,
+) -> Option<(f64, f64, f64)> {
+    let (rj, imj) = (f.radius[j], f.inv_mass[j]);
+    let mut none = 0.0;
+    let hist = if FRICTION {
+        &mut p.hist[e - p.e0]
+    } else {
+        &mut none
+    };
+    c.pair::<FRICTION>(
+        xj - own.x,
+        yj - own.y,
+        own.r + rj,
+        own.ux - uxj,
+        own.uy - uyj,
+        own.spin + wj * rj,
+        own.inv_mass + imj,
+        hist,
+    )
 }
 
 /// The deferred grains of an even chunk: their partial force plus the spills of `prev`,
