@@ -1,10 +1,10 @@
-//! The DEM's fused, chunked step (#23's speed work) against a plain reference. On a world
-//! large enough for several chunks (so that pairs cross chunks, spill, and wait for the
-//! chunk before), one step equals a brute-force all-pairs step written out here to
-//! rounding, for the paper's model (frictionless, constant dashpot, forward Euler, drag) and
-//! the full one (friction with history, restitution damping, velocity Verlet, gravity), with
-//! walls and a moving intruder; and many steps, through list rebuilds, give the same bits on
-//! one, two and three threads.
+//! The DEM's fused step (#23's speed work) against a plain reference. One step, on one
+//! thread (one chunk) and on three (several chunks, so that pairs cross chunks), equals a
+//! brute-force all-pairs step written out here to rounding, for the paper's model
+//! (frictionless, constant dashpot, forward Euler, drag) and the full one (friction with
+//! history, restitution damping, velocity Verlet, gravity), with walls and a moving
+//! intruder; and many steps, through list rebuilds, give the same bits on one, two and three
+//! threads (one chunk against several).
 
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use sandjumper_sim::dem::grains::{FREE, Grains, INTRUDER};
@@ -189,14 +189,38 @@ fn reference_step(w: &World) -> Vec<[f64; 8]> {
     out
 }
 
+/// `f` on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 #[test]
-fn one_chunked_step_equals_a_brute_force_step_for_both_models() {
-    for model in [Model::Paper, Model::Full] {
+fn one_step_equals_a_brute_force_step_for_both_models_on_one_and_three_threads() {
+    for (model, threads) in [
+        (Model::Paper, 1),
+        (Model::Paper, 3),
+        (Model::Full, 1),
+        (Model::Full, 3),
+    ] {
+        on_threads(threads, || check_one_step(model, threads));
+    }
+}
+
+fn check_one_step(model: Model, threads: usize) {
+    {
         let mut w = world(model, 3);
-        // What the test claims to exercise: several chunks, pairs spilled across them,
-        // contacts with walls, friction only in the full model.
-        assert!(w.nl.chunks() >= 5, "{} chunks", w.nl.chunks());
-        assert!(w.nl.spills() > 100, "{} spills", w.nl.spills());
+        // What the test claims to exercise: one chunk on one thread; on three, several
+        // chunks and pairs across them; friction only in the full model.
+        if threads == 1 {
+            assert_eq!(w.nl.chunks(), 1);
+        } else {
+            assert!(w.nl.chunks() >= 5, "{} chunks", w.nl.chunks());
+            assert!(w.nl.spills() > 100, "{} cross pairs", w.nl.spills());
+        }
         assert_eq!(w.cfg.law.friction.is_some(), model == Model::Full);
         let want = reference_step(&w);
         let before = by_id(&w);
@@ -237,12 +261,13 @@ fn one_chunked_step_equals_a_brute_force_step_for_both_models() {
 fn many_steps_give_the_same_bits_on_one_two_and_three_threads() {
     for model in [Model::Paper, Model::Full] {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            on_threads(threads, || {
                 let mut w = world(model, 7);
+                let chunks = w.nl.chunks();
+                assert!(
+                    (threads == 1) == (chunks == 1),
+                    "{chunks} chunks on {threads} threads"
+                );
                 let d0 = w.nl.builds;
                 let mut sums = Vec::new();
                 for s in 0..400 {

@@ -10,18 +10,21 @@
 //! per-pair force array. LAMMPS runs the pair force, each fix (gravity, walls, the move of
 //! the intruder, `enforce2d`) and the integrator's two halves as separate passes.
 //!
-//! **Parallel, the same bits on any thread count.** The slots are cut into chunks of whole
-//! cell rows (see [`super::neighbours`]); a pair's partner lies in the owner's chunk or the
-//! next. A pair reaching into the next chunk writes its reaction to a spill slot instead.
-//! Even chunks run first, in parallel: a grain that gathers spills from the chunk before
-//! (its first row, about) is left for later with its partial force. Odd chunks run next:
-//! their spills from the even chunk before are ready, so every grain finishes in turn; the
-//! even chunk after them still holds its first row unintegrated, as they need. Last, the
-//! even chunks' deferred grains gather their spills and integrate. Each grain's force is
-//! summed in one fixed order, `((scattered from lower slots of its chunk) + own pairs) +
-//! spills`, and per-chunk sums (forces on the intruder and the floor) are added in chunk
-//! order: the result depends on the chunks, which depend on the state alone, never on the
-//! threads.
+//! Grains farther than a skin from every wall at the list's build skip the walls (they
+//! cannot reach one before the next build), and the list is rebuilt when the sum over the
+//! steps of the largest displacement in each passes half the skin.
+//!
+//! **Parallel, the same bits on any thread count.** On several threads the slots are cut
+//! into chunks of whole cell rows, about two a thread (see [`super::neighbours`]); a pair's
+//! partner lies in the owner's chunk or the next. First, in parallel, the pairs that cross
+//! into the next chunk are computed from the state before the step. Then every chunk runs
+//! the fused pass on its own, in parallel: its first row takes the reactions of the cross
+//! pairs from the chunk before, before anything else, and its owners take their own cross
+//! pairs' forces after their pairs within the chunk. So every grain's force is summed in
+//! one order whatever the chunks: the reactions of the pairs below it, in increasing slot
+//! order, then its own pairs, in entry order. The sums over grains (forces on the intruder
+//! and the floor) are added in slot order after the pass. One thread runs one chunk (no
+//! cross pairs), and gets the same bits as any number of threads (tested on 1, 2 and 3).
 //!
 //! Integrators:
 //! - forward Euler (Supplementary I): `x' = x + v dt`, `v' = v + a(x, v) dt`;
@@ -155,41 +158,68 @@ pub(super) fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
     rule.at(1.0 / inv_mass_sum)
 }
 
-/// Force accumulators reused from step to step: per grain (zero between steps) and per
-/// spill slot.
+/// Force accumulators reused from step to step: per grain (zero between steps), per
+/// cross pair, and the per-grain forces on the intruder and the floor that the step's sums
+/// add up in slot order.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scratch {
     fx: Vec<f64>,
     fy: Vec<f64>,
     ft: Vec<f64>,
-    spill_x: Vec<f64>,
-    spill_y: Vec<f64>,
-    spill_t: Vec<f64>,
+    cross_x: Vec<f64>,
+    cross_y: Vec<f64>,
+    cross_t: Vec<f64>,
+    cross_hit: Vec<bool>,
+    /// Force of the grains on each intruder grain, N (x, y).
+    out_x: Vec<f64>,
+    out_y: Vec<f64>,
+    /// Force of each grain on the floor, N.
+    out_floor: Vec<f64>,
+    /// Slots of the intruder grains and of the grains near a wall, increasing.
+    prescribed: Vec<u32>,
+    near_wall: Vec<u32>,
 }
 
 impl Scratch {
-    /// Sized for `n` grains and `spills` spill slots, zeroed (`friction`: with the
-    /// tangential sums).
-    pub fn sized(n: usize, spills: usize, friction: bool) -> Self {
+    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others) and `cross` cross
+    /// pairs, zeroed (`friction`: with the tangential sums).
+    pub fn sized(class: &[u8], cross: usize, friction: bool) -> Self {
+        let n = class.len();
         let t = |len| if friction { vec![0.0; len] } else { Vec::new() };
+        let slots = |c: u8| {
+            (0..n as u32)
+                .filter(|&i| class[i as usize] == c)
+                .collect::<Vec<u32>>()
+        };
         Self {
             fx: vec![0.0; n],
             fy: vec![0.0; n],
             ft: t(n),
-            spill_x: vec![0.0; spills],
-            spill_y: vec![0.0; spills],
-            spill_t: t(spills),
+            cross_x: vec![0.0; cross],
+            cross_y: vec![0.0; cross],
+            cross_t: t(cross),
+            cross_hit: vec![false; cross],
+            out_x: vec![0.0; n],
+            out_y: vec![0.0; n],
+            out_floor: vec![0.0; n],
+            prescribed: slots(PRESCRIBED),
+            near_wall: slots(NEAR_WALL),
         }
     }
 
     /// Bytes per grain for `n` grains.
     pub fn bytes_per_grain(&self, n: usize) -> f64 {
-        8.0 * (self.fx.capacity()
+        (8 * (self.fx.capacity()
             + self.fy.capacity()
             + self.ft.capacity()
-            + self.spill_x.capacity()
-            + self.spill_y.capacity()
-            + self.spill_t.capacity()) as f64
+            + self.cross_x.capacity()
+            + self.cross_y.capacity()
+            + self.cross_t.capacity()
+            + self.out_x.capacity()
+            + self.out_y.capacity()
+            + self.out_floor.capacity())
+            + self.cross_hit.capacity()
+            + 4 * (self.prescribed.capacity() + self.near_wall.capacity())) as f64
             / n.max(1) as f64
     }
 }
@@ -206,8 +236,8 @@ struct Fixed<'a> {
     spill_in: &'a [u32],
 }
 
-/// One chunk's grains (slots `c0..c1`), entries (from `e0`) and spill slots (from `s0`):
-/// the parts of the arrays its grains own.
+/// One chunk's grains (slots `c0..c1`) and entries (from `e0`): the parts of the arrays its
+/// grains own, and its cross pairs' forces (slots from `s0`).
 struct Part<'a> {
     c0: usize,
     c1: usize,
@@ -224,11 +254,19 @@ struct Part<'a> {
     fx: &'a mut [f64],
     fy: &'a mut [f64],
     ft: &'a mut [f64],
+    out_x: &'a mut [f64],
+    out_y: &'a mut [f64],
+    out_floor: &'a mut [f64],
     wall_hist: &'a mut [[f64; 4]],
     hist: &'a mut [f64],
-    spill_x: &'a mut [f64],
-    spill_y: &'a mut [f64],
-    spill_t: &'a mut [f64],
+}
+
+/// The forces of the cross pairs, by slot (read by every chunk in the second phase).
+struct Cross<'a> {
+    x: &'a [f64],
+    y: &'a [f64],
+    t: &'a [f64],
+    hit: &'a [bool],
 }
 
 /// `v` cut at the consecutive offsets `cuts` (first 0, last `v.len()`); an empty `v` (an
@@ -259,7 +297,7 @@ pub(super) fn advance(w: &mut World) {
     } = &mut w.nl;
     let chunks: Vec<usize> = chunk_start.iter().map(|&s| s as usize).collect();
     let entries: Vec<usize> = chunks.iter().map(|&s| start[s] as usize).collect();
-    let spills: Vec<usize> = spill_base.iter().map(|&s| s as usize).collect();
+    let slots: Vec<usize> = spill_base.iter().map(|&s| s as usize).collect();
     let g = &mut w.g;
     let fixed = Fixed {
         radius: &g.radius,
@@ -272,32 +310,75 @@ pub(super) fn advance(w: &mut World) {
         spill_in,
     };
     let s = &mut w.scratch;
+    let u = &mut w.u;
+    let nchunks = chunks.len() - 1;
+    // Phase 1 (only with several chunks): the cross pairs, from the state before the step.
+    if nchunks > 1 {
+        let state = State {
+            x: &g.x,
+            y: &g.y,
+            ux: &u.x,
+            uy: &u.y,
+            uw: &u.w,
+        };
+        let pieces: Vec<_> = cut(hist, &entries)
+            .into_iter()
+            .zip(cut(&mut s.cross_x, &slots))
+            .zip(cut(&mut s.cross_y, &slots))
+            .zip(cut(&mut s.cross_t, &slots))
+            .zip(cut(&mut s.cross_hit, &slots))
+            .collect();
+        let run = if c.friction {
+            cross_pairs::<true>
+        } else {
+            cross_pairs::<false>
+        };
+        let one = |(k, ((((h, cx), cy), ct), hit)): (usize, _)| {
+            run(
+                &c,
+                &fixed,
+                &state,
+                (chunks[k], chunks[k + 1], entries[k]),
+                h,
+                [cx, cy, ct],
+                hit,
+            )
+        };
+        pieces.into_par_iter().enumerate().for_each(one);
+    }
+    // Phase 2: every chunk on its own.
+    let cross = Cross {
+        x: &s.cross_x,
+        y: &s.cross_y,
+        t: &s.cross_t,
+        hit: &s.cross_hit,
+    };
     let mut pieces = (
         cut(&mut g.x, &chunks).into_iter(),
         cut(&mut g.y, &chunks).into_iter(),
         cut(&mut g.vx, &chunks).into_iter(),
         cut(&mut g.vy, &chunks).into_iter(),
         cut(&mut g.w, &chunks).into_iter(),
-        cut(&mut w.u.x, &chunks).into_iter(),
-        cut(&mut w.u.y, &chunks).into_iter(),
-        cut(&mut w.u.w, &chunks).into_iter(),
+        cut(&mut u.x, &chunks).into_iter(),
+        cut(&mut u.y, &chunks).into_iter(),
+        cut(&mut u.w, &chunks).into_iter(),
         cut(&mut s.fx, &chunks).into_iter(),
         cut(&mut s.fy, &chunks).into_iter(),
         cut(&mut s.ft, &chunks).into_iter(),
+        cut(&mut s.out_x, &chunks).into_iter(),
+        cut(&mut s.out_y, &chunks).into_iter(),
+        cut(&mut s.out_floor, &chunks).into_iter(),
         cut(&mut w.wall_hist, &chunks).into_iter(),
         cut(hist, &entries).into_iter(),
-        cut(&mut s.spill_x, &spills).into_iter(),
-        cut(&mut s.spill_y, &spills).into_iter(),
-        cut(&mut s.spill_t, &spills).into_iter(),
     );
-    let (mut even, mut odd) = (Vec::new(), Vec::new());
-    for k in 0..chunks.len() - 1 {
+    let mut parts = Vec::with_capacity(nchunks);
+    for k in 0..nchunks {
         let p = &mut pieces;
-        let part = Part {
+        parts.push(Part {
             c0: chunks[k],
             c1: chunks[k + 1],
             e0: entries[k],
-            s0: spills[k],
+            s0: slots[k],
             x: p.0.next().unwrap_or_default(),
             y: p.1.next().unwrap_or_default(),
             vx: p.2.next().unwrap_or_default(),
@@ -309,102 +390,141 @@ pub(super) fn advance(w: &mut World) {
             fx: p.8.next().unwrap_or_default(),
             fy: p.9.next().unwrap_or_default(),
             ft: p.10.next().unwrap_or_default(),
-            wall_hist: p.11.next().unwrap_or_default(),
-            hist: p.12.next().unwrap_or_default(),
-            spill_x: p.13.next().unwrap_or_default(),
-            spill_y: p.14.next().unwrap_or_default(),
-            spill_t: p.15.next().unwrap_or_default(),
-        };
-        if k % 2 == 0 {
-            even.push(part);
-        } else {
-            odd.push(part);
-        }
+            out_x: p.11.next().unwrap_or_default(),
+            out_y: p.12.next().unwrap_or_default(),
+            out_floor: p.13.next().unwrap_or_default(),
+            wall_hist: p.14.next().unwrap_or_default(),
+            hist: p.15.next().unwrap_or_default(),
+        });
     }
-    let f = &fixed;
-    let c = &c;
-    // Even chunks (chunk 2m reads the state of odd chunk m's first row, untouched yet).
     let run = if c.friction {
         run_chunk::<true>
     } else {
         run_chunk::<false>
     };
-    let late = if c.friction {
-        finish_deferred::<true>
+    let max_step2 = if nchunks == 1 {
+        run(&c, &fixed, &mut parts[0], &cross)
     } else {
-        finish_deferred::<false>
+        parts
+            .par_iter_mut()
+            .map(|p| run(&c, &fixed, p, &cross))
+            .reduce(|| 0.0, f64::max)
     };
-    let sums_even: Vec<StepSums> = even
-        .par_iter_mut()
-        .enumerate()
-        .map(|(m, p)| run(c, f, p, odd.get(m), None, m > 0))
-        .collect();
-    // Odd chunks (chunk 2m + 1 gathers the spills of even chunk m and reads the state of
-    // even chunk m + 1's first row, deferred).
-    let sums_odd: Vec<StepSums> = odd
-        .par_iter_mut()
-        .enumerate()
-        .map(|(m, p)| run(c, f, p, even.get(m + 1), Some(&even[m]), false))
-        .collect();
-    // The even chunks' deferred grains.
-    let sums_late: Vec<StepSums> = even
-        .par_iter_mut()
-        .enumerate()
-        .skip(1)
-        .map(|(m, p)| late(c, f, p, &odd[m - 1]))
-        .collect();
-    let mut total = StepSums::default();
-    for k in 0..chunks.len() - 1 {
-        let m = k / 2;
-        if k % 2 == 0 {
-            total = total.add(&sums_even[m]);
-            if m > 0 {
-                total = total.add(&sums_late[m - 1]);
-            }
-        } else {
-            total = total.add(&sums_odd[m]);
-        }
+    // The sums, in slot order whatever the chunks.
+    let mut total = StepSums {
+        max_step2,
+        ..StepSums::default()
+    };
+    for &i in &s.prescribed {
+        total.intruder_fx_n += s.out_x[i as usize];
+        total.intruder_fy_n += s.out_y[i as usize];
+    }
+    for &i in &s.near_wall {
+        total.floor_n += s.out_floor[i as usize];
     }
     w.drift_m += total.max_step2.sqrt();
     w.rebuild_due = w.drift_m > 0.5 * w.cfg.skin_m;
     w.last = total;
 }
 
-/// One chunk's grains in slot order: pairs (scattered forward, or spilled into the next
-/// chunk), then, unless `defer` and the grain gathers spills, walls and integration
-/// (`prev`: the chunk before, whose spills are ready). `next`: the chunk after, whose first
-/// row partners read.
-fn run_chunk<const FRICTION: bool>(
+/// Positions and the velocities the forces see, every grain, before the step.
+struct State<'a> {
+    x: &'a [f64],
+    y: &'a [f64],
+    ux: &'a [f64],
+    uy: &'a [f64],
+    uw: &'a [f64],
+}
+
+/// Phase 1 for the chunk of slots `c0..c1` whose entries start at `e0`: each pair whose
+/// partner lies in the next chunk, in entry order: the force on the owner (x, y,
+/// tangential) into `out`, whether the grains touch into `hit`, and its history (`hist`,
+/// the chunk's entries).
+fn cross_pairs<const FRICTION: bool>(
     c: &StepConst,
     f: &Fixed,
-    p: &mut Part,
-    next: Option<&Part>,
-    prev: Option<&Part>,
-    defer: bool,
-) -> StepSums {
-    let mut sums = StepSums::default();
-    let (c0, c1) = (p.c0, p.c1);
+    s: &State,
+    (c0, c1, e0): (usize, usize, usize),
+    hist: &mut [f64],
+    out: [&mut [f64]; 3],
+    hit: &mut [bool],
+) {
+    let [ox, oy, ot] = out;
     let mut slot = 0usize;
+    for i in c0..c1 {
+        let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
+        let js = &f.j[e_lo..e_hi];
+        let n_here = js.iter().filter(|&&j| (j as usize) < c1).count();
+        if n_here == js.len() {
+            continue;
+        }
+        let own = Own {
+            x: s.x[i],
+            y: s.y[i],
+            r: f.radius[i],
+            inv_mass: f.inv_mass[i],
+            ux: s.ux[i],
+            uy: s.uy[i],
+            spin: if FRICTION { s.uw[i] * f.radius[i] } else { 0.0 },
+        };
+        for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
+            let j = j as usize;
+            let wj = if FRICTION { s.uw[j] } else { 0.0 };
+            let partner = [s.x[j], s.y[j], s.ux[j], s.uy[j], wj];
+            let mut none = 0.0;
+            let h = if FRICTION {
+                &mut hist[e - e0]
+            } else {
+                &mut none
+            };
+            let force = pair_with::<FRICTION>(c, f, &own, partner, j, h);
+            let (fx, fy, ft) = force.unwrap_or((0.0, 0.0, 0.0));
+            ox[slot] = fx;
+            oy[slot] = fy;
+            if FRICTION {
+                ot[slot] = ft;
+            }
+            hit[slot] = force.is_some();
+            slot += 1;
+        }
+    }
+}
+
+/// Phase 2 for one chunk: its grains in slot order, each one's pairs (those within the
+/// chunk computed here, their reactions scattered forward; those across into the next
+/// chunk read from phase 1), then walls and integration. The grains of its first row take
+/// the reactions of the chunk before's cross pairs first. Returns the largest squared
+/// displacement in the step, m^2.
+///
+/// Every grain's force is summed in one order, whatever the chunks: the reactions of the
+/// pairs below it in increasing slot order (those of the chunk before come from its cross
+/// pairs, before any of its own chunk), then its own pairs in entry order.
+fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross: &Cross) -> f64 {
+    let mut max_step2 = 0.0;
+    let (c0, c1) = (p.c0, p.c1);
     // Every array of a part covers its grains (cut at the same bounds); the unchecked
     // partner reads below rely on it.
-    let len = c1 - c0;
-    let n = f.radius.len();
+    let len = p.x.len();
     assert!(
-        [
-            p.x.len(),
-            p.y.len(),
-            p.ux.len(),
-            p.uy.len(),
-            p.fx.len(),
-            p.fy.len()
-        ] == [len; 6]
-            && f.inv_mass.len() == n
-            && next.is_none_or(|q| {
-                let l = q.c1 - q.c0;
-                [q.x.len(), q.y.len(), q.ux.len(), q.uy.len()] == [l; 4]
-            }),
+        [p.y.len(), p.ux.len(), p.uy.len(), p.fx.len(), p.fy.len()] == [len; 5],
         "a chunk's arrays disagree in length"
     );
+    // The reactions of the chunk before's cross pairs, before anything else.
+    for i in c0..c1 {
+        let incoming = f.spill_in_start[i] as usize..f.spill_in_start[i + 1] as usize;
+        let l = i - c0;
+        for &slot in &f.spill_in[incoming] {
+            let slot = slot as usize;
+            if cross.hit[slot] {
+                p.fx[l] -= cross.x[slot];
+                p.fy[l] -= cross.y[slot];
+                if FRICTION {
+                    p.ft[l] += cross.t[slot];
+                }
+            }
+        }
+    }
+    let mut slot = p.s0;
     for i in c0..c1 {
         let l = i - c0;
         let (xi, yi, ri, imi) = (p.x[l], p.y[l], f.radius[i], f.inv_mass[i]);
@@ -431,7 +551,13 @@ fn run_chunk<const FRICTION: bool>(
             let j = j as usize;
             let m = j.wrapping_sub(c0);
             let partner = state::<FRICTION>(p, m);
-            let Some((pfx, pfy, pft)) = pair_with::<FRICTION>(c, f, &own, partner, j, p, e) else {
+            let mut none = 0.0;
+            let h = if FRICTION {
+                &mut p.hist[e - p.e0]
+            } else {
+                &mut none
+            };
+            let Some((pfx, pfy, pft)) = pair_with::<FRICTION>(c, f, &own, partner, j, h) else {
                 continue;
             };
             fx += pfx;
@@ -446,42 +572,23 @@ fn run_chunk<const FRICTION: bool>(
                 p.ft[m] += pft;
             }
         }
-        // Partners in the next chunk: the reaction goes to a spill slot.
-        if let Some(q) = next {
-            for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
-                let j = j as usize;
-                let partner = state::<FRICTION>(q, j.wrapping_sub(q.c0));
-                let force = pair_with::<FRICTION>(c, f, &own, partner, j, p, e);
-                let (pfx, pfy, pft) = force.unwrap_or((0.0, 0.0, 0.0));
-                if force.is_some() {
-                    fx += pfx;
-                    fy += pfy;
-                    ft += pft;
-                }
-                p.spill_x[slot] = -pfx;
-                p.spill_y[slot] = -pfy;
+        // Partners in the next chunk: computed in phase 1.
+        for _ in n_here..js.len() {
+            if cross.hit[slot] {
+                fx += cross.x[slot];
+                fy += cross.y[slot];
                 if FRICTION {
-                    p.spill_t[slot] = pft;
+                    ft += cross.t[slot];
                 }
-                slot += 1;
             }
+            slot += 1;
         }
-        let incoming = f.spill_in_start[i] as usize..f.spill_in_start[i + 1] as usize;
-        if defer && !incoming.is_empty() {
-            p.fx[l] = fx;
-            p.fy[l] = fy;
-            if FRICTION {
-                p.ft[l] = ft;
-            }
-            continue;
+        let step2 = finish::<FRICTION>(c, f, p, i, (fx, fy, ft));
+        if step2 > max_step2 {
+            max_step2 = step2;
         }
-        let mut force = (fx, fy, ft);
-        if let Some(q) = prev {
-            force = add_spills::<FRICTION>(f, q, i, force);
-        }
-        finish::<FRICTION>(c, f, p, i, force, &mut sums);
     }
-    sums
+    max_step2
 }
 
 /// The owner of the pairs being computed: position, m; radius, m; inverse mass, 1/kg;
@@ -514,7 +621,7 @@ fn state<const FRICTION: bool>(q: &Part, m: usize) -> [f64; 5] {
     [x, y, ux, uy, w]
 }
 
-/// The pair of `own` and grain `j` (its `state`), entry `e` of part `p`: see
+/// The pair of `own` and grain `j` (its `state`) with slip history `hist`: see
 /// [`StepConst::pair`].
 #[inline(always)]
 fn pair_with<const FRICTION: bool>(
@@ -523,16 +630,9 @@ fn pair_with<const FRICTION: bool>(
     own: &Own,
     [xj, yj, uxj, uyj, wj]: [f64; 5],
     j: usize,
-    p: &mut Part,
-    e: usize,
+    hist: &mut f64,
 ) -> Option<(f64, f64, f64)> {
     let (rj, imj) = (f.radius[j], f.inv_mass[j]);
-    let mut none = 0.0;
-    let hist = if FRICTION {
-        &mut p.hist[e - p.e0]
-    } else {
-        &mut none
-    };
     c.pair::<FRICTION>(
         xj - own.x,
         yj - own.y,
@@ -545,52 +645,11 @@ fn pair_with<const FRICTION: bool>(
     )
 }
 
-/// The deferred grains of an even chunk: their partial force plus the spills of `prev`,
-/// then walls and integration.
-fn finish_deferred<const FRICTION: bool>(
-    c: &StepConst,
-    f: &Fixed,
-    p: &mut Part,
-    prev: &Part,
-) -> StepSums {
-    let mut sums = StepSums::default();
-    for i in p.c0..p.c1 {
-        let incoming = f.spill_in_start[i] as usize..f.spill_in_start[i + 1] as usize;
-        if incoming.is_empty() {
-            continue;
-        }
-        let l = i - p.c0;
-        let ft = if FRICTION { p.ft[l] } else { 0.0 };
-        let force = add_spills::<FRICTION>(f, prev, i, (p.fx[l], p.fy[l], ft));
-        finish::<FRICTION>(c, f, p, i, force, &mut sums);
-    }
-    sums
-}
-
-/// `force` (x, y, tangential sum) plus the spills grain `i` gathers from chunk `prev`, in
-/// slot order.
-#[inline(always)]
-fn add_spills<const FRICTION: bool>(
-    f: &Fixed,
-    prev: &Part,
-    i: usize,
-    (mut fx, mut fy, mut ft): (f64, f64, f64),
-) -> (f64, f64, f64) {
-    let incoming = f.spill_in_start[i] as usize..f.spill_in_start[i + 1] as usize;
-    for &s in &f.spill_in[incoming] {
-        let s = s as usize - prev.s0;
-        fx += prev.spill_x[s];
-        fy += prev.spill_y[s];
-        if FRICTION {
-            ft += prev.spill_t[s];
-        }
-    }
-    (fx, fy, ft)
-}
-
 /// Grain `i` (of chunk `p`) with its pair force `(fx, fy)` and tangential sum `ft`: clear
 /// its accumulators, add walls, drag and gravity, integrate it in place (an intruder grain
-/// is put where its trajectory says), and add to the chunk's sums.
+/// is put where its trajectory says), and note its force on the floor (or, for an intruder
+/// grain, the grains' force on it) for the step's sums. Returns its squared displacement,
+/// m^2.
 #[inline(always)]
 fn finish<const FRICTION: bool>(
     c: &StepConst,
@@ -598,8 +657,7 @@ fn finish<const FRICTION: bool>(
     p: &mut Part,
     i: usize,
     force: (f64, f64, f64),
-    s: &mut StepSums,
-) {
+) -> f64 {
     let (mut fx, mut fy, ft_sum) = force;
     let l = i - p.c0;
     p.fx[l] = 0.0;
@@ -615,8 +673,7 @@ fn finish<const FRICTION: bool>(
     }
     let class = f.class[i];
     if class == PRESCRIBED {
-        s.intruder_fx_n += fx;
-        s.intruder_fy_n += fy;
+        (p.out_x[l], p.out_y[l]) = (fx, fy);
         (p.vx[l], p.ux[l], p.w[l], p.uw[l]) = (0.0, 0.0, 0.0, 0.0);
         if let Some((bottom, v)) = c.intruder {
             (p.y[l], p.vy[l]) = (bottom + ri, v);
@@ -625,12 +682,11 @@ fn finish<const FRICTION: bool>(
         }
         p.uy[l] = p.vy[l];
         let dy = p.y[l] - yi;
-        if dy * dy > s.max_step2 {
-            s.max_step2 = dy * dy;
-        }
+        dy * dy
     } else {
         // Walls (only for grains that were within a skin of one at the build).
         if class == NEAR_WALL {
+            p.out_floor[l] = 0.0;
             // Walls: (overlap, outward normal from grain to wall, index).
             let walls = [
                 c.walls.floor_m.map(|w| (ri - (yi - w), 0.0, -1.0)),
@@ -659,7 +715,7 @@ fn finish<const FRICTION: bool>(
                 fx -= fn_ * wnx;
                 fy -= fn_ * wny;
                 if kw == 0 {
-                    s.floor_n += fn_;
+                    p.out_floor[l] = fn_;
                 }
                 if FRICTION {
                     let (tx, ty) = (-wny, wnx);
@@ -685,12 +741,7 @@ fn finish<const FRICTION: bool>(
         };
         p.x[l] = xi + dx;
         p.y[l] = yi + dy;
-        // A plain comparison, not `f64::max` (whose NaN rule costs a dependent select per
-        // grain); a NaN never wins either way.
         let step2 = dx * dx + dy * dy;
-        if step2 > s.max_step2 {
-            s.max_step2 = step2;
-        }
         (p.vx[l], p.vy[l]) = (nvx, nvy);
         // Without friction there is no torque: the spin stays as it is (and its two arrays
         // are neither read nor written).
@@ -700,5 +751,6 @@ fn finish<const FRICTION: bool>(
             p.uw[l] = if c.euler { nw } else { nw + al * (0.5 * c.dt) };
             p.w[l] = nw;
         }
+        step2
     }
 }

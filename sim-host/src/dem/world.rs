@@ -71,16 +71,6 @@ pub struct StepSums {
     pub(super) max_step2: f64,
 }
 
-impl StepSums {
-    pub(super) fn add(mut self, o: &Self) -> Self {
-        self.intruder_fx_n += o.intruder_fx_n;
-        self.intruder_fy_n += o.intruder_fy_n;
-        self.floor_n += o.floor_n;
-        self.max_step2 = self.max_step2.max(o.max_step2);
-        self
-    }
-}
-
 /// A DEM world.
 #[derive(Clone, Debug)]
 pub struct World {
@@ -160,10 +150,13 @@ impl World {
 
     /// Rebuild the neighbour list now (reorders the grains).
     pub fn rebuild(&mut self) {
+        // Chunks for the threads of the pool the step runs on: the results do not depend
+        // on the chunks (see `super::step`), only the speed does.
         let perm = self.nl.rebuild(
             &mut self.g,
             self.cfg.skin_m,
             self.cfg.law.friction.is_some(),
+            rayon::current_num_threads(),
         );
         permute(&mut self.wall_hist, &perm);
         if self.u.x.len() == perm.len() {
@@ -171,11 +164,6 @@ impl World {
             permute(&mut self.u.y, &perm);
             permute(&mut self.u.w, &perm);
         }
-        self.scratch = Scratch::sized(
-            self.g.len(),
-            self.nl.spills(),
-            self.cfg.law.friction.is_some(),
-        );
         let (g, w, reach) = (&self.g, self.cfg.walls, self.cfg.skin_m);
         self.class = (0..g.len())
             .map(|i| {
@@ -193,6 +181,11 @@ impl World {
                 }
             })
             .collect();
+        self.scratch = Scratch::sized(
+            &self.class,
+            self.nl.spills(),
+            self.cfg.law.friction.is_some(),
+        );
         self.walls_at_build = w;
         self.rebuild_due = false;
         self.drift_m = 0.0;
