@@ -219,7 +219,11 @@ fn check_one_step(model: Model, threads: usize) {
             assert_eq!(w.nl.chunks(), 1);
         } else {
             assert!(w.nl.chunks() >= 5, "{} chunks", w.nl.chunks());
-            assert!(w.nl.spills() > 100, "{} cross pairs", w.nl.spills());
+            assert!(
+                w.nl.cross_pairs() > 100,
+                "{} cross pairs",
+                w.nl.cross_pairs()
+            );
         }
         assert_eq!(w.cfg.law.friction.is_some(), model == Model::Full);
         let want = reference_step(&w);

@@ -10,9 +10,10 @@
 //! (see [`super::step`]). For that to run in parallel with the same bits on any thread
 //! count, the slots are cut into **chunks** of whole cell rows (`chunk_start`): a partner
 //! lies in its owner's row or the next one, so in the owner's chunk or the next chunk.
-//! Entries whose partner lies in the next chunk are *spills*: their force goes to a spill
-//! slot (numbered in entry order, chunk `k`'s are `spill_base[k]..spill_base[k + 1]`) that
-//! the partner gathers (`spill_in`, in increasing slot order).
+//! Entries whose partner lies in the next chunk are *cross pairs*: the step computes them
+//! first, into cross slots (numbered in entry order, chunk `k`'s are
+//! `cross_base[k]..cross_base[k + 1]`) that the partner gathers (`cross_in`, in increasing
+//! slot order).
 
 use super::grains::Grains;
 
@@ -25,12 +26,12 @@ pub struct NeighbourList {
     pub j: Vec<u32>,
     /// Chunk `k` holds slots `chunk_start[k]..chunk_start[k + 1]` (whole cell rows).
     pub chunk_start: Vec<u32>,
-    /// Chunk `k`'s spill slots are `spill_base[k]..spill_base[k + 1]`.
-    pub spill_base: Vec<u32>,
-    /// Grain `j` gathers the spill slots `spill_in[spill_in_start[j]..spill_in_start[j + 1]]`.
-    pub spill_in_start: Vec<u32>,
-    /// Spill slots by receiving grain, in increasing slot order.
-    pub spill_in: Vec<u32>,
+    /// Chunk `k`'s cross slots are `cross_base[k]..cross_base[k + 1]`.
+    pub cross_base: Vec<u32>,
+    /// Grain `j` gathers the cross slots `cross_in[cross_in_start[j]..cross_in_start[j + 1]]`.
+    pub cross_in_start: Vec<u32>,
+    /// Cross slots by receiving grain, in increasing slot order.
+    pub cross_in: Vec<u32>,
     /// Tangential history of each entry, m (empty when friction is off).
     pub hist: Vec<f64>,
     /// Skin, m.
@@ -192,29 +193,29 @@ impl NeighbourList {
         if chunk_start.len() == 1 {
             chunk_start.push(n as u32);
         }
-        // Spills: entries whose partner lies beyond the owner's chunk (always the next one).
-        let mut spill_base = vec![0u32];
-        let mut spill_to: Vec<u32> = Vec::new();
+        // Cross pairs: entries whose partner lies beyond the owner's chunk (always the next one).
+        let mut cross_base = vec![0u32];
+        let mut cross_to: Vec<u32> = Vec::new();
         for c in chunk_start.windows(2) {
             let (c0, c1) = (c[0] as usize, c[1] as usize);
             for &j in &js[start[c0] as usize..start[c1] as usize] {
                 if j as usize >= c1 {
-                    spill_to.push(j);
+                    cross_to.push(j);
                 }
             }
-            spill_base.push(spill_to.len() as u32);
+            cross_base.push(cross_to.len() as u32);
         }
-        let mut spill_in_start = vec![0u32; n + 1];
-        for &j in &spill_to {
-            spill_in_start[j as usize + 1] += 1;
+        let mut cross_in_start = vec![0u32; n + 1];
+        for &j in &cross_to {
+            cross_in_start[j as usize + 1] += 1;
         }
         for k in 0..n {
-            spill_in_start[k + 1] += spill_in_start[k];
+            cross_in_start[k + 1] += cross_in_start[k];
         }
-        let mut fill: Vec<u32> = spill_in_start[..n].to_vec();
-        let mut spill_in = vec![0u32; spill_to.len()];
-        for (slot, &j) in spill_to.iter().enumerate() {
-            spill_in[fill[j as usize] as usize] = slot as u32;
+        let mut fill: Vec<u32> = cross_in_start[..n].to_vec();
+        let mut cross_in = vec![0u32; cross_to.len()];
+        for (slot, &j) in cross_to.iter().enumerate() {
+            cross_in[fill[j as usize] as usize] = slot as u32;
             fill[j as usize] += 1;
         }
         let mut hist = Vec::new();
@@ -242,9 +243,9 @@ impl NeighbourList {
             start,
             j: js,
             chunk_start,
-            spill_base,
-            spill_in_start,
-            spill_in,
+            cross_base,
+            cross_in_start,
+            cross_in,
             hist,
             skin_m,
             builds: old.builds + 1,
@@ -299,20 +300,20 @@ impl NeighbourList {
         self.chunk_start.len().saturating_sub(1)
     }
 
-    /// Number of spill slots.
-    pub fn spills(&self) -> usize {
-        self.spill_in.len()
+    /// Number of cross pairs (entries whose partner lies in the next chunk).
+    pub fn cross_pairs(&self) -> usize {
+        self.cross_in.len()
     }
 
-    /// Bytes held per grain (list, chunks, spill index, history), at the current fill.
+    /// Bytes held per grain (list, chunks, cross-pair index, history), at the current fill.
     pub fn bytes_per_grain(&self) -> f64 {
         let n = self.start.len().saturating_sub(1).max(1) as f64;
         (4.0 * (self.start.len()
             + self.j.capacity()
             + self.chunk_start.len()
-            + self.spill_base.len()
-            + self.spill_in_start.len()
-            + self.spill_in.capacity()) as f64
+            + self.cross_base.len()
+            + self.cross_in_start.len()
+            + self.cross_in.capacity()) as f64
             + 8.0 * self.hist.capacity() as f64)
             / n
     }

@@ -150,11 +150,30 @@ impl StepConst {
     }
 }
 
+/// The pair of entry `e` (owner `i`) of `w`'s list at its current state, as the next step
+/// would compute it (the force on `i`, N, and the tangential force; `None` without
+/// contact); `w` is left as it is (the slip history is read, not advanced).
+pub(super) fn pair_now(w: &World, c: &StepConst, i: usize, e: usize) -> Option<(f64, f64, f64)> {
+    let (g, u) = (&w.g, &w.u);
+    let j = w.nl.j[e] as usize;
+    let mut hist = w.nl.hist.get(e).copied().unwrap_or(0.0);
+    let (dx, dy) = (g.x[j] - g.x[i], g.y[j] - g.y[i]);
+    let rsum = g.radius[i] + g.radius[j];
+    let (rvx, rvy) = (u.x[i] - u.x[j], u.y[i] - u.y[j]);
+    let spin = u.w[i] * g.radius[i] + u.w[j] * g.radius[j];
+    let ims = g.inv_mass[i] + g.inv_mass[j];
+    if c.friction {
+        c.pair::<true>(dx, dy, rsum, rvx, rvy, spin, ims, &mut hist)
+    } else {
+        c.pair::<false>(dx, dy, rsum, rvx, rvy, spin, ims, &mut hist)
+    }
+}
+
 /// `gamma_n` for a pair whose inverse masses sum to `inv_mass_sum` (1/kg). Kept out of
 /// line: inlined, the compiler hoists its division and square root out of the branch that
 /// needs them and pays them for every pair even when `gamma_n` is a constant.
 #[inline(never)]
-pub(super) fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
+fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
     rule.at(1.0 / inv_mass_sum)
 }
 
@@ -232,8 +251,8 @@ struct Fixed<'a> {
     class: &'a [u8],
     start: &'a [u32],
     j: &'a [u32],
-    spill_in_start: &'a [u32],
-    spill_in: &'a [u32],
+    cross_in_start: &'a [u32],
+    cross_in: &'a [u32],
 }
 
 /// One chunk's grains (slots `c0..c1`) and entries (from `e0`): the parts of the arrays its
@@ -289,15 +308,15 @@ pub(super) fn advance(w: &mut World) {
         start,
         j,
         chunk_start,
-        spill_base,
-        spill_in_start,
-        spill_in,
+        cross_base,
+        cross_in_start,
+        cross_in,
         hist,
         ..
     } = &mut w.nl;
     let chunks: Vec<usize> = chunk_start.iter().map(|&s| s as usize).collect();
     let entries: Vec<usize> = chunks.iter().map(|&s| start[s] as usize).collect();
-    let slots: Vec<usize> = spill_base.iter().map(|&s| s as usize).collect();
+    let slots: Vec<usize> = cross_base.iter().map(|&s| s as usize).collect();
     let g = &mut w.g;
     let fixed = Fixed {
         radius: &g.radius,
@@ -306,8 +325,8 @@ pub(super) fn advance(w: &mut World) {
         class: &w.class,
         start,
         j,
-        spill_in_start,
-        spill_in,
+        cross_in_start,
+        cross_in,
     };
     let s = &mut w.scratch;
     let u = &mut w.u;
@@ -454,7 +473,7 @@ fn cross_pairs<const FRICTION: bool>(
     for i in c0..c1 {
         let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
         let js = &f.j[e_lo..e_hi];
-        let n_here = js.iter().filter(|&&j| (j as usize) < c1).count();
+        let n_here = partners_below(js, c1);
         if n_here == js.len() {
             continue;
         }
@@ -471,13 +490,7 @@ fn cross_pairs<const FRICTION: bool>(
             let j = j as usize;
             let wj = if FRICTION { s.uw[j] } else { 0.0 };
             let partner = [s.x[j], s.y[j], s.ux[j], s.uy[j], wj];
-            let mut none = 0.0;
-            let h = if FRICTION {
-                &mut hist[e - e0]
-            } else {
-                &mut none
-            };
-            let force = pair_with::<FRICTION>(c, f, &own, partner, j, h);
+            let force = pair_with::<FRICTION>(c, f, &own, partner, j, hist, e - e0);
             let (fx, fy, ft) = force.unwrap_or((0.0, 0.0, 0.0));
             ox[slot] = fx;
             oy[slot] = fy;
@@ -509,11 +522,12 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
         [p.y.len(), p.ux.len(), p.uy.len(), p.fx.len(), p.fy.len()] == [len; 5],
         "a chunk's arrays disagree in length"
     );
-    // The reactions of the chunk before's cross pairs, before anything else.
-    for i in c0..c1 {
-        let incoming = f.spill_in_start[i] as usize..f.spill_in_start[i + 1] as usize;
+    // The reactions of the chunk before's cross pairs, before anything else (the first
+    // chunk, and so a single one, has none).
+    for i in if c0 > 0 { c0..c1 } else { 0..0 } {
+        let incoming = f.cross_in_start[i] as usize..f.cross_in_start[i + 1] as usize;
         let l = i - c0;
-        for &slot in &f.spill_in[incoming] {
+        for &slot in &f.cross_in[incoming] {
             let slot = slot as usize;
             if cross.hit[slot] {
                 p.fx[l] -= cross.x[slot];
@@ -533,11 +547,10 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
         let (mut fx, mut fy) = (p.fx[l], p.fy[l]);
         let mut ft = if FRICTION { p.ft[l] } else { 0.0 };
         let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
-        // An owner's partners come in increasing slot order (the build scans the cells
-        // in order), so those in this chunk come first: two loops, no branch per pair on
-        // where the partner lies.
+        // Partners in this chunk first, then those in the next: two loops, no branch per
+        // pair on where the partner lies.
         let js = &f.j[e_lo..e_hi];
-        let n_here = js.iter().filter(|&&j| (j as usize) < c1).count();
+        let n_here = partners_below(js, c1);
         let own = Own {
             x: xi,
             y: yi,
@@ -551,13 +564,9 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
             let j = j as usize;
             let m = j.wrapping_sub(c0);
             let partner = state::<FRICTION>(p, m);
-            let mut none = 0.0;
-            let h = if FRICTION {
-                &mut p.hist[e - p.e0]
-            } else {
-                &mut none
-            };
-            let Some((pfx, pfy, pft)) = pair_with::<FRICTION>(c, f, &own, partner, j, h) else {
+            let k = e - p.e0;
+            let Some((pfx, pfy, pft)) = pair_with::<FRICTION>(c, f, &own, partner, j, p.hist, k)
+            else {
                 continue;
             };
             fx += pfx;
@@ -591,6 +600,14 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
     max_step2
 }
 
+/// How many of an owner's partners `js` lie below slot `c1` (in its chunk): they come
+/// first, as the build lists partners in increasing slot order (it scans the cells in
+/// order).
+#[inline(always)]
+fn partners_below(js: &[u32], c1: usize) -> usize {
+    js.iter().filter(|&&j| (j as usize) < c1).count()
+}
+
 /// The owner of the pairs being computed: position, m; radius, m; inverse mass, 1/kg;
 /// velocity the forces see, m/s; surface speed of its spin `w r`, m/s.
 struct Own {
@@ -621,18 +638,22 @@ fn state<const FRICTION: bool>(q: &Part, m: usize) -> [f64; 5] {
     [x, y, ux, uy, w]
 }
 
-/// The pair of `own` and grain `j` (its `state`) with slip history `hist`: see
-/// [`StepConst::pair`].
+/// The pair of `own` and grain `j` (its `state`), whose slip history is `hist[k]` (`hist`
+/// is empty, and not read, without friction): see [`StepConst::pair`].
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn pair_with<const FRICTION: bool>(
     c: &StepConst,
     f: &Fixed,
     own: &Own,
     [xj, yj, uxj, uyj, wj]: [f64; 5],
     j: usize,
-    hist: &mut f64,
+    hist: &mut [f64],
+    k: usize,
 ) -> Option<(f64, f64, f64)> {
     let (rj, imj) = (f.radius[j], f.inv_mass[j]);
+    let mut none = 0.0;
+    let hist = if FRICTION { &mut hist[k] } else { &mut none };
     c.pair::<FRICTION>(
         xj - own.x,
         yj - own.y,

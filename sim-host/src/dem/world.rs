@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::contact::ContactLaw;
 use super::grains::{FREE, Grains, permute};
 use super::neighbours::NeighbourList;
-use super::step::{Scratch, StepConst, advance};
+use super::step::{Scratch, StepConst, advance, pair_now};
 
 /// A free grain that cannot touch a wall before the next list build.
 pub const INTERIOR: u8 = 0;
@@ -183,7 +183,7 @@ impl World {
             .collect();
         self.scratch = Scratch::sized(
             &self.class,
-            self.nl.spills(),
+            self.nl.cross_pairs(),
             self.cfg.law.friction.is_some(),
         );
         self.walls_at_build = w;
@@ -279,30 +279,12 @@ impl World {
     pub fn vertical_load_across(&self, heights_m: &[f64]) -> Vec<f64> {
         let g = &self.g;
         let nl = &self.nl;
-        let u = &self.u;
         let c = StepConst::of(self);
-        let friction = self.cfg.law.friction.is_some();
         let mut out = vec![0.0; heights_m.len()];
         for i in 0..g.len().min(nl.start.len().saturating_sub(1)) {
             for e in nl.start[i] as usize..nl.start[i + 1] as usize {
                 let j = nl.j[e] as usize;
-                let mut hist = nl.hist.get(e).copied().unwrap_or(0.0);
-                let args = (
-                    g.x[j] - g.x[i],
-                    g.y[j] - g.y[i],
-                    g.radius[i] + g.radius[j],
-                    u.x[i] - u.x[j],
-                    u.y[i] - u.y[j],
-                    u.w[i] * g.radius[i] + u.w[j] * g.radius[j],
-                    g.inv_mass[i] + g.inv_mass[j],
-                );
-                let (dx, dy, rsum, rvx, rvy, spin, ims) = args;
-                let force = if friction {
-                    c.pair::<true>(dx, dy, rsum, rvx, rvy, spin, ims, &mut hist)
-                } else {
-                    c.pair::<false>(dx, dy, rsum, rvx, rvy, spin, ims, &mut hist)
-                };
-                let Some((_, fy, _)) = force else {
+                let Some((_, fy, _)) = pair_now(self, &c, i, e) else {
                     continue;
                 };
                 // fy is the force on i from j: on the upper grain, from the lower one.
