@@ -218,7 +218,7 @@ fn check_one_step(model: Model, threads: usize) {
         if threads == 1 {
             assert_eq!(w.nl.chunks(), 1);
         } else {
-            assert!(w.nl.chunks() >= 5, "{} chunks", w.nl.chunks());
+            assert!(w.nl.chunks() >= 3, "{} chunks", w.nl.chunks());
             assert!(
                 w.nl.cross_pairs() > 100,
                 "{} cross pairs",

@@ -15,16 +15,20 @@
 //! steps of the largest displacement in each passes half the skin.
 //!
 //! **Parallel, the same bits on any thread count.** On several threads the slots are cut
-//! into chunks of whole cell rows, about two a thread (see [`super::neighbours`]); a pair's
-//! partner lies in the owner's chunk or the next. First, in parallel, the pairs that cross
-//! into the next chunk are computed from the state before the step. Then every chunk runs
-//! the fused pass on its own, in parallel: its first row takes the reactions of the cross
-//! pairs from the chunk before, before anything else, and its owners take their own cross
-//! pairs' forces after their pairs within the chunk. So every grain's force is summed in
-//! one order whatever the chunks: the reactions of the pairs below it, in increasing slot
-//! order, then its own pairs, in entry order. The sums over grains (forces on the intruder
-//! and the floor) are added in slot order after the pass. One thread runs one chunk (no
-//! cross pairs), and gets the same bits as any number of threads (tested on 1, 2 and 3).
+//! into chunks of whole cell rows, one a thread (see [`super::neighbours`]); a pair's
+//! partner lies in the owner's chunk or the next. Before the step, the grains on both
+//! sides of each boundary between chunks (the owners of the pairs that cross it, and
+//! their partners) and those pairs' slip histories are copied. Then every chunk runs on
+//! its own, in one parallel region per step: it first computes the pairs that cross in
+//! from the chunk below, from the copy, and takes their reactions; then it runs the fused
+//! pass, computing the pairs that cross out into the chunk above from its own owners
+//! (not yet moved) and the copy of their partners. Each such pair is computed twice, from
+//! the same numbers, so both sides see the same bits; only the owner's side advances the
+//! slip history. Every grain's force is summed in one order whatever the chunks: the
+//! reactions of the pairs below it, in increasing slot order, then its own pairs, in entry
+//! order. The sums over grains (forces on the intruder and the floor) are added in slot
+//! order after the pass. One thread runs one chunk (no boundaries), and gets the same bits
+//! as any number of threads (tested on 1, 2 and 3).
 //!
 //! Integrators:
 //! - forward Euler (Supplementary I): `x' = x + v dt`, `v' = v + a(x, v) dt`;
@@ -177,18 +181,15 @@ fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
     rule.at(1.0 / inv_mass_sum)
 }
 
-/// Force accumulators reused from step to step: per grain (zero between steps), per
-/// cross pair, and the per-grain forces on the intruder and the floor that the step's sums
-/// add up in slot order.
+/// Force accumulators reused from step to step: per grain (zero between steps), the
+/// per-grain forces on the intruder and the floor that the step's sums add up in slot
+/// order, and the copy of the grains and slip histories of the cross pairs taken before
+/// each step.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scratch {
     fx: Vec<f64>,
     fy: Vec<f64>,
     ft: Vec<f64>,
-    cross_x: Vec<f64>,
-    cross_y: Vec<f64>,
-    cross_t: Vec<f64>,
-    cross_hit: Vec<bool>,
     /// Force of the grains on each intruder grain, N (x, y).
     out_x: Vec<f64>,
     out_y: Vec<f64>,
@@ -197,12 +198,19 @@ pub struct Scratch {
     /// Slots of the intruder grains and of the grains near a wall, increasing.
     prescribed: Vec<u32>,
     near_wall: Vec<u32>,
+    /// Before the step, the grains of every chunk boundary's cross pairs (slots
+    /// `cross_lo[k]..cross_hi[k]` of the list, boundary after boundary): position, m;
+    /// velocity the forces see, m/s; spin, rad/s (0 without friction).
+    snap: Vec<[f64; 5]>,
+    /// Before the step, the slip histories of the entries of every boundary's owners, m
+    /// (empty without friction).
+    snap_hist: Vec<f64>,
 }
 
 impl Scratch {
-    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others) and `cross` cross
-    /// pairs, zeroed (`friction`: with the tangential sums).
-    pub fn sized(class: &[u8], cross: usize, friction: bool) -> Self {
+    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others),
+    /// zeroed (`friction`: with the tangential sums).
+    pub fn sized(class: &[u8], friction: bool) -> Self {
         let n = class.len();
         let t = |len| if friction { vec![0.0; len] } else { Vec::new() };
         let slots = |c: u8| {
@@ -214,15 +222,13 @@ impl Scratch {
             fx: vec![0.0; n],
             fy: vec![0.0; n],
             ft: t(n),
-            cross_x: vec![0.0; cross],
-            cross_y: vec![0.0; cross],
-            cross_t: t(cross),
-            cross_hit: vec![false; cross],
             out_x: vec![0.0; n],
             out_y: vec![0.0; n],
             out_floor: vec![0.0; n],
             prescribed: slots(PRESCRIBED),
             near_wall: slots(NEAR_WALL),
+            snap: Vec::new(),
+            snap_hist: Vec::new(),
         }
     }
 
@@ -231,13 +237,11 @@ impl Scratch {
         (8 * (self.fx.capacity()
             + self.fy.capacity()
             + self.ft.capacity()
-            + self.cross_x.capacity()
-            + self.cross_y.capacity()
-            + self.cross_t.capacity()
             + self.out_x.capacity()
             + self.out_y.capacity()
-            + self.out_floor.capacity())
-            + self.cross_hit.capacity()
+            + self.out_floor.capacity()
+            + 5 * self.snap.capacity()
+            + self.snap_hist.capacity())
             + 4 * (self.prescribed.capacity() + self.near_wall.capacity())) as f64
             / n.max(1) as f64
     }
@@ -251,17 +255,30 @@ struct Fixed<'a> {
     class: &'a [u8],
     start: &'a [u32],
     j: &'a [u32],
-    cross_in_start: &'a [u32],
-    cross_in: &'a [u32],
+}
+
+/// The copy, taken before the step, of the grains of one chunk boundary's cross pairs:
+/// owners in slots `lo..mid` (the end of the chunk below), partners in `mid..hi` (the start
+/// of the chunk above).
+#[derive(Clone, Copy)]
+struct Boundary<'a> {
+    lo: usize,
+    mid: usize,
+    /// Grain `s`'s state is `state[s - lo]`: see [`Scratch`]'s `snap`.
+    state: &'a [[f64; 5]],
+    /// Entry `e`'s slip history is `hist[e - e_lo]` (empty without friction).
+    hist: &'a [f64],
+    e_lo: usize,
 }
 
 /// One chunk's grains (slots `c0..c1`) and entries (from `e0`): the parts of the arrays its
-/// grains own, and its cross pairs' forces (slots from `s0`).
+/// grains own, and the boundaries with the chunks below and above.
 struct Part<'a> {
     c0: usize,
     c1: usize,
     e0: usize,
-    s0: usize,
+    below: Option<Boundary<'a>>,
+    above: Option<Boundary<'a>>,
     x: &'a mut [f64],
     y: &'a mut [f64],
     vx: &'a mut [f64],
@@ -278,14 +295,6 @@ struct Part<'a> {
     out_floor: &'a mut [f64],
     wall_hist: &'a mut [[f64; 4]],
     hist: &'a mut [f64],
-}
-
-/// The forces of the cross pairs, by slot (read by every chunk in the second phase).
-struct Cross<'a> {
-    x: &'a [f64],
-    y: &'a [f64],
-    t: &'a [f64],
-    hit: &'a [bool],
 }
 
 /// `v` cut at the consecutive offsets `cuts` (first 0, last `v.len()`); an empty `v` (an
@@ -308,16 +317,51 @@ pub(super) fn advance(w: &mut World) {
         start,
         j,
         chunk_start,
-        cross_base,
-        cross_in_start,
-        cross_in,
+        cross_lo,
+        cross_hi,
         hist,
         ..
     } = &mut w.nl;
     let chunks: Vec<usize> = chunk_start.iter().map(|&s| s as usize).collect();
     let entries: Vec<usize> = chunks.iter().map(|&s| start[s] as usize).collect();
-    let slots: Vec<usize> = cross_base.iter().map(|&s| s as usize).collect();
+    let nchunks = chunks.len() - 1;
     let g = &mut w.g;
+    let s = &mut w.scratch;
+    let u = &mut w.u;
+    // The grains and histories of the cross pairs, before the step: the chunks on both
+    // sides of a boundary compute its pairs from this copy while they change the grains.
+    s.snap.clear();
+    s.snap_hist.clear();
+    let mut bases = Vec::with_capacity(nchunks);
+    for k in 0..nchunks - 1 {
+        let (lo, hi) = (cross_lo[k] as usize, cross_hi[k] as usize);
+        bases.push((s.snap.len(), s.snap_hist.len()));
+        s.snap.extend((lo..hi).map(|i| {
+            let spin = if c.friction { u.w[i] } else { 0.0 };
+            [g.x[i], g.y[i], u.x[i], u.y[i], spin]
+        }));
+        if c.friction {
+            s.snap_hist
+                .extend_from_slice(&hist[start[lo] as usize..start[chunks[k + 1]] as usize]);
+        }
+    }
+    let boundary = |k: usize| {
+        let (lo, mid, hi) = (cross_lo[k] as usize, chunks[k + 1], cross_hi[k] as usize);
+        let (e_lo, e_hi) = (start[lo] as usize, start[mid] as usize);
+        let (b, bh) = bases[k];
+        Boundary {
+            lo,
+            mid,
+            state: &s.snap[b..b + (hi - lo)],
+            hist: if c.friction {
+                &s.snap_hist[bh..bh + (e_hi - e_lo)]
+            } else {
+                &[]
+            },
+            e_lo,
+        }
+    };
+    let boundaries: Vec<Boundary> = (0..nchunks - 1).map(boundary).collect();
     let fixed = Fixed {
         radius: &g.radius,
         inv_mass: &g.inv_mass,
@@ -325,52 +369,6 @@ pub(super) fn advance(w: &mut World) {
         class: &w.class,
         start,
         j,
-        cross_in_start,
-        cross_in,
-    };
-    let s = &mut w.scratch;
-    let u = &mut w.u;
-    let nchunks = chunks.len() - 1;
-    // Phase 1 (only with several chunks): the cross pairs, from the state before the step.
-    if nchunks > 1 {
-        let state = State {
-            x: &g.x,
-            y: &g.y,
-            ux: &u.x,
-            uy: &u.y,
-            uw: &u.w,
-        };
-        let pieces: Vec<_> = cut(hist, &entries)
-            .into_iter()
-            .zip(cut(&mut s.cross_x, &slots))
-            .zip(cut(&mut s.cross_y, &slots))
-            .zip(cut(&mut s.cross_t, &slots))
-            .zip(cut(&mut s.cross_hit, &slots))
-            .collect();
-        let run = if c.friction {
-            cross_pairs::<true>
-        } else {
-            cross_pairs::<false>
-        };
-        let one = |(k, ((((h, cx), cy), ct), hit)): (usize, _)| {
-            run(
-                &c,
-                &fixed,
-                &state,
-                (chunks[k], chunks[k + 1], entries[k]),
-                h,
-                [cx, cy, ct],
-                hit,
-            )
-        };
-        pieces.into_par_iter().enumerate().for_each(one);
-    }
-    // Phase 2: every chunk on its own.
-    let cross = Cross {
-        x: &s.cross_x,
-        y: &s.cross_y,
-        t: &s.cross_t,
-        hit: &s.cross_hit,
     };
     let mut pieces = (
         cut(&mut g.x, &chunks).into_iter(),
@@ -397,7 +395,8 @@ pub(super) fn advance(w: &mut World) {
             c0: chunks[k],
             c1: chunks[k + 1],
             e0: entries[k],
-            s0: slots[k],
+            below: k.checked_sub(1).map(|b| boundaries[b]),
+            above: boundaries.get(k).copied(),
             x: p.0.next().unwrap_or_default(),
             y: p.1.next().unwrap_or_default(),
             vx: p.2.next().unwrap_or_default(),
@@ -422,11 +421,11 @@ pub(super) fn advance(w: &mut World) {
         run_chunk::<false>
     };
     let max_step2 = if nchunks == 1 {
-        run(&c, &fixed, &mut parts[0], &cross)
+        run(&c, &fixed, &mut parts[0])
     } else {
         parts
             .par_iter_mut()
-            .map(|p| run(&c, &fixed, p, &cross))
+            .map(|p| run(&c, &fixed, p))
             .reduce(|| 0.0, f64::max)
     };
     // The sums, in slot order whatever the chunks.
@@ -446,73 +445,18 @@ pub(super) fn advance(w: &mut World) {
     w.last = total;
 }
 
-/// Positions and the velocities the forces see, every grain, before the step.
-struct State<'a> {
-    x: &'a [f64],
-    y: &'a [f64],
-    ux: &'a [f64],
-    uy: &'a [f64],
-    uw: &'a [f64],
-}
-
-/// Phase 1 for the chunk of slots `c0..c1` whose entries start at `e0`: each pair whose
-/// partner lies in the next chunk, in entry order: the force on the owner (x, y,
-/// tangential) into `out`, whether the grains touch into `hit`, and its history (`hist`,
-/// the chunk's entries).
-fn cross_pairs<const FRICTION: bool>(
-    c: &StepConst,
-    f: &Fixed,
-    s: &State,
-    (c0, c1, e0): (usize, usize, usize),
-    hist: &mut [f64],
-    out: [&mut [f64]; 3],
-    hit: &mut [bool],
-) {
-    let [ox, oy, ot] = out;
-    let mut slot = 0usize;
-    for i in c0..c1 {
-        let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
-        let js = &f.j[e_lo..e_hi];
-        let n_here = partners_below(js, c1);
-        if n_here == js.len() {
-            continue;
-        }
-        let own = Own {
-            x: s.x[i],
-            y: s.y[i],
-            r: f.radius[i],
-            inv_mass: f.inv_mass[i],
-            ux: s.ux[i],
-            uy: s.uy[i],
-            spin: if FRICTION { s.uw[i] * f.radius[i] } else { 0.0 },
-        };
-        for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
-            let j = j as usize;
-            let wj = if FRICTION { s.uw[j] } else { 0.0 };
-            let partner = [s.x[j], s.y[j], s.ux[j], s.uy[j], wj];
-            let force = pair_with::<FRICTION>(c, f, &own, partner, j, hist, e - e0);
-            let (fx, fy, ft) = force.unwrap_or((0.0, 0.0, 0.0));
-            ox[slot] = fx;
-            oy[slot] = fy;
-            if FRICTION {
-                ot[slot] = ft;
-            }
-            hit[slot] = force.is_some();
-            slot += 1;
-        }
-    }
-}
-
-/// Phase 2 for one chunk: its grains in slot order, each one's pairs (those within the
-/// chunk computed here, their reactions scattered forward; those across into the next
-/// chunk read from phase 1), then walls and integration. The grains of its first row take
-/// the reactions of the chunk before's cross pairs first. Returns the largest squared
+/// The grains of one chunk, in slot order, each one's pairs (those within the chunk
+/// computed here, their reactions scattered forward; those across into the next chunk
+/// from the boundary's copy), then walls and integration. The grains of its first row take
+/// the reactions of the chunk below's cross pairs first, computed here from the boundary's
+/// copy (the chunk below computes the same pairs from the same copy, so both see the same
+/// bits; only the owner's side writes the slip history). Returns the largest squared
 /// displacement in the step, m^2.
 ///
 /// Every grain's force is summed in one order, whatever the chunks: the reactions of the
-/// pairs below it in increasing slot order (those of the chunk before come from its cross
-/// pairs, before any of its own chunk), then its own pairs in entry order.
-fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross: &Cross) -> f64 {
+/// pairs below it in increasing slot order (those of the chunk below first, as they have
+/// lower slots), then its own pairs in entry order.
+fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part) -> f64 {
     let mut max_step2 = 0.0;
     let (c0, c1) = (p.c0, p.c1);
     // Every array of a part covers its grains (cut at the same bounds); the unchecked
@@ -522,23 +466,34 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
         [p.y.len(), p.ux.len(), p.uy.len(), p.fx.len(), p.fy.len()] == [len; 5],
         "a chunk's arrays disagree in length"
     );
-    // The reactions of the chunk before's cross pairs, before anything else (the first
+    // The reactions of the chunk below's cross pairs, before anything else (the first
     // chunk, and so a single one, has none).
-    for i in if c0 > 0 { c0..c1 } else { 0..0 } {
-        let incoming = f.cross_in_start[i] as usize..f.cross_in_start[i + 1] as usize;
-        let l = i - c0;
-        for &slot in &f.cross_in[incoming] {
-            let slot = slot as usize;
-            if cross.hit[slot] {
-                p.fx[l] -= cross.x[slot];
-                p.fy[l] -= cross.y[slot];
-                if FRICTION {
-                    p.ft[l] += cross.t[slot];
+    if let Some(b) = p.below {
+        for i in b.lo..b.mid {
+            let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
+            let js = &f.j[e_lo..e_hi];
+            let n_here = partners_below(js, b.mid);
+            if n_here == js.len() {
+                continue;
+            }
+            let own = Own::of::<FRICTION>(f, i, b.state[i - b.lo]);
+            for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
+                let j = j as usize;
+                // The owner's side advances the history; this side works on a copy.
+                let mut slip = [if FRICTION { b.hist[e - b.e_lo] } else { 0.0 }];
+                let partner = b.state[j - b.lo];
+                let force = pair_with::<FRICTION>(c, f, &own, partner, j, &mut slip, 0);
+                if let Some((pfx, pfy, pft)) = force {
+                    let m = j - c0;
+                    p.fx[m] -= pfx;
+                    p.fy[m] -= pfy;
+                    if FRICTION {
+                        p.ft[m] += pft;
+                    }
                 }
             }
         }
     }
-    let mut slot = p.s0;
     for i in c0..c1 {
         let l = i - c0;
         let (xi, yi, ri, imi) = (p.x[l], p.y[l], f.radius[i], f.inv_mass[i]);
@@ -581,16 +536,23 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part, cross
                 p.ft[m] += pft;
             }
         }
-        // Partners in the next chunk: computed in phase 1.
-        for _ in n_here..js.len() {
-            if cross.hit[slot] {
-                fx += cross.x[slot];
-                fy += cross.y[slot];
-                if FRICTION {
-                    ft += cross.t[slot];
+        // Partners in the next chunk, from the boundary's copy (the owner is not moved yet,
+        // so its state is the copy's too).
+        if n_here < js.len()
+            && let Some(b) = p.above
+        {
+            for (e, &j) in (e_lo + n_here..).zip(&js[n_here..]) {
+                let j = j as usize;
+                let partner = b.state[j - b.lo];
+                let k = e - p.e0;
+                if let Some((pfx, pfy, pft)) =
+                    pair_with::<FRICTION>(c, f, &own, partner, j, p.hist, k)
+                {
+                    fx += pfx;
+                    fy += pfy;
+                    ft += pft;
                 }
             }
-            slot += 1;
         }
         let step2 = finish::<FRICTION>(c, f, p, i, (fx, fy, ft));
         if step2 > max_step2 {
@@ -618,6 +580,23 @@ struct Own {
     ux: f64,
     uy: f64,
     spin: f64,
+}
+
+impl Own {
+    /// Grain `i` at `[x, y, ux, uy, w]` (a boundary's copy).
+    #[inline(always)]
+    fn of<const FRICTION: bool>(f: &Fixed, i: usize, [x, y, ux, uy, w]: [f64; 5]) -> Self {
+        let r = f.radius[i];
+        Self {
+            x,
+            y,
+            r,
+            inv_mass: f.inv_mass[i],
+            ux,
+            uy,
+            spin: if FRICTION { w * r } else { 0.0 },
+        }
+    }
 }
 
 /// Grain `m` of part `q`: position, m; velocity the forces see, m/s; spin, rad/s (0
