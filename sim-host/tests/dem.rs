@@ -336,10 +336,13 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
         &[&["--threads", "1", "--no-frames"][..], &every].concat(),
     );
     assert_eq!(c, 0, "{e}");
+    // Two threads, pinned to cores of their own where the machine has two.
+    let cores = std::thread::available_parallelism().map_or(1, |p| p.get());
+    let pin: &[&str] = if cores >= 2 { &["--pin-threads"] } else { &[] };
     let (c, _, e) = intrude(
         &b,
         &two,
-        &[&["--threads", "2", "--no-frames"][..], &every].concat(),
+        &[&["--threads", "2", "--no-frames"][..], &every, pin].concat(),
     );
     assert_eq!(c, 0, "{e}");
     // Stopped twice (once between checkpoints), resumed twice.
@@ -527,6 +530,10 @@ fn bad_intrusions_are_refused_with_exit_2() {
     let (c, _, e) = intrude(&b, &out, &[]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("checksum"), "{e}");
+    // More pinned threads than cores.
+    let (c, _, e) = intrude(&b, &out, &["--threads", "100000", "--pin-threads"]);
+    assert_eq!(c, 2, "{e}");
+    assert!(e.contains("--pin-threads: 100000 threads need"), "{e}");
     // Unphysical grains.
     let (c, _, e) = sandjumper(&["dem", "bed", "--kn=-1", "--out", o]);
     assert_eq!(c, 2, "{e}");

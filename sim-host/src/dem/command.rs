@@ -166,6 +166,11 @@ pub struct BedArgs {
     /// Threads (0: all cores).
     #[arg(long, default_value = "0")]
     pub threads: usize,
+    /// Pin each thread to a core of its own, among those this process may run on (as
+    /// OpenMP's `OMP_PROC_BIND`): steadier, and about 2 % faster on two threads. Leave it
+    /// off on a node shared with jobs that are not confined to cores of their own.
+    #[arg(long)]
+    pub pin_threads: bool,
     /// Output directory: bed.ckpt, grains.csv, load.csv, bed.toml, bed.png/.svg.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -234,6 +239,11 @@ pub struct IntrudeArgs {
     /// Threads (0: all cores).
     #[arg(long, default_value = "0")]
     pub threads: usize,
+    /// Pin each thread to a core of its own, among those this process may run on (as
+    /// OpenMP's `OMP_PROC_BIND`): steadier, and about 2 % faster on two threads. Leave it
+    /// off on a node shared with jobs that are not confined to cores of their own.
+    #[arg(long)]
+    pub pin_threads: bool,
     /// Output directory.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -284,14 +294,43 @@ pub struct CollideArgs {
 pub fn run(a: &DemArgs) -> Result<(), CliError> {
     match &a.command {
         DemCommand::Collide(c) => run_collide(c),
-        DemCommand::Bed(b) => with_threads(b.threads, || run_bed(b)),
-        DemCommand::Intrude(i) => with_threads(i.threads, || run_intrude(i)),
+        DemCommand::Bed(b) => with_threads(b.threads, b.pin_threads, || run_bed(b)),
+        DemCommand::Intrude(i) => with_threads(i.threads, i.pin_threads, || run_intrude(i)),
     }
 }
 
-fn with_threads(n: usize, f: impl FnOnce() -> Result<(), CliError> + Send) -> Result<(), CliError> {
+/// Run `f` on a pool of `n` threads (0: one a core), each pinned to a core of its own when
+/// `pin`.
+fn with_threads(
+    n: usize,
+    pin: bool,
+    f: impl FnOnce() -> Result<(), CliError> + Send,
+) -> Result<(), CliError> {
+    let cores = if pin {
+        core_affinity::get_core_ids().unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    let n = if n == 0 {
+        rayon::current_num_threads()
+    } else {
+        n
+    };
+    if pin && cores.len() < n {
+        return Err(CliError::input(format!(
+            "--pin-threads: {n} threads need {n} cores, and this process may run on {} \
+             (use --threads {} or fewer, or drop --pin-threads)",
+            cores.len(),
+            cores.len().max(1)
+        )));
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
+        .start_handler(move |k| {
+            if let Some(&core) = cores.get(k) {
+                core_affinity::set_for_current(core);
+            }
+        })
         .build()
         .map_err(|e| CliError::internal(format!("cannot start {n} threads: {e}")))?;
     pool.install(f)

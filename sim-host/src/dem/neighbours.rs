@@ -8,12 +8,21 @@
 //!
 //! The step walks the grains in slot order and scatters each pair's force to the partner
 //! (see [`super::step`]). For that to run in parallel with the same bits on any thread
-//! count, the slots are cut into **chunks** of whole cell rows (`chunk_start`): a partner
-//! lies in its owner's row or the next one, so in the owner's chunk or the next chunk.
-//! Entries whose partner lies in the next chunk are *cross pairs*; their owners lie in the
-//! last row of their chunk and their partners in the first row of the next, so chunk `k`'s
+//! count, the slots are cut into **chunks** (`chunk_start`) such that every partner lies in
+//! its owner's chunk or the next (checked at the build; chunks of whole cell rows always
+//! do, as a partner lies in its owner's row or the next one).
+//! Entries whose partner lies in the next chunk are *cross pairs*; their owners lie near
+//! the end of their chunk and their partners near the start of the next, so chunk `k`'s
 //! cross pairs involve only the slots `cross_lo[k]..cross_hi[k]` (the step copies their
 //! state before it starts, so both chunks can compute those pairs from it).
+//!
+//! The results do not depend on where the chunks are cut, only the speed does; so each
+//! build cuts where the last interval's timings of the chunks say the work is even (the
+//! upper part of a bed, with the intruder and the free surface, costs more per grain),
+//! anywhere within a row, as long as every partner stays within the next chunk (else
+//! whole rows, which always keep it there).
+
+use rayon::prelude::*;
 
 use super::grains::Grains;
 
@@ -24,7 +33,7 @@ pub struct NeighbourList {
     pub start: Vec<u32>,
     /// Neighbour slot of each entry (always above the owner's).
     pub j: Vec<u32>,
-    /// Chunk `k` holds slots `chunk_start[k]..chunk_start[k + 1]` (whole cell rows).
+    /// Chunk `k` holds slots `chunk_start[k]..chunk_start[k + 1]`.
     pub chunk_start: Vec<u32>,
     /// Chunk `k`'s cross pairs have their owners in `cross_lo[k]..chunk_start[k + 1]` and
     /// their partners in `chunk_start[k + 1]..cross_hi[k]` (both ends `chunk_start[k + 1]`
@@ -55,8 +64,110 @@ pub fn chunk_count(n: usize, parts: usize) -> usize {
     }
 }
 
+/// Slots a task of the parallel list build takes.
+const BUILD_PIECE: usize = 1024;
+
 /// Bounds of a chunk's size in [`chunk_count`], grains.
 const CHUNK_SIZE: (usize, usize) = (256, 4096);
+
+/// `want` chunks of `n` slots, cut where the time measured on the `old` chunks (`seconds`
+/// each since the last build) says the work is even, moving each cut halfway there from
+/// where it was (timings are noisy); evenly by slots without usable timings. Increasing,
+/// from 0 to `n`; any cuts give the same results, only the speed differs.
+fn cuts_by_time(n: usize, want: usize, old: &[u32], seconds: &[f64]) -> Vec<u32> {
+    let mut cuts = vec![0u32];
+    let usable = want > 1
+        && old.len() == want + 1
+        && old.last() == Some(&(n as u32))
+        && seconds.len() == want
+        && seconds.iter().all(|&t| t > 0.0 && t.is_finite());
+    for k in 1..want {
+        let even = k * n / want;
+        let cut = if usable {
+            // Time of slots 0..s, each old chunk's time spread evenly over its slots.
+            let time_to = |s: usize| -> f64 {
+                let c = old
+                    .partition_point(|&o| (o as usize) <= s)
+                    .saturating_sub(1)
+                    .min(want - 1);
+                let (a, b) = (old[c] as usize, old[c + 1] as usize);
+                seconds[..c].iter().sum::<f64>()
+                    + seconds[c] * (s - a) as f64 / (b - a).max(1) as f64
+            };
+            let target = seconds.iter().sum::<f64>() * k as f64 / want as f64;
+            let (mut lo, mut hi) = (0usize, n);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if time_to(mid) < target {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            let was = old[k] as usize;
+            (was + lo) / 2
+        } else {
+            even
+        };
+        if cut > *cuts.last().unwrap_or(&0) as usize && cut < n {
+            cuts.push(cut as u32);
+        }
+    }
+    cuts.push(n as u32);
+    cuts
+}
+
+/// `want` chunks of whole cell rows (`row_end`: each row's end slot), each cut at the row
+/// end nearest an even share of the `n` slots.
+fn cuts_by_rows(n: usize, want: usize, row_end: &[usize]) -> Vec<u32> {
+    let mut cuts = vec![0u32];
+    for k in 1..want {
+        let target = k * n / want;
+        let at = row_end.partition_point(|&e| e < target);
+        let below = at.checked_sub(1).map(|r| row_end[r]);
+        let above = row_end.get(at).copied();
+        let end = match (below, above) {
+            (Some(b), Some(a)) if target - b <= a - target => b,
+            (_, Some(a)) => a,
+            (Some(b), None) => b,
+            (None, None) => n,
+        };
+        if end > *cuts.last().unwrap_or(&0) as usize && end < n {
+            cuts.push(end as u32);
+        }
+    }
+    cuts.push(n as u32);
+    cuts
+}
+
+/// For chunks `cuts` of the list (`start`, `js`): each chunk's `cross_lo` and `cross_hi`
+/// (see [`NeighbourList`]) and the number of cross pairs; `None` if a partner lies beyond
+/// the chunk after its owner's.
+#[allow(clippy::type_complexity)]
+fn cross_bounds(cuts: &[u32], start: &[u32], js: &[u32]) -> Option<(Vec<u32>, Vec<u32>, usize)> {
+    let (mut cross_lo, mut cross_hi, mut count) = (Vec::new(), Vec::new(), 0);
+    for (k, c) in cuts.windows(2).enumerate() {
+        let c1 = c[1] as usize;
+        let c2 = cuts.get(k + 2).map_or(c1, |&e| e as usize);
+        let (mut lo, mut hi) = (c1, c1);
+        for i in c[0] as usize..c1 {
+            for &j in &js[start[i] as usize..start[i + 1] as usize] {
+                let j = j as usize;
+                if j >= c1 {
+                    if j >= c2 {
+                        return None;
+                    }
+                    lo = lo.min(i);
+                    hi = hi.max(j + 1);
+                    count += 1;
+                }
+            }
+        }
+        cross_lo.push(lo as u32);
+        cross_hi.push(hi as u32);
+    }
+    Some((cross_lo, cross_hi, count))
+}
 
 /// Grid bounds: cells of side `cell_m` over the grains' bounding box.
 struct CellGrid {
@@ -113,7 +224,9 @@ impl CellGrid {
 impl NeighbourList {
     /// Reorder `g` along the cell grid, rebuild the list for interaction range
     /// `r_i + r_j + skin`, and carry every tangential history over (`with_history`: friction
-    /// on), cutting the slots into chunks for `parts` threads (see [`chunk_count`]). Returns
+    /// on), cutting the slots into chunks for `parts` threads (see [`chunk_count`]) where
+    /// `chunk_seconds` (the time each of the current chunks took since the last build, if
+    /// known) says the work is even. Returns
     /// the permutation applied (new slot `s` took old slot `perm[s]`), which the caller
     /// applies to its own per-grain arrays ([`super::grains::permute`]).
     pub fn rebuild(
@@ -122,6 +235,7 @@ impl NeighbourList {
         skin_m: f64,
         with_history: bool,
         parts: usize,
+        chunk_seconds: &[f64],
     ) -> Vec<usize> {
         self.skin_m = skin_m;
         let n = g.len();
@@ -153,70 +267,65 @@ impl NeighbourList {
         let old = std::mem::take(self);
         g.permute(&perm);
         // Grains of cell c are now slots cell_start[c]..cell_start[c + 1].
-        let mut start = Vec::with_capacity(n + 1);
-        let mut js: Vec<u32> = Vec::with_capacity(n * 8);
-        start.push(0u32);
-        for i in 0..n {
-            let (cx, cy) = grid.cell_of(g.x[i], g.y[i]);
-            let (xi, yi, ri) = (g.x[i], g.y[i], g.radius[i]);
-            let intruder_i = g.kind[i] != super::grains::FREE;
+        // Each grain's partners, in slot order; pieces of slots in parallel (the list does
+        // not depend on the pieces), then joined.
+        let g_ref: &Grains = g;
+        let partners_of = |i: usize, js: &mut Vec<u32>| {
+            let (cx, cy) = grid.cell_of(g_ref.x[i], g_ref.y[i]);
+            let (xi, yi, ri) = (g_ref.x[i], g_ref.y[i], g_ref.radius[i]);
+            let intruder_i = g_ref.kind[i] != super::grains::FREE;
             for ny in cy.saturating_sub(1)..(cy + 2).min(grid.ny) {
                 for nx in cx.saturating_sub(1)..(cx + 2).min(grid.nx) {
                     let c = ny * grid.nx + nx;
                     for j in cell_start[c]..cell_start[c + 1] {
-                        if j <= i || (intruder_i && g.kind[j] != super::grains::FREE) {
+                        if j <= i || (intruder_i && g_ref.kind[j] != super::grains::FREE) {
                             continue;
                         }
-                        let dx = g.x[j] - xi;
-                        let dy = g.y[j] - yi;
-                        let reach = ri + g.radius[j] + skin_m;
+                        let dx = g_ref.x[j] - xi;
+                        let dy = g_ref.y[j] - yi;
+                        let reach = ri + g_ref.radius[j] + skin_m;
                         if dx * dx + dy * dy < reach * reach {
                             js.push(j as u32);
                         }
                     }
                 }
             }
-            start.push(js.len() as u32);
-        }
-        // Chunks of whole cell rows, as even as rows allow: each cut at the row end nearest
-        // its share of the grains.
-        let row_end: Vec<usize> = (1..=grid.ny).map(|r| cell_start[r * grid.nx]).collect();
-        let want = chunk_count(n, parts);
-        let mut chunk_start = vec![0u32];
-        for k in 1..want {
-            let target = k * n / want;
-            let at = row_end.partition_point(|&e| e < target);
-            let below = at.checked_sub(1).map(|r| row_end[r]);
-            let above = row_end.get(at).copied();
-            let end = match (below, above) {
-                (Some(b), Some(a)) if target - b <= a - target => b,
-                (_, Some(a)) => a,
-                (Some(b), None) => b,
-                (None, None) => n,
-            };
-            if end > *chunk_start.last().unwrap_or(&0) as usize && end < n {
-                chunk_start.push(end as u32);
-            }
-        }
-        chunk_start.push(n as u32);
-        // Cross pairs: entries whose partner lies beyond the owner's chunk (always the next
-        // one: a partner's row is its owner's or the next).
-        let (mut cross_lo, mut cross_hi, mut cross_count) = (Vec::new(), Vec::new(), 0);
-        for c in chunk_start.windows(2) {
-            let c1 = c[1] as usize;
-            let (mut lo, mut hi) = (c1, c1);
-            for i in c[0] as usize..c1 {
-                for &j in &js[start[i] as usize..start[i + 1] as usize] {
-                    if j as usize >= c1 {
-                        lo = lo.min(i);
-                        hi = hi.max(j as usize + 1);
-                        cross_count += 1;
-                    }
+        };
+        let pieces: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(BUILD_PIECE))
+            .into_par_iter()
+            .map(|k| {
+                let slots = k * BUILD_PIECE..((k + 1) * BUILD_PIECE).min(n);
+                let mut js = Vec::with_capacity(slots.len() * 8);
+                let mut ends = Vec::with_capacity(slots.len());
+                for i in slots {
+                    partners_of(i, &mut js);
+                    ends.push(js.len() as u32);
                 }
-            }
-            cross_lo.push(lo as u32);
-            cross_hi.push(hi as u32);
+                (ends, js)
+            })
+            .collect();
+        let mut start = Vec::with_capacity(n + 1);
+        let mut js: Vec<u32> = Vec::with_capacity(pieces.iter().map(|p| p.1.len()).sum());
+        start.push(0u32);
+        for (ends, piece) in pieces {
+            let offset = js.len() as u32;
+            start.extend(ends.iter().map(|&e| offset + e));
+            js.extend_from_slice(&piece);
         }
+        // Chunks: cut where the last interval's timings say the work is even; cuts that
+        // put a partner beyond the next chunk (chunks too thin for the rows) fall back to
+        // whole rows, which never do.
+        let want = chunk_count(n, parts);
+        let timed = cuts_by_time(n, want, &old.chunk_start, chunk_seconds);
+        let row_end: Vec<usize> = (1..=grid.ny).map(|r| cell_start[r * grid.nx]).collect();
+        let rows = || cuts_by_rows(n, want, &row_end);
+        let one = || vec![0, n as u32];
+        let (chunk_start, (cross_lo, cross_hi, cross_count)) = [timed]
+            .into_iter()
+            .chain(std::iter::once_with(rows))
+            .chain(std::iter::once_with(one))
+            .find_map(|cuts| cross_bounds(&cuts, &start, &js).map(|b| (cuts, b)))
+            .unwrap_or_default();
         let mut hist = Vec::new();
         if with_history {
             hist = vec![0.0; js.len()];

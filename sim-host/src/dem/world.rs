@@ -106,6 +106,9 @@ pub struct World {
     /// Sum over the steps since the build of the largest displacement in each, m: a bound
     /// on how far any grain moved (a rebuild is due past half the skin).
     pub(super) drift_m: f64,
+    /// Time each chunk of the list took in the steps since its build, s (what the next
+    /// build balances the chunks by; the results do not depend on it).
+    pub(super) chunk_seconds: Vec<f64>,
 }
 
 /// Velocities, one array per component.
@@ -138,6 +141,7 @@ impl World {
             walls_at_build: Walls::default(),
             rebuild_due: true,
             drift_m: 0.0,
+            chunk_seconds: Vec::new(),
         };
         w.u = Velocities {
             x: w.g.vx.clone(),
@@ -157,7 +161,9 @@ impl World {
             self.cfg.skin_m,
             self.cfg.law.friction.is_some(),
             rayon::current_num_threads(),
+            &self.chunk_seconds,
         );
+        self.chunk_seconds = vec![0.0; self.nl.chunks()];
         permute(&mut self.wall_hist, &perm);
         if self.u.x.len() == perm.len() {
             permute(&mut self.u.x, &perm);
