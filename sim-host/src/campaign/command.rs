@@ -328,7 +328,7 @@ fn drive(
     mut journal: Journal,
     stop_after: Option<usize>,
 ) -> Result<(), CliError> {
-    let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+    let mut state = State::from_records(&journal.records).map_err(CliError::internal)?;
     journal
         .append(Event::SessionStarted {
             session: state.sessions + 1,
@@ -339,7 +339,9 @@ fn drive(
     bar.set_position(state.done() as u64);
     let mut this_session = 0usize;
     loop {
-        let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+        state
+            .catch_up(&journal.records)
+            .map_err(CliError::internal)?;
         write_results(work, &state).map_err(CliError::internal)?;
         write_documents(work, &state, file.seed).map_err(CliError::internal)?;
         let Some(point) = state.next_point().cloned() else {
@@ -388,7 +390,9 @@ fn drive(
         this_session += 1;
         bar.inc(1);
         if failed && file.on_failed_preparation == FailurePolicy::Stop {
-            let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+            state
+                .catch_up(&journal.records)
+                .map_err(CliError::internal)?;
             write_results(work, &state).map_err(CliError::internal)?;
             write_documents(work, &state, file.seed).map_err(CliError::internal)?;
             bar.finish_and_clear();
@@ -400,11 +404,10 @@ fn drive(
         }
     }
     bar.finish_and_clear();
-    if State::from_records(&journal.records)
-        .map_err(CliError::internal)?
-        .finished
-        .is_none()
-    {
+    state
+        .catch_up(&journal.records)
+        .map_err(CliError::internal)?;
+    if state.finished.is_none() {
         journal
             .append(Event::Finished {
                 exit_status: "success".into(),
@@ -412,7 +415,9 @@ fn drive(
             })
             .map_err(CliError::internal)?;
     }
-    let state = State::from_records(&journal.records).map_err(CliError::internal)?;
+    state
+        .catch_up(&journal.records)
+        .map_err(CliError::internal)?;
     write_results(work, &state).map_err(CliError::internal)?;
     write_documents(work, &state, file.seed).map_err(CliError::internal)?;
     super::figure::write(work, &state).map_err(CliError::internal)?;

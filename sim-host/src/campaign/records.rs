@@ -103,17 +103,30 @@ pub struct State {
     pub start_time: f64,
     /// Time of the last record.
     pub last_time: f64,
+    /// Records of the journal replayed so far.
+    #[serde(skip)]
+    pub applied: usize,
 }
 
 impl State {
     /// Replay the journal.
     pub fn from_records(records: &[Record]) -> Result<Self, String> {
         let mut s = State::default();
+        s.catch_up(records)?;
+        Ok(s)
+    }
+
+    /// Replay the records of `records` (the same journal, grown since) not replayed yet:
+    /// a long campaign does not replay its whole journal after every point.
+    pub fn catch_up(&mut self, records: &[Record]) -> Result<(), String> {
         let Some(first) = records.first() else {
             return Err("the journal is empty (the campaign never started)".into());
         };
-        s.start_time = first.time;
-        for r in records {
+        if self.applied == 0 {
+            self.start_time = first.time;
+        }
+        let s = self;
+        for r in records.get(s.applied..).unwrap_or_default() {
             s.last_time = r.time;
             match &r.event {
                 Event::Planned {
@@ -151,10 +164,11 @@ impl State {
                 } => s.finished = Some((exit_status.clone(), reason.clone())),
             }
         }
+        s.applied = s.applied.max(records.len());
         if s.points.is_empty() {
             return Err("the journal has no plan (its first record must be `planned`)".into());
         }
-        Ok(s)
+        Ok(())
     }
 
     /// The next point to run (the first not done), if any.
@@ -308,4 +322,92 @@ pub fn write_documents(dir: &Path, state: &State, seed: u64) -> Result<(), Strin
     std::fs::write(&tmp, text)
         .and_then(|()| std::fs::rename(&tmp, dir.join("documents.jsonl")))
         .map_err(|e| format!("cannot write documents.jsonl: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::journal::{Event, Record};
+    use crate::campaign::plan::Point;
+
+    fn point(index: usize) -> Point {
+        Point {
+            index,
+            kind: "single".into(),
+            freq_hz: 10.0 + index as f64,
+            tau_s: 0.0,
+            target_phi: 0.58,
+            repeat: 0,
+        }
+    }
+
+    fn row(index: usize) -> ResultRow {
+        let p = point(index);
+        ResultRow {
+            point: index,
+            repeat: 0,
+            kind: "single".into(),
+            freq_hz: p.freq_hz,
+            tau_s: 0.0,
+            target_phi: 0.58,
+            achieved_phi: 0.5801,
+            attempts: 1,
+            fluidizations: 1,
+            doses: 3,
+            status: "ok".into(),
+            measured_jump_height_m: Some(0.01 * index as f64),
+            frames_flagged: Some(0),
+            predicted_jump_height_m: None,
+            plant_jump_height_m: None,
+            faults: String::new(),
+            folder: p.folder(),
+        }
+    }
+
+    #[test]
+    fn catching_up_record_by_record_equals_replaying_the_whole_journal() {
+        let mut events = vec![
+            Event::Planned {
+                name: "c".into(),
+                file_text: "name = \"c\"".into(),
+                points: (0..3).map(point).collect(),
+                link: "sil".into(),
+            },
+            Event::SessionStarted { session: 1 },
+        ];
+        for p in 0..2 {
+            events.push(Event::PointStarted { point: p });
+            events.push(Event::Jumped { point: p });
+            events.push(Event::Done { row: row(p) });
+        }
+        events.push(Event::PointStarted { point: 2 });
+        events.push(Event::Interrupted {
+            point: 2,
+            phase: "started".into(),
+        });
+        events.push(Event::SessionStarted { session: 2 });
+        let records: Vec<Record> = events
+            .into_iter()
+            .enumerate()
+            .map(|(k, event)| Record {
+                seq: k as u64,
+                time: 100.0 + k as f64,
+                event,
+            })
+            .collect();
+        let whole = State::from_records(&records).unwrap();
+        assert_eq!(whole.done(), 2);
+        assert_eq!(whole.sessions, 2);
+        assert_eq!(whole.interruptions, 1);
+        assert_eq!(whole.next_point().map(|p| p.index), Some(2));
+        // Grown one record at a time, as `campaign run` appends them.
+        let mut grown = State::from_records(&records[..1]).unwrap();
+        for n in 2..=records.len() {
+            grown.catch_up(&records[..n]).unwrap();
+        }
+        assert_eq!(grown, whole);
+        // Nothing new: nothing changes.
+        grown.catch_up(&records).unwrap();
+        assert_eq!(grown, whole);
+    }
 }
