@@ -18,31 +18,25 @@ use super::track::{
 };
 use crate::acqlog::{AcqLog, Column, ReadOptions};
 use crate::command::CliError;
+use crate::command::args::parse_positive_as;
 use crate::output::StagedDir;
 use crate::plot::save_figure;
 use sandjumper_core::sample::flags;
 
-fn positive(s: &str, what: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("`{s}` is not {what}: a finite number > 0")),
-    }
-}
-
 fn parse_m_per_px(s: &str) -> Result<f64, String> {
-    positive(s, "a scale in metres per pixel")
+    parse_positive_as(s, "a scale in metres per pixel")
 }
 
 fn parse_fps(s: &str) -> Result<f64, String> {
-    positive(s, "a frame rate in frames/s")
+    parse_positive_as(s, "a frame rate in frames/s")
 }
 
 fn parse_length(s: &str) -> Result<f64, String> {
-    positive(s, "a length in metres")
+    parse_positive_as(s, "a length in metres")
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
-    positive(s, "a time in seconds")
+    parse_positive_as(s, "a time in seconds")
 }
 
 fn parse_exposure(s: &str) -> Result<f64, String> {
@@ -53,7 +47,7 @@ fn parse_exposure(s: &str) -> Result<f64, String> {
 }
 
 fn parse_px(s: &str) -> Result<f64, String> {
-    positive(s, "a diameter in pixels")
+    parse_positive_as(s, "a diameter in pixels")
 }
 
 /// `X,Y,W,H` in pixels.
