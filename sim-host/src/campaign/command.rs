@@ -319,6 +319,16 @@ fn resume(a: &ResumeArgs) -> Result<(), CliError> {
     drive(&file, &mut target, &work, &a.dir, journal, a.stop_after)
 }
 
+/// Bring `state` up to `journal` and rewrite `results.csv` and the Bluesky documents in
+/// `work` from it.
+fn refresh(state: &mut State, journal: &Journal, work: &Path, seed: u64) -> Result<(), CliError> {
+    state
+        .catch_up(&journal.records)
+        .map_err(CliError::internal)?;
+    write_results(work, state).map_err(CliError::internal)?;
+    write_documents(work, state, seed).map_err(CliError::internal)
+}
+
 /// Run the points not done yet, then finish the campaign.
 fn drive(
     file: &CampaignFile,
@@ -339,11 +349,7 @@ fn drive(
     bar.set_position(state.done() as u64);
     let mut this_session = 0usize;
     loop {
-        state
-            .catch_up(&journal.records)
-            .map_err(CliError::internal)?;
-        write_results(work, &state).map_err(CliError::internal)?;
-        write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+        refresh(&mut state, &journal, work, file.seed)?;
         let Some(point) = state.next_point().cloned() else {
             break;
         };
@@ -390,11 +396,7 @@ fn drive(
         this_session += 1;
         bar.inc(1);
         if failed && file.on_failed_preparation == FailurePolicy::Stop {
-            state
-                .catch_up(&journal.records)
-                .map_err(CliError::internal)?;
-            write_results(work, &state).map_err(CliError::internal)?;
-            write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+            refresh(&mut state, &journal, work, file.seed)?;
             bar.finish_and_clear();
             return Err(CliError::internal(format!(
                 "campaign: point {} failed its bed preparation and the campaign's policy is `stop`; the failure is recorded, `campaign resume {}` goes on with the next point",
@@ -415,11 +417,7 @@ fn drive(
             })
             .map_err(CliError::internal)?;
     }
-    state
-        .catch_up(&journal.records)
-        .map_err(CliError::internal)?;
-    write_results(work, &state).map_err(CliError::internal)?;
-    write_documents(work, &state, file.seed).map_err(CliError::internal)?;
+    refresh(&mut state, &journal, work, file.seed)?;
     super::figure::write(work, &state).map_err(CliError::internal)?;
     drop(journal);
     std::fs::rename(work, out).map_err(|e| {

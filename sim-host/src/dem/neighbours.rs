@@ -75,65 +75,72 @@ const CHUNK_SIZE: (usize, usize) = (256, 4096);
 /// where it was (timings are noisy); evenly by slots without usable timings. Increasing,
 /// from 0 to `n`; any cuts give the same results, only the speed differs.
 fn cuts_by_time(n: usize, want: usize, old: &[u32], seconds: &[f64]) -> Vec<u32> {
-    let mut cuts = vec![0u32];
     let usable = want > 1
         && old.len() == want + 1
         && old.last() == Some(&(n as u32))
         && seconds.len() == want
         && seconds.iter().all(|&t| t > 0.0 && t.is_finite());
-    for k in 1..want {
-        let even = k * n / want;
-        let cut = if usable {
-            // Time of slots 0..s, each old chunk's time spread evenly over its slots.
-            let time_to = |s: usize| -> f64 {
-                let c = old
-                    .partition_point(|&o| (o as usize) <= s)
-                    .saturating_sub(1)
-                    .min(want - 1);
-                let (a, b) = (old[c] as usize, old[c + 1] as usize);
-                seconds[..c].iter().sum::<f64>()
-                    + seconds[c] * (s - a) as f64 / (b - a).max(1) as f64
-            };
-            let target = seconds.iter().sum::<f64>() * k as f64 / want as f64;
-            let (mut lo, mut hi) = (0usize, n);
-            while lo < hi {
-                let mid = (lo + hi) / 2;
-                if time_to(mid) < target {
-                    lo = mid + 1;
-                } else {
-                    hi = mid;
+    increasing_cuts(
+        n,
+        (1..want).map(|k| {
+            let even = k * n / want;
+            if usable {
+                // Time of slots 0..s, each old chunk's time spread evenly over its slots.
+                let time_to = |s: usize| -> f64 {
+                    let c = old
+                        .partition_point(|&o| (o as usize) <= s)
+                        .saturating_sub(1)
+                        .min(want - 1);
+                    let (a, b) = (old[c] as usize, old[c + 1] as usize);
+                    seconds[..c].iter().sum::<f64>()
+                        + seconds[c] * (s - a) as f64 / (b - a).max(1) as f64
+                };
+                let target = seconds.iter().sum::<f64>() * k as f64 / want as f64;
+                let (mut lo, mut hi) = (0usize, n);
+                while lo < hi {
+                    let mid = (lo + hi) / 2;
+                    if time_to(mid) < target {
+                        lo = mid + 1;
+                    } else {
+                        hi = mid;
+                    }
                 }
+                let was = old[k] as usize;
+                (was + lo) / 2
+            } else {
+                even
             }
-            let was = old[k] as usize;
-            (was + lo) / 2
-        } else {
-            even
-        };
-        if cut > *cuts.last().unwrap_or(&0) as usize && cut < n {
-            cuts.push(cut as u32);
-        }
-    }
-    cuts.push(n as u32);
-    cuts
+        }),
+    )
 }
 
 /// `want` chunks of whole cell rows (`row_end`: each row's end slot), each cut at the row
 /// end nearest an even share of the `n` slots.
 fn cuts_by_rows(n: usize, want: usize, row_end: &[usize]) -> Vec<u32> {
+    increasing_cuts(
+        n,
+        (1..want).map(|k| {
+            let target = k * n / want;
+            let at = row_end.partition_point(|&e| e < target);
+            let below = at.checked_sub(1).map(|r| row_end[r]);
+            let above = row_end.get(at).copied();
+            match (below, above) {
+                (Some(b), Some(a)) if target - b <= a - target => b,
+                (_, Some(a)) => a,
+                (Some(b), None) => b,
+                (None, None) => n,
+            }
+        }),
+    )
+}
+
+/// Chunk starts from 0 through `inner` (cuts that do not go up, or reach `n`, dropped) to
+/// `n`.
+fn increasing_cuts(n: usize, inner: impl Iterator<Item = usize>) -> Vec<u32> {
     let mut cuts = vec![0u32];
-    for k in 1..want {
-        let target = k * n / want;
-        let at = row_end.partition_point(|&e| e < target);
-        let below = at.checked_sub(1).map(|r| row_end[r]);
-        let above = row_end.get(at).copied();
-        let end = match (below, above) {
-            (Some(b), Some(a)) if target - b <= a - target => b,
-            (_, Some(a)) => a,
-            (Some(b), None) => b,
-            (None, None) => n,
-        };
-        if end > *cuts.last().unwrap_or(&0) as usize && end < n {
-            cuts.push(end as u32);
+    for cut in inner {
+        if cut > *cuts.last().unwrap_or(&0) as usize && cut < n {
+            cuts.push(cut as u32);
         }
     }
     cuts.push(n as u32);
@@ -318,14 +325,13 @@ impl NeighbourList {
         let want = chunk_count(n, parts);
         let timed = cuts_by_time(n, want, &old.chunk_start, chunk_seconds);
         let row_end: Vec<usize> = (1..=grid.ny).map(|r| cell_start[r * grid.nx]).collect();
-        let rows = || cuts_by_rows(n, want, &row_end);
-        let one = || vec![0, n as u32];
-        let (chunk_start, (cross_lo, cross_hi, cross_count)) = [timed]
+        let rows = cuts_by_rows(n, want, &row_end);
+        // One chunk (no boundary) is the last resort; it has no cross pairs.
+        let one = (vec![0, n as u32], (vec![n as u32], vec![n as u32], 0));
+        let (chunk_start, (cross_lo, cross_hi, cross_count)) = [timed, rows]
             .into_iter()
-            .chain(std::iter::once_with(rows))
-            .chain(std::iter::once_with(one))
             .find_map(|cuts| cross_bounds(&cuts, &start, &js).map(|b| (cuts, b)))
-            .unwrap_or_default();
+            .unwrap_or(one);
         let mut hist = Vec::new();
         if with_history {
             hist = vec![0.0; js.len()];

@@ -458,7 +458,7 @@ pub(super) fn advance(w: &mut World) {
 
 /// The grains of one chunk, in slot order, each one's pairs (those within the chunk
 /// computed here, their reactions scattered forward; those across into the next chunk
-/// from the boundary's copy), then walls and integration. The grains of its first row take
+/// from the boundary's copy), then walls and integration. The grains at its start take
 /// the reactions of the chunk below's cross pairs first, computed here from the boundary's
 /// copy (the chunk below computes the same pairs from the same copy, so both see the same
 /// bits; only the owner's side writes the slip history). Returns the largest squared
@@ -507,9 +507,7 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part) -> f6
     }
     for i in c0..c1 {
         let l = i - c0;
-        let (xi, yi, ri, imi) = (p.x[l], p.y[l], f.radius[i], f.inv_mass[i]);
-        let (uxi, uyi) = (p.ux[l], p.uy[l]);
-        let wri = if FRICTION { p.uw[l] * ri } else { 0.0 };
+        let own = Own::of::<FRICTION>(f, i, state::<FRICTION>(p, l));
         let (mut fx, mut fy) = (p.fx[l], p.fy[l]);
         let mut ft = if FRICTION { p.ft[l] } else { 0.0 };
         let (e_lo, e_hi) = (f.start[i] as usize, f.start[i + 1] as usize);
@@ -517,15 +515,6 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part) -> f6
         // pair on where the partner lies.
         let js = &f.j[e_lo..e_hi];
         let n_here = partners_below(js, c1);
-        let own = Own {
-            x: xi,
-            y: yi,
-            r: ri,
-            inv_mass: imi,
-            ux: uxi,
-            uy: uyi,
-            spin: wri,
-        };
         for (e, &j) in (e_lo..).zip(&js[..n_here]) {
             let j = j as usize;
             let m = j.wrapping_sub(c0);
@@ -594,7 +583,7 @@ struct Own {
 }
 
 impl Own {
-    /// Grain `i` at `[x, y, ux, uy, w]` (a boundary's copy).
+    /// Grain `i` at `[x, y, ux, uy, w]` (a boundary's copy, or [`state`]).
     #[inline(always)]
     fn of<const FRICTION: bool>(f: &Fixed, i: usize, [x, y, ux, uy, w]: [f64; 5]) -> Self {
         let r = f.radius[i];
