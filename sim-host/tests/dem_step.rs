@@ -296,3 +296,47 @@ fn many_steps_give_the_same_bits_on_one_two_and_three_threads() {
         }
     }
 }
+
+/// A bed of `long` by `short` grains on a jittered triangular lattice, lying (`wide`) or
+/// standing, no walls.
+fn lattice(wide: bool, long: usize, short: usize) -> World {
+    let p = Choice::new(Model::Paper).resolve(false).unwrap();
+    let d = p.diameter_m;
+    let mut rng = StdRng::seed_from_u64(11);
+    let mut g = Grains::default();
+    for a in 0..long {
+        for b in 0..short {
+            let along = (a as f64 + 0.5 * (b % 2) as f64) * d + 0.05 * d * rng.random::<f64>();
+            let across = b as f64 * 0.866 * d + 0.05 * d * rng.random::<f64>();
+            let (x, y) = if wide {
+                (along, across)
+            } else {
+                (across, along)
+            };
+            g.push(x, y, d, p.density_kg_m3, FREE);
+        }
+    }
+    World::new(p.world(Walls::default()), g)
+}
+
+#[test]
+fn chunk_boundaries_cross_the_short_side_of_the_bed() {
+    // 160 by 20 grains, lying and standing: cut in two, either way, the boundary crosses
+    // the 20 grains, each with a few partners across it; one along the 160 would have
+    // several hundred cross pairs.
+    let (long, short) = (160, 20);
+    let cross = |wide: bool| {
+        on_threads(2, || {
+            let w = lattice(wide, long, short);
+            assert_eq!(w.nl.chunks(), 2, "wide {wide}");
+            w.nl.cross_pairs()
+        })
+    };
+    for wide in [true, false] {
+        let n = cross(wide);
+        assert!(
+            n > 0 && n <= 4 * short,
+            "wide {wide}: {n} cross pairs for a boundary {short} grains long"
+        );
+    }
+}

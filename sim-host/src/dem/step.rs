@@ -15,7 +15,7 @@
 //! steps of the largest displacement in each passes half the skin.
 //!
 //! **Parallel, the same bits on any thread count.** On several threads the slots are cut
-//! into chunks of whole cell rows, one a thread (see [`super::neighbours`]); a pair's
+//! into chunks along the cell lines, one a thread (see [`super::neighbours`]); a pair's
 //! partner lies in the owner's chunk or the next. Before the step, the grains on both
 //! sides of each boundary between chunks (the owners of the pairs that cross it, and
 //! their partners) and those pairs' slip histories are copied. Then every chunk runs on
@@ -200,6 +200,12 @@ pub struct Scratch {
     /// Slots of the intruder grains and of the grains near a wall, increasing.
     prescribed: Vec<u32>,
     near_wall: Vec<u32>,
+    /// The step's forces on the intruder grains (`out_x`, `out_y` of `prescribed`'s slots)
+    /// and on the floor (`out_floor` of `near_wall`'s), N, packed side by side by the chunk
+    /// that owns them, so the sums after the step read a few cache lines from another
+    /// core, not one per grain.
+    packed_intruder: Vec<[f64; 2]>,
+    packed_floor: Vec<f64>,
     /// Before the step, the grains of every chunk boundary's cross pairs (slots
     /// `cross_lo[k]..cross_hi[k]` of the list, boundary after boundary): position, m;
     /// velocity the forces see, m/s; spin, rad/s (0 without friction).
@@ -227,6 +233,8 @@ impl Scratch {
             out_x: vec![0.0; n],
             out_y: vec![0.0; n],
             out_floor: vec![0.0; n],
+            packed_intruder: vec![[0.0; 2]; slots(PRESCRIBED).len()],
+            packed_floor: vec![0.0; slots(NEAR_WALL).len()],
             prescribed: slots(PRESCRIBED),
             near_wall: slots(NEAR_WALL),
             snap: Vec::new(),
@@ -242,6 +250,8 @@ impl Scratch {
             + self.out_x.capacity()
             + self.out_y.capacity()
             + self.out_floor.capacity()
+            + 2 * self.packed_intruder.capacity()
+            + self.packed_floor.capacity()
             + 5 * self.snap.capacity()
             + self.snap_hist.capacity())
             + 4 * (self.prescribed.capacity() + self.near_wall.capacity())) as f64
@@ -297,6 +307,12 @@ struct Part<'a> {
     out_floor: &'a mut [f64],
     wall_hist: &'a mut [[f64; 4]],
     hist: &'a mut [f64],
+    /// The chunk's intruder grains and grains near a wall (slots), and where their forces
+    /// go when the chunk is done (see [`Scratch`]).
+    prescribed: &'a [u32],
+    near_wall: &'a [u32],
+    packed_intruder: &'a mut [[f64; 2]],
+    packed_floor: &'a mut [f64],
 }
 
 /// `v` cut at the consecutive offsets `cuts` (first 0, last `v.len()`); an empty `v` (an
@@ -390,6 +406,18 @@ pub(super) fn advance(w: &mut World) {
         cut(&mut w.wall_hist, &chunks).into_iter(),
         cut(hist, &entries).into_iter(),
     );
+    // Where each chunk's intruder grains and grains near a wall start in their lists.
+    let at = |list: &[u32]| -> Vec<usize> {
+        chunks
+            .iter()
+            .map(|&c| list.partition_point(|&i| (i as usize) < c))
+            .collect()
+    };
+    let (at_intruder, at_wall) = (at(&s.prescribed), at(&s.near_wall));
+    let mut packed = (
+        cut(&mut s.packed_intruder, &at_intruder).into_iter(),
+        cut(&mut s.packed_floor, &at_wall).into_iter(),
+    );
     let mut parts = Vec::with_capacity(nchunks);
     for k in 0..nchunks {
         let p = &mut pieces;
@@ -415,6 +443,10 @@ pub(super) fn advance(w: &mut World) {
             out_floor: p.13.next().unwrap_or_default(),
             wall_hist: p.14.next().unwrap_or_default(),
             hist: p.15.next().unwrap_or_default(),
+            prescribed: &s.prescribed[at_intruder[k]..at_intruder[k + 1]],
+            near_wall: &s.near_wall[at_wall[k]..at_wall[k + 1]],
+            packed_intruder: packed.0.next().unwrap_or_default(),
+            packed_floor: packed.1.next().unwrap_or_default(),
         });
     }
     let run = if c.friction {
@@ -444,12 +476,12 @@ pub(super) fn advance(w: &mut World) {
         max_step2,
         ..StepSums::default()
     };
-    for &i in &s.prescribed {
-        total.intruder_fx_n += s.out_x[i as usize];
-        total.intruder_fy_n += s.out_y[i as usize];
+    for &[fx, fy] in &s.packed_intruder {
+        total.intruder_fx_n += fx;
+        total.intruder_fy_n += fy;
     }
-    for &i in &s.near_wall {
-        total.floor_n += s.out_floor[i as usize];
+    for &f in &s.packed_floor {
+        total.floor_n += f;
     }
     w.drift_m += total.max_step2.sqrt();
     w.rebuild_due = w.drift_m > 0.5 * w.cfg.skin_m;
@@ -558,6 +590,13 @@ fn run_chunk<const FRICTION: bool>(c: &StepConst, f: &Fixed, p: &mut Part) -> f6
         if step2 > max_step2 {
             max_step2 = step2;
         }
+    }
+    for (out, &i) in p.packed_intruder.iter_mut().zip(p.prescribed) {
+        let l = i as usize - c0;
+        *out = [p.out_x[l], p.out_y[l]];
+    }
+    for (out, &i) in p.packed_floor.iter_mut().zip(p.near_wall) {
+        *out = p.out_floor[i as usize - c0];
     }
     max_step2
 }
