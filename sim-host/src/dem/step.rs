@@ -226,6 +226,7 @@ impl Scratch {
                 .filter(|&i| class[i as usize] == c)
                 .collect::<Vec<u32>>()
         };
+        let (prescribed, near_wall) = (slots(PRESCRIBED), slots(NEAR_WALL));
         Self {
             fx: vec![0.0; n],
             fy: vec![0.0; n],
@@ -233,10 +234,10 @@ impl Scratch {
             out_x: vec![0.0; n],
             out_y: vec![0.0; n],
             out_floor: vec![0.0; n],
-            packed_intruder: vec![[0.0; 2]; slots(PRESCRIBED).len()],
-            packed_floor: vec![0.0; slots(NEAR_WALL).len()],
-            prescribed: slots(PRESCRIBED),
-            near_wall: slots(NEAR_WALL),
+            packed_intruder: vec![[0.0; 2]; prescribed.len()],
+            packed_floor: vec![0.0; near_wall.len()],
+            prescribed,
+            near_wall,
             snap: Vec::new(),
             snap_hist: Vec::new(),
         }
