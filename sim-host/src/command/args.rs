@@ -91,10 +91,10 @@ pub fn parse_positive(s: &str) -> Result<f64, String> {
 /// Parse a strictly positive number that is `what` (named in the error: "`0` is not a frame
 /// rate in frames/s: a finite number > 0").
 pub fn parse_positive_as(s: &str, what: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("`{s}` is not {what}: a finite number > 0")),
-    }
+    parse_number(s)
+        .ok()
+        .filter(|&v| v > 0.0)
+        .ok_or_else(|| format!("`{s}` is not {what}: a finite number > 0"))
 }
 
 /// Check a forcing frequency: positive, within the trajectory's supported band.

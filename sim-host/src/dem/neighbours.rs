@@ -240,31 +240,27 @@ impl CellGrid {
         }
     }
 
+    /// Cell (`cx`, `cy`) as (its line, its place along the line).
+    #[inline]
+    fn line_of(&self, cx: usize, cy: usize) -> (usize, usize) {
+        if self.columns { (cx, cy) } else { (cy, cx) }
+    }
+
     /// Index of cell (`cx`, `cy`): line by line.
     #[inline]
     fn index(&self, cx: usize, cy: usize) -> usize {
-        if self.columns {
-            cx * self.ny + cy
-        } else {
-            cy * self.nx + cx
-        }
+        let (line, along) = self.line_of(cx, cy);
+        line * self.lines().1 + along
     }
 
     /// The cells around (`cx`, `cy`), itself included, in increasing index.
     #[inline]
-    fn around(&self, cx: usize, cy: usize) -> impl Iterator<Item = usize> + '_ {
-        let xs = cx.saturating_sub(1)..(cx + 2).min(self.nx);
-        let ys = cy.saturating_sub(1)..(cy + 2).min(self.ny);
-        let (outer, inner) = if self.columns { (xs, ys) } else { (ys, xs) };
-        outer.flat_map(move |a| {
-            inner.clone().map(move |b| {
-                if self.columns {
-                    self.index(a, b)
-                } else {
-                    self.index(b, a)
-                }
-            })
-        })
+    fn around(&self, cx: usize, cy: usize) -> impl Iterator<Item = usize> + use<> {
+        let (lines, per_line) = self.lines();
+        let (line, along) = self.line_of(cx, cy);
+        let alongs = along.saturating_sub(1)..(along + 2).min(per_line);
+        (line.saturating_sub(1)..(line + 2).min(lines))
+            .flat_map(move |l| alongs.clone().map(move |a| l * per_line + a))
     }
 
     #[inline]
@@ -370,10 +366,10 @@ impl NeighbourList {
         let timed = cuts_by_time(n, want, &old.chunk_start, chunk_seconds);
         let (lines, per_line) = grid.lines();
         let line_end: Vec<usize> = (1..=lines).map(|l| cell_start[l * per_line]).collect();
-        let lines = cuts_by_lines(n, want, &line_end);
+        let whole_lines = cuts_by_lines(n, want, &line_end);
         // One chunk (no boundary) is the last resort; it has no cross pairs.
         let one = (vec![0, n as u32], (vec![n as u32], vec![n as u32], 0));
-        let (chunk_start, (cross_lo, cross_hi, cross_count)) = [timed, lines]
+        let (chunk_start, (cross_lo, cross_hi, cross_count)) = [timed, whole_lines]
             .into_iter()
             .find_map(|cuts| cross_bounds(&cuts, &start, &js).map(|b| (cuts, b)))
             .unwrap_or(one);
