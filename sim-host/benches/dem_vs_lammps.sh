@@ -105,7 +105,7 @@ for r in $(seq "$REPS"); do
   done
   for t in 1 2 2p; do
     w=$(whole $t)
-    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w, $r)" >> "$WORK/runs.txt"
+    python3 -c "import json,sys; s=json.load(open('$WORK/ours$t/summary.json'))['summary']; print('$t', s['performance']['atom_steps_per_s'], s['grains'] * s['steps'] / $w)" >> "$WORK/runs.txt"
   done
 done
 python3 - "$WORK" "$NL" "$STEPS_L" <<'PY'

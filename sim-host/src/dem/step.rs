@@ -200,6 +200,10 @@ pub struct Scratch {
     /// Slots of the intruder grains and of the grains near a wall, increasing.
     prescribed: Vec<u32>,
     near_wall: Vec<u32>,
+    /// Where each chunk's grains start in `prescribed` and in `near_wall` (one more entry
+    /// than the chunks, the last the list's length).
+    prescribed_at: Vec<usize>,
+    near_wall_at: Vec<usize>,
     /// The step's forces on the intruder grains (`out_x`, `out_y` of `prescribed`'s slots)
     /// and on the floor (`out_floor` of `near_wall`'s), N, packed side by side by the chunk
     /// that owns them, so the sums after the step read a few cache lines from another
@@ -216,9 +220,10 @@ pub struct Scratch {
 }
 
 impl Scratch {
-    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others),
-    /// zeroed (`friction`: with the tangential sums).
-    pub fn sized(class: &[u8], friction: bool) -> Self {
+    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others)
+    /// in chunks starting at the slots `chunk_start` (the list's), zeroed (`friction`: with
+    /// the tangential sums).
+    pub fn sized(class: &[u8], chunk_start: &[u32], friction: bool) -> Self {
         let n = class.len();
         let t = |len| if friction { vec![0.0; len] } else { Vec::new() };
         let slots = |c: u8| {
@@ -227,7 +232,15 @@ impl Scratch {
                 .collect::<Vec<u32>>()
         };
         let (prescribed, near_wall) = (slots(PRESCRIBED), slots(NEAR_WALL));
+        let at = |list: &[u32]| -> Vec<usize> {
+            chunk_start
+                .iter()
+                .map(|&c| list.partition_point(|&i| i < c))
+                .collect()
+        };
         Self {
+            prescribed_at: at(&prescribed),
+            near_wall_at: at(&near_wall),
             fx: vec![0.0; n],
             fy: vec![0.0; n],
             ft: t(n),
@@ -255,7 +268,8 @@ impl Scratch {
             + self.packed_floor.capacity()
             + 5 * self.snap.capacity()
             + self.snap_hist.capacity())
-            + 4 * (self.prescribed.capacity() + self.near_wall.capacity())) as f64
+            + 4 * (self.prescribed.capacity() + self.near_wall.capacity())
+            + 8 * (self.prescribed_at.capacity() + self.near_wall_at.capacity())) as f64
             / n.max(1) as f64
     }
 }
@@ -407,17 +421,13 @@ pub(super) fn advance(w: &mut World) {
         cut(&mut w.wall_hist, &chunks).into_iter(),
         cut(hist, &entries).into_iter(),
     );
-    // Where each chunk's intruder grains and grains near a wall start in their lists.
-    let at = |list: &[u32]| -> Vec<usize> {
-        chunks
-            .iter()
-            .map(|&c| list.partition_point(|&i| (i as usize) < c))
-            .collect()
-    };
-    let (at_intruder, at_wall) = (at(&s.prescribed), at(&s.near_wall));
+    // Where each chunk's intruder grains and grains near a wall start in their lists (the
+    // scratch is sized for the list's chunks at every build).
+    let (at_intruder, at_wall) = (&s.prescribed_at, &s.near_wall_at);
+    debug_assert!(at_intruder.len() == chunks.len() && at_wall.len() == chunks.len());
     let mut packed = (
-        cut(&mut s.packed_intruder, &at_intruder).into_iter(),
-        cut(&mut s.packed_floor, &at_wall).into_iter(),
+        cut(&mut s.packed_intruder, at_intruder).into_iter(),
+        cut(&mut s.packed_floor, at_wall).into_iter(),
     );
     let mut parts = Vec::with_capacity(nchunks);
     for k in 0..nchunks {

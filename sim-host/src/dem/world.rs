@@ -187,7 +187,11 @@ impl World {
                 }
             })
             .collect();
-        self.scratch = Scratch::sized(&self.class, self.cfg.law.friction.is_some());
+        self.scratch = Scratch::sized(
+            &self.class,
+            &self.nl.chunk_start,
+            self.cfg.law.friction.is_some(),
+        );
         self.walls_at_build = w;
         self.rebuild_due = false;
         self.drift_m = 0.0;
