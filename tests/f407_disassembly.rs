@@ -56,8 +56,7 @@ fn disassemble(tool: &Path, elf: &Path, symbol: &str) -> Vec<String> {
 }
 
 fn setup() -> Option<(PathBuf, PathBuf)> {
-    let elf =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(sandjumper_sim::rig::firmware_image::F407_ELF);
+    let elf = Path::new(env!("CARGO_MANIFEST_DIR")).join(sandjumper_rig::firmware_image::F407_ELF);
     if !elf.is_file() {
         skip_or_fail(&format!("the F407 image at {}", elf.display()));
         return None;

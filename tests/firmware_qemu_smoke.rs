@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use sandjumper_sim::rig::hil::emulated_firmware;
+use sandjumper_rig::hil::emulated_firmware;
 use std::time::{Duration, Instant};
 
 /// Own target directory: the outer `cargo test` holds the lock on `target/`'s host build.

@@ -7,8 +7,8 @@ mod hil_common;
 
 use hil_common::{params, sil};
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::ModelName;
-use sandjumper_sim::rig::hil::HilSpec;
+use sandjumper_model::ModelName;
+use sandjumper_rig::hil::HilSpec;
 
 fn check(fps: u32, ticks_per_frame: u32) {
     let mut spec = HilSpec::new(JumpKind::DelayedStutter, 10.0, 0.3, ModelName::Eq4);

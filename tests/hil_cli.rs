@@ -3,8 +3,8 @@
 //! parameters, the summary and the figure; bad input is an error with exit status 2.
 
 use clap::Parser;
-use sandjumper_sim::acqlog::{AcqLog, ReadOptions};
-use sandjumper_sim::cli::{Cli, EXIT_BAD_INPUT, execute};
+use sandjumper_acqlog::{AcqLog, ReadOptions};
+use sandjumper_cli::cli::{Cli, EXIT_BAD_INPUT, execute};
 
 fn run(args: &[&str]) -> Result<(), (u8, String)> {
     let mut all = vec!["sandjumper", "hil"];
@@ -99,10 +99,9 @@ fn a_camera_file_changes_the_frames_and_a_bad_one_is_refused() {
         "--json",
     ])
     .expect("hil runs");
-    let seq = sandjumper_sim::imaging::sequence::ImageSequence::open(
-        out.join("frames").to_str().unwrap(),
-    )
-    .unwrap();
+    let seq =
+        sandjumper_imaging::sequence::ImageSequence::open(out.join("frames").to_str().unwrap())
+            .unwrap();
     let first = seq.nth(0).unwrap().unwrap().frame;
     assert_eq!((first.width(), first.height()), (128, 900));
     assert_eq!(first.depth().bits(), 16);

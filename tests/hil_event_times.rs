@@ -19,9 +19,9 @@ mod hil_common;
 
 use hil_common::{params, sil};
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::rig::hil::pil::{self, PilConfig};
-use sandjumper_sim::rig::hil::{HilSpec, RigModelConfig, emulated_firmware, run_jump};
-use sandjumper_sim::{JumpSpec, JumpSummary, ModelName, SimOptions, simulate_jump};
+use sandjumper_model::{JumpSpec, JumpSummary, ModelName, SimOptions, simulate_jump};
+use sandjumper_rig::hil::pil::{self, PilConfig};
+use sandjumper_rig::hil::{HilSpec, RigModelConfig, emulated_firmware, run_jump};
 
 /// Largest difference of lift-off times between the loop and the imposed stroke, s.
 const LIFTOFF_LAG_S: f64 = 0.001;

@@ -6,12 +6,12 @@
 mod hil_common;
 
 use hil_common::{params, sil};
+use sandjumper_acqlog::{ReadOptions, read_log};
 use sandjumper_core::FaultCode;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::acqlog::{ReadOptions, read_log};
-use sandjumper_sim::rig::hil::log::acquisition_log;
-use sandjumper_sim::rig::hil::{HilOutcome, HilSpec, InjectedFault, Injection};
-use sandjumper_sim::{ModelName, Params};
+use sandjumper_model::{ModelName, Params};
+use sandjumper_rig::hil::log::acquisition_log;
+use sandjumper_rig::hil::{HilOutcome, HilSpec, InjectedFault, Injection};
 
 /// 30 ms into a 10 Hz single jump on sand at phi 0.57: the motor is moving fast.
 const AT_S: f64 = 0.03;
@@ -127,8 +127,8 @@ fn simulated_control_overrun_is_a_deadline_fault_on_the_same_tick() {
 #[test]
 fn a_rig_whose_lift_is_not_down_refuses_to_arm_and_one_whose_lift_is_down_jumps() {
     use sandjumper_core::bed::BedInputs;
-    use sandjumper_sim::rig::hil::run::rig_config;
-    use sandjumper_sim::rig::hil::{RigModelConfig, SilLink, run_jump};
+    use sandjumper_rig::hil::run::rig_config;
+    use sandjumper_rig::hil::{RigModelConfig, SilLink, run_jump};
     let p = params(0.57);
     let mut spec = HilSpec::new(JumpKind::Single, 10.0, 0.0, ModelName::Eq4);
     let config = RigModelConfig::default();

@@ -6,10 +6,8 @@
 use std::path::Path;
 
 use clap::Parser;
-use sandjumper_sim::cli::{Cli, EXIT_BAD_INPUT, execute};
-use sandjumper_sim::rig::firmware_image::{
-    Board, EMULATED_BUILD, EMULATED_ELF, F407_ELF, check_elf,
-};
+use sandjumper_cli::cli::{Cli, EXIT_BAD_INPUT, execute};
+use sandjumper_rig::firmware_image::{Board, EMULATED_BUILD, EMULATED_ELF, F407_ELF, check_elf};
 
 fn run(args: &[&str]) -> Result<(), (u8, String)> {
     let mut all = vec!["sandjumper"];
@@ -98,12 +96,12 @@ fn the_two_boards_build_to_different_paths() {
 
 #[test]
 fn rig_flash_refuses_the_emulated_boards_image() {
-    if !sandjumper_sim::rig::hil::emulated_firmware::available_for_test("the flash image check") {
+    if !sandjumper_rig::hil::emulated_firmware::available_for_test("the flash image check") {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let elf = sandjumper_sim::rig::hil::emulated_firmware::build_once(root)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let elf =
+        sandjumper_rig::hil::emulated_firmware::build_once(root).unwrap_or_else(|e| panic!("{e}"));
     let elf_s = elf.to_str().expect("utf-8");
     // A stand-in for probe-rs that exists: the image check comes before any probe-rs call.
     let (code, message) = run(&[
@@ -124,4 +122,4 @@ fn rig_flash_refuses_the_emulated_boards_image() {
 }
 
 /// The F407 build command, as the flash refusal names it.
-const F407_BUILD_HINT: &str = sandjumper_sim::rig::firmware_image::F407_BUILD;
+const F407_BUILD_HINT: &str = sandjumper_rig::firmware_image::F407_BUILD;

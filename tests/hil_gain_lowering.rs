@@ -7,8 +7,8 @@ mod hil_common;
 
 use hil_common::{delayed, params, sil, spring_ringing_n};
 use sandjumper_core::sample::flags;
-use sandjumper_sim::ModelName;
-use sandjumper_sim::rig::hil::HilSpec;
+use sandjumper_model::ModelName;
+use sandjumper_rig::hil::HilSpec;
 
 /// The delay ends at T/2 + tau = 0.8 s; the gains ramp back over its last 50 ms. The ringing
 /// is measured over the 100 ms before the ramp back starts (almost one 8 Hz period).

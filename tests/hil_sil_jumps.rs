@@ -26,8 +26,8 @@ mod hil_common;
 
 use hil_common::{params, sil};
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::rig::hil::HilSpec;
-use sandjumper_sim::{JumpSpec, ModelName, SimOptions, simulate_jump};
+use sandjumper_model::{JumpSpec, ModelName, SimOptions, simulate_jump};
+use sandjumper_rig::hil::HilSpec;
 
 /// Largest |p_cmd - p| until the force first saturates, m.
 const TRACKING_BOUND_M: f64 = 0.002;
@@ -99,7 +99,7 @@ fn delayed_stutter_jumps_track_and_match_the_kinematic_height() {
 /// Largest deviation of the force command from its 21-tick (2.1 ms) moving average between 4
 /// and 31 ms after the start, N: the loop's own oscillation once the feedforward's step at the
 /// start has passed (the trajectory's force changes little over 2 ms).
-fn start_ringing_n(o: &sandjumper_sim::rig::hil::HilOutcome) -> f64 {
+fn start_ringing_n(o: &sandjumper_rig::hil::HilOutcome) -> f64 {
     let f: Vec<f64> = o
         .trace
         .iter()

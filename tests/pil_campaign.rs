@@ -8,8 +8,8 @@
 use std::path::Path;
 
 use clap::Parser;
-use sandjumper_sim::cli::{Cli, execute};
-use sandjumper_sim::rig::hil::emulated_firmware;
+use sandjumper_cli::cli::{Cli, execute};
+use sandjumper_rig::hil::emulated_firmware;
 
 fn run(args: &[&str]) -> Result<(), (u8, String)> {
     let cli = Cli::try_parse_from(args).map_err(|e| (e.exit_code() as u8, e.to_string()))?;

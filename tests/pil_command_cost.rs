@@ -15,9 +15,9 @@ use std::path::Path;
 use sandjumper_core::command::replay_upload;
 use sandjumper_core::replay::REPLAY_CAPACITY;
 use sandjumper_core::{Command, Reply, SensorFrame};
-use sandjumper_sim::rig::hil::emulated_firmware;
-use sandjumper_sim::rig::hil::link::RigLink;
-use sandjumper_sim::rig::hil::pil::{self, PilConfig};
+use sandjumper_rig::hil::emulated_firmware;
+use sandjumper_rig::hil::link::RigLink;
+use sandjumper_rig::hil::pil::{self, PilConfig};
 
 /// The F407's tick budget: 80 % of a 10 kHz period at 168 MHz, cycles
 /// (`firmware/src/board/f407.rs`, `TICK_BUDGET_CYCLES`).

@@ -13,10 +13,10 @@ use std::time::{Duration, Instant};
 
 use hil_common::{delayed, params, sil};
 use sandjumper_core::FaultCode;
-use sandjumper_sim::ModelName;
-use sandjumper_sim::rig::hil::emulated_firmware;
-use sandjumper_sim::rig::hil::pil::{self, PilConfig};
-use sandjumper_sim::rig::hil::{
+use sandjumper_model::ModelName;
+use sandjumper_rig::hil::emulated_firmware;
+use sandjumper_rig::hil::pil::{self, PilConfig};
+use sandjumper_rig::hil::{
     HilOutcome, HilSpec, InjectedFault, Injection, LinkError, RigModelConfig, run_jump,
 };
 

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use clap::Parser;
-use sandjumper_sim::cli::{Cli, execute};
+use sandjumper_cli::cli::{Cli, execute};
 
 fn run(args: &[&str]) {
     let mut all = vec!["sandjumper"];

@@ -8,17 +8,17 @@ mod hil_common;
 
 use clap::Parser;
 use hil_common::{params, sil};
+use sandjumper_acqlog::{AcqLog, Column, LogMetadata, LogRow, ReadOptions};
+use sandjumper_cli::cli::{Cli, EXIT_BAD_INPUT, execute};
+use sandjumper_cli::imaging::command::log_clock;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::ModelName;
-use sandjumper_sim::acqlog::{AcqLog, Column, LogMetadata, LogRow, ReadOptions};
-use sandjumper_sim::cli::{Cli, EXIT_BAD_INPUT, execute};
-use sandjumper_sim::imaging::command::log_clock;
-use sandjumper_sim::imaging::render::{CameraModel, write_png};
-use sandjumper_sim::imaging::sequence::ImageSequence;
-use sandjumper_sim::imaging::track::{TrackSpec, track_sequence};
-use sandjumper_sim::rig::hil::HilSpec;
-use sandjumper_sim::rig::hil::camera::{heights_by_period, write_frames};
-use sandjumper_sim::rig::hil::log::acquisition_log;
+use sandjumper_imaging::render::{CameraModel, write_png};
+use sandjumper_imaging::sequence::ImageSequence;
+use sandjumper_imaging::track::{TrackSpec, track_sequence};
+use sandjumper_model::ModelName;
+use sandjumper_rig::hil::HilSpec;
+use sandjumper_rig::hil::camera::{heights_by_period, write_frames};
+use sandjumper_rig::hil::log::acquisition_log;
 
 fn run(args: &[&str]) -> Result<(), (u8, String)> {
     let cli = Cli::try_parse_from(args).map_err(|e| (e.exit_code() as u8, e.to_string()))?;
@@ -224,7 +224,7 @@ fn the_scale_comes_back_from_a_simulated_slow_move_against_the_encoder() {
     log.write_file(&log_path).unwrap();
     let seq = ImageSequence::open(frames.to_str().unwrap()).unwrap();
     let (fit, n, flagged) =
-        sandjumper_sim::imaging::command::scale_from(&seq, &log, 79.0, None).unwrap();
+        sandjumper_cli::imaging::command::scale_from(&seq, &log, 79.0, None).unwrap();
     assert_eq!((n, flagged), (300, 0));
     assert!(fit.direction_ok);
     assert!(fit.r_squared > 0.999_999, "{fit:?}");

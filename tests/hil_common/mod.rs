@@ -2,9 +2,9 @@
 #![allow(dead_code)]
 
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_sim::rig::hil::run::rig_config;
-use sandjumper_sim::rig::hil::{HilOutcome, HilSpec, RigModelConfig, SilLink, run_jump};
-use sandjumper_sim::{ModelName, Params};
+use sandjumper_model::{ModelName, Params};
+use sandjumper_rig::hil::run::rig_config;
+use sandjumper_rig::hil::{HilOutcome, HilSpec, RigModelConfig, SilLink, run_jump};
 
 /// Parameters at `phi`.
 pub fn params(phi: f64) -> Params {

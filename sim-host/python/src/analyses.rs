@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString, PyTuple};
-use sandjumper_sim::cli::args::Command;
+use sandjumper_cli::cli::args::Command;
 
 use crate::argv::Argv;
 use crate::convert::{f64_array, json_to_py, path_arg, py_err, str_array};
@@ -230,8 +230,8 @@ fn frames_analysis(
     argv.value("out", "--out", dir.display());
     add_options(&mut argv, options)?;
     let analysed = match argv.parse()? {
-        Command::Track(a) => py.detach(|| sandjumper_sim::imaging::command::analyse(&a)),
-        Command::Piv(a) => py.detach(|| sandjumper_sim::flow::command::analyse(&a)),
+        Command::Track(a) => py.detach(|| sandjumper_cli::imaging::command::analyse(&a)),
+        Command::Piv(a) => py.detach(|| sandjumper_cli::flow::command::analyse(&a)),
         _ => unreachable!("frames_analysis runs track or piv"),
     };
     let done = analysed.map_err(|e| argv.error(e))?;
@@ -306,7 +306,7 @@ pub fn dem_collide(
     let Command::Dem(a) = argv.parse()? else {
         unreachable!("`sandjumper dem` parses as Command::Dem")
     };
-    let json = sandjumper_sim::dem::command::collide_json(&a).map_err(|e| argv.error(e))?;
+    let json = sandjumper_cli::dem::command::collide_json(&a).map_err(|e| argv.error(e))?;
     Ok(json_to_py(py, &json)?.unbind())
 }
 
@@ -341,7 +341,7 @@ fn dem_run(
     let Command::Dem(a) = argv.parse()? else {
         unreachable!("`sandjumper dem` parses as Command::Dem")
     };
-    py.detach(|| sandjumper_sim::dem::command::run(&a))
+    py.detach(|| sandjumper_cli::dem::command::run(&a))
         .map_err(|e| argv.error(e))?;
     load_folder(py, &dir, None, true)
 }
@@ -377,7 +377,7 @@ pub fn read_log(
 ) -> PyResult<Py<PyAny>> {
     let path = path_arg("path", path)?;
     let (log, summary) =
-        sandjumper_sim::acqlog::command::load_checked(&path, allow_gaps).map_err(py_err)?;
+        sandjumper_cli::acqlog::command::load_checked(&path, allow_gaps).map_err(py_err)?;
     let d = PyDict::new(py);
     d.set_item("columns", log_columns(py, &log)?)?;
     d.set_item("metadata", log_metadata(py, &log)?)?;
@@ -407,6 +407,6 @@ pub fn log_to_mcap(
     let Command::Log(a) = argv.parse()? else {
         unreachable!("`sandjumper log` parses as Command::Log")
     };
-    py.detach(|| sandjumper_sim::acqlog::command::run(&a))
+    py.detach(|| sandjumper_cli::acqlog::command::run(&a))
         .map_err(|e| argv.error(e))
 }

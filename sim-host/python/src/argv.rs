@@ -6,9 +6,9 @@ use std::fmt::Display;
 use clap::Parser;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use sandjumper_sim::cli::Cli;
-use sandjumper_sim::cli::args::Command;
-use sandjumper_sim::command::CliError;
+use sandjumper_cli::cli::Cli;
+use sandjumper_cli::cli::args::Command;
+use sandjumper_output::CliError;
 
 /// An argument list under construction, and which Python argument each flag came from.
 pub struct Argv {

@@ -4,17 +4,17 @@ use clap::ValueEnum;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PySequence, PyString};
-use sandjumper_sim::SeriesRow;
-use sandjumper_sim::acqlog::{AcqLog, Column};
-use sandjumper_sim::cli::args::Command;
-use sandjumper_sim::command::args::{
+use sandjumper_acqlog::{AcqLog, Column};
+use sandjumper_cli::cli::args::Command;
+use sandjumper_cli::command::args::{
     KindArg, ModelArg, check_freq, check_phi, check_tau, parse_gain_lowering, parse_rtol,
 };
-use sandjumper_sim::command::resolve::resolve_params;
-use sandjumper_sim::output::SERIES_HEADER;
-use sandjumper_sim::study::sweep::command::resolve_sweep_params;
-use sandjumper_sim::study::sweep::drive::run_driven;
-use sandjumper_sim::study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
+use sandjumper_cli::study::sweep::command::resolve_sweep_params;
+use sandjumper_model::SeriesRow;
+use sandjumper_output::SERIES_HEADER;
+use sandjumper_output::resolve::resolve_params;
+use sandjumper_study::sweep::drive::run_driven;
+use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
 
 use crate::argv::Argv;
 use crate::convert::{f64_array, i64_array, json_to_py, params_source, py_err, str_array};
@@ -139,7 +139,7 @@ fn series_dict<'py>(py: Python<'py>, rows: &[SeriesRow]) -> PyResult<Bound<'py, 
 }
 
 /// Reads an optional value of a log row as f64.
-type OptionalValue = fn(&sandjumper_sim::acqlog::LogRow) -> Option<f64>;
+type OptionalValue = fn(&sandjumper_acqlog::LogRow) -> Option<f64>;
 
 /// An acquisition log's columns (see [`HilResult::log`]).
 pub fn log_columns<'py>(py: Python<'py>, log: &AcqLog) -> PyResult<Bound<'py, PyDict>> {
@@ -257,7 +257,7 @@ pub fn jump(
     let file = params_source("params", params)?;
     let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_sim::study::jump_command::simulate_run(&a, params, true))
+        .detach(|| sandjumper_cli::study::jump_command::simulate_run(&a, params, true))
         .map_err(|e| argv.error(e))?;
     Ok(JumpResult {
         summary: json_to_py(py, &run.json)?.unbind(),
@@ -510,7 +510,7 @@ pub fn hil(
     let file = params_source("params", params)?;
     let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_sim::rig::hil::command::simulate_run(&a, params))
+        .detach(|| sandjumper_cli::rig::hil::command::simulate_run(&a, params))
         .map_err(|e| argv.error(e))?;
     let log = run.acquisition_log();
     Ok(HilResult {
@@ -548,11 +548,11 @@ pub fn replay(
         unreachable!("`sandjumper replay` parses as Command::Replay")
     };
     let file = params_source("params", params)?;
-    let log = sandjumper_sim::study::replay::command::read_log_file(&a.log, a.allow_gaps)
+    let log = sandjumper_cli::study::replay::command::read_log_file(&a.log, a.allow_gaps)
         .map_err(|e| argv.error(e))?;
     let run = py
         .detach(|| {
-            sandjumper_sim::study::replay::command::replay_run(&a, &log, file.as_ref(), true)
+            sandjumper_cli::study::replay::command::replay_run(&a, &log, file.as_ref(), true)
         })
         .map_err(|e| argv.error(e))?;
     Ok(JumpResult {

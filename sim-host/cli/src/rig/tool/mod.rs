@@ -1,0 +1,204 @@
+//! `sandjumper rig`: the host tool for the rig's board, over its USB serial port
+//! (`--port PATH`), or against the controller in this process (`--link sil`) or the real
+//! firmware in QEMU (`--link pil`), where the host plays the rig in lockstep.
+//!
+//! - `flash`: write the firmware with the probe-rs CLI (no-op for sil/pil).
+//! - `status`: state, phase, fault and counters.
+//! - `jump`: configure, arm, run one sine jump; its acquisition log and a figure.
+//! - `intrude`: the slow-intrusion program; the force-vs-depth curves `depth_m,force_n` (the
+//!   input of `sandjumper fit intrusion`) and a figure: the paper's `F_p(z)` measurement.
+//! - `replay LOG`: upload an (edited) encoder record as the core's replay table, verify its
+//!   checksum, run it, record the new log; refused before anything moves when it would leave
+//!   the stroke, exceed the drive's force or not fit the firmware's buffer.
+//!
+//! - `calibrate-drive`: send (and save) the DAC codes of the drive's force command measured at
+//!   bring-up; `--drive-calibration FILE` sends saved codes at the start of any command.
+//! - `acknowledge-reset`: allow `Arm` again after a reset other than power-on.
+//!
+//! All programs run through [`session::run_program`], the one code path for the three links.
+
+pub mod calibrate;
+pub mod flash;
+pub mod intrude;
+pub mod jump;
+pub mod replay;
+pub mod status;
+
+pub use sandjumper_rig::tool::{intrusion_fixture, output, session};
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::{Args, Subcommand, ValueEnum};
+
+use crate::command::args::ModelArg;
+use crate::rig::hil::command::{LinkArg, open_link};
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_output::CliError;
+use sandjumper_output::resolve::{ParamsFile, resolve_params};
+use sandjumper_rig::hil::link::RigLink;
+use sandjumper_rig::hil::rig_model::RigModelConfig;
+use sandjumper_rig::hil::serial;
+
+/// `sandjumper rig`.
+#[derive(Debug, Clone, Args)]
+pub struct RigArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: RigCommand,
+}
+
+/// The rig subcommands.
+#[derive(Debug, Clone, Subcommand)]
+pub enum RigCommand {
+    /// Write the firmware to the board with the probe-rs CLI (nothing to do for sil/pil).
+    Flash(flash::FlashArgs),
+    /// Print the controller's state, fault and counters (--json for JSON).
+    Status(status::StatusArgs),
+    /// Configure, arm and run one jump; write its acquisition log, summary and figure.
+    Jump(jump::JumpArgs),
+    /// Run the slow-intrusion program; write force-vs-depth CSVs (input of `fit intrusion`),
+    /// the acquisition log and a figure.
+    Intrude(intrude::IntrudeArgs),
+    /// Upload an acquisition log's (edited) motor trajectory, verify it, run it and record the
+    /// new log.
+    Replay(replay::ReplayArgs),
+    /// Send the DAC codes of the drive's force command measured at bring-up (drive off), and
+    /// save them for --drive-calibration.
+    CalibrateDrive(calibrate::CalibrateDriveArgs),
+    /// Allow Arm again after a reset other than power-on (the carriage's position checked).
+    AcknowledgeReset(calibrate::AcknowledgeResetArgs),
+}
+
+/// A simulated controller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SimLink {
+    /// The core's controller in this process.
+    Sil,
+    /// The real firmware in QEMU mps2-an386 (frames over semihosting FIFOs).
+    Pil,
+}
+
+/// Which controller: a board on a serial port, or a simulated one (exactly one of the two).
+#[derive(Debug, Clone, Args)]
+#[group(id = "controller", required = true, multiple = false)]
+pub struct ControllerArgs {
+    /// The board's USB serial port (e.g. /dev/ttyACM0): the real rig.
+    #[arg(long, value_name = "PATH")]
+    pub port: Option<String>,
+    /// A simulated controller against a simulated rig instead of a board.
+    #[arg(long, value_enum)]
+    pub link: Option<SimLink>,
+}
+
+/// The controller and its firmware.
+#[derive(Debug, Clone, Args)]
+pub struct TargetArgs {
+    /// `--port PATH` or `--link sil|pil`.
+    #[command(flatten)]
+    pub controller: ControllerArgs,
+    /// Firmware ELF: for --link pil the QEMU build (--features board-qemu); for `flash` the
+    /// F407 build.
+    #[arg(long, value_name = "ELF")]
+    pub firmware: Option<PathBuf>,
+    /// Drive calibration saved by `rig calibrate-drive --save`: sent when the session opens.
+    #[arg(long, value_name = "FILE.toml")]
+    pub drive_calibration: Option<PathBuf>,
+}
+
+/// The ELF QEMU runs for `--link pil` unless `--firmware` says otherwise.
+pub const DEFAULT_QEMU_ELF: &str = sandjumper_rig::firmware_image::EMULATED_ELF;
+
+impl TargetArgs {
+    /// The link argument of `sandjumper hil` this target is.
+    pub fn link_arg(&self) -> LinkArg {
+        match (&self.controller.port, self.controller.link) {
+            (Some(p), _) => LinkArg::Serial(p.clone()),
+            (None, Some(SimLink::Pil)) => LinkArg::Pil,
+            _ => LinkArg::Sil,
+        }
+    }
+
+    /// True when the host plays the rig (sil/pil).
+    pub fn is_simulated(&self) -> bool {
+        self.controller.port.is_none()
+    }
+
+    /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
+    /// `--drive-calibration` names one.
+    pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
+        let calibration = self
+            .drive_calibration
+            .as_deref()
+            .map(calibrate::read_calibration)
+            .transpose()?;
+        let mut link = self.open_link(model)?;
+        if let Some(cal) = calibration {
+            calibrate::send_calibration(link.as_mut(), cal)?;
+        }
+        Ok(link)
+    }
+
+    fn open_link(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
+        let elf = self
+            .firmware
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_QEMU_ELF));
+        match self.link_arg() {
+            // A board that streams samples needs longer than a lockstep answer.
+            LinkArg::Serial(path) => Ok(Box::new(
+                serial::start(&path, Duration::from_secs(2)).map_err(|e| {
+                    CliError::input(format!("cannot open the board on {path}: {e}"))
+                })?,
+            )),
+            other => open_link(&other, model, &elf),
+        }
+    }
+}
+
+/// The simulated rig (for sil/pil) and the parameters used to interpret measurements.
+#[derive(Debug, Clone, Args)]
+pub struct RigParamArgs {
+    /// Ground model of the simulated sand (sil/pil).
+    #[arg(long, value_enum, default_value = "eq4")]
+    pub model: ModelArg,
+    /// Packing fraction phi of the simulated sand (presets 0.57..=0.62).
+    #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = crate::command::args::parse_phi)]
+    pub phi: f64,
+    /// TOML file overriding any parameter (as for `sandjumper jump --params`): the simulated
+    /// rig's, and the masses, force constant and peak force used to interpret a board's data.
+    #[arg(long, value_name = "FILE.toml")]
+    pub params: Option<PathBuf>,
+}
+
+impl RigParamArgs {
+    /// Resolved parameters.
+    pub fn resolve(&self) -> Result<Params, CliError> {
+        let file = ParamsFile::read_opt(self.params.as_deref())?;
+        resolve_params(self.phi, file.as_ref())
+    }
+
+    /// The ground model.
+    pub fn model(&self) -> ModelName {
+        self.model.into()
+    }
+}
+
+/// A link failure as a command error: the controller's refusals and a bad port are bad input
+/// (exit 2), like every other failure of the run.
+pub fn link_failed(link: &str, what: &str, e: impl std::fmt::Display) -> CliError {
+    CliError::input(format!("{what} through {link} failed: {e}"))
+}
+
+/// Run `rig`.
+pub fn run(a: &RigArgs) -> Result<(), CliError> {
+    match &a.command {
+        RigCommand::Flash(f) => flash::run(f),
+        RigCommand::Status(s) => status::run(s),
+        RigCommand::Jump(j) => jump::run(j),
+        RigCommand::Intrude(i) => intrude::run(i),
+        RigCommand::Replay(r) => replay::run(r),
+        RigCommand::CalibrateDrive(c) => calibrate::run(c),
+        RigCommand::AcknowledgeReset(a) => calibrate::acknowledge_reset(a),
+    }
+}

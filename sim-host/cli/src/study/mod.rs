@@ -1,0 +1,12 @@
+//! The subcommands `sandjumper jump`, `sweep`, `merge`, `replay`, `fit`, `figures`.
+//!
+//! The library items are re-exported from `sandjumper_study`, so a subcommand reads them as its
+//! neighbours.
+
+pub use sandjumper_study::*;
+
+pub mod figures;
+pub mod fit;
+pub mod jump_command;
+pub mod replay;
+pub mod sweep;

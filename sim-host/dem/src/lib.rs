@@ -1,0 +1,23 @@
+//! The 2-D discrete element model of the paper's Supplementary I, and a fuller one.
+//!
+//! - [`contact`]: the spring-dashpot contact law, damping conventions, friction with history.
+//! - [`grains`]: the grains as a structure of arrays; size distributions.
+//! - [`neighbours`]: Verlet lists with a skin from a cell grid.
+//! - [`world`]: the fused time step (forces, walls, gravity, drag, integrator).
+//! - [`collide`]: one binary collision, against the analytic values.
+pub mod bed;
+pub mod checkpoint;
+pub mod coarse;
+pub mod collide;
+pub mod contact;
+pub mod figure;
+pub mod grains;
+pub mod intrude;
+pub mod intruder;
+pub mod neighbours;
+pub mod outputs;
+pub mod params;
+pub mod render;
+pub mod step;
+pub mod structure;
+pub mod world;

@@ -1,0 +1,500 @@
+//! The folder a finished intrusion writes: data (CSV, `.npy`), pictures (PNG, SVG, GIF),
+//! side-wall frames that `sandjumper piv` reads, the resolved parameters, and a summary with
+//! the structure of the flow (crystallisation, the jammed region) and the added mass against
+//! the model's eq. 6.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::intrude::{FlowRow, Run};
+use super::structure::{JammedRegion, hexatic_order, jammed_region};
+use sandjumper_flow::figure::MapFigure;
+use sandjumper_output::CliError;
+use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel};
+use sandjumper_output::plot::{palette, save_figure};
+use sandjumper_output::{StagedDir, write_csv, write_npy};
+
+/// What a run reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Where it was written.
+    pub out: String,
+    /// Grains (free and intruder).
+    pub grains: usize,
+    /// Steps.
+    pub steps: u64,
+    /// Step, s.
+    pub dt_s: f64,
+    /// Shortest contact time, s.
+    pub contact_time_s: f64,
+    /// `t_c v / d` at the fastest intrusion speed.
+    pub contact_time_speed_over_d: f64,
+    /// `v / sqrt(g d)`.
+    pub froude: f64,
+    /// Deepest intrusion, m.
+    pub max_depth_m: f64,
+    /// Largest force on the intruder, N.
+    pub max_force_n: f64,
+    /// Added mass at the deepest sample, kg.
+    pub final_added_mass_kg: f64,
+    /// Median of DEM added mass over the model's eq. 6 (for a foot of this width), samples
+    /// deeper than a quarter of the deepest.
+    pub added_mass_ratio_to_model: f64,
+    /// Hexatic order of the bed at the end (1: crystal).
+    pub hexatic_order: f64,
+    /// The jammed region under the intruder at the last intruding sample.
+    pub jammed: JammedRegion,
+    /// Samples.
+    pub samples: usize,
+    /// Side-wall frames written.
+    pub frames: usize,
+    /// Largest overlap over a radius at the end.
+    pub max_overlap_ratio: f64,
+    /// Stepping speed of this process (the steps since the start or the resume).
+    pub performance: super::intrude::Performance,
+}
+
+impl Summary {
+    /// One line for the terminal.
+    pub fn line(&self) -> String {
+        format!(
+            "dem intrude: {} grains, {} steps, depth {:.2} mm, peak force {:.3} N, added mass {:.4} kg ({:.2}x the model's eq. 6), jammed region side {:.1} deg, hexatic order {:.2}; t_c v/d {:.2e}, Froude {:.2}; {:.1} M atom-steps/s; written to {}",
+            self.grains,
+            self.steps,
+            1e3 * self.max_depth_m,
+            self.max_force_n,
+            self.final_added_mass_kg,
+            self.added_mass_ratio_to_model,
+            self.jammed.side_angle_deg,
+            self.hexatic_order,
+            self.contact_time_speed_over_d,
+            self.froude,
+            1e-6 * self.performance.atom_steps_per_s,
+            self.out
+        )
+    }
+}
+
+const FLOW_HEADER: &[&str] = &[
+    "sample",
+    "t_s",
+    "depth_m",
+    "foot_speed_m_s",
+    "momentum_left_kg_m_s",
+    "momentum_right_kg_m_s",
+    "momentum_kg_m_s",
+    "added_mass_kg",
+    "max_shear_rate_per_s",
+    "cells",
+];
+
+/// TOML has no null: drop them (NaN numbers and absent options serialise as null in JSON).
+fn strip_nulls(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|_, x| !x.is_null());
+            m.values_mut().for_each(strip_nulls);
+        }
+        serde_json::Value::Array(a) => {
+            a.retain(|x| !x.is_null());
+            a.iter_mut().for_each(strip_nulls);
+        }
+        _ => {}
+    }
+}
+
+fn err(e: impl std::fmt::Display) -> CliError {
+    CliError::internal(e.to_string())
+}
+
+/// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m`, kg.
+pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
+    let mut params = sandjumper_model::params::Params::preset(phi).map_err(|e| e.to_string())?;
+    params.robot.foot_radius_m = r_m;
+    let sand = sandjumper_model::ground::Sand::new(
+        &params,
+        sandjumper_model::ground::GroundLaw::resolve(
+            sandjumper_model::params::ModelName::Eq4,
+            &params.model,
+        ),
+    );
+    Ok(sand.added_mass(depth_m))
+}
+
+/// Median DEM/model added-mass ratio over intruding samples deeper than a quarter of the
+/// deepest.
+pub fn added_mass_ratio(flow: &[FlowRow], phi: f64, foot_radius_m: f64) -> f64 {
+    let deepest = flow.iter().map(|r| r.depth_m).fold(0.0, f64::max);
+    let mut ratios: Vec<f64> = flow
+        .iter()
+        .filter(|r| {
+            r.depth_m > 0.25 * deepest && r.added_mass_kg.is_finite() && r.foot_speed_m_s > 0.0
+        })
+        .filter_map(|r| {
+            let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
+            (m > 0.0).then(|| r.added_mass_kg / m)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return f64::NAN;
+    }
+    ratios.sort_by(f64::total_cmp);
+    ratios[ratios.len() / 2]
+}
+
+/// Write the finished run into `out` (from the work directory `work`, removed after).
+pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
+    let staged = StagedDir::create(out)?;
+    let spec = &run.spec;
+    let grid = &run.grid;
+    write_csv(
+        &staged.file("force_depth.csv"),
+        &run.state.force,
+        &["t_s", "depth_m", "velocity_m_s", "force_n"],
+    )
+    .map_err(err)?;
+    write_csv(&staged.file("flow.csv"), &run.state.flow, FLOW_HEADER).map_err(err)?;
+    #[derive(Serialize)]
+    struct Am {
+        depth_m: f64,
+        added_mass_kg: f64,
+    }
+    let am: Vec<Am> = run
+        .state
+        .flow
+        .iter()
+        .filter(|r| r.depth_m > 0.0 && r.foot_speed_m_s > 0.0 && r.added_mass_kg.is_finite())
+        .map(|r| Am {
+            depth_m: r.depth_m,
+            added_mass_kg: r.added_mass_kg,
+        })
+        .collect();
+    write_csv(
+        &staged.file("added_mass.csv"),
+        &am,
+        &["depth_m", "added_mass_kg"],
+    )
+    .map_err(err)?;
+    // Fields: per sample CSV, and stacked arrays (samples, rows, columns).
+    std::fs::create_dir_all(staged.file("fields")).map_err(err)?;
+    let (nx, ny) = (grid.nx, grid.ny);
+    let xs: Vec<f64> = (0..nx).map(|i| grid.node(i, 0).0).collect();
+    let hs: Vec<f64> = (0..ny)
+        .map(|j| grid.node(0, j).1 - spec.surface_m)
+        .collect();
+    for (k, f) in run.fields.iter().enumerate() {
+        #[derive(Serialize)]
+        struct Cell {
+            x_m: f64,
+            h_m: f64,
+            u_m_s: f64,
+            v_m_s: f64,
+            shear_rate_per_s: f64,
+            vorticity_per_s: f64,
+        }
+        let rows: Vec<Cell> = (0..nx * ny)
+            .map(|c| Cell {
+                x_m: xs[c % nx] - 0.5 * (spec.bed_x_m.0 + spec.bed_x_m.1),
+                h_m: hs[c / nx],
+                u_m_s: f[0][c],
+                v_m_s: f[1][c],
+                shear_rate_per_s: f[2][c],
+                vorticity_per_s: f[3][c],
+            })
+            .collect();
+        write_csv(&staged.file(&format!("fields/{k:04}.csv")), &rows, &[]).map_err(err)?;
+    }
+    let ns = run.fields.len() as u64;
+    let shape = [ns, ny as u64, nx as u64];
+    let axis = 0.5 * (spec.bed_x_m.0 + spec.bed_x_m.1);
+    write_npy(
+        &staged.file("x_m.npy"),
+        &[nx as u64],
+        xs.iter().map(|x| x - axis).collect(),
+    )
+    .map_err(err)?;
+    write_npy(&staged.file("h_m.npy"), &[ny as u64], hs.clone()).map_err(err)?;
+    for (q, name) in ["u_m_s", "v_m_s", "shear_rate_per_s", "vorticity_per_s"]
+        .iter()
+        .enumerate()
+    {
+        write_npy(
+            &staged.file(&format!("{name}.npy")),
+            &shape,
+            run.fields
+                .iter()
+                .flat_map(|f| f[q].iter().copied())
+                .collect(),
+        )
+        .map_err(err)?;
+    }
+    // Side-wall frames with the foot outline per frame and the camera for `piv`.
+    let cam = run.camera;
+    let mut frames = 0;
+    if spec.frames {
+        std::fs::rename(work.join("frames"), staged.file("frames")).map_err(err)?;
+        frames = run.state.flow.len();
+        #[derive(Serialize)]
+        struct Foot {
+            frame: u64,
+            x_px: f64,
+            y_px: f64,
+        }
+        let (l, r) = spec.intruder().edges();
+        let mut foot = Vec::new();
+        for row in &run.state.flow {
+            let bottom = spec.surface_m - row.depth_m;
+            let (xl, yb) = cam.to_px(l, bottom);
+            let (xr, _) = cam.to_px(r, bottom);
+            for (x, y) in [(xl, -1.0), (xr, -1.0), (xr, yb), (xl, yb)] {
+                foot.push(Foot {
+                    frame: row.sample,
+                    x_px: x,
+                    y_px: y,
+                });
+            }
+        }
+        write_csv(&staged.file("foot.csv"), &foot, &["frame", "x_px", "y_px"]).map_err(err)?;
+    }
+    let (ox, oy) = cam.to_px(axis, spec.surface_m);
+    staged
+        .write_text(
+            "camera.toml",
+            &format!(
+                "# The virtual side-wall camera of frames/; `sandjumper piv` on them:\n# sandjumper piv frames --m-per-px {} --fps {} --origin {ox:.3},{oy:.3} --foot foot.csv --phi {}\nm_per_px = {}\nfps = {}\norigin_px = [{ox}, {oy}]\nwidth_px = {}\nheight_px = {}\nleft_m = {}\ntop_m = {}\n",
+                cam.m_per_px, spec.fps, spec.phi_bulk, cam.m_per_px, spec.fps, cam.width_px, cam.height_px, cam.left_m, cam.top_m
+            ),
+        )
+        .map_err(err)?;
+    // Animation from the snapshots.
+    let mut gif_frames = Vec::new();
+    for k in 0..run.state.flow.len() {
+        let p = work.join(format!("snapshots/{k:06}.png"));
+        let img = image::open(&p)
+            .map_err(|e| CliError::internal(format!("cannot read {}: {e}", p.display())))?;
+        gif_frames.push(img.to_rgba8());
+    }
+    sandjumper_flow::figure::write_gif(&staged.file("animation.gif"), gif_frames, 100)
+        .map_err(CliError::internal)?;
+    // Structure and summary.
+    let p = spec.params;
+    let last = run
+        .state
+        .flow
+        .iter()
+        .rev()
+        .find(|r| r.foot_speed_m_s > 0.0 && r.depth_m > 0.0)
+        .copied();
+    let intr = spec.intruder();
+    let jammed = match last {
+        Some(r) => jammed_region(
+            &run.world,
+            intr.x_centre_m,
+            0.5 * spec.foot_width_m,
+            spec.surface_m - run.spec.trajectory().depth(run.world.t_s),
+            r.foot_speed_m_s,
+            0.5,
+            p.diameter_m * p.sizes.max_factor(),
+        ),
+        None => jammed_region(
+            &run.world,
+            intr.x_centre_m,
+            0.5 * spec.foot_width_m,
+            0.0,
+            1.0,
+            2.0,
+            p.diameter_m,
+        ),
+    };
+    let hex = hexatic_order(&run.world);
+    let dl = p.dimensionless(spec.trajectory().max_speed());
+    let ratio = added_mass_ratio(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
+    let summary = Summary {
+        out: out.display().to_string(),
+        grains: run.world.g.len(),
+        steps: run.world.steps,
+        dt_s: p.dt_s,
+        contact_time_s: dl.contact_time_s,
+        contact_time_speed_over_d: dl.contact_time_speed_over_d,
+        froude: dl.froude,
+        max_depth_m: spec.depth_m.iter().copied().fold(f64::MIN, f64::max),
+        max_force_n: run
+            .state
+            .force
+            .iter()
+            .map(|r| r.force_n)
+            .fold(0.0, f64::max),
+        final_added_mass_kg: last.map_or(f64::NAN, |r| r.added_mass_kg),
+        added_mass_ratio_to_model: ratio,
+        hexatic_order: hex,
+        jammed,
+        samples: run.state.flow.len(),
+        frames,
+        performance: run.performance,
+        max_overlap_ratio: run.world.max_overlap_ratio(),
+    };
+    #[derive(Serialize)]
+    struct Record<'a> {
+        summary: &'a Summary,
+        spec: &'a super::intrude::IntrudeSpec,
+        grid: &'a super::coarse::GridSpec,
+        camera: &'a super::render::SideCamera,
+    }
+    let rec = Record {
+        summary: &summary,
+        spec,
+        grid,
+        camera: &cam,
+    };
+    let mut toml_rec = serde_json::to_value(&rec).map_err(err)?;
+    // TOML has no NaN-free guarantee from JSON; trajectories are long: keep them in JSON only.
+    if let Some(s) = toml_rec.get_mut("spec").and_then(|s| s.as_object_mut()) {
+        s.remove("t_s");
+        s.remove("depth_m");
+    }
+    strip_nulls(&mut toml_rec);
+    staged
+        .write_text("dem.toml", &toml::to_string(&toml_rec).map_err(err)?)
+        .map_err(CliError::from)?;
+    staged
+        .write_text(
+            "summary.json",
+            &serde_json::to_string_pretty(&rec).map_err(err)?,
+        )
+        .map_err(CliError::from)?;
+    // Figures: force and added mass against depth, the last shear map, a snapshot.
+    let force_fig = LineFigure {
+        title: "DEM: force of the grains on the intruder".into(),
+        panels: vec![LinePanel {
+            caption: format!(
+                "{:?} model, foot {:.1} mm",
+                p.model,
+                1e3 * spec.foot_width_m
+            ),
+            x_desc: "depth (mm)".into(),
+            y_desc: "force (N)".into(),
+            lines: vec![Line {
+                label: "DEM".into(),
+                points: run
+                    .state
+                    .force
+                    .iter()
+                    .map(|r| (1e3 * r.depth_m, r.force_n))
+                    .collect(),
+                color: palette(0),
+                dashed: false,
+                markers: false,
+            }],
+            y_from_zero: false,
+        }],
+        size: (900, 600),
+    };
+    save_figure(
+        &force_fig,
+        &staged.file("force_depth.png"),
+        Some(&staged.file("force_depth.svg")),
+    )?;
+    let zmax = am.iter().map(|r| r.depth_m).fold(0.0, f64::max).max(1e-4);
+    let model: Vec<(f64, f64)> = (0..=60)
+        .filter_map(|i| {
+            let z = zmax * f64::from(i) / 60.0;
+            model_added_mass(spec.phi_bulk, 0.5 * spec.foot_width_m, z)
+                .ok()
+                .map(|m| (1e3 * z, m))
+        })
+        .collect();
+    let am_fig = LineFigure {
+        title: "DEM added mass P / v_foot against depth, and the model's eq. 6".into(),
+        panels: vec![LinePanel {
+            caption: format!(
+                "phi {} (rho phi for P), foot {:.1} mm",
+                spec.phi_bulk,
+                1e3 * spec.foot_width_m
+            ),
+            x_desc: "depth (mm)".into(),
+            y_desc: "added mass (kg)".into(),
+            lines: vec![
+                Line {
+                    label: "DEM, coarse-grained, momentum as from PIV".into(),
+                    points: am
+                        .iter()
+                        .map(|r| (1e3 * r.depth_m, r.added_mass_kg))
+                        .collect(),
+                    color: palette(0),
+                    dashed: false,
+                    markers: true,
+                },
+                Line {
+                    label: "eq. 6 (preset), same foot radius".into(),
+                    points: model,
+                    color: palette(1),
+                    dashed: true,
+                    markers: false,
+                },
+            ],
+            y_from_zero: true,
+        }],
+        size: (900, 600),
+    };
+    save_figure(
+        &am_fig,
+        &staged.file("added_mass.png"),
+        Some(&staged.file("added_mass.svg")),
+    )?;
+    if let (Some(f), Some(r)) = (run.fields.last(), run.state.flow.last()) {
+        let (fl, fr) = intr.edges();
+        let px = super::coarse::PX_PER_NODE as f64;
+        let to_px = |x: f64, y: f64| {
+            (
+                (x - (grid.x0_m - 0.5 * grid.spacing_m)) / grid.spacing_m * px,
+                ((grid.top_m + 0.5 * grid.spacing_m) - y) / grid.spacing_m * px,
+            )
+        };
+        let bottom = spec.surface_m - r.depth_m;
+        let outline = vec![
+            to_px(fl, bottom),
+            to_px(fr, bottom),
+            to_px(fr, grid.top_m),
+            to_px(fl, grid.top_m),
+        ];
+        let fig = MapFigure {
+            title: format!(
+                "DEM max shear strain rate (eq. 2) at depth {:.1} mm",
+                1e3 * r.depth_m
+            ),
+            label: "shear rate (1/s)".into(),
+            image: (
+                nx * super::coarse::PX_PER_NODE,
+                ny * super::coarse::PX_PER_NODE,
+            ),
+            xs: (0..nx).map(|i| (i as f64 + 0.5) * px).collect(),
+            ys: (0..ny).map(|j| (j as f64 + 0.5) * px).collect(),
+            values: f[2].clone(),
+            arrows: Vec::new(),
+            outlines: vec![outline],
+        };
+        save_figure(
+            &fig,
+            &staged.file("shear_rate.png"),
+            Some(&staged.file("shear_rate.svg")),
+        )?;
+    }
+    super::figure::save_snapshot(
+        &run.world,
+        &cam,
+        spec.trajectory().max_speed().max(1e-3),
+        &format!(
+            "DEM at t = {:.1} ms, grains coloured by speed",
+            1e3 * run.world.t_s
+        ),
+        &staged.file("snapshot.png"),
+        &staged.file("snapshot.svg"),
+    )?;
+    let target = staged.commit()?;
+    let _ = std::fs::remove_dir_all(work);
+    Ok(Summary {
+        out: target.display().to_string(),
+        ..summary
+    })
+}

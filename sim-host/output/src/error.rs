@@ -1,0 +1,78 @@
+//! The error every command returns (one message and an exit status) and an analysis's two
+//! summaries.
+
+use std::fmt;
+
+/// Exit status for bad input (the same as clap's usage errors).
+pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit status for an internal failure after the input was accepted.
+pub const EXIT_INTERNAL: u8 = 1;
+
+/// What an analysis command leaves besides its output folder: its JSON summary (what
+/// `--json` prints and `summary.json` holds) and the text summary it prints without `--json`.
+/// Its `analyse` function returns this without printing; its `run` prints one of the two.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Analysed {
+    /// The JSON summary, pretty-printed.
+    pub json: String,
+    /// The human summary.
+    pub human: String,
+}
+
+impl Analysed {
+    /// Print the JSON (`json`) or the human summary on stdout, as the CLI does.
+    pub fn print(&self, json: bool) {
+        if json {
+            println!("{}", self.json);
+        } else {
+            print!("{}", self.human);
+        }
+    }
+}
+
+/// A command failed: the message to print and the exit status.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CliError {
+    /// One message: what, where, what is allowed.
+    pub message: String,
+    /// [`EXIT_BAD_INPUT`] or [`EXIT_INTERNAL`].
+    pub exit: u8,
+}
+
+impl CliError {
+    /// Bad input (exit 2).
+    pub fn input(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            exit: EXIT_BAD_INPUT,
+        }
+    }
+
+    /// Internal failure (exit 1).
+    pub fn internal(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            exit: EXIT_INTERNAL,
+        }
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for CliError {}
+
+impl From<crate::OutputError> for CliError {
+    fn from(e: crate::OutputError) -> Self {
+        Self::input(e.to_string())
+    }
+}
+
+impl From<crate::plot::PlotError> for CliError {
+    fn from(e: crate::plot::PlotError) -> Self {
+        Self::internal(e.to_string())
+    }
+}

@@ -1,0 +1,337 @@
+//! Output directories that appear complete or not at all.
+//!
+//! [`StagedDir::create`] makes a hidden staging directory `.<name>.partial-XXXXXX` beside the
+//! target (same parent, so the final rename is atomic on one filesystem); the caller writes
+//! every file into [`StagedDir::path`]; [`StagedDir::commit`] renames it onto the target. If
+//! the program fails or is interrupted first, the target is untouched and the staging
+//! directory is removed (on error) or left under its `.partial-` name, never as if complete.
+//!
+//! An existing target is replaced only if it is empty or was itself written by sandjumper
+//! (it holds the [`MARKER_FILE`]); any other non-empty directory is refused, so a mistyped
+//! `--out ~` can never delete anything.
+
+use std::fmt;
+use std::fs;
+use std::io;
+use std::path::{Path, PathBuf};
+
+use sandjumper_model::record::SeriesRow;
+
+/// File written into every output directory; its presence allows replacing that directory.
+pub const MARKER_FILE: &str = ".sandjumper-output";
+
+/// An output directory could not be prepared or written.
+#[derive(Debug)]
+pub struct OutputError {
+    /// The path concerned.
+    pub path: PathBuf,
+    /// What was being done, e.g. "create the output directory".
+    pub action: String,
+    /// Why it failed.
+    pub reason: String,
+}
+
+impl fmt::Display for OutputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "cannot {} `{}`: {}",
+            self.action,
+            self.path.display(),
+            self.reason
+        )
+    }
+}
+
+impl std::error::Error for OutputError {}
+
+impl OutputError {
+    /// Build from an I/O error.
+    pub fn io(path: &Path, action: &str, err: &io::Error) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            action: action.to_string(),
+            reason: err.to_string(),
+        }
+    }
+}
+
+/// An output directory being written: files go into a staging directory until [`commit`].
+///
+/// [`commit`]: StagedDir::commit
+#[derive(Debug)]
+pub struct StagedDir {
+    target: PathBuf,
+    staging: Option<tempfile::TempDir>,
+}
+
+fn dir_is_replaceable(target: &Path) -> Result<bool, OutputError> {
+    let mut entries = fs::read_dir(target)
+        .map_err(|e| OutputError::io(target, "read the output directory", &e))?;
+    if entries.next().is_none() {
+        return Ok(true);
+    }
+    Ok(target.join(MARKER_FILE).is_file())
+}
+
+impl StagedDir {
+    /// Check that `target` can be (re)written and create its staging directory. Parent
+    /// directories are created as needed. Fails, with the path and the reason, if the target
+    /// is a file, a non-empty directory not written by sandjumper, or not writable.
+    pub fn create(target: &Path) -> Result<Self, OutputError> {
+        if target.as_os_str().is_empty() {
+            return Err(OutputError {
+                path: target.to_path_buf(),
+                action: "use the output directory".into(),
+                reason: "the path is empty".into(),
+            });
+        }
+        let name = target
+            .file_name()
+            .ok_or_else(|| OutputError {
+                path: target.to_path_buf(),
+                action: "use the output directory".into(),
+                reason: "the path has no final component (name a directory, e.g. out/jump)".into(),
+            })?
+            .to_string_lossy()
+            .into_owned();
+        if target.exists() {
+            if !target.is_dir() {
+                return Err(OutputError {
+                    path: target.to_path_buf(),
+                    action: "use the output directory".into(),
+                    reason: "it exists and is not a directory".into(),
+                });
+            }
+            if !dir_is_replaceable(target)? {
+                return Err(OutputError {
+                    path: target.to_path_buf(),
+                    action: "replace the output directory".into(),
+                    reason: format!(
+                        "it is not empty and was not written by sandjumper (no {MARKER_FILE}); \
+                         choose a new directory or empty it"
+                    ),
+                });
+            }
+        }
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        fs::create_dir_all(&parent).map_err(|e| OutputError {
+            path: target.to_path_buf(),
+            action: "create the output directory".into(),
+            reason: format!("its parent `{}` cannot be created: {e}", parent.display()),
+        })?;
+        let staging = tempfile::Builder::new()
+            .prefix(&format!(".{name}.partial-"))
+            .tempdir_in(&parent)
+            .map_err(|e| OutputError::io(target, "write the output directory", &e))?;
+        fs::write(
+            staging.path().join(MARKER_FILE),
+            "written by the sandjumper CLI\n",
+        )
+        .map_err(|e| OutputError::io(target, "write the output directory", &e))?;
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging: Some(staging),
+        })
+    }
+
+    /// Where to write files now (the staging directory).
+    pub fn path(&self) -> &Path {
+        self.staging
+            .as_ref()
+            .map_or(self.target.as_path(), |s| s.path())
+    }
+
+    /// The directory the files will be in after [`StagedDir::commit`].
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Path of a file inside the staging directory.
+    pub fn file(&self, name: &str) -> PathBuf {
+        self.path().join(name)
+    }
+
+    /// Write a text file into the staging directory.
+    pub fn write_text(&self, name: &str, text: &str) -> Result<(), OutputError> {
+        let path = self.file(name);
+        fs::write(&path, text).map_err(|e| OutputError::io(&self.target.join(name), "write", &e))
+    }
+
+    /// Move the finished directory into place (replacing a previous sandjumper output there).
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        let Some(staging) = self.staging.take() else {
+            return Ok(self.target.clone());
+        };
+        let target = self.target.clone();
+        let staged = staging.keep();
+        let fail = |action: &str, e: &io::Error| {
+            let _ = fs::remove_dir_all(&staged);
+            OutputError::io(&target, action, e)
+        };
+        let mut old = None;
+        if target.exists() {
+            // Checked again: the directory may have changed while we were computing.
+            if !dir_is_replaceable(&target)? {
+                let _ = fs::remove_dir_all(&staged);
+                return Err(OutputError {
+                    path: target.clone(),
+                    action: "replace the output directory".into(),
+                    reason: "it was filled by something else while sandjumper was running".into(),
+                });
+            }
+            let mut aside_name = staged.file_name().unwrap_or_default().to_os_string();
+            aside_name.push(".old");
+            let aside = staged.with_file_name(aside_name);
+            fs::rename(&target, &aside)
+                .map_err(|e| fail("move the previous output directory aside", &e))?;
+            old = Some(aside);
+        }
+        if let Err(e) = fs::rename(&staged, &target) {
+            if let Some(aside) = &old {
+                let _ = fs::rename(aside, &target);
+            }
+            return Err(fail("move the finished output into place", &e));
+        }
+        if let Some(aside) = old {
+            let _ = fs::remove_dir_all(aside);
+        }
+        Ok(target)
+    }
+}
+
+/// Header of `trajectory.csv` (SI units in the names).
+pub const SERIES_HEADER: [&str; 9] = [
+    "t_s", "x_m_m", "x_r_m", "x_f_m", "p_m", "f_s_n", "f_gm_n", "m_a_kg", "mode",
+];
+
+/// Write a time series as `trajectory.csv`: [`SERIES_HEADER`], one row per sample, floats in
+/// their shortest exact representation.
+pub fn write_series_csv(path: &Path, rows: &[SeriesRow]) -> Result<(), OutputError> {
+    let err = |e: &dyn fmt::Display| OutputError {
+        path: path.to_path_buf(),
+        action: "write".into(),
+        reason: e.to_string(),
+    };
+    let mut w = csv::Writer::from_path(path).map_err(|e| err(&e))?;
+    w.write_record(SERIES_HEADER).map_err(|e| err(&e))?;
+    for r in rows {
+        let nums = [r.t_s, r.x_m, r.x_r, r.x_f, r.p, r.f_s, r.f_gm, r.m_a].map(|v| v.to_string());
+        w.write_record(nums.iter().map(String::as_str).chain([r.mode.as_str()]))
+            .map_err(|e| err(&e))?;
+    }
+    w.flush().map_err(|e| err(&e))
+}
+
+/// Write records (with a header, even when there are none) as CSV to `path`.
+pub fn write_csv<T: serde::Serialize>(
+    path: &Path,
+    records: &[T],
+    header: &[&str],
+) -> Result<(), String> {
+    let mut w = csv::Writer::from_path(path)
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    if records.is_empty() {
+        w.write_record(header)
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    }
+    for r in records {
+        w.serialize(r)
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    }
+    w.flush()
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
+}
+
+/// Write `data` (row-major, `shape`) as a float64 `.npy` array.
+pub fn write_npy(path: &Path, shape: &[u64], data: Vec<f64>) -> Result<(), String> {
+    use npyz::WriterBuilder;
+    let err = |e: &dyn std::fmt::Display| format!("cannot write `{}`: {e}", path.display());
+    let file = fs::File::create(path).map_err(|e| err(&e))?;
+    let mut wr = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(shape)
+        .writer(io::BufWriter::new(file))
+        .begin_nd()
+        .map_err(|e| err(&e))?;
+    wr.extend(data).map_err(|e| err(&e))?;
+    wr.finish().map_err(|e| err(&e))
+}
+
+/// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
+/// otherwise, so logs and pipes stay clean).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {what} (eta {{eta}})"
+    )) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nothing_appears_until_commit_and_then_everything_does() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("a/b/run");
+        let staged = StagedDir::create(&target).unwrap();
+        staged.write_text("x.txt", "1").unwrap();
+        assert!(!target.exists());
+        staged.commit().unwrap();
+        assert_eq!(fs::read_to_string(target.join("x.txt")).unwrap(), "1");
+        // Nothing else left in the parent.
+        let names: Vec<_> = fs::read_dir(root.path().join("a/b")).unwrap().collect();
+        assert_eq!(names.len(), 1);
+    }
+
+    #[test]
+    fn dropped_stage_leaves_no_trace() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("run");
+        {
+            let staged = StagedDir::create(&target).unwrap();
+            staged.write_text("x.txt", "1").unwrap();
+        }
+        assert_eq!(fs::read_dir(root.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn replaces_own_output_but_refuses_foreign_directories() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("run");
+        let s = StagedDir::create(&target).unwrap();
+        s.write_text("old.txt", "old").unwrap();
+        s.commit().unwrap();
+        let s = StagedDir::create(&target).unwrap();
+        s.write_text("new.txt", "new").unwrap();
+        s.commit().unwrap();
+        assert!(target.join("new.txt").exists() && !target.join("old.txt").exists());
+
+        let foreign = root.path().join("home");
+        fs::create_dir(&foreign).unwrap();
+        fs::write(foreign.join("thesis.tex"), "precious").unwrap();
+        let e = StagedDir::create(&foreign).unwrap_err();
+        assert!(e.to_string().contains("not empty"), "{e}");
+        assert!(foreign.join("thesis.tex").exists());
+    }
+
+    #[test]
+    fn a_file_is_not_an_output_directory() {
+        let root = tempfile::tempdir().unwrap();
+        let file = root.path().join("f");
+        fs::write(&file, "").unwrap();
+        let e = StagedDir::create(&file).unwrap_err();
+        assert!(e.to_string().contains("not a directory"), "{e}");
+    }
+}

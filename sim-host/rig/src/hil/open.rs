@@ -1,0 +1,70 @@
+//! Which link closes the loop ([`LinkArg`]: the core in this process, the firmware in QEMU, a
+//! board on a serial port), opening it ([`open_link`]), and a fault as a link reports it.
+
+use std::time::Duration;
+
+use serde::Serialize;
+
+use super::link::{LinkError, RigLink};
+use super::pil::{self, PilConfig};
+use super::rig_model::RigModelConfig;
+use super::run::rig_config;
+use super::serial;
+use super::sil::SilLink;
+use crate::firmware_image::{Board, check_elf};
+use sandjumper_output::CliError;
+
+/// Where the controller is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LinkArg {
+    /// The core in this process.
+    Sil,
+    /// The firmware in QEMU over semihosting FIFOs.
+    Pil,
+    /// A board on a serial port.
+    Serial(String),
+}
+
+/// Parse a link as named on the command line: `sil`, `pil` or `serial:PATH`.
+pub fn parse_link(s: &str) -> Result<LinkArg, String> {
+    match s {
+        "sil" => Ok(LinkArg::Sil),
+        "pil" => Ok(LinkArg::Pil),
+        _ => match s.strip_prefix("serial:") {
+            Some(path) if !path.is_empty() => Ok(LinkArg::Serial(path.to_string())),
+            _ => Err(format!(
+                "unknown link `{s}` (allowed: sil, pil, serial:PATH e.g. serial:/dev/ttyACM0)"
+            )),
+        },
+    }
+}
+
+/// A fault as reported.
+#[derive(Debug, Serialize)]
+pub struct FaultEntry {
+    /// Stable code (README table).
+    pub code: u8,
+    /// Name.
+    pub name: &'static str,
+    /// Controller tick it was latched on.
+    pub tick: u32,
+}
+
+/// Open the link `arg` for a rig with `model_config`.
+pub fn open_link(
+    arg: &LinkArg,
+    model_config: &RigModelConfig,
+    firmware: &std::path::Path,
+) -> Result<Box<dyn RigLink>, CliError> {
+    let fail = |e: LinkError| CliError::input(format!("cannot open the link: {e}"));
+    Ok(match arg {
+        LinkArg::Sil => Box::new(SilLink::new(rig_config(model_config)).map_err(fail)?),
+        LinkArg::Pil => {
+            check_elf(firmware, Board::Emulated).map_err(|e| CliError::input(e.to_string()))?;
+            Box::new(pil::start(&PilConfig::new(firmware)).map_err(fail)?)
+        }
+        LinkArg::Serial(path) => {
+            Box::new(serial::start(path, Duration::from_secs(2)).map_err(fail)?)
+        }
+    })
+}

@@ -1,0 +1,206 @@
+//! What every rig program leaves behind: its acquisition log (the logs' own format, built with
+//! [`SampleLogBuilder`] from the controller's sample records exactly as they arrived) and a
+//! figure of commanded vs measured motor position and the force command.
+
+use sandjumper_acqlog::{AcqLog, LogMetadata, SampleLogBuilder};
+use sandjumper_core::SampleRecord;
+use sandjumper_core::sample::flags;
+use sandjumper_output::CliError;
+use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
+use sandjumper_output::plot::palette;
+
+/// The acquisition log of `samples` at `tick_hz` and `metres_per_count`, with `source` (the
+/// command) and `firmware` (who ran it) in its metadata; `fill` adds the rest.
+pub fn samples_log(
+    samples: &[SampleRecord],
+    tick_hz: u32,
+    metres_per_count: f64,
+    firmware: String,
+    source: String,
+    fill: impl FnOnce(&mut LogMetadata),
+) -> Result<AcqLog, CliError> {
+    let mut meta = LogMetadata::new(f64::from(tick_hz), 1.0 / metres_per_count);
+    meta.firmware = Some(firmware);
+    meta.source = Some(source);
+    fill(&mut meta);
+    let mut builder = SampleLogBuilder::new(meta);
+    for s in samples {
+        builder
+            .push(s)
+            .map_err(|e| CliError::internal(format!("the controller's samples: {e}")))?;
+    }
+    Ok(builder.finish())
+}
+
+/// Who ran the program, for the log's `firmware` line.
+pub fn firmware_name(link: &str) -> String {
+    let version = env!("CARGO_PKG_VERSION");
+    if link == "sil" {
+        format!("sandjumper-core {version} (software in the loop)")
+    } else {
+        format!("sandjumper-firmware {version} ({link})")
+    }
+}
+
+/// Index of the first sample of the trajectory (the first `Running` record).
+pub fn start_index(samples: &[SampleRecord]) -> Option<usize> {
+    samples.iter().position(|s| s.flags & flags::RUNNING != 0)
+}
+
+/// Commanded vs measured motor position and the force command against time since the start.
+pub fn motion_figure(
+    samples: &[SampleRecord],
+    tick_hz: u32,
+    metres_per_count: f64,
+    title: String,
+) -> LineFigure {
+    let t0 = start_index(samples).map_or(0, |i| samples[i].tick);
+    let step = (samples.len() / 4000).max(1);
+    let t = |s: &SampleRecord| f64::from(s.tick.wrapping_sub(t0) as i32) / f64::from(tick_hz);
+    let pts = |f: &dyn Fn(&SampleRecord) -> f64| -> Vec<(f64, f64)> {
+        samples.iter().step_by(step).map(|s| (t(s), f(s))).collect()
+    };
+    let line = |label: &str, i: usize, dashed: bool, points| Line {
+        label: label.into(),
+        points,
+        color: palette(i),
+        dashed,
+        markers: false,
+    };
+    let panels = vec![
+        LinePanel {
+            caption: "motor position relative to the rod".into(),
+            x_desc: "time since the trajectory started (s)".into(),
+            y_desc: "p (mm)".into(),
+            lines: vec![
+                line(
+                    "commanded",
+                    0,
+                    true,
+                    pts(&|s| 1e3 * f64::from(s.commanded_position_m)),
+                ),
+                line(
+                    "measured (encoder)",
+                    1,
+                    false,
+                    pts(&|s| 1e3 * s.encoder_count as f64 * metres_per_count),
+                ),
+            ],
+            y_from_zero: false,
+        },
+        LinePanel {
+            caption: "force command".into(),
+            x_desc: "time since the trajectory started (s)".into(),
+            y_desc: "F_m command (N)".into(),
+            lines: vec![line(
+                "force command",
+                2,
+                false,
+                pts(&|s| f64::from(s.force_n)),
+            )],
+            y_from_zero: false,
+        },
+    ];
+    LineFigure {
+        title,
+        size: grid_size(panels.len()),
+        panels,
+    }
+}
+
+/// Write `acquisition.csv` (and with `mcap` `acquisition.mcap`), `params.toml`,
+/// `summary.json` and `<stem>.png`/`.svg` into the staged directory, then commit it. Returns
+/// the directory.
+pub fn write_run_files(
+    staged: sandjumper_output::StagedDir,
+    log: &AcqLog,
+    params: &sandjumper_model::params::Params,
+    summary_json: &str,
+    figure: &LineFigure,
+    stem: &str,
+    mcap: bool,
+) -> Result<std::path::PathBuf, CliError> {
+    log.write_file(&staged.file("acquisition.csv"))
+        .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+    if mcap {
+        log.write_mcap_file(&staged.file("acquisition.mcap"), None)
+            .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
+    }
+    staged.write_text("params.toml", &params.to_toml())?;
+    staged.write_text("summary.json", &format!("{summary_json}\n"))?;
+    sandjumper_output::plot::save_figure(
+        figure,
+        &staged.file(&format!("{stem}.png")),
+        Some(&staged.file(&format!("{stem}.svg"))),
+    )?;
+    Ok(staged.commit()?)
+}
+
+/// Largest `|p_cmd - p|` over the trajectory's samples (Running or Done), m.
+pub fn max_tracking_error_m(samples: &[SampleRecord], metres_per_count: f64) -> f64 {
+    samples
+        .iter()
+        .filter(|s| s.flags & (flags::RUNNING | flags::DONE) != 0)
+        .map(|s| {
+            (f64::from(s.commanded_position_m) - s.encoder_count as f64 * metres_per_count).abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+pub use crate::hil::open::FaultEntry;
+
+/// The faults of a run, for summaries.
+pub fn fault_entries(faults: &[sandjumper_core::protocol::FaultReport]) -> Vec<FaultEntry> {
+    faults
+        .iter()
+        .map(|f| FaultEntry {
+            code: f.code.code(),
+            name: f.code.name(),
+            tick: f.tick,
+        })
+        .collect()
+}
+
+/// The end of every program: list the faults (unless JSON was asked for), say where the files
+/// went, and fail (exit 1) when the controller did not complete the program cleanly.
+pub fn conclude(
+    what: &str,
+    completed: bool,
+    faults: &[FaultEntry],
+    dir: &std::path::Path,
+    json: bool,
+) -> Result<(), CliError> {
+    if !json {
+        for f in faults {
+            println!("  fault {} {} at tick {}", f.code, f.name, f.tick);
+        }
+    }
+    eprintln!("wrote {}", dir.display());
+    if !faults.is_empty() || !completed {
+        return Err(CliError::internal(format!(
+            "the {what} did not complete cleanly (see {})",
+            dir.join("summary.json").display()
+        )));
+    }
+    Ok(())
+}
+
+/// The simulated robot (sil/pil) with the motor at `p0_m`, or `None` for a board.
+pub fn robot_fixture(
+    simulated: bool,
+    params: &sandjumper_model::params::Params,
+    model: sandjumper_model::params::ModelName,
+    p0_m: f64,
+    config: crate::hil::rig_model::RigModelConfig,
+) -> Result<Option<crate::hil::rig_model::RigModel>, CliError> {
+    if !simulated {
+        return Ok(None);
+    }
+    let opts = sandjumper_model::options::SimOptions {
+        rtol: crate::hil::run::DEFAULT_RTOL,
+        ..sandjumper_model::options::SimOptions::default()
+    };
+    crate::hil::rig_model::RigModel::new(params, model, p0_m, config, &opts)
+        .map(Some)
+        .map_err(|e| CliError::input(e.to_string()))
+}

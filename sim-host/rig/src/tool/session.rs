@@ -1,0 +1,255 @@
+//! One program (a sine jump, the slow intrusion, a replay) run on the controller, the same way
+//! whichever link reaches it:
+//!
+//! - **Lockstep** (`--link sil|pil`): the host plays the rig. One sensor frame per control
+//!   period from a [`Fixture`] (the robot on simulated sand, or the clamped intrusion fixture),
+//!   one actuator frame back, applied to the fixture.
+//! - **Free-running** (`--port PATH`): the board ticks on its own timer against the real rig;
+//!   the host sends the same commands, keeps the watchdog fed with status queries and collects
+//!   the sample batches it streams.
+//!
+//! Sequence in both: `Configure`, one Idle period, `Arm`, hold the start position for
+//! `settle_s`, `Start`, run until the controller reports `Done` (then `tail_s` more) or a fault
+//! (then [`POST_FAULT_PERIODS`]), never longer than `max_run_s` after the start.
+
+use std::time::{Duration, Instant};
+
+use crate::hil::link::{LinkError, LinkReport, RigLink};
+use crate::hil::rig_model::RigModel;
+use sandjumper_core::protocol::FaultReport;
+use sandjumper_core::{
+    ActuatorFrame, Command, JumpConfig, Reply, RigState, SampleRecord, SensorFrame, Status,
+};
+use sandjumper_model::error::SimError;
+
+/// Periods simulated after a fault is latched (the force stays zero).
+pub const POST_FAULT_PERIODS: u64 = 20;
+/// Free-running: how often the host asks for the status (also feeds the 500 ms watchdog).
+pub const POLL_INTERVAL: Duration = Duration::from_millis(50);
+
+/// What the host plays in lockstep: sensors for one period, then the actuator's outputs.
+pub trait Fixture {
+    /// The sensor frame for this period.
+    fn sense(&mut self, frame: u32) -> SensorFrame;
+    /// Apply the controller's outputs and advance one control period.
+    fn actuate(&mut self, out: &ActuatorFrame) -> Result<(), SimError>;
+}
+
+impl Fixture for RigModel {
+    fn sense(&mut self, frame: u32) -> SensorFrame {
+        RigModel::sense(self, frame)
+    }
+    fn actuate(&mut self, out: &ActuatorFrame) -> Result<(), SimError> {
+        RigModel::actuate(self, f64::from(out.force_n), out.drive_enabled, out.trigger)
+    }
+}
+
+/// How to run one program.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Program {
+    /// What the controller runs.
+    pub config: JumpConfig,
+    /// Control rate, Hz.
+    pub tick_hz: u32,
+    /// Armed, holding the start position, before `Start`, s.
+    pub settle_s: f64,
+    /// Kept running after `Done`, s.
+    pub tail_s: f64,
+    /// Longest run after `Start` before the host gives up, s.
+    pub max_run_s: f64,
+}
+
+impl Program {
+    /// The program of one sine jump (MODEL.md section 2) as `rig jump` runs it: the jump's
+    /// controller configuration, the spec's settle time, 0.5 s kept running after `Done`,
+    /// and up to 5 s past the trajectory's end before the host gives up.
+    /// `traj` is the jump's trajectory (`rig::hil::run::trajectory`).
+    pub fn jump(
+        params: &sandjumper_model::params::Params,
+        spec: &crate::hil::run::HilSpec,
+        traj: &sandjumper_core::trajectory::SineJump,
+        tick_hz: u32,
+    ) -> Self {
+        Self {
+            config: crate::hil::run::jump_config(params, spec),
+            tick_hz,
+            settle_s: spec.settle_s,
+            tail_s: 0.5,
+            max_run_s: traj.end_s() + 5.0,
+        }
+    }
+}
+
+/// What a run leaves behind.
+#[derive(Debug, Default)]
+pub struct RunRecord {
+    /// The controller's sample records, in sequence order.
+    pub samples: Vec<SampleRecord>,
+    /// Faults reported.
+    pub faults: Vec<FaultReport>,
+    /// The link's closing report (final status, exit code).
+    pub report: LinkReport,
+    /// The controller reached `Done`.
+    pub completed: bool,
+    /// Control periods the host played (lockstep) or ticks the run took (board).
+    pub periods: u64,
+    /// Wall-clock time, s.
+    pub wall_time_s: f64,
+}
+
+impl RunRecord {
+    /// The first fault reported, if any.
+    pub fn first_fault(&self) -> Option<FaultReport> {
+        self.faults.first().copied()
+    }
+}
+
+fn status_of(reply: Reply) -> Result<Status, LinkError> {
+    match reply {
+        Reply::Status(s) => Ok(s),
+        Reply::Ack => Err(LinkError::Protocol(
+            "a status query was answered with a plain Ack".into(),
+        )),
+    }
+}
+
+/// Ask for the controller's status.
+pub fn query_status(link: &mut dyn RigLink) -> Result<Status, LinkError> {
+    status_of(link.command(&Command::StatusQuery)?)
+}
+
+/// Bring a controller left Armed, Running, Done or Faulted by an earlier session to Idle.
+pub fn bring_to_idle(link: &mut dyn RigLink) -> Result<(), LinkError> {
+    match query_status(link)?.state {
+        RigState::Faulted => {
+            link.command(&Command::ClearFault)?;
+        }
+        RigState::Armed | RigState::Running | RigState::Done => {
+            link.command(&Command::Abort)?;
+        }
+        RigState::Idle => {}
+    }
+    Ok(())
+}
+
+/// Run `program` through `link`. With a fixture the host plays the rig in lockstep; without
+/// one the board runs free on its own rig.
+pub fn run_program(
+    link: &mut dyn RigLink,
+    fixture: Option<&mut dyn Fixture>,
+    program: &Program,
+) -> Result<RunRecord, LinkError> {
+    let wall = Instant::now();
+    bring_to_idle(link)?;
+    link.command(&Command::Configure(program.config))?;
+    let mut record = match fixture {
+        Some(f) => lockstep(link, f, program)?,
+        None => free_running(link, program)?,
+    };
+    record.report = link.finish()?;
+    record.samples.extend(link.take_samples());
+    record.samples.sort_by_key(|s| s.seq);
+    record.samples.dedup_by_key(|s| s.seq);
+    record.faults.extend(link.take_faults());
+    record.wall_time_s = wall.elapsed().as_secs_f64();
+    Ok(record)
+}
+
+fn lockstep(
+    link: &mut dyn RigLink,
+    fixture: &mut dyn Fixture,
+    program: &Program,
+) -> Result<RunRecord, LinkError> {
+    let hz = f64::from(program.tick_hz);
+    let settle = ((program.settle_s * hz).round() as u64).max(1);
+    let tail = (program.tail_s * hz).round() as u64;
+    let cap = settle + (program.max_run_s * hz).ceil() as u64;
+    let sim = |e: SimError| LinkError::Protocol(format!("the simulated rig failed: {e}"));
+    let mut frame: u32 = 0;
+    let mut step = |link: &mut dyn RigLink, fixture: &mut dyn Fixture| {
+        let sensor = fixture.sense(frame);
+        frame = frame.wrapping_add(1);
+        let a = link.exchange(&sensor)?;
+        if a.frame != sensor.frame {
+            return Err(LinkError::Protocol(format!(
+                "actuator frame {} answers sensor frame {}",
+                a.frame, sensor.frame
+            )));
+        }
+        fixture.actuate(&a).map_err(sim)?;
+        Ok(a)
+    };
+    // One Idle period: the encoder's first reading is not a movement.
+    step(link, fixture)?;
+    link.command(&Command::Arm)?;
+    let mut record = RunRecord::default();
+    let mut stop_at: Option<u64> = None;
+    let mut period = 1u64;
+    loop {
+        if period == settle {
+            link.command(&Command::Start)?;
+        }
+        let a = step(link, fixture)?;
+        period += 1;
+        if stop_at.is_none() {
+            if a.fault.is_some() {
+                stop_at = Some(period + POST_FAULT_PERIODS);
+            } else if a.state == RigState::Done {
+                record.completed = true;
+                stop_at = Some(period + tail);
+            }
+        }
+        if stop_at.is_some_and(|s| period >= s) {
+            break;
+        }
+        if period > cap {
+            return Err(LinkError::Protocol(format!(
+                "the controller did not finish the program within {} s",
+                program.max_run_s
+            )));
+        }
+    }
+    record.periods = period;
+    Ok(record)
+}
+
+fn free_running(link: &mut dyn RigLink, program: &Program) -> Result<RunRecord, LinkError> {
+    let wait = |link: &mut dyn RigLink, seconds: f64| -> Result<Status, LinkError> {
+        let until = Instant::now() + Duration::from_secs_f64(seconds.max(0.0));
+        let mut status = query_status(link)?;
+        while Instant::now() < until {
+            std::thread::sleep(POLL_INTERVAL);
+            status = query_status(link)?;
+        }
+        Ok(status)
+    };
+    link.command(&Command::Arm)?;
+    wait(link, program.settle_s)?;
+    let start = query_status(link)?;
+    link.command(&Command::Start)?;
+    let deadline = Instant::now() + Duration::from_secs_f64(program.max_run_s);
+    let mut record = RunRecord::default();
+    let last = loop {
+        let s = wait(link, 0.0)?;
+        if s.state == RigState::Faulted {
+            break s;
+        }
+        if s.state == RigState::Done {
+            record.completed = true;
+            break wait(link, program.tail_s)?;
+        }
+        if Instant::now() > deadline {
+            let _ = link.command(&Command::Abort);
+            return Err(LinkError::Timeout {
+                waiting_for: "the board to finish the program".into(),
+                seconds: program.max_run_s,
+            });
+        }
+        std::thread::sleep(POLL_INTERVAL);
+    };
+    if last.state != RigState::Faulted {
+        link.command(&Command::Abort)?;
+    }
+    record.periods = u64::from(last.tick.wrapping_sub(start.tick));
+    Ok(record)
+}
