@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::plan::Point;
 use super::prepare::Preparation;
-use super::records::ResultRow;
+use super::result_row::ResultRow;
 
 /// One journal record.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

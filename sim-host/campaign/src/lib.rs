@@ -21,3 +21,4 @@ pub mod plan;
 pub mod point;
 pub mod prepare;
 pub mod records;
+pub mod result_row;

@@ -9,6 +9,15 @@
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use serde::{Deserialize, Serialize};
 
+// What the step does with a grain: its class at the last list build.
+
+/// A free grain that cannot touch a wall before the next list build.
+pub const INTERIOR: u8 = 0;
+/// A free grain that may touch a wall before the next list build.
+pub const NEAR_WALL: u8 = 1;
+/// A grain on a prescribed trajectory (the intruder's).
+pub const PRESCRIBED: u8 = 2;
+
 /// A free grain.
 pub const FREE: u8 = 0;
 /// A grain of the intruder (prescribed motion).

@@ -18,6 +18,7 @@ pub mod neighbours;
 pub mod outputs;
 pub mod params;
 pub mod render;
+pub mod scratch;
 pub mod step;
 pub mod structure;
 pub mod world;

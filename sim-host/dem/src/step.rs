@@ -45,7 +45,7 @@ use rayon::prelude::*;
 
 use super::contact::GammaRule;
 use super::neighbours::NeighbourList;
-use super::world::{Integrator, NEAR_WALL, PRESCRIBED, StepSums, Walls, World};
+use super::world::{Integrator, NEAR_WALL, PRESCRIBED, StepSums, Velocities, Walls, World};
 
 /// Constants of one step, read by every grain.
 pub(super) struct StepConst {
@@ -181,97 +181,6 @@ pub(super) fn pair_now(w: &World, c: &StepConst, i: usize, e: usize) -> Option<(
 #[inline(never)]
 fn pair_gamma(rule: GammaRule, inv_mass_sum: f64) -> f64 {
     rule.at(1.0 / inv_mass_sum)
-}
-
-/// Force accumulators reused from step to step: per grain (zero between steps), the
-/// per-grain forces on the intruder and the floor that the step's sums add up in slot
-/// order, and the copy of the grains and slip histories of the cross pairs taken before
-/// each step.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Scratch {
-    fx: Vec<f64>,
-    fy: Vec<f64>,
-    ft: Vec<f64>,
-    /// Force of the grains on each intruder grain, N (x, y).
-    out_x: Vec<f64>,
-    out_y: Vec<f64>,
-    /// Force of each grain on the floor, N.
-    out_floor: Vec<f64>,
-    /// Slots of the intruder grains and of the grains near a wall, increasing.
-    prescribed: Vec<u32>,
-    near_wall: Vec<u32>,
-    /// Where each chunk's grains start in `prescribed` and in `near_wall` (one more entry
-    /// than the chunks, the last the list's length).
-    prescribed_at: Vec<usize>,
-    near_wall_at: Vec<usize>,
-    /// The step's forces on the intruder grains (`out_x`, `out_y` of `prescribed`'s slots)
-    /// and on the floor (`out_floor` of `near_wall`'s), N, packed side by side by the chunk
-    /// that owns them, so the sums after the step read a few cache lines from another
-    /// core, not one per grain.
-    packed_intruder: Vec<[f64; 2]>,
-    packed_floor: Vec<f64>,
-    /// Before the step, the grains of every chunk boundary's cross pairs (slots
-    /// `cross_lo[k]..cross_hi[k]` of the list, boundary after boundary): position, m;
-    /// velocity the forces see, m/s; spin, rad/s (0 without friction).
-    snap: Vec<[f64; 5]>,
-    /// Before the step, the slip histories of the entries of every boundary's owners, m
-    /// (empty without friction).
-    snap_hist: Vec<f64>,
-}
-
-impl Scratch {
-    /// Sized for grains of the classes `class` ([`super::world::INTERIOR`] and the others)
-    /// in chunks starting at the slots `chunk_start` (the list's), zeroed (`friction`: with
-    /// the tangential sums).
-    pub fn sized(class: &[u8], chunk_start: &[u32], friction: bool) -> Self {
-        let n = class.len();
-        let t = |len| if friction { vec![0.0; len] } else { Vec::new() };
-        let slots = |c: u8| {
-            (0..n as u32)
-                .filter(|&i| class[i as usize] == c)
-                .collect::<Vec<u32>>()
-        };
-        let (prescribed, near_wall) = (slots(PRESCRIBED), slots(NEAR_WALL));
-        let at = |list: &[u32]| -> Vec<usize> {
-            chunk_start
-                .iter()
-                .map(|&c| list.partition_point(|&i| i < c))
-                .collect()
-        };
-        Self {
-            prescribed_at: at(&prescribed),
-            near_wall_at: at(&near_wall),
-            fx: vec![0.0; n],
-            fy: vec![0.0; n],
-            ft: t(n),
-            out_x: vec![0.0; n],
-            out_y: vec![0.0; n],
-            out_floor: vec![0.0; n],
-            packed_intruder: vec![[0.0; 2]; prescribed.len()],
-            packed_floor: vec![0.0; near_wall.len()],
-            prescribed,
-            near_wall,
-            snap: Vec::new(),
-            snap_hist: Vec::new(),
-        }
-    }
-
-    /// Bytes per grain for `n` grains.
-    pub fn bytes_per_grain(&self, n: usize) -> f64 {
-        (8 * (self.fx.capacity()
-            + self.fy.capacity()
-            + self.ft.capacity()
-            + self.out_x.capacity()
-            + self.out_y.capacity()
-            + self.out_floor.capacity()
-            + 2 * self.packed_intruder.capacity()
-            + self.packed_floor.capacity()
-            + 5 * self.snap.capacity()
-            + self.snap_hist.capacity())
-            + 4 * (self.prescribed.capacity() + self.near_wall.capacity())
-            + 8 * (self.prescribed_at.capacity() + self.near_wall_at.capacity())) as f64
-            / n.max(1) as f64
-    }
 }
 
 /// What every chunk reads and no chunk writes.
@@ -802,5 +711,60 @@ fn finish<const FRICTION: bool>(
             p.w[l] = nw;
         }
         step2
+    }
+}
+
+impl World {
+    /// Advance one step.
+    pub fn step(&mut self) {
+        if self.rebuild_due
+            || self.nl.start.len() != self.g.len() + 1
+            || self.cfg.walls != self.walls_at_build
+        {
+            self.rebuild();
+        }
+        let n = self.g.len();
+        if self.u.x.len() != n {
+            self.u = Velocities {
+                x: self.g.vx.clone(),
+                y: self.g.vy.clone(),
+                w: self.g.w.clone(),
+            };
+        }
+        advance(self);
+        self.steps += 1;
+        self.t_s = self.steps as f64 * self.cfg.dt_s;
+    }
+
+    /// The vertical force carried across each height in `heights_m` by the contacts whose
+    /// centres lie on both sides of it (the lower grain pushing the upper one up), N, from
+    /// the pair forces at the current state (the step's own kernel, tangential part
+    /// included, the slip history as it stands). In a bed at rest this is the weight of the
+    /// grains above the height.
+    pub fn vertical_load_across(&self, heights_m: &[f64]) -> Vec<f64> {
+        let g = &self.g;
+        let nl = &self.nl;
+        let c = StepConst::of(self);
+        let mut out = vec![0.0; heights_m.len()];
+        for i in 0..g.len().min(nl.start.len().saturating_sub(1)) {
+            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
+                let j = nl.j[e] as usize;
+                let Some((_, fy, _)) = pair_now(self, &c, i, e) else {
+                    continue;
+                };
+                // fy is the force on i from j: on the upper grain, from the lower one.
+                let (lower_y, upper_y, up_force) = if g.y[i] < g.y[j] {
+                    (g.y[i], g.y[j], -fy)
+                } else {
+                    (g.y[j], g.y[i], fy)
+                };
+                for (k, &h) in heights_m.iter().enumerate() {
+                    if lower_y < h && upper_y >= h {
+                        out[k] += up_force;
+                    }
+                }
+            }
+        }
+        out
     }
 }

@@ -7,14 +7,9 @@ use serde::{Deserialize, Serialize};
 use super::contact::ContactLaw;
 use super::grains::{FREE, Grains, permute};
 use super::neighbours::NeighbourList;
-use super::step::{Scratch, StepConst, advance, pair_now};
+use super::scratch::Scratch;
 
-/// A free grain that cannot touch a wall before the next list build.
-pub const INTERIOR: u8 = 0;
-/// A free grain that may touch a wall before the next list build.
-pub const NEAR_WALL: u8 = 1;
-/// A grain on a prescribed trajectory (the intruder's).
-pub const PRESCRIBED: u8 = 2;
+pub use super::grains::{INTERIOR, NEAR_WALL, PRESCRIBED};
 
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -101,7 +96,7 @@ pub struct World {
     /// next build) or [`PRESCRIBED`] (an intruder grain).
     pub(super) class: Vec<u8>,
     /// The walls the flags were computed for.
-    walls_at_build: Walls,
+    pub(super) walls_at_build: Walls,
     pub(super) rebuild_due: bool,
     /// Sum over the steps since the build of the largest displacement in each, m: a bound
     /// on how far any grain moved (a rebuild is due past half the skin).
@@ -197,27 +192,6 @@ impl World {
         self.drift_m = 0.0;
     }
 
-    /// Advance one step.
-    pub fn step(&mut self) {
-        if self.rebuild_due
-            || self.nl.start.len() != self.g.len() + 1
-            || self.cfg.walls != self.walls_at_build
-        {
-            self.rebuild();
-        }
-        let n = self.g.len();
-        if self.u.x.len() != n {
-            self.u = Velocities {
-                x: self.g.vx.clone(),
-                y: self.g.vy.clone(),
-                w: self.g.w.clone(),
-            };
-        }
-        advance(self);
-        self.steps += 1;
-        self.t_s = self.steps as f64 * self.cfg.dt_s;
-    }
-
     /// Free grains: kinetic energy per grain (translation and rotation, at the velocities
     /// the forces see) over `m g d` of the mean grain (settling measure); `g` at least
     /// 9.81 m/s^2 for a gravity-free world.
@@ -275,38 +249,6 @@ impl World {
             }
         }
         worst
-    }
-
-    /// The vertical force carried across each height in `heights_m` by the contacts whose
-    /// centres lie on both sides of it (the lower grain pushing the upper one up), N, from
-    /// the pair forces at the current state (the step's own kernel, tangential part
-    /// included, the slip history as it stands). In a bed at rest this is the weight of the
-    /// grains above the height.
-    pub fn vertical_load_across(&self, heights_m: &[f64]) -> Vec<f64> {
-        let g = &self.g;
-        let nl = &self.nl;
-        let c = StepConst::of(self);
-        let mut out = vec![0.0; heights_m.len()];
-        for i in 0..g.len().min(nl.start.len().saturating_sub(1)) {
-            for e in nl.start[i] as usize..nl.start[i + 1] as usize {
-                let j = nl.j[e] as usize;
-                let Some((_, fy, _)) = pair_now(self, &c, i, e) else {
-                    continue;
-                };
-                // fy is the force on i from j: on the upper grain, from the lower one.
-                let (lower_y, upper_y, up_force) = if g.y[i] < g.y[j] {
-                    (g.y[i], g.y[j], -fy)
-                } else {
-                    (g.y[j], g.y[i], fy)
-                };
-                for (k, &h) in heights_m.iter().enumerate() {
-                    if lower_y < h && upper_y >= h {
-                        out[k] += up_force;
-                    }
-                }
-            }
-        }
-        out
     }
 }
 

@@ -10,24 +10,13 @@ pub const EXIT_INTERNAL: u8 = 1;
 
 /// What an analysis command leaves besides its output folder: its JSON summary (what
 /// `--json` prints and `summary.json` holds) and the text summary it prints without `--json`.
-/// Its `analyse` function returns this without printing; its `run` prints one of the two.
+/// Its `analyse` function returns this without printing; the command line prints one of the two.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Analysed {
     /// The JSON summary, pretty-printed.
     pub json: String,
     /// The human summary.
     pub human: String,
-}
-
-impl Analysed {
-    /// Print the JSON (`json`) or the human summary on stdout, as the CLI does.
-    pub fn print(&self, json: bool) {
-        if json {
-            println!("{}", self.json);
-        } else {
-            print!("{}", self.human);
-        }
-    }
 }
 
 /// A command failed: the message to print and the exit status.

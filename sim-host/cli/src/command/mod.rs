@@ -5,3 +5,12 @@ pub use sandjumper_output::error::*;
 pub use sandjumper_output::resolve;
 
 pub mod args;
+
+/// Print an analysis's JSON (`json`) or its human summary on stdout.
+pub fn print_analysed(analysed: &Analysed, json: bool) {
+    if json {
+        println!("{}", analysed.json);
+    } else {
+        print!("{}", analysed.human);
+    }
+}

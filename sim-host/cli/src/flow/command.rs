@@ -253,7 +253,7 @@ pub fn read_foot(path: &Path) -> Result<std::collections::BTreeMap<u64, Polygon>
 
 /// Run `sandjumper piv`.
 pub fn run(a: &PivArgs) -> Result<(), CliError> {
-    analyse(a)?.print(a.json);
+    crate::command::print_analysed(&analyse(a)?, a.json);
     Ok(())
 }
 

@@ -150,7 +150,7 @@ fn read_log(path: &std::path::Path) -> Result<AcqLog, CliError> {
 
 /// Run `sandjumper track`.
 pub fn run(a: &TrackArgs) -> Result<(), CliError> {
-    analyse(a)?.print(a.json);
+    crate::command::print_analysed(&analyse(a)?, a.json);
     Ok(())
 }
 

@@ -161,30 +161,6 @@ pub fn fault_entries(faults: &[sandjumper_core::protocol::FaultReport]) -> Vec<F
         .collect()
 }
 
-/// The end of every program: list the faults (unless JSON was asked for), say where the files
-/// went, and fail (exit 1) when the controller did not complete the program cleanly.
-pub fn conclude(
-    what: &str,
-    completed: bool,
-    faults: &[FaultEntry],
-    dir: &std::path::Path,
-    json: bool,
-) -> Result<(), CliError> {
-    if !json {
-        for f in faults {
-            println!("  fault {} {} at tick {}", f.code, f.name, f.tick);
-        }
-    }
-    eprintln!("wrote {}", dir.display());
-    if !faults.is_empty() || !completed {
-        return Err(CliError::internal(format!(
-            "the {what} did not complete cleanly (see {})",
-            dir.join("summary.json").display()
-        )));
-    }
-    Ok(())
-}
-
 /// The simulated robot (sil/pil) with the motor at `p0_m`, or `None` for a board.
 pub fn robot_fixture(
     simulated: bool,

@@ -21,11 +21,11 @@ use serde::Serialize;
 
 use super::intrusion_fixture::IntrusionFixture;
 use super::output::{
-    FaultEntry, conclude, fault_entries, firmware_name, max_tracking_error_m, samples_log,
-    start_index, write_run_files,
+    FaultEntry, fault_entries, firmware_name, max_tracking_error_m, samples_log, start_index,
+    write_run_files,
 };
 use super::session::{Fixture, Program, run_program};
-use super::{RigParamArgs, TargetArgs, link_failed};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_core::{Gains, JumpConfig, SampleRecord, SlowIntrusion, TrajectorySpec};
 use sandjumper_model::params::Params;

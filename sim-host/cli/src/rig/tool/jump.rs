@@ -7,11 +7,11 @@ use clap::Args;
 use serde::Serialize;
 
 use super::output::{
-    FaultEntry, conclude, fault_entries, firmware_name, max_tracking_error_m, motion_figure,
-    robot_fixture, samples_log, write_run_files,
+    FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
+    samples_log, write_run_files,
 };
 use super::session::{Fixture, Program, run_program};
-use super::{RigParamArgs, TargetArgs, link_failed};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_model::trajectory::kind_name;

@@ -202,3 +202,27 @@ pub fn run(a: &RigArgs) -> Result<(), CliError> {
         RigCommand::AcknowledgeReset(a) => calibrate::acknowledge_reset(a),
     }
 }
+
+/// The end of every program: list the faults (unless JSON was asked for), say where the files
+/// went, and fail (exit 1) when the controller did not complete the program cleanly.
+pub fn conclude(
+    what: &str,
+    completed: bool,
+    faults: &[sandjumper_rig::hil::open::FaultEntry],
+    dir: &std::path::Path,
+    json: bool,
+) -> Result<(), CliError> {
+    if !json {
+        for f in faults {
+            println!("  fault {} {} at tick {}", f.code, f.name, f.tick);
+        }
+    }
+    eprintln!("wrote {}", dir.display());
+    if !faults.is_empty() || !completed {
+        return Err(CliError::internal(format!(
+            "the {what} did not complete cleanly (see {})",
+            dir.join("summary.json").display()
+        )));
+    }
+    Ok(())
+}

@@ -21,11 +21,11 @@ use clap::Args;
 use serde::Serialize;
 
 use super::output::{
-    FaultEntry, conclude, fault_entries, firmware_name, max_tracking_error_m, motion_figure,
-    robot_fixture, samples_log, start_index, write_run_files,
+    FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
+    samples_log, start_index, write_run_files,
 };
 use super::session::{Fixture, Program, bring_to_idle, query_status, run_program};
-use super::{RigParamArgs, TargetArgs, link_failed};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_core::command::REPLAY_CHUNK;
 use sandjumper_core::replay::{REPLAY_CAPACITY, replay_checksum};
