@@ -34,7 +34,7 @@ pub struct RigConfig {
     /// Cut-off of the velocity estimate's first-order low-pass, Hz (default 2000). The
     /// derivative gain closes the position loop at a few hundred hertz on the motor/rod reduced
     /// mass, where a 500 Hz filter alone takes 30-40 degrees of phase; at 2 kHz it takes ~10
-    /// (see `sandjumper-sim`'s `hil::loop_margins`). A 1 um count per 0.1 ms tick is 0.01 m/s of
+    /// (see `sandjumper-rig`'s `hil::loop_margins`). A 1 um count per 0.1 ms tick is 0.01 m/s of
     /// quantization, 72 % of it through this filter.
     pub velocity_cutoff_hz: f32,
     /// Consecutive rejected frames that latch `LinkCorrupted` (default 10; 0 disables).

@@ -5,7 +5,7 @@
 # ratio, our speed-up on 2 threads beside LAMMPS's on 2 MPI ranks (what this machine's two
 # cores give a peer), and our memory per grain.
 #
-#   sim-host/benches/dem_vs_lammps.sh [WIDTH_M] [HEIGHT_M] [STEPS]
+#   sim-host/dem/benches/dem_vs_lammps.sh [WIDTH_M] [HEIGHT_M] [STEPS]
 #
 # LAMMPS runs REPS times (default 3) on 1 and 2 ranks, ours on 1 thread, 2 threads and 2
 # pinned threads, all in turn, and the medians are reported (a shared machine's load moves
@@ -19,13 +19,14 @@
 # paper's); LAMMPS's gran/hooke takes gamma per unit effective mass, so we give it
 # gamma / m_eff of two small grains (the same cost per contact either way).
 set -euo pipefail
-cd "$(dirname "$0")/../.."
+cd "$(dirname "$0")/../../.."
 WIDTH=${1:-0.25}
 HEIGHT=${2:-0.08}
 STEPS=${3:-20000}
 VENV=target/bench-venv-lammps
 WORK=target/bench-dem
-cargo build --release -q -p sandjumper-sim --bin sandjumper --example core_latency
+cargo build --release -q -p sandjumper-cli --bin sandjumper
+cargo build --release -q -p sandjumper-dem --example core_latency
 BIN=target/release/sandjumper
 if [ ! -x "$VENV/bin/python" ]; then
   python3 -m venv "$VENV"

@@ -4,7 +4,7 @@
 //! virtual machine can move its cores farther apart for minutes at a time, and a step loop
 //! that meets every 40 us feels it where a one-thread run does not.
 //!
-//!   cargo run --release -p sandjumper-sim --example core_latency [CORE_A CORE_B]
+//!   cargo run --release -p sandjumper-dem --example core_latency [CORE_A CORE_B]
 //!
 //! Prints one line: `core-to-core round trip: <ns> ns (cores A and B)`. Exit status 2 when
 //! the cores are not two distinct ones this process may run on.

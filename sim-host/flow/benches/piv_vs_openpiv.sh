@@ -10,14 +10,14 @@
 # (interior vectors, a window away from the edges).
 #
 # Installs OpenPIV from PyPI into its own virtual environment (target/bench-venv); needs
-# python3 with venv. Usage: sim-host/benches/piv_vs_openpiv.sh
+# python3 with venv. Usage: sim-host/flow/benches/piv_vs_openpiv.sh
 set -euo pipefail
-root="$(cd "$(dirname "$0")/../.." && pwd)"
+root="$(cd "$(dirname "$0")/../../.." && pwd)"
 cd "$root"
 work="$root/target/bench-piv"
 venv="$root/target/bench-venv"
 rm -rf "$work" && mkdir -p "$work"
-cargo build -q --release -p sandjumper-sim
+cargo build -q --release -p sandjumper-cli
 bin="$root/target/release/sandjumper"
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"

@@ -43,7 +43,7 @@ pub struct Image {
 
 impl Image {
     /// From a grey frame.
-    pub fn from_frame(f: &sandjumper_imaging::frame::GrayFrame) -> Self {
+    pub fn from_frame(f: &sandjumper_frame::GrayFrame) -> Self {
         let (w, h) = (f.width() as usize, f.height() as usize);
         let mut data = Vec::with_capacity(w * h);
         let mut row = Vec::new();

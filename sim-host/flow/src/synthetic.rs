@@ -13,7 +13,7 @@ use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::StandardNormal;
 
-use sandjumper_imaging::frame::GrayFrame;
+use sandjumper_frame::GrayFrame;
 
 /// The scene.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

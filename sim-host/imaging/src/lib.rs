@@ -4,7 +4,7 @@
 
 pub mod ball;
 pub mod figure;
-pub mod frame;
+pub use sandjumper_frame as frame;
 pub mod render;
 pub mod scale;
 pub mod sequence;

@@ -246,19 +246,45 @@ pub fn write_csv<T: serde::Serialize>(
         .map_err(|e| format!("cannot write `{}`: {e}", path.display()))
 }
 
-/// Write `data` (row-major, `shape`) as a float64 `.npy` array.
+/// Write `data` (row-major, `shape`) as a float64 `.npy` array (NPY format 1.0: the magic
+/// string, a header dict padded so the data starts on a 64-byte boundary, then the values
+/// little-endian). Written here rather than through a crate: the format's writer is a dozen
+/// lines, while the crates that also read it pull a Python-literal parser into every build.
 pub fn write_npy(path: &Path, shape: &[u64], data: Vec<f64>) -> Result<(), String> {
-    use npyz::WriterBuilder;
     let err = |e: &dyn std::fmt::Display| format!("cannot write `{}`: {e}", path.display());
-    let file = fs::File::create(path).map_err(|e| err(&e))?;
-    let mut wr = npyz::WriteOptions::new()
-        .default_dtype()
-        .shape(shape)
-        .writer(io::BufWriter::new(file))
-        .begin_nd()
-        .map_err(|e| err(&e))?;
-    wr.extend(data).map_err(|e| err(&e))?;
-    wr.finish().map_err(|e| err(&e))
+    let count: u64 = shape.iter().product();
+    if count != data.len() as u64 {
+        return Err(format!(
+            "cannot write `{}`: shape {shape:?} holds {count} values, not {}",
+            path.display(),
+            data.len()
+        ));
+    }
+    let dims = match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(u64::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {dims}, }}");
+    // magic (6) + version (2) + header length (2) + header + '\n', a multiple of 64.
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat(unpadded.next_multiple_of(64) - unpadded));
+    header.push('\n');
+    let header_len = u16::try_from(header.len()).map_err(|_| err(&"the shape is too long"))?;
+    let mut bytes = Vec::with_capacity(10 + header.len() + 8 * data.len());
+    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
+    bytes.extend_from_slice(&header_len.to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in data {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    fs::write(path, bytes).map_err(|e| err(&e))
 }
 
 /// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
@@ -280,6 +306,31 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn npy_files_read_back_with_an_independent_reader() {
+        let dir = tempfile::tempdir().unwrap();
+        for shape in [vec![5u64], vec![2, 3], vec![0], vec![3, 1, 2]] {
+            let n: u64 = shape.iter().product();
+            let data: Vec<f64> = (0..n).map(|i| i as f64 * 0.5 - 1.25).collect();
+            let path = dir.path().join("a.npy");
+            write_npy(&path, &shape, data.clone()).unwrap();
+            let bytes = fs::read(&path).unwrap();
+            let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+            assert_eq!(npy.shape(), &shape[..]);
+            let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+            assert_eq!(
+                (10 + header_len) % 64,
+                0,
+                "data starts on a 64-byte boundary"
+            );
+            assert_eq!(bytes.len(), 10 + header_len + 8 * n as usize);
+            let back: Vec<f64> = npy.into_vec().unwrap();
+            assert_eq!(back, data);
+        }
+        let bad = write_npy(&dir.path().join("b.npy"), &[2, 2], vec![1.0; 3]).unwrap_err();
+        assert!(bad.contains("holds 4 values, not 3"), "{bad}");
+    }
 
     #[test]
     fn nothing_appears_until_commit_and_then_everything_does() {

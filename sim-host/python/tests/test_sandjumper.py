@@ -3,7 +3,7 @@ arrays have the right dtypes and lengths, bad input raises with the CLI's messag
 sweep releases the GIL.
 
 The CLI is ``target/debug/sandjumper`` of this workspace (or ``$SANDJUMPER_BIN``); build it
-first with ``cargo build -p sandjumper-sim``.
+first with ``cargo build -p sandjumper-cli``.
 """
 
 import csv

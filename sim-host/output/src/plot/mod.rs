@@ -104,7 +104,27 @@ fn render<DB: DrawingBackend>(fig: &impl Figure, root: DrawingArea<DB, Shift>) -
 pub fn save_figure(fig: &impl Figure, png: &Path, svg: Option<&Path>) -> PlotResult<()> {
     register_fonts();
     let size = fig.size();
-    render(fig, BitMapBackend::new(png, size).into_drawing_area()).map_err(with_path(png))?;
+    // Drawn into memory and encoded with the `image` crate the rest of the workspace uses
+    // (plotters' own encoder would build a second, older `image` and `png`).
+    let (w, h) = size;
+    let mut rgb = vec![0u8; w as usize * h as usize * 3];
+    render(
+        fig,
+        BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area(),
+    )
+    .map_err(with_path(png))?;
+    image::save_buffer_with_format(
+        png,
+        &rgb,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| PlotError {
+        path: Some(png.to_path_buf()),
+        reason: e.to_string(),
+    })?;
     if let Some(svg) = svg {
         render(fig, SVGBackend::new(svg, size).into_drawing_area()).map_err(with_path(svg))?;
     }

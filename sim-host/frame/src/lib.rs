@@ -1,4 +1,6 @@
-//! One grey-level camera frame: 8- or 16-bit pixels, row by row, `y` growing downward.
+//! `sandjumper-frame`: one grey-level camera frame (8- or 16-bit pixels, row by row, `y` growing
+//! downward) and a region of interest: the pixel type the rod camera (`sandjumper-imaging`) and
+//! PIV (`sandjumper-flow`) both read, so neither depends on the other.
 
 /// Bits per pixel of a grey frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
