@@ -2,6 +2,7 @@
 //! derived fields ([`fields`]), grain momentum and added mass ([`momentum`]), and synthetic
 //! grain images with known motion for testing ([`synthetic`]).
 
+pub mod analysis;
 pub mod fields;
 pub mod figure;
 pub mod momentum;

@@ -6,11 +6,13 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use super::fields::{Grid, derive};
+use super::analysis::{
+    self, FLOW_HEADER, FlowRow, Frames, PairResult, Pairing, PivOptions, PivRun, SiFields, Totals,
+};
 use super::figure::MapFigure;
-use super::momentum::{Calibration, Momentum, Polygon, foot_depth_m, grain_momentum, inside};
-use super::piv::{Image, PivConfig, SubPixel, VectorField, flag, piv_pair};
-use super::preprocess::{Preprocess, apply, background};
+use super::momentum::{Calibration, Polygon};
+use super::piv::{Image, PivConfig, SubPixel, VectorField};
+use super::preprocess::Preprocess;
 use super::synthetic::GrainScene;
 use crate::command::args::{parse_number, parse_positive};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
@@ -23,14 +25,22 @@ use sandjumper_output::StagedDir;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::{palette, save_figure};
 
-/// How frames are paired.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Pairing {
+/// `--pairs`: how frames are paired ([`Pairing`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PairingArg {
     /// 1-2, 2-3, 3-4, ...
     Consecutive,
     /// 1-2, 3-4, ... (double-frame cameras).
     Ab,
+}
+
+impl From<PairingArg> for Pairing {
+    fn from(p: PairingArg) -> Self {
+        match p {
+            PairingArg::Consecutive => Pairing::Consecutive,
+            PairingArg::Ab => Pairing::Ab,
+        }
+    }
 }
 
 fn parse_windows(s: &str) -> Result<Vec<usize>, String> {
@@ -57,7 +67,7 @@ pub struct PivArgs {
     pub frames: String,
     /// Pairing of the frames.
     #[arg(long, value_enum, default_value = "consecutive")]
-    pub pairs: Pairing,
+    pub pairs: PairingArg,
     /// Analyse every Nth pair.
     #[arg(long, value_name = "N", default_value = "1", value_parser = clap::value_parser!(u32).range(1..))]
     pub every: u32,
@@ -132,54 +142,6 @@ pub enum SubPixelArg {
     /// 3-point parabola.
     Parabolic,
 }
-
-/// One row of `flow.csv`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct FlowRow {
-    /// Pair index.
-    pub pair: usize,
-    /// Frame numbers.
-    pub frame_a: u64,
-    /// Frame numbers.
-    pub frame_b: u64,
-    /// Mid time of the pair, s (NaN without a clock).
-    pub t_s: f64,
-    /// Foot depth below the surface (mean over the pair), m.
-    pub foot_depth_m: f64,
-    /// Foot velocity, m/s (height up: negative when intruding).
-    pub foot_velocity_m_s: f64,
-    /// Grain momentum from the left half-plane, kg m/s.
-    pub momentum_left_kg_m_s: f64,
-    /// From the right.
-    pub momentum_right_kg_m_s: f64,
-    /// Mean, kg m/s.
-    pub momentum_kg_m_s: f64,
-    /// `P / v_foot`, kg.
-    pub added_mass_kg: f64,
-    /// Vectors measured and accepted.
-    pub vectors_valid: usize,
-    /// Outliers replaced.
-    pub vectors_replaced: usize,
-    /// Masked.
-    pub vectors_masked: usize,
-}
-
-/// Header of `flow.csv`.
-pub const FLOW_HEADER: [&str; 13] = [
-    "pair",
-    "frame_a",
-    "frame_b",
-    "t_s",
-    "foot_depth_m",
-    "foot_velocity_m_s",
-    "momentum_left_kg_m_s",
-    "momentum_right_kg_m_s",
-    "momentum_kg_m_s",
-    "added_mass_kg",
-    "vectors_valid",
-    "vectors_replaced",
-    "vectors_masked",
-];
 
 /// `summary.json` of `piv`.
 #[derive(Debug, Serialize)]
@@ -258,7 +220,43 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 }
 
 /// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
+/// The stages: the frames and their times ([`read_frames`]), the options ([`options`]), the
+/// analysis itself (`sandjumper_flow::analysis::run`), the summary, the output folder
+/// ([`write_outputs`]).
 pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
+    let frames = read_frames(a)?;
+    let opts = options(a, &frames)?;
+    analysis::check(&frames, &opts).map_err(input)?;
+    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
+    let pairs = analysis::frame_pairs(frames.images.len(), opts.pairing, opts.every);
+    let progress = sandjumper_output::progress_bar(pairs.len() as u64, "PIV pairs");
+    let run = analysis::run(&frames, &opts, || progress.inc(1)).map_err(input)?;
+    progress.finish_and_clear();
+    let totals = run.totals();
+    let rows = run.rows();
+    let report = PivReport::new(&run, &rows, &totals, &opts);
+    let json = serde_json::to_string_pretty(&report)
+        .map_err(|e| CliError::internal(format!("cannot encode the summary: {e}")))?;
+    if let Some(staged) = staged {
+        write_outputs(&staged, a, &frames, &opts, &run, &rows, &json)?;
+        let dir = staged.commit()?;
+        eprintln!("wrote {}", dir.display());
+    }
+    if totals.replaced > 0 {
+        eprintln!(
+            "note: {} of {} vectors were outliers, replaced by their neighbours' mean (flag 1 in fields/)",
+            totals.replaced,
+            totals.valid + totals.replaced
+        );
+    }
+    Ok(sandjumper_output::Analysed {
+        json,
+        human: human_summary(&report, &rows),
+    })
+}
+
+/// The frames `a` names, in memory, with their times (from `--fps` or `--log`).
+fn read_frames(a: &PivArgs) -> Result<Frames, CliError> {
     let seq = ImageSequence::open(&a.frames).map_err(|e| input(format!("frames: {e}")))?;
     if seq.len() < 2 {
         return Err(input(format!(
@@ -267,7 +265,37 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
             seq.len()
         )));
     }
-    let cfg = PivConfig {
+    let numbers = seq.numbers();
+    let clock = match (&a.log, a.fps) {
+        (Some(p), _) => Some(log_clock(
+            &AcqLog::read_file(p, &ReadOptions::default())
+                .map_err(|e| input(format!("--log {}: {e}", p.display())))?,
+        )),
+        (None, Some(f)) => Some(FrameClock::Fps(f)),
+        (None, None) => None,
+    };
+    let times_s = match &clock {
+        Some(c) => Some(frame_times(&numbers, c).map_err(input)?),
+        None => None,
+    };
+    let mut images = Vec::with_capacity(seq.len());
+    let mut max_value = 255.0f32;
+    for f in seq.frames() {
+        let f = f.map_err(|e| input(format!("frames: {e}")))?;
+        max_value = f.frame.depth().max_value();
+        images.push(Image::from_frame(&f.frame));
+    }
+    Ok(Frames {
+        numbers,
+        images,
+        max_value,
+        times_s,
+    })
+}
+
+/// The analysis options from the arguments: passes, pre-processing, calibration, masks.
+fn options(a: &PivArgs, frames: &Frames) -> Result<PivOptions, CliError> {
+    let piv = PivConfig {
         windows: parse_windows(&a.windows).map_err(|e| input(format!("--windows {e}")))?,
         overlap: a.overlap,
         deform: !a.no_deform,
@@ -278,26 +306,13 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
         median_threshold: a.median_threshold,
         min_peak_ratio: a.min_peak_ratio,
     };
-    let pre = Preprocess {
+    let preprocess = Preprocess {
         clahe_tile_px: a.clahe_tile,
         clahe_clip: a.clahe_clip,
         subtract_background: a.subtract_background,
         cap_sigma: a.cap_sigma,
     };
-    let numbers = seq.numbers();
-    let clock = match (&a.log, a.fps) {
-        (Some(p), _) => Some(log_clock(
-            &AcqLog::read_file(p, &ReadOptions::default())
-                .map_err(|e| input(format!("--log {}: {e}", p.display())))?,
-        )),
-        (None, Some(f)) => Some(FrameClock::Fps(f)),
-        (None, None) => None,
-    };
-    let times = match &clock {
-        Some(c) => Some(frame_times(&numbers, c).map_err(input)?),
-        None => None,
-    };
-    let cal = match (a.m_per_px, a.origin) {
+    let calibration = match (a.m_per_px, a.origin) {
         (Some(m), Some(o)) => Some(Calibration {
             m_per_px: m,
             origin_px: o,
@@ -309,217 +324,67 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
         }
         _ => None,
     };
-    if cal.is_some() && times.is_none() {
+    if calibration.is_some() && frames.times_s.is_none() {
         return Err(input(
             "--m-per-px needs --fps or --log to turn displacements into velocities",
         ));
     }
-    let foot = a.foot.as_deref().map(read_foot).transpose()?;
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    // Frames, in memory, as floats.
-    let mut images = Vec::with_capacity(seq.len());
-    let mut max_value = 255.0f32;
-    for f in seq.frames() {
-        let f = f.map_err(|e| input(format!("frames: {e}")))?;
-        max_value = f.frame.depth().max_value();
-        images.push(Image::from_frame(&f.frame));
-    }
-    let (w, h) = (images[0].width, images[0].height);
-    super::piv::check_config(&cfg, w, h).map_err(input)?;
-    let static_mask: Option<Vec<bool>> = match &a.mask {
-        Some(p) => {
-            let m = decode_file(p).map_err(|e| input(format!("--mask {e}")))?;
-            if (m.width() as usize, m.height() as usize) != (w, h) {
-                return Err(input(format!(
-                    "--mask {}: {}x{} pixels, the frames {w}x{h} (allowed: the frames' size)",
-                    p.display(),
-                    m.width(),
-                    m.height()
-                )));
-            }
-            let img = Image::from_frame(&m);
-            Some(img.data.iter().map(|&v| v > 0.0).collect())
-        }
+    let feet = a.foot.as_deref().map(read_foot).transpose()?;
+    let static_mask = match &a.mask {
+        Some(p) => Some(read_mask(p, frames.size())?),
         None => None,
     };
-    let bg = pre
-        .subtract_background
-        .then(|| background(&images.iter().collect::<Vec<_>>()))
-        .flatten();
-    let prepared: Vec<Image> = images
+    Ok(PivOptions {
+        piv,
+        preprocess,
+        pairing: a.pairs.into(),
+        every: a.every as usize,
+        calibration,
+        rho_phi_kg_m3: a.grain_density * a.phi,
+        static_mask,
+        feet,
+    })
+}
+
+/// A static mask image of the frames' size `(w, h)`: non-zero pixels are not grain flow.
+fn read_mask(path: &Path, (w, h): (usize, usize)) -> Result<Vec<bool>, CliError> {
+    let m = decode_file(path).map_err(|e| input(format!("--mask {e}")))?;
+    if (m.width() as usize, m.height() as usize) != (w, h) {
+        return Err(input(format!(
+            "--mask {}: {}x{} pixels, the frames {w}x{h} (allowed: the frames' size)",
+            path.display(),
+            m.width(),
+            m.height()
+        )));
+    }
+    Ok(Image::from_frame(&m)
+        .data
         .iter()
-        .map(|i| apply(&pre, i, bg.as_ref(), max_value))
-        .collect();
-    let pairs: Vec<(usize, usize)> = match a.pairs {
-        Pairing::Consecutive => (0..prepared.len() - 1)
-            .map(|i| (i, i + 1))
-            .collect::<Vec<_>>(),
-        Pairing::Ab => (0..prepared.len() / 2)
-            .map(|i| (2 * i, 2 * i + 1))
-            .collect::<Vec<_>>(),
-    }
-    .into_iter()
-    .step_by(a.every as usize)
-    .collect();
-    let progress = sandjumper_output::progress_bar(pairs.len() as u64, "PIV pairs");
-    let rho_phi = a.grain_density * a.phi;
-    let mut fields: Vec<VectorField> = Vec::with_capacity(pairs.len());
-    let mut rows: Vec<FlowRow> = Vec::with_capacity(pairs.len());
-    let mut derived: Vec<Option<(Grid, Grid, Grid, Grid)>> = Vec::new();
-    for (k, &(ia, ib)) in pairs.iter().enumerate() {
-        let (fa, fb) = (numbers[ia], numbers[ib]);
-        let foot_a = foot.as_ref().and_then(|m| m.get(&fa));
-        let foot_b = foot.as_ref().and_then(|m| m.get(&fb));
-        let mask: Option<Vec<bool>> = if static_mask.is_some() || foot_a.is_some() {
-            let mut m = static_mask.clone().unwrap_or_else(|| vec![false; w * h]);
-            for poly in [foot_a, foot_b].into_iter().flatten() {
-                // Only the polygon's bounding box can be inside it.
-                let (x0, x1, y0, y1) = poly.iter().fold(
-                    (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
-                    |(a, b, c, d), &(x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)),
-                );
-                let span = |lo: f64, hi: f64, n: usize| {
-                    (lo.floor().clamp(0.0, n as f64) as usize)
-                        ..(hi.ceil() + 1.0).clamp(0.0, n as f64) as usize
-                };
-                for y in span(y0, y1, h) {
-                    for x in span(x0, x1, w) {
-                        if inside(poly, x as f64, y as f64) {
-                            m[y * w + x] = true;
-                        }
-                    }
-                }
-            }
-            Some(m)
-        } else {
-            None
-        };
-        let f = piv_pair(&prepared[ia], &prepared[ib], mask.as_deref(), &cfg).map_err(input)?;
-        let (valid, replaced, masked) = f.counts();
-        let dt = times.as_ref().map(|t| t[ib] - t[ia]);
-        let t_mid = times.as_ref().map_or(f64::NAN, |t| 0.5 * (t[ia] + t[ib]));
-        let mut row = FlowRow {
-            pair: k,
-            frame_a: fa,
-            frame_b: fb,
-            t_s: t_mid,
-            foot_depth_m: f64::NAN,
-            foot_velocity_m_s: f64::NAN,
-            momentum_left_kg_m_s: f64::NAN,
-            momentum_right_kg_m_s: f64::NAN,
-            momentum_kg_m_s: f64::NAN,
-            added_mass_kg: f64::NAN,
-            vectors_valid: valid,
-            vectors_replaced: replaced,
-            vectors_masked: masked,
-        };
-        let mut d = None;
-        if let (Some(cal), Some(dt)) = (cal, dt) {
-            if dt <= 0.0 {
-                return Err(input(format!(
-                    "frames {fa} and {fb}: the second is not later than the first (dt = {dt} s)"
-                )));
-            }
-            let m: Momentum =
-                grain_momentum(&f, &cal, dt, rho_phi, mask.as_deref().map(|m| (m, w)));
-            row.momentum_left_kg_m_s = m.left_kg_m_s;
-            row.momentum_right_kg_m_s = m.right_kg_m_s;
-            row.momentum_kg_m_s = m.momentum_kg_m_s;
-            if let (Some(pa), Some(pb)) = (foot_a, foot_b) {
-                let (da, db) = (foot_depth_m(pa, &cal), foot_depth_m(pb, &cal));
-                row.foot_depth_m = 0.5 * (da + db);
-                row.foot_velocity_m_s = -(db - da) / dt;
-                if row.foot_velocity_m_s.abs() > 1e-9 {
-                    row.added_mass_kg = m.momentum_kg_m_s / row.foot_velocity_m_s;
-                }
-            }
-            let s = cal.m_per_px / dt;
-            let um: Vec<f64> = f.u.iter().map(|u| u * s).collect();
-            let vm: Vec<f64> = f.v.iter().map(|v| -v * s).collect();
-            let spacing = f.step_px as f64 * cal.m_per_px;
-            let ug = Grid::new(f.nx, f.ny, spacing, um);
-            let vg = Grid::new(f.nx, f.ny, spacing, vm);
-            let dd = derive(&ug, &vg);
-            d = Some((ug, vg, dd.vorticity, dd.shear_rate));
+        .map(|&v| v > 0.0)
+        .collect())
+}
+
+impl<'a> PivReport<'a> {
+    /// The summary of `run` (its `rows` and `totals`) with the settings of `opts`.
+    fn new(run: &PivRun, rows: &'a [FlowRow], totals: &Totals, opts: &'a PivOptions) -> Self {
+        let f0 = &run.results[0].field;
+        PivReport {
+            pairs: run.results.len(),
+            grid: (f0.nx, f0.ny, f0.step_px),
+            vectors: totals.valid + totals.replaced + totals.masked,
+            vectors_replaced: totals.replaced,
+            vectors_masked: totals.masked,
+            median_peak_ratio: totals.median_peak_ratio,
+            calibrated: opts.calibration.is_some(),
+            flow: rows,
+            piv: &opts.piv,
+            preprocess: &opts.preprocess,
         }
-        derived.push(d);
-        rows.push(row);
-        fields.push(f);
-        progress.inc(1);
     }
-    progress.finish_and_clear();
-    let (mut valid, mut replaced, mut masked) = (0, 0, 0);
-    let mut ratios = Vec::new();
-    for f in &fields {
-        let c = f.counts();
-        valid += c.0;
-        replaced += c.1;
-        masked += c.2;
-        ratios.extend(
-            f.peak_ratio
-                .iter()
-                .zip(&f.flag)
-                .filter(|(_, fl)| **fl == flag::VALID)
-                .map(|(r, _)| *r),
-        );
-    }
-    ratios.sort_by(f64::total_cmp);
-    let f0 = &fields[0];
-    let report = PivReport {
-        pairs: fields.len(),
-        grid: (f0.nx, f0.ny, f0.step_px),
-        vectors: valid + replaced + masked,
-        vectors_replaced: replaced,
-        vectors_masked: masked,
-        median_peak_ratio: ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN),
-        calibrated: cal.is_some(),
-        flow: &rows,
-        piv: &cfg,
-        preprocess: &pre,
-    };
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::internal(format!("cannot encode the summary: {e}")))?;
-    if let Some(staged) = staged {
-        // The animation (the paper's Supplementary Video 2): each pair's frame A with its
-        // vectors, at most 200 frames, 100 ms each.
-        let stride = (fields[0].nx / 40).max(1);
-        let max_disp = fields
-            .iter()
-            .flat_map(|f| f.u.iter().zip(&f.v).map(|(a, b)| a.hypot(*b)))
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::max);
-        let scale = if max_disp > 0.0 {
-            1.5 * (stride * fields[0].step_px) as f64 / max_disp
-        } else {
-            1.0
-        };
-        let frames: Vec<image::RgbaImage> = pairs
-            .iter()
-            .zip(&fields)
-            .take(200)
-            .map(|(&(ia, _), f)| super::figure::animation_frame(&images[ia], f, stride, scale))
-            .collect();
-        super::figure::write_gif(&staged.file("animation.gif"), frames, 100)
-            .map_err(CliError::internal)?;
-        write_outputs(
-            &staged,
-            a,
-            (w, h),
-            &fields,
-            &derived,
-            &rows,
-            foot.as_ref(),
-            &json,
-        )?;
-        let dir = staged.commit()?;
-        eprintln!("wrote {}", dir.display());
-    }
-    if replaced > 0 {
-        eprintln!(
-            "note: {replaced} of {} vectors were outliers, replaced by their neighbours' mean (flag 1 in fields/)",
-            valid + replaced
-        );
-    }
+}
+
+/// The text `piv` prints without `--json`.
+fn human_summary(report: &PivReport<'_>, rows: &[FlowRow]) -> String {
     let mut human = format!(
         "piv: {} pairs, grid {}x{} every {} px, {} vectors ({} replaced, {} masked), median peak ratio {:.2}\n",
         report.pairs,
@@ -527,8 +392,8 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
         report.grid.1,
         report.grid.2,
         report.vectors,
-        replaced,
-        masked,
+        report.vectors_replaced,
+        report.vectors_masked,
         report.median_peak_ratio
     );
     if let Some(r) = rows.iter().rfind(|r| r.added_mass_kg.is_finite()) {
@@ -540,7 +405,7 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
             r.added_mass_kg
         );
     }
-    Ok(sandjumper_output::Analysed { json, human })
+    human
 }
 
 fn csv_num(v: f64) -> String {
@@ -551,29 +416,76 @@ fn csv_num(v: f64) -> String {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+fn internal(e: impl std::fmt::Display) -> CliError {
+    CliError::internal(e.to_string())
+}
+
+/// Everything `--out` holds: the animation, the per-pair field tables, the stacked arrays,
+/// `flow.csv` and `added_mass.csv`, `piv.toml`, the figures and `summary.json`.
 fn write_outputs(
     staged: &StagedDir,
     a: &PivArgs,
-    (w, h): (usize, usize),
-    fields: &[VectorField],
-    derived: &[Option<(Grid, Grid, Grid, Grid)>],
+    frames: &Frames,
+    opts: &PivOptions,
+    run: &PivRun,
     rows: &[FlowRow],
-    foot: Option<&std::collections::BTreeMap<u64, Polygon>>,
     json: &str,
 ) -> Result<(), CliError> {
-    let err = |e: &dyn std::fmt::Display| CliError::internal(e.to_string());
+    write_animation(staged, frames, run)?;
+    write_field_tables(staged, run, opts.calibration)?;
+    write_arrays(staged, run)?;
+    let added_mass = run.added_mass_points();
+    write_tables(staged, rows, &added_mass)?;
+    write_settings(staged, a, opts)?;
+    write_maps(staged, frames.size(), run, rows, opts.feet.as_ref())?;
+    if !added_mass.is_empty() {
+        write_added_mass_figure(staged, a.phi, &added_mass)?;
+    }
+    staged.write_text("summary.json", &format!("{json}\n"))?;
+    Ok(())
+}
+
+/// `animation.gif` (the paper's Supplementary Video 2): each pair's frame A with its vectors,
+/// at most 200 frames, 100 ms each.
+fn write_animation(staged: &StagedDir, frames: &Frames, run: &PivRun) -> Result<(), CliError> {
+    let f0 = &run.results[0].field;
+    let stride = (f0.nx / 40).max(1);
+    let max_disp = run
+        .results
+        .iter()
+        .flat_map(|r| r.field.u.iter().zip(&r.field.v).map(|(a, b)| a.hypot(*b)))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let scale = if max_disp > 0.0 {
+        1.5 * (stride * f0.step_px) as f64 / max_disp
+    } else {
+        1.0
+    };
+    let gif: Vec<image::RgbaImage> = run
+        .pairs
+        .iter()
+        .zip(&run.results)
+        .take(200)
+        .map(|(&(ia, _), r)| {
+            super::figure::animation_frame(&frames.images[ia], &r.field, stride, scale)
+        })
+        .collect();
+    super::figure::write_gif(&staged.file("animation.gif"), gif, 100).map_err(internal)
+}
+
+/// `fields/NNNN.csv`: one table per pair, every vector with its flag and peak ratio, and in
+/// SI units when calibrated.
+fn write_field_tables(
+    staged: &StagedDir,
+    run: &PivRun,
+    cal: Option<Calibration>,
+) -> Result<(), CliError> {
     let dir = staged.file("fields");
-    std::fs::create_dir_all(&dir).map_err(|e| err(&e))?;
-    let cal = a.m_per_px.zip(a.origin).map(|(m, o)| Calibration {
-        m_per_px: m,
-        origin_px: o,
-    });
-    for (k, (f, d)) in fields.iter().zip(derived).enumerate() {
-        let mut wtr =
-            csv::Writer::from_path(dir.join(format!("{k:04}.csv"))).map_err(|e| err(&e))?;
+    std::fs::create_dir_all(&dir).map_err(internal)?;
+    for (k, PairResult { field: f, si, .. }) in run.results.iter().enumerate() {
+        let mut wtr = csv::Writer::from_path(dir.join(format!("{k:04}.csv"))).map_err(internal)?;
         let mut header = vec!["x_px", "y_px", "u_px", "v_px", "flag", "s2n"];
-        if d.is_some() {
+        if si.is_some() {
             header.extend([
                 "x_m",
                 "h_m",
@@ -583,7 +495,7 @@ fn write_outputs(
                 "shear_rate_1_s",
             ]);
         }
-        wtr.write_record(&header).map_err(|e| err(&e))?;
+        wtr.write_record(&header).map_err(internal)?;
         for j in 0..f.ny {
             for i in 0..f.nx {
                 let q = j * f.nx + i;
@@ -595,34 +507,36 @@ fn write_outputs(
                     f.flag[q].to_string(),
                     csv_num(f.peak_ratio[q]),
                 ];
-                if let (Some((u, v, vo, sh)), Some(c)) = (d, cal) {
+                if let (Some(s), Some(c)) = (si, cal) {
                     rec.extend([
                         c.x_m(f.xs[i]).to_string(),
                         c.h_m(f.ys[j]).to_string(),
-                        csv_num(u.values[q]),
-                        csv_num(v.values[q]),
-                        csv_num(vo.values[q]),
-                        csv_num(sh.values[q]),
+                        csv_num(s.u.values[q]),
+                        csv_num(s.v.values[q]),
+                        csv_num(s.vorticity.values[q]),
+                        csv_num(s.shear_rate.values[q]),
                     ]);
                 }
-                wtr.write_record(&rec).map_err(|e| err(&e))?;
+                wtr.write_record(&rec).map_err(internal)?;
             }
         }
-        wtr.flush().map_err(|e| err(&e))?;
+        wtr.flush().map_err(internal)?;
     }
-    // Stacked arrays for numpy: (pairs, rows, columns).
-    let (nx, ny, np) = (
-        fields[0].nx as u64,
-        fields[0].ny as u64,
-        fields.len() as u64,
-    );
+    Ok(())
+}
+
+/// The stacked arrays for numpy, `(pairs, rows, columns)`: displacements, flags and peak
+/// ratios, and the SI fields when every pair has them.
+fn write_arrays(staged: &StagedDir, run: &PivRun) -> Result<(), CliError> {
+    let f0 = &run.results[0].field;
+    let (nx, ny, np) = (f0.nx as u64, f0.ny as u64, run.results.len() as u64);
     let write_npy = |name: &str, shape: &[u64], data: Vec<f64>| -> Result<(), CliError> {
         sandjumper_output::write_npy(&staged.file(name), shape, data).map_err(CliError::internal)
     };
-    write_npy("x_px.npy", &[nx], fields[0].xs.clone())?;
-    write_npy("y_px.npy", &[ny], fields[0].ys.clone())?;
+    write_npy("x_px.npy", &[nx], f0.xs.clone())?;
+    write_npy("y_px.npy", &[ny], f0.ys.clone())?;
     let stack = |get: &dyn Fn(&VectorField) -> Vec<f64>| -> Vec<f64> {
-        fields.iter().flat_map(get).collect()
+        run.results.iter().flat_map(|r| get(&r.field)).collect()
     };
     write_npy("u_px.npy", &[np, ny, nx], stack(&|f| f.u.clone()))?;
     write_npy("v_px.npy", &[np, ny, nx], stack(&|f| f.v.clone()))?;
@@ -632,57 +546,114 @@ fn write_outputs(
         stack(&|f| f.flag.iter().map(|&x| f64::from(x)).collect()),
     )?;
     write_npy("s2n.npy", &[np, ny, nx], stack(&|f| f.peak_ratio.clone()))?;
-    if derived.iter().all(Option::is_some) {
-        let pick = |k: usize| -> Vec<f64> {
-            derived
-                .iter()
-                .flatten()
-                .flat_map(|d| match k {
-                    0 => d.0.values.clone(),
-                    1 => d.1.values.clone(),
-                    2 => d.2.values.clone(),
-                    _ => d.3.values.clone(),
-                })
-                .collect()
+    let si: Vec<&SiFields> = run.results.iter().filter_map(|r| r.si.as_ref()).collect();
+    if si.len() == run.results.len() {
+        let pick = |get: &dyn Fn(&SiFields) -> &Vec<f64>| -> Vec<f64> {
+            si.iter().flat_map(|s| get(s).iter().copied()).collect()
         };
-        write_npy("u_m_s.npy", &[np, ny, nx], pick(0))?;
-        write_npy("v_m_s.npy", &[np, ny, nx], pick(1))?;
-        write_npy("vorticity_1_s.npy", &[np, ny, nx], pick(2))?;
-        write_npy("shear_rate_1_s.npy", &[np, ny, nx], pick(3))?;
+        write_npy("u_m_s.npy", &[np, ny, nx], pick(&|s| &s.u.values))?;
+        write_npy("v_m_s.npy", &[np, ny, nx], pick(&|s| &s.v.values))?;
+        write_npy(
+            "vorticity_1_s.npy",
+            &[np, ny, nx],
+            pick(&|s| &s.vorticity.values),
+        )?;
+        write_npy(
+            "shear_rate_1_s.npy",
+            &[np, ny, nx],
+            pick(&|s| &s.shear_rate.values),
+        )?;
     }
+    Ok(())
+}
+
+/// `flow.csv` (one row per pair) and `added_mass.csv` (the table `fit added-mass` reads:
+/// intruding pairs, depth increasing).
+fn write_tables(
+    staged: &StagedDir,
+    rows: &[FlowRow],
+    added_mass: &[(f64, f64)],
+) -> Result<(), CliError> {
     sandjumper_output::write_csv(&staged.file("flow.csv"), rows, &FLOW_HEADER)
         .map_err(CliError::internal)?;
-    // The table `fit added-mass` reads: intruding pairs, depth increasing.
     let mut am = String::from("depth_m,added_mass_kg\n");
-    let mut last = f64::MIN;
-    let mut am_points = Vec::new();
-    for r in rows {
-        if r.added_mass_kg.is_finite() && r.foot_velocity_m_s < 0.0 && r.foot_depth_m > last {
-            am += &format!("{},{}\n", r.foot_depth_m, r.added_mass_kg);
-            last = r.foot_depth_m;
-            am_points.push((r.foot_depth_m, r.added_mass_kg));
-        }
+    for (z, m) in added_mass {
+        am += &format!("{z},{m}\n");
     }
     staged.write_text("added_mass.csv", &am)?;
+    Ok(())
+}
+
+/// `piv.toml`: the resolved settings of the run, enough to run it again.
+#[derive(Debug, Serialize)]
+struct PivSettings<'a> {
+    /// The frames.
+    frames: &'a str,
+    /// Frame rate, frames/s (absent: timed by `log`, or not timed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fps: Option<f64>,
+    /// Acquisition log timing the frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    log: Option<String>,
+    /// Static mask image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mask: Option<String>,
+    /// The foot's outlines.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    foot: Option<String>,
+    /// How frames are paired.
+    pairs: Pairing,
+    /// Every Nth pair analysed.
+    every: usize,
+    /// Packing fraction of the bed.
+    phi: f64,
+    /// Grain density, kg/m^3.
+    grain_density_kg_m3: f64,
+    /// Pixels to metres and the foot's axis at the surface.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    calibration: Option<Calibration>,
+    /// The correlation passes.
+    piv: &'a PivConfig,
+    /// Pre-processing.
+    preprocess: &'a Preprocess,
+}
+
+fn write_settings(staged: &StagedDir, a: &PivArgs, opts: &PivOptions) -> Result<(), CliError> {
+    let shown = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let settings = PivSettings {
+        frames: &a.frames,
+        fps: a.fps,
+        log: shown(&a.log),
+        mask: shown(&a.mask),
+        foot: shown(&a.foot),
+        pairs: opts.pairing,
+        every: opts.every,
+        phi: a.phi,
+        grain_density_kg_m3: a.grain_density,
+        calibration: opts.calibration,
+        piv: &opts.piv,
+        preprocess: &opts.preprocess,
+    };
+    let text = toml::to_string(&settings).map_err(internal)?;
     staged.write_text(
         "piv.toml",
         &format!(
-            "# sandjumper piv {}: the resolved settings\n{}",
-            a.frames,
-            toml::to_string(
-                &serde_json::from_str::<serde_json::Value>(json)
-                    .map_err(|e| err(&e))?
-                    .as_object()
-                    .map(|o| {
-                        let mut o = o.clone();
-                        o.remove("flow");
-                        o
-                    })
-            )
-            .map_err(|e| err(&e))?
+            "# sandjumper piv {}: the resolved settings\n{text}",
+            a.frames
         ),
     )?;
-    // Figures of the pair with the largest momentum (or the middle pair).
+    Ok(())
+}
+
+/// `speed.png/svg` and `shear_rate.png/svg`: the maps of the pair with the largest momentum
+/// (or the middle pair), with the foot's outline.
+fn write_maps(
+    staged: &StagedDir,
+    size: (usize, usize),
+    run: &PivRun,
+    rows: &[FlowRow],
+    feet: Option<&std::collections::BTreeMap<u64, Polygon>>,
+) -> Result<(), CliError> {
     let pick = rows
         .iter()
         .enumerate()
@@ -692,20 +663,21 @@ fn write_outputs(
                 .abs()
                 .total_cmp(&y.1.momentum_kg_m_s.abs())
         })
-        .map_or(fields.len() / 2, |(k, _)| k);
-    let f = &fields[pick];
-    let outline: Vec<Vec<(f64, f64)>> = foot
+        .map_or(run.results.len() / 2, |(k, _)| k);
+    let PairResult { field: f, si, .. } = &run.results[pick];
+    let outlines: Vec<Vec<(f64, f64)>> = feet
         .and_then(|m| m.get(&rows[pick].frame_a))
         .cloned()
         .into_iter()
         .collect();
-    let speed: Vec<f64> = match &derived[pick] {
-        Some((u, v, _, _)) => u
-            .values
-            .iter()
-            .zip(&v.values)
-            .map(|(a, b)| a.hypot(*b))
-            .collect(),
+    let speed: Vec<f64> = match si {
+        Some(s) => {
+            s.u.values
+                .iter()
+                .zip(&s.v.values)
+                .map(|(a, b)| a.hypot(*b))
+                .collect()
+        }
         None => f.u.iter().zip(&f.v).map(|(a, b)| a.hypot(*b)).collect(),
     };
     let max_disp =
@@ -729,39 +701,38 @@ fn write_outputs(
                 .then(|| (f.xs[i], f.ys[j], f.u[q] * arrow_scale, f.v[q] * arrow_scale))
         })
         .collect();
-    let calibrated = derived[pick].is_some();
     let speed_fig = MapFigure {
         title: format!(
             "Grain speed, pair {pick} (frames {} -> {})",
             rows[pick].frame_a, rows[pick].frame_b
         ),
-        label: if calibrated {
+        label: if si.is_some() {
             "speed (m/s)".into()
         } else {
             "displacement (px)".into()
         },
-        image: (w, h),
+        image: size,
         xs: f.xs.clone(),
         ys: f.ys.clone(),
         values: speed,
         arrows,
-        outlines: outline.clone(),
+        outlines: outlines.clone(),
     };
     save_figure(
         &speed_fig,
         &staged.file("speed.png"),
         Some(&staged.file("speed.svg")),
     )?;
-    if let Some((_, _, _, shear)) = &derived[pick] {
+    if let Some(s) = si {
         let fig = MapFigure {
             title: format!("Max shear strain rate (eq. 2), pair {pick}"),
             label: "shear rate (1/s)".into(),
-            image: (w, h),
+            image: size,
             xs: f.xs.clone(),
             ys: f.ys.clone(),
-            values: shear.values.clone(),
+            values: s.shear_rate.values.clone(),
             arrows: Vec::new(),
-            outlines: outline,
+            outlines,
         };
         save_figure(
             &fig,
@@ -769,55 +740,57 @@ fn write_outputs(
             Some(&staged.file("shear_rate.svg")),
         )?;
     }
-    if !am_points.is_empty() {
-        let params = sandjumper_model::params::Params::preset(a.phi).map_err(|e| err(&e))?;
-        let sand = sandjumper_model::ground::Sand::new(
-            &params,
-            sandjumper_model::ground::GroundLaw::resolve(
-                sandjumper_model::params::ModelName::Eq4,
-                &params.model,
-            ),
-        );
-        let zmax = am_points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.1;
-        let model: Vec<(f64, f64)> = (0..=100)
-            .map(|i| {
-                let z = zmax * f64::from(i) / 100.0;
-                (1e3 * z, sand.added_mass(z))
-            })
-            .collect();
-        let fig = LineFigure {
-            title: "Added mass against foot depth (PIV) and the model's eq. 6".into(),
-            panels: vec![LinePanel {
-                caption: format!("phi = {}", a.phi),
-                x_desc: "foot depth (mm)".into(),
-                y_desc: "added mass (kg)".into(),
-                lines: vec![
-                    Line {
-                        label: "PIV: P / v_foot".into(),
-                        points: am_points.iter().map(|p| (1e3 * p.0, p.1)).collect(),
-                        color: palette(0),
-                        dashed: false,
-                        markers: true,
-                    },
-                    Line {
-                        label: "eq. 6, preset at this phi".into(),
-                        points: model,
-                        color: palette(1),
-                        dashed: true,
-                        markers: false,
-                    },
-                ],
-                y_from_zero: true,
-            }],
-            size: grid_size(1),
-        };
-        save_figure(
-            &fig,
-            &staged.file("added_mass.png"),
-            Some(&staged.file("added_mass.svg")),
-        )?;
-    }
-    staged.write_text("summary.json", &format!("{json}\n"))?;
+    Ok(())
+}
+
+/// `added_mass.png/svg`: PIV's added mass against foot depth beside the model's eq. 6 at `phi`.
+fn write_added_mass_figure(
+    staged: &StagedDir,
+    phi: f64,
+    points: &[(f64, f64)],
+) -> Result<(), CliError> {
+    use sandjumper_model::ground::{GroundLaw, Sand};
+    use sandjumper_model::params::{ModelName, Params};
+    let params = Params::preset(phi).map_err(internal)?;
+    let sand = Sand::new(&params, GroundLaw::resolve(ModelName::Eq4, &params.model));
+    let zmax = points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.1;
+    let model: Vec<(f64, f64)> = (0..=100)
+        .map(|i| {
+            let z = zmax * f64::from(i) / 100.0;
+            (1e3 * z, sand.added_mass(z))
+        })
+        .collect();
+    let fig = LineFigure {
+        title: "Added mass against foot depth (PIV) and the model's eq. 6".into(),
+        panels: vec![LinePanel {
+            caption: format!("phi = {phi}"),
+            x_desc: "foot depth (mm)".into(),
+            y_desc: "added mass (kg)".into(),
+            lines: vec![
+                Line {
+                    label: "PIV: P / v_foot".into(),
+                    points: points.iter().map(|p| (1e3 * p.0, p.1)).collect(),
+                    color: palette(0),
+                    dashed: false,
+                    markers: true,
+                },
+                Line {
+                    label: "eq. 6, preset at this phi".into(),
+                    points: model,
+                    color: palette(1),
+                    dashed: true,
+                    markers: false,
+                },
+            ],
+            y_from_zero: true,
+        }],
+        size: grid_size(1),
+    };
+    save_figure(
+        &fig,
+        &staged.file("added_mass.png"),
+        Some(&staged.file("added_mass.svg")),
+    )?;
     Ok(())
 }
 
