@@ -594,131 +594,16 @@ pub fn work_dir(out: &Path) -> PathBuf {
     out.with_file_name(name)
 }
 
+/// `dem intrude`, in stages: the run resumed from its checkpoint or started from a bed
+/// ([`start_intrusion`]), advanced with frames, snapshots and checkpoints
+/// ([`advance_intrusion`]), then its outputs written and summarised.
 fn run_intrude(a: &IntrudeArgs) -> Result<(), CliError> {
     let work = work_dir(&a.out);
     let ckpt = work.join("run.ckpt");
-    let mut run: Run = if a.resume {
-        let l = checkpoint::load(&ckpt).map_err(|e| {
-            CliError::input(format!(
-                "--resume: {e} (a stopped `dem intrude --out {}` leaves it there)",
-                a.out.display()
-            ))
-        })?;
-        intrude::resume(l.world, &l.record, &l.extra)
-            .map_err(|e| CliError::input(format!("checkpoint {}: {e}", ckpt.display())))?
+    let mut run = if a.resume {
+        resume_intrusion(a, &ckpt)?
     } else {
-        let Some(bed_path) = &a.bed else {
-            return Err(CliError::input("--bed BED is required (or --resume)"));
-        };
-        let bp = bed_checkpoint(bed_path);
-        let bed = checkpoint::load(&bp).map_err(CliError::input)?;
-        let bed_rec: super::bed::BedReport =
-            serde_json::from_value(bed.record["bed"]["report"].clone()).map_err(|e| {
-                CliError::input(format!("{}: not a bed checkpoint ({e})", bp.display()))
-            })?;
-        let bed_params: DemParams = serde_json::from_value(bed.record["bed"]["params"].clone())
-            .map_err(|e| {
-                CliError::input(format!("{}: not a bed checkpoint ({e})", bp.display()))
-            })?;
-        let bed_spec: BedSpec =
-            serde_json::from_value(bed.record["bed"]["spec"].clone()).map_err(|e| {
-                CliError::input(format!("{}: not a bed checkpoint ({e})", bp.display()))
-            })?;
-        let mut params = a.model.resolve()?;
-        // The bed's grains are what they are.
-        params.diameter_m = bed_params.diameter_m;
-        params.density_kg_m3 = bed_params.density_kg_m3;
-        params.sizes = bed_params.sizes;
-        let traj = match (&a.trajectory, a.speed) {
-            (Some(p), _) => Trajectory::from_csv(p, (a.from, a.to)).map_err(CliError::input)?,
-            (None, Some(v)) => Trajectory::Constant {
-                speed_m_s: v,
-                start_depth_m: -0.5 * params.diameter_m,
-                end_depth_m: a.depth,
-            },
-            (None, None) => {
-                return Err(CliError::input(
-                    "give the intruder's motion: --trajectory CSV or --speed M_PER_S",
-                ));
-            }
-        };
-        let vmax = traj.max_speed();
-        if vmax > 1.5 * params.design_speed_m_s {
-            eprintln!(
-                "dem intrude: warning: the intruder reaches {vmax:.3} m/s, above the {:.3} m/s the stiffness was chosen for (overlaps grow beyond --overlap; raise --design-speed)",
-                params.design_speed_m_s
-            );
-        }
-        let (t_s, depth_m) = match &traj {
-            Trajectory::Table { t_s, depth_m, .. } => (t_s.clone(), depth_m.clone()),
-            Trajectory::Constant { .. } => (
-                vec![0.0, traj.duration_s()],
-                vec![traj.depth(0.0), traj.depth(traj.duration_s())],
-            ),
-        };
-        let d = params.diameter_m;
-        let spec = IntrudeSpec {
-            params,
-            foot_width_m: a.foot_width,
-            t_s,
-            depth_m,
-            trajectory: a
-                .trajectory
-                .as_ref()
-                .map_or(format!("constant {} m/s", a.speed.unwrap_or(0.0)), |p| {
-                    p.display().to_string()
-                }),
-            fps: a.fps,
-            force_rate_hz: a.force_rate,
-            grid_spacing_m: a.grid.unwrap_or(2.0 * d),
-            cg_width_m: a.cg_width.unwrap_or(d),
-            m_per_px: a.m_per_px.unwrap_or(0.1 * d),
-            frames: !a.no_frames,
-            phi_bulk: a.phi,
-            checkpoint_every: a.checkpoint_every,
-            seed: a.seed,
-            surface_m: bed_rec.surface_m,
-            bed_x_m: (0.0, bed_spec.width_m),
-        };
-        if spec.fps * spec.params.dt_s > 1.0 || spec.force_rate_hz * spec.params.dt_s > 1.0 {
-            return Err(CliError::input(format!(
-                "--fps {} / --force-rate {} Hz sample faster than the step {:.3e} s (allowed: at most one sample per step)",
-                spec.fps, spec.force_rate_hz, spec.params.dt_s
-            )));
-        }
-        let (grid, cam) = spec.views();
-        if spec.frames && u64::from(cam.width_px) * u64::from(cam.height_px) > 40_000_000 {
-            return Err(CliError::input(format!(
-                "side-wall frames of {}x{} px at --m-per-px {} (allowed: up to 40 Mpx; raise --m-per-px or --no-frames)",
-                cam.width_px, cam.height_px, spec.m_per_px
-            )));
-        }
-        if grid.nx * grid.ny > 4_000_000 {
-            return Err(CliError::input(format!(
-                "a coarse-graining grid of {}x{} nodes (allowed: up to 4 million; raise --grid)",
-                grid.nx, grid.ny
-            )));
-        }
-        // A previous stopped run of the same --out is replaced by a fresh start.
-        if work.exists() {
-            std::fs::remove_dir_all(&work)
-                .map_err(|e| CliError::input(format!("cannot clear {}: {e}", work.display())))?;
-        }
-        StagedDir::create(&a.out)?; // checks the target now, before hours of work
-        let mut run = intrude::start(spec, bed.world).map_err(CliError::input)?;
-        std::fs::create_dir_all(&work)
-            .map_err(|e| CliError::input(format!("cannot create {}: {e}", work.display())))?;
-        // Step 0 is a checkpoint like any other: a run stopped before its first regular
-        // checkpoint resumes from here.
-        run.world.rebuild();
-        checkpoint::save(
-            &ckpt,
-            &run.world,
-            &intrude::record(&run),
-            &run.fields_flat(),
-        )
-        .map_err(CliError::internal)?;
-        run
+        start_intrusion(a, &work, &ckpt)?
     };
     std::fs::create_dir_all(work.join("frames"))
         .and_then(|()| std::fs::create_dir_all(work.join("snapshots")))
@@ -734,33 +619,7 @@ fn run_intrude(a: &IntrudeArgs) -> Result<(), CliError> {
         dl.contact_time_speed_over_d,
         dl.froude
     );
-    let bar = sandjumper_output::progress_bar(run.total_steps, "steps");
-    bar.set_position(run.steps());
-    let until = a.stop_after.map_or(u64::MAX, |s| s);
-    let vref = run.spec.trajectory().max_speed().max(1e-3);
-    let cam = run.camera;
-    let frames = run.spec.frames;
-    let seed = run.spec.seed;
-    let work2 = work.clone();
-    let mut on_sample = |s: &SampleOut| -> Result<(), String> {
-        if frames {
-            super::render::side_wall_frame(s.world, &cam, seed)
-                .save(work2.join(format!("frames/frame_{:06}.png", s.k)))
-                .map_err(|e| format!("cannot write frame {}: {e}", s.k))?;
-        }
-        let snap_cam = snapshot_camera(&cam);
-        super::render::speed_snapshot(s.world, &snap_cam, vref)
-            .save(work2.join(format!("snapshots/{:06}.png", s.k)))
-            .map_err(|e| format!("cannot write snapshot {}: {e}", s.k))
-    };
-    let ck = ckpt.clone();
-    let mut on_checkpoint = |r: &Run| -> Result<(), String> {
-        checkpoint::save(&ck, &r.world, &intrude::record(r), &r.fields_flat())
-    };
-    let mut on_progress = |s: u64| bar.set_position(s);
-    run.advance(until, &mut on_sample, &mut on_checkpoint, &mut on_progress)
-        .map_err(CliError::internal)?;
-    bar.finish_and_clear();
+    advance_intrusion(a, &mut run, &work, &ckpt)?;
     if run.steps() < run.total_steps {
         // Resuming from the last regular checkpoint (not from here) repeats the
         // uninterrupted run bit for bit; the steps since are done again.
@@ -784,6 +643,192 @@ fn run_intrude(a: &IntrudeArgs) -> Result<(), CliError> {
     } else {
         println!("{}", summary.line());
     }
+    Ok(())
+}
+
+/// A stopped run of `--out`, from its checkpoint.
+fn resume_intrusion(a: &IntrudeArgs, ckpt: &Path) -> Result<Run, CliError> {
+    let l = checkpoint::load(ckpt).map_err(|e| {
+        CliError::input(format!(
+            "--resume: {e} (a stopped `dem intrude --out {}` leaves it there)",
+            a.out.display()
+        ))
+    })?;
+    intrude::resume(l.world, &l.record, &l.extra)
+        .map_err(|e| CliError::input(format!("checkpoint {}: {e}", ckpt.display())))
+}
+
+/// A bed checkpoint written by `dem bed`: its world and what it was made with.
+struct Bed {
+    checkpoint: checkpoint::Loaded,
+    report: BedReport,
+    params: DemParams,
+    spec: BedSpec,
+}
+
+/// Read the bed `--bed` names (its folder or its checkpoint).
+fn read_bed(bed_path: &Path) -> Result<Bed, CliError> {
+    let bp = bed_checkpoint(bed_path);
+    let checkpoint = checkpoint::load(&bp).map_err(CliError::input)?;
+    let part = |key: &str| checkpoint.record["bed"][key].clone();
+    let not_a_bed = |e: serde_json::Error| {
+        CliError::input(format!("{}: not a bed checkpoint ({e})", bp.display()))
+    };
+    Ok(Bed {
+        report: serde_json::from_value(part("report")).map_err(not_a_bed)?,
+        params: serde_json::from_value(part("params")).map_err(not_a_bed)?,
+        spec: serde_json::from_value(part("spec")).map_err(not_a_bed)?,
+        checkpoint,
+    })
+}
+
+/// The intruder's motion: a trajectory file or a constant speed down to `--depth`.
+fn intruder_trajectory(a: &IntrudeArgs, params: &DemParams) -> Result<Trajectory, CliError> {
+    let traj = match (&a.trajectory, a.speed) {
+        (Some(p), _) => Trajectory::from_csv(p, (a.from, a.to)).map_err(CliError::input)?,
+        (None, Some(v)) => Trajectory::Constant {
+            speed_m_s: v,
+            start_depth_m: -0.5 * params.diameter_m,
+            end_depth_m: a.depth,
+        },
+        (None, None) => {
+            return Err(CliError::input(
+                "give the intruder's motion: --trajectory CSV or --speed M_PER_S",
+            ));
+        }
+    };
+    let vmax = traj.max_speed();
+    if vmax > 1.5 * params.design_speed_m_s {
+        eprintln!(
+            "dem intrude: warning: the intruder reaches {vmax:.3} m/s, above the {:.3} m/s the stiffness was chosen for (overlaps grow beyond --overlap; raise --design-speed)",
+            params.design_speed_m_s
+        );
+    }
+    Ok(traj)
+}
+
+/// The intrusion `a` asks for into `bed`.
+fn intrude_spec(a: &IntrudeArgs, bed: &Bed) -> Result<IntrudeSpec, CliError> {
+    let mut params = a.model.resolve()?;
+    // The bed's grains are what they are.
+    params.diameter_m = bed.params.diameter_m;
+    params.density_kg_m3 = bed.params.density_kg_m3;
+    params.sizes = bed.params.sizes;
+    let traj = intruder_trajectory(a, &params)?;
+    let (t_s, depth_m) = match &traj {
+        Trajectory::Table { t_s, depth_m, .. } => (t_s.clone(), depth_m.clone()),
+        Trajectory::Constant { .. } => (
+            vec![0.0, traj.duration_s()],
+            vec![traj.depth(0.0), traj.depth(traj.duration_s())],
+        ),
+    };
+    let d = params.diameter_m;
+    Ok(IntrudeSpec {
+        params,
+        foot_width_m: a.foot_width,
+        t_s,
+        depth_m,
+        trajectory: a
+            .trajectory
+            .as_ref()
+            .map_or(format!("constant {} m/s", a.speed.unwrap_or(0.0)), |p| {
+                p.display().to_string()
+            }),
+        fps: a.fps,
+        force_rate_hz: a.force_rate,
+        grid_spacing_m: a.grid.unwrap_or(2.0 * d),
+        cg_width_m: a.cg_width.unwrap_or(d),
+        m_per_px: a.m_per_px.unwrap_or(0.1 * d),
+        frames: !a.no_frames,
+        phi_bulk: a.phi,
+        checkpoint_every: a.checkpoint_every,
+        seed: a.seed,
+        surface_m: bed.report.surface_m,
+        bed_x_m: (0.0, bed.spec.width_m),
+    })
+}
+
+/// Refuse an intrusion whose samples, frames or grid would not fit.
+fn check_spec(spec: &IntrudeSpec) -> Result<(), CliError> {
+    if spec.fps * spec.params.dt_s > 1.0 || spec.force_rate_hz * spec.params.dt_s > 1.0 {
+        return Err(CliError::input(format!(
+            "--fps {} / --force-rate {} Hz sample faster than the step {:.3e} s (allowed: at most one sample per step)",
+            spec.fps, spec.force_rate_hz, spec.params.dt_s
+        )));
+    }
+    let (grid, cam) = spec.views();
+    if spec.frames && u64::from(cam.width_px) * u64::from(cam.height_px) > 40_000_000 {
+        return Err(CliError::input(format!(
+            "side-wall frames of {}x{} px at --m-per-px {} (allowed: up to 40 Mpx; raise --m-per-px or --no-frames)",
+            cam.width_px, cam.height_px, spec.m_per_px
+        )));
+    }
+    if grid.nx * grid.ny > 4_000_000 {
+        return Err(CliError::input(format!(
+            "a coarse-graining grid of {}x{} nodes (allowed: up to 4 million; raise --grid)",
+            grid.nx, grid.ny
+        )));
+    }
+    Ok(())
+}
+
+/// A fresh intrusion into `--bed`: checked, its work folder cleared, its step-0 checkpoint
+/// written (a run stopped before its first regular checkpoint resumes from there).
+fn start_intrusion(a: &IntrudeArgs, work: &Path, ckpt: &Path) -> Result<Run, CliError> {
+    let Some(bed_path) = &a.bed else {
+        return Err(CliError::input("--bed BED is required (or --resume)"));
+    };
+    let bed = read_bed(bed_path)?;
+    let spec = intrude_spec(a, &bed)?;
+    check_spec(&spec)?;
+    // A previous stopped run of the same --out is replaced by a fresh start.
+    if work.exists() {
+        std::fs::remove_dir_all(work)
+            .map_err(|e| CliError::input(format!("cannot clear {}: {e}", work.display())))?;
+    }
+    StagedDir::create(&a.out)?; // checks the target now, before hours of work
+    let mut run = intrude::start(spec, bed.checkpoint.world).map_err(CliError::input)?;
+    std::fs::create_dir_all(work)
+        .map_err(|e| CliError::input(format!("cannot create {}: {e}", work.display())))?;
+    run.world.rebuild();
+    checkpoint::save(ckpt, &run.world, &intrude::record(&run), &run.fields_flat())
+        .map_err(CliError::internal)?;
+    Ok(run)
+}
+
+/// Advance `run` to its end or to `--stop-after`: side-wall frames and speed snapshots at
+/// every sample, checkpoints as the spec says, a progress bar.
+fn advance_intrusion(
+    a: &IntrudeArgs,
+    run: &mut Run,
+    work: &Path,
+    ckpt: &Path,
+) -> Result<(), CliError> {
+    let bar = sandjumper_output::progress_bar(run.total_steps, "steps");
+    bar.set_position(run.steps());
+    let until = a.stop_after.map_or(u64::MAX, |s| s);
+    let vref = run.spec.trajectory().max_speed().max(1e-3);
+    let cam = run.camera;
+    let frames = run.spec.frames;
+    let seed = run.spec.seed;
+    let mut on_sample = |s: &SampleOut| -> Result<(), String> {
+        if frames {
+            super::render::side_wall_frame(s.world, &cam, seed)
+                .save(work.join(format!("frames/frame_{:06}.png", s.k)))
+                .map_err(|e| format!("cannot write frame {}: {e}", s.k))?;
+        }
+        let snap_cam = snapshot_camera(&cam);
+        super::render::speed_snapshot(s.world, &snap_cam, vref)
+            .save(work.join(format!("snapshots/{:06}.png", s.k)))
+            .map_err(|e| format!("cannot write snapshot {}: {e}", s.k))
+    };
+    let mut on_checkpoint = |r: &Run| -> Result<(), String> {
+        checkpoint::save(ckpt, &r.world, &intrude::record(r), &r.fields_flat())
+    };
+    let mut on_progress = |s: u64| bar.set_position(s);
+    run.advance(until, &mut on_sample, &mut on_checkpoint, &mut on_progress)
+        .map_err(CliError::internal)?;
+    bar.finish_and_clear();
     Ok(())
 }
 
