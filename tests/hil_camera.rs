@@ -1,4 +1,4 @@
-//! Camera triggers through SIL (MODEL.md section 6): at 200 fps exactly one frame per 5 ms
+//! Camera triggers through SIL (docs/model.md section 6): at 200 fps exactly one frame per 5 ms
 //! (50 ticks at 10 kHz), at 500 fps one per 2 ms (20 ticks), from the arm on (frames of the
 //! rod at rest come first); every frame the rig model's camera
 //! took corresponds to the controller's sample record of the same tick, in order.

@@ -1,4 +1,4 @@
-//! Gain-lowering damping through SIL (MODEL.md section 2: "during a long delay the firmware
+//! Gain-lowering damping through SIL (docs/model.md section 2: "during a long delay the firmware
 //! lowers its position gain to damp the spring's ringing"). With a 0.75 s delay, the spring's
 //! ringing at the end of the delay is at least 5x smaller with gain lowering than without, and
 //! the ramp back to full gains is bumpless.

@@ -1,4 +1,4 @@
-//! The rod camera end to end (MODEL.md section 6): a SIL delayed stutter's frames, rendered
+//! The rod camera end to end (docs/model.md section 6): a SIL delayed stutter's frames, rendered
 //! by the simulated camera the firmware triggered, tracked, give the simulator's jump height
 //! within 0.1 mm; `sandjumper track --log` writes the log again with the measured rod heights,
 //! which `replay` then compares with its prediction; the camera's scale comes back from a

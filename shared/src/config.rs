@@ -123,7 +123,7 @@ impl RigConfig {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TrajectorySpec {
-    /// One-cycle sine (MODEL.md section 2); see [`SineJump::new`].
+    /// One-cycle sine (docs/model.md section 2); see [`SineJump::new`].
     Sine {
         kind: JumpKind,
         amplitude_m: f64,

@@ -1,4 +1,4 @@
-//! The slow-intrusion program (MODEL.md section 6): with the motor clamped to the bed, drive
+//! The slow-intrusion program (docs/model.md section 6): with the motor clamped to the bed, drive
 //! the rod down at a constant slow speed to a depth, hold, withdraw part of the way, hold,
 //! re-intrude to a (usually deeper) depth, hold, and withdraw to the start. Force comes from
 //! the motor current and depth from the encoder: this is how `k1`, `k2`, `delta` and the

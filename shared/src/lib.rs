@@ -7,7 +7,7 @@
 //! [`Rig::tick`] the same way.
 //!
 //! Modules, one concept each:
-//! * [`trajectory`]: the exact f64 one-cycle sine jumps (MODEL.md section 2).
+//! * [`trajectory`]: the exact f64 one-cycle sine jumps (docs/model.md section 2).
 //! * [`intrusion`]: the slow-intrusion program; [`replay`]: the uploaded table.
 //! * [`profile`]: any trajectory sampled per control tick in f32 (exact phase, 0.1 um).
 //! * [`turns`]: sine/cosine of an exact fixed-point phase.

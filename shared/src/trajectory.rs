@@ -1,4 +1,4 @@
-//! Commanded motor position `p = x_m - x_r` (MODEL.md section 2): the one-cycle sine jumps.
+//! Commanded motor position `p = x_m - x_r` (docs/model.md section 2): the one-cycle sine jumps.
 //!
 //! [`SineJump`] is the exact f64 curve used by the simulator (and as the reference the
 //! firmware's per-tick f32 evaluation is tested against). All times in seconds, positions in
@@ -15,7 +15,7 @@ pub const MAX_FREQ_HZ: f64 = 40.0;
 /// Longest delay of a delayed stutter, seconds.
 pub const MAX_TAU_S: f64 = 5.0;
 
-/// Which one-cycle sine (MODEL.md section 2).
+/// Which one-cycle sine (docs/model.md section 2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum JumpKind {
@@ -138,7 +138,7 @@ impl fmt::Display for TrajectoryError {
 
 impl core::error::Error for TrajectoryError {}
 
-/// A validated one-cycle sine jump (MODEL.md section 2).
+/// A validated one-cycle sine jump (docs/model.md section 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SineJump {

@@ -42,7 +42,7 @@
 //!   advance by exactly the number of periods.
 //!
 //! Position of the motor relative to the rod: `p = encoder_sign * encoder_counts /
-//! counts_per_m + position_offset_m` (MODEL.md `p = x_m - x_r`).
+//! counts_per_m + position_offset_m` (docs/model.md `p = x_m - x_r`).
 
 pub mod binary;
 pub mod columns;

@@ -8,7 +8,7 @@ pub const FORMAT_NAME: &str = "sandjumper-acqlog";
 /// Version of the format this crate writes; the reader accepts exactly this version.
 pub const FORMAT_VERSION: u32 = 1;
 
-/// Which one-cycle jump the log records, when it is one (MODEL.md section 2). Written as
+/// Which one-cycle jump the log records, when it is one (docs/model.md section 2). Written as
 /// `jump_kind`, `jump_amplitude_m`, `jump_freq_hz`, `jump_tau_s`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct JumpConfig {
@@ -24,7 +24,7 @@ pub struct JumpConfig {
 
 /// Everything above the header line. Only `rate_hz` and `counts_per_m` are required.
 ///
-/// Motor position relative to the rod (MODEL.md `p = x_m - x_r`) is recovered from a row as
+/// Motor position relative to the rod (docs/model.md `p = x_m - x_r`) is recovered from a row as
 /// `p_m = encoder_sign * encoder_counts / counts_per_m + position_offset_m`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LogMetadata {

@@ -10,7 +10,8 @@
 //! - [`journal`]: the append-only journal, the campaign's only source of truth.
 //! - [`records`]: state, `results.csv` and Bluesky documents derived from the journal.
 //! - [`figure`]: jump height against phi and frequency.
-//! - [`command`]: `campaign run|resume|status`.
+//!
+//! The subcommands `campaign run|resume|status` live in the CLI crate.
 
 pub mod bed;
 pub mod board_bed;

@@ -2,18 +2,12 @@
 //! same CSV the library produces, refuses to overwrite, and a loss in sequence numbers is an
 //! error (exit 2) unless --allow-gaps.
 
-use std::process::Command;
-
 use sandjumper_acqlog::{AcqLog, BinaryLogWriter, LogMetadata, ReadOptions};
 use sandjumper_core::protocol::{RigMessage, SAMPLE_BATCH, encode_frame_vec};
 use sandjumper_core::sample::SampleRecord;
 
-fn sandjumper(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
+mod common;
+use common::sandjumper;
 
 fn records(skip: Option<u32>) -> Vec<SampleRecord> {
     (0..100u32)

@@ -4,7 +4,6 @@
 //! `log check`'s message and exit 2.
 
 use std::collections::BTreeMap;
-use std::process::Command;
 
 use sandjumper_acqlog::mcap_file::FLAG_NAMES;
 use sandjumper_acqlog::{
@@ -15,21 +14,8 @@ use sandjumper_core::protocol::{FaultReport, RigMessage, SAMPLE_BATCH, encode_fr
 use sandjumper_core::sample::{SampleRecord, flags};
 use serde_json::Value;
 
-fn sandjumper(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
-
-fn ok(out: &std::process::Output) {
-    assert!(
-        out.status.success(),
-        "exit {:?}: {}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+mod common;
+use common::{ok, sandjumper};
 
 /// A 3 s log at 10 kHz with every column, empty cells, camera frames every 50 ticks with a
 /// rod height on some, and a fault that latches and clears.
@@ -101,12 +87,12 @@ fn csv_to_mcap_every_value_equals_the_csv() {
     let csv = tmp.path().join("run.csv");
     let mcap_path = tmp.path().join("run.mcap");
     rich_log().write_file(&csv).unwrap();
-    ok(&sandjumper(&[
+    ok(&[
         "log",
         "convert",
         csv.to_str().unwrap(),
         mcap_path.to_str().unwrap(),
-    ]));
+    ]);
     let log = AcqLog::read_file(&csv, &ReadOptions::default()).unwrap();
     let bytes = std::fs::read(&mcap_path).unwrap();
     let topics = by_topic(&bytes);
@@ -302,8 +288,8 @@ fn binary_to_mcap_carries_the_rigs_fault_reports() {
         csv.to_str().unwrap(),
         out.to_str().unwrap(),
     );
-    ok(&sandjumper(&["log", "convert", b, c]));
-    ok(&sandjumper(&["log", "convert", b, o]));
+    ok(&["log", "convert", b, c]);
+    ok(&["log", "convert", b, o]);
     let log = AcqLog::read_file(&csv, &ReadOptions::default()).unwrap();
     let bytes = std::fs::read(&out).unwrap();
     let topics = by_topic(&bytes);
@@ -348,7 +334,7 @@ fn binary_to_mcap_carries_the_rigs_fault_reports() {
 fn hil_writes_the_mcap_beside_the_csv() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
-    ok(&sandjumper(&[
+    ok(&[
         "hil",
         "--kind",
         "stutter",
@@ -357,7 +343,7 @@ fn hil_writes_the_mcap_beside_the_csv() {
         "--out",
         dir.to_str().unwrap(),
         "--mcap",
-    ]));
+    ]);
     let log = AcqLog::read_file(&dir.join("acquisition.csv"), &ReadOptions::default()).unwrap();
     let topics = by_topic(&std::fs::read(dir.join("acquisition.mcap")).unwrap());
     assert_eq!(topics["/encoder"].len(), log.rows.len());
@@ -409,7 +395,7 @@ fn bad_input_is_refused_with_the_csv_readers_message() {
     assert_eq!(exists.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&exists.stderr).contains("--force"));
     assert_eq!(std::fs::read(&out).unwrap(), b"keep");
-    ok(&sandjumper(&["log", "convert", g, o, "--force"]));
+    ok(&["log", "convert", g, o, "--force"]);
     assert!(read_messages(&std::fs::read(&out).unwrap()).complete);
     let to_csv = sandjumper(&["log", "convert", g, o, "--force", "--to", "csv"]);
     assert_eq!(to_csv.status.code(), Some(2));

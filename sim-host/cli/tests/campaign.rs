@@ -8,26 +8,13 @@ use std::time::Duration;
 
 use rand::{RngExt, SeedableRng};
 
+mod common;
+use common::{read, sandjumper_text};
+
 const SMALL: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../examples/campaign-small.toml"
 );
-
-fn sandjumper(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("run sandjumper");
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
-
-fn read(p: &Path) -> String {
-    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
 
 fn with_suffix(p: &Path, s: &str) -> PathBuf {
     let mut o = p.as_os_str().to_owned();
@@ -55,7 +42,7 @@ fn a_small_campaign_runs_end_to_end_through_sil() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("small");
     let o = out.to_str().unwrap();
-    let (c, stdout, e) = sandjumper(&["campaign", "run", SMALL, "--link", "sil", "--out", o]);
+    let (c, stdout, e) = sandjumper_text(&["campaign", "run", SMALL, "--link", "sil", "--out", o]);
     assert_eq!(c, 0, "{e}");
     assert!(stdout.contains("8 points done"), "{stdout}");
     for f in [
@@ -173,13 +160,13 @@ fn a_small_campaign_runs_end_to_end_through_sil() {
     assert_eq!(stop["run_start"], start["uid"]);
     assert_eq!(stop["num_events"]["primary"], 8);
 
-    let (c, s, e) = sandjumper(&["campaign", "status", o, "--json"]);
+    let (c, s, e) = sandjumper_text(&["campaign", "status", o, "--json"]);
     assert_eq!(c, 0, "{e}");
     let st: serde_json::Value = serde_json::from_str(&s).unwrap();
     assert_eq!(st["state"], "finished");
     assert_eq!(st["done"], 8);
     // A finished campaign has nothing to resume.
-    let (c, _, e) = sandjumper(&["campaign", "resume", o]);
+    let (c, _, e) = sandjumper_text(&["campaign", "resume", o]);
     assert_eq!(c, 2);
     assert!(e.contains("finished"), "{e}");
 }
@@ -188,7 +175,7 @@ fn a_small_campaign_runs_end_to_end_through_sil() {
 fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
     let tmp = tempfile::tempdir().unwrap();
     let straight = tmp.path().join("straight");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "campaign",
         "run",
         SMALL,
@@ -262,7 +249,7 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
         .filter(|l| l.contains("\"event\":\"done\""))
         .count();
     assert_eq!(done, 8, "each point done exactly once");
-    let (c, s, e) = sandjumper(&["campaign", "status", k, "--json"]);
+    let (c, s, e) = sandjumper_text(&["campaign", "status", k, "--json"]);
     assert_eq!(c, 0, "{e}");
     let st: serde_json::Value = serde_json::from_str(&s).unwrap();
     assert!(
@@ -295,7 +282,7 @@ fn a_bed_that_cannot_be_prepared_is_recorded_and_the_policy_decides() {
             .replace("phis = [0.58, 0.61]", "phis = [0.61]")
     });
     let out = tmp.path().join("skip");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "campaign",
         "run",
         f.to_str().unwrap(),
@@ -326,7 +313,7 @@ fn a_bed_that_cannot_be_prepared_is_recorded_and_the_policy_decides() {
     });
     let out = tmp.path().join("stop");
     let o = out.to_str().unwrap();
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "campaign",
         "run",
         f.to_str().unwrap(),
@@ -339,7 +326,7 @@ fn a_bed_that_cannot_be_prepared_is_recorded_and_the_policy_decides() {
     assert!(e.contains("policy is `stop`"), "{e}");
     let work = with_suffix(&out, ".incomplete");
     assert_eq!(csv_rows(&work.join("results.csv")).len(), 1);
-    let (c, _, e) = sandjumper(&["campaign", "resume", o]);
+    let (c, _, e) = sandjumper_text(&["campaign", "resume", o]);
     assert_eq!(c, 1, "{e}");
     assert_eq!(csv_rows(&work.join("results.csv")).len(), 2);
 }
@@ -376,7 +363,7 @@ fn bad_campaign_files_are_refused_with_file_and_line() {
     ] {
         let f = campaign_file(tmp.path(), |t| t.replace(edit.0, edit.1));
         let out = tmp.path().join("never");
-        let (c, _, e) = sandjumper(&[
+        let (c, _, e) = sandjumper_text(&[
             "campaign",
             "run",
             f.to_str().unwrap(),
@@ -396,13 +383,13 @@ fn bad_campaign_files_are_refused_with_file_and_line() {
     // A link that is not there, a board without the bed's protocol, a status of nothing.
     let out = tmp.path().join("x");
     let x = out.to_str().unwrap();
-    let (c, _, e) = sandjumper(&["campaign", "run", SMALL, "--link", "hil", "--out", x]);
+    let (c, _, e) = sandjumper_text(&["campaign", "run", SMALL, "--link", "hil", "--out", x]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("allowed: sil, pil"), "{e}");
-    let (c, _, e) = sandjumper(&["campaign", "run", SMALL, "--port", "/dev/null", "--out", x]);
+    let (c, _, e) = sandjumper_text(&["campaign", "run", SMALL, "--port", "/dev/null", "--out", x]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("[bed.height_sensor]"), "{e}");
-    let (c, _, e) = sandjumper(&["campaign", "status", x]);
+    let (c, _, e) = sandjumper_text(&["campaign", "status", x]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("no campaign here"), "{e}");
 }

@@ -2,34 +2,9 @@
 //! naming the culprit, no panic, and nothing written.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn sandjumper(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
-
-/// Run, expect exit 2 and a stderr that mentions every one of `culprits`, without panic text.
-fn refused(args: &[&str], culprits: &[&str]) -> String {
-    let out = sandjumper(args);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{args:?} should exit 2; stderr:\n{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
-    for c in culprits {
-        assert!(
-            stderr.contains(c),
-            "{args:?}: stderr should mention `{c}`:\n{stderr}"
-        );
-    }
-    assert!(out.stdout.is_empty(), "{args:?} printed to stdout on error");
-    stderr
-}
+mod common;
+use common::{refused, sandjumper};
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);

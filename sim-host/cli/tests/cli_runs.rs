@@ -1,33 +1,9 @@
 //! The `sandjumper` binary's outputs: `jump --json`, `jump --out`, `sweep`, shards and `merge`.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn sandjumper(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
-
-/// Run and expect success; returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = sandjumper(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{args:?} failed:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    String::from_utf8(out.stdout).expect("UTF-8 output")
-}
-
-fn refused(args: &[&str], culprits: &[&str]) {
-    let out = sandjumper(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    for c in culprits {
-        assert!(stderr.contains(c), "{args:?}: expected `{c}` in:\n{stderr}");
-    }
-}
+mod common;
+use common::{ok, read, refused};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -203,10 +179,6 @@ fn jump_out_writes_data_picture_and_parameters() {
     let saved: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
     assert_eq!(saved["kind"], "single");
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 const SWEEP: &[&str] = &[

@@ -3,7 +3,6 @@
 //! DEM's own frames, and bad input.
 
 use std::path::Path;
-use std::process::Command;
 
 use proptest::prelude::*;
 use sandjumper_dem::bed::{BedMethod, BedSpec, prepare};
@@ -14,20 +13,11 @@ use sandjumper_dem::params::{Choice, Model};
 use sandjumper_dem::structure::hexatic_order;
 use sandjumper_dem::world::Integrator;
 
+mod common;
+use common::{read, sandjumper_text};
+
 #[path = "dem/closed_loop.rs"]
 mod closed_loop;
-
-fn sandjumper(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn collision(d1: f64, d2: f64, wall: bool, speed: f64, zeta: f64, steps: f64) -> Collision {
     let mut c = Collision {
@@ -102,7 +92,7 @@ fn forward_euler_is_first_order_and_gains_energy() {
 
 #[test]
 fn collide_prints_the_verification_numbers_as_json() {
-    let (code, out, err) = sandjumper(&[
+    let (code, out, err) = sandjumper_text(&[
         "dem",
         "collide",
         "--d1",
@@ -146,13 +136,13 @@ fn unphysical_collisions_are_refused_with_exit_2() {
     for (extra, want) in cases {
         let mut args = base.to_vec();
         args.extend_from_slice(extra);
-        let (code, _, err) = sandjumper(&args);
+        let (code, _, err) = sandjumper_text(&args);
         assert_eq!(code, 2, "{extra:?}: {err}");
         assert!(err.contains(want), "{extra:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
     // --force-step runs the coarse step anyway.
-    let (code, _, err) = sandjumper(&[
+    let (code, _, err) = sandjumper_text(&[
         "dem",
         "collide",
         "--d1",
@@ -265,7 +255,7 @@ fn bed(dir: &Path, extra: &[&str]) -> String {
     let o = out.to_str().unwrap().to_string();
     args.push(&o);
     args.extend_from_slice(extra);
-    let (code, _, err) = sandjumper(&args);
+    let (code, _, err) = sandjumper_text(&args);
     assert_eq!(code, 0, "{err}");
     o
 }
@@ -292,13 +282,13 @@ fn intrude(bed: &str, out: &Path, extra: &[&str]) -> (i32, String, String) {
         args.extend_from_slice(&["--foot-width", "0.006"]);
     }
     args.extend_from_slice(extra);
-    sandjumper(&args)
+    sandjumper_text(&args)
 }
 
 /// A packed bed (no gravity) 5 cm wide and 1.2 cm deep, wide against an 8 mm foot.
 fn wide_bed(dir: &Path) -> std::path::PathBuf {
     let bed = dir.join("wide");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "dem",
         "bed",
         "--pack",
@@ -314,10 +304,6 @@ fn wide_bed(dir: &Path) -> std::path::PathBuf {
     ]);
     assert_eq!(c, 0, "{e}");
     bed
-}
-
-fn read(p: &Path) -> String {
-    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
 #[test]
@@ -363,7 +349,7 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
     assert!(out.contains("stopped after 2500"), "{out}");
     assert!(!res.exists(), "a stopped run must not look finished");
     let r = res.to_str().unwrap();
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "dem",
         "intrude",
         "--resume",
@@ -373,7 +359,7 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
         "4000",
     ]);
     assert_eq!(c, 0, "{e}");
-    let (c, _, e) = sandjumper(&["dem", "intrude", "--resume", "--out", r, "--threads", "1"]);
+    let (c, _, e) = sandjumper_text(&["dem", "intrude", "--resume", "--out", r, "--threads", "1"]);
     assert_eq!(c, 0, "{e}");
     for f in ["force_depth.csv", "flow.csv", "fields/0003.csv"] {
         assert_eq!(
@@ -389,7 +375,7 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
     }
     // A resume with nothing to resume is refused.
     let none = tmp.path().join("none");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "dem",
         "intrude",
         "--resume",
@@ -408,7 +394,7 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
     let bed_dir = wide_bed(tmp.path());
     let bd = bed_dir.to_str().unwrap();
     let out = tmp.path().join("run");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "dem",
         "intrude",
         "--bed",
@@ -506,7 +492,7 @@ fn bad_intrusions_are_refused_with_exit_2() {
     std::fs::write(&t2, "t_s,depth_m\n0,0\n0.002,0.001\n0.001,0.002\n").unwrap();
     let o = out.to_str().unwrap();
     for (t, want) in [(&t1, "no `x_f_m` or `depth_m`"), (&t2, "does not increase")] {
-        let (c, _, e) = sandjumper(&[
+        let (c, _, e) = sandjumper_text(&[
             "dem",
             "intrude",
             "--bed",
@@ -535,7 +521,7 @@ fn bad_intrusions_are_refused_with_exit_2() {
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("--pin-threads: 100000 threads need"), "{e}");
     // Unphysical grains.
-    let (c, _, e) = sandjumper(&["dem", "bed", "--kn=-1", "--out", o]);
+    let (c, _, e) = sandjumper_text(&["dem", "bed", "--kn=-1", "--out", o]);
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("stiffness"), "{e}");
     assert!(!e.contains("panicked"), "{e}");

@@ -4,14 +4,9 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn sandjumper(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("run sandjumper")
-}
+mod common;
+use common::{refused, sandjumper};
 
 fn write_intrusion(path: &Path) {
     // Noise-free two-resistance curve plus a small deterministic wiggle (k1 1600, k2 1100,
@@ -82,31 +77,21 @@ fn intrusion_fit_writes_a_params_file_the_cli_accepts() {
     );
 }
 
-fn assert_bad_input(args: &[&str], expect: &[&str]) {
-    let out = sandjumper(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-    for e in expect {
-        assert!(err.contains(e), "{args:?}: `{e}` not in {err}");
-    }
-    assert!(!err.contains("panicked"), "{err}");
-}
-
 #[test]
 fn bad_data_and_options_exit_with_status_2() {
     let dir = tempfile::tempdir().unwrap();
     let nan = dir.path().join("nan.csv");
     std::fs::write(&nan, "depth_m,force_n\n0,0\n0.001,1.6\n0.002,nan\n").unwrap();
     let p = nan.to_str().unwrap();
-    assert_bad_input(
+    refused(
         &["fit", "intrusion", p],
         &[&format!("{p}:4:"), "not a finite number"],
     );
-    assert_bad_input(
+    refused(
         &["fit", "intrusion", "/nonexistent.csv"],
         &["/nonexistent.csv", "cannot read"],
     );
-    assert_bad_input(
+    refused(
         &["fit", "added-mass", p, "--exclude-deepest", "1.5"],
         &["allowed 0 <= fraction < 1"],
     );
@@ -116,18 +101,18 @@ fn bad_data_and_options_exit_with_status_2() {
         "kind,phi,freq_hz,tau_s,jump_height_m\nsingle,0.58,8,0,0.05\nsingle,0.58,9,0,0.05\n",
     )
     .unwrap();
-    assert_bad_input(
+    refused(
         &["fit", "drag", jumps.to_str().unwrap(), "--model", "eq4"],
         &["--model eq4 has no alpha"],
     );
-    assert_bad_input(
+    refused(
         &["fit", "inertial", jumps.to_str().unwrap(), "--model", "eq1"],
         &["--model eq1 has no b"],
     );
     let good = dir.path().join("good.csv");
     write_intrusion(&good);
     let unwritable = "/nonexistent-dir/out.toml";
-    assert_bad_input(
+    refused(
         &[
             "fit",
             "intrusion",

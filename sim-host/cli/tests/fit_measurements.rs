@@ -85,7 +85,7 @@ fn first_intrusion(k1: f64, k2: f64, delta: f64, sigma_n: f64, seed: u64) -> Vec
 fn first_intrusion_recovers_k1_k2_delta_at_low_and_high_packing() {
     let dir = tempfile::tempdir().unwrap();
     let params = Params::default();
-    // (k1, k2, delta): the phi = 0.57 and phi = 0.62 presets of MODEL.md.
+    // (k1, k2, delta): the phi = 0.57 and phi = 0.62 presets of docs/model.md.
     for (i, (k1, k2, delta)) in [(1600.0, 1100.0, 0.015), (10_000.0, 2500.0, 0.010)]
         .into_iter()
         .enumerate()
@@ -162,7 +162,7 @@ fn reintrusion_overshoot_recovers_kappa_and_l_re() {
     assert_eq!(fitted.sand.reintrusion_length_m, value(&report, "l_re").0);
 }
 
-/// MODEL.md's m_a(s), written out as the test's oracle.
+/// docs/model.md's m_a(s), written out as the test's oracle.
 fn added_mass(p: &Params, mu: f64, c: f64, s: f64) -> f64 {
     let (r, tan) = (
         p.robot.foot_radius_m,

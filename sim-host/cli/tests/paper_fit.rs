@@ -1,4 +1,4 @@
-//! The paper's central finding, reproduced the paper's way (MODEL.md section 3, "alpha for
+//! The paper's central finding, reproduced the paper's way (docs/model.md section 3, "alpha for
 //! eq1"): eq1's constant alpha fitted per packing fraction to single-jump heights (eq4
 //! standing in for the experiment), then eq1 compared with eq4 on the stutter. Facts checked
 //! on the simulator's own output:

@@ -10,7 +10,7 @@ fn preset_rows_and_linear_interpolation() {
     assert_eq!(a.sand.k1_n_m, 1600.0);
     assert_eq!(Params::preset(0.62).unwrap().sand.k1_n_m, 10_000.0);
     assert!((mid.sand.k1_n_m - 0.5 * (a.sand.k1_n_m + b.sand.k1_n_m)).abs() < 1e-9);
-    // eq1's alpha: the fitted table (MODEL.md section 3, "alpha for eq1"), interpolated.
+    // eq1's alpha: the fitted table (docs/model.md section 3, "alpha for eq1"), interpolated.
     assert!((a.sand.alpha_kg_m - 90.6).abs() < 1e-9);
     assert!((mid.sand.alpha_kg_m - 0.5 * (90.6 + 109.4)).abs() < 1e-9);
     assert!((mid.sand.sigma_cone_n_m3 - 0.135e6).abs() < 1e-6);
@@ -171,7 +171,7 @@ fn bad_jump_requests_are_errors_not_panics() {
     );
 }
 
-/// The starting values of MODEL.md's alpha column stay reachable through the params file
+/// The starting values of docs/model.md's alpha column stay reachable through the params file
 /// shipped in the repository, at every preset row and between rows; a file that sets
 /// `sand.alpha_kg_m` itself keeps it.
 #[test]

@@ -1,4 +1,4 @@
-//! The final jump height (MODEL.md section 1): the push-off's own highest point, taken only
+//! The final jump height (docs/model.md section 1): the push-off's own highest point, taken only
 //! after the push-off half begins, checked against the sampled rod trajectory.
 
 use sandjumper_model::*;

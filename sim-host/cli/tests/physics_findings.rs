@@ -1,4 +1,4 @@
-//! MODEL.md section 4: what the paper found, reproduced with the default parameters.
+//! docs/model.md section 4: what the paper found, reproduced with the default parameters.
 //! Each test states the finding; the numbers come from frequency scans, never hard-coded.
 
 use sandjumper_model::*;
@@ -114,7 +114,7 @@ fn differences_between_the_three_jumps_shrink_at_high_phi() {
 
 #[test]
 fn added_mass_brings_the_stutter_push_off_down_at_low_phi() {
-    // Compare final jump heights (after the push-off half begins), as MODEL.md says.
+    // Compare final jump heights (after the push-off half begins), as docs/model.md says.
     let mut eq1_best: f64 = 0.0;
     let mut eq4_best: f64 = 0.0;
     for f in FREQS {

@@ -2,32 +2,8 @@
 //! foot's cone analysed end to end (fields, arrays, flow table, figures, the added-mass table
 //! that `fit added-mass` reads), and bad input refused with exit status 2.
 
-use std::process::{Command, Output};
-
-fn sandjumper(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = sandjumper(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{args:?}: {stderr}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn refused(args: &[&str], says: &str) {
-    let out = sandjumper(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(says),
-        "{args:?} should say `{says}`: {stderr}"
-    );
-}
+mod common;
+use common::{ok, refused};
 
 #[test]
 fn a_synthetic_cone_goes_through_piv_to_an_added_mass_table() {
@@ -126,13 +102,13 @@ fn bad_piv_input_is_refused_with_exit_status_2() {
     ]);
     refused(
         &["piv", f, "--windows", "256,32"],
-        "larger than the 128x96 image",
+        &["larger than the 128x96 image"],
     );
-    refused(&["piv", f, "--windows", "24"], "power of two");
-    refused(&["piv", f, "--windows", "16,32"], "do not grow");
-    refused(&["piv", f, "--windows", "a,b"], "window sizes");
-    refused(&["piv", f, "--overlap", "0.95"], "overlap");
-    refused(&["piv", f, "--overlap=-0.1"], "overlap");
+    refused(&["piv", f, "--windows", "24"], &["power of two"]);
+    refused(&["piv", f, "--windows", "16,32"], &["do not grow"]);
+    refused(&["piv", f, "--windows", "a,b"], &["window sizes"]);
+    refused(&["piv", f, "--overlap", "0.95"], &["overlap"]);
+    refused(&["piv", f, "--overlap=-0.1"], &["overlap"]);
     refused(
         &[
             "piv",
@@ -144,22 +120,22 @@ fn bad_piv_input_is_refused_with_exit_status_2() {
             "--origin",
             "1,1",
         ],
-        "not allowed",
+        &["not allowed"],
     );
     refused(
         &["piv", f, "--m-per-px", "1e-4", "--fps", "500"],
-        "--origin",
+        &["--origin"],
     );
     refused(
         &["piv", f, "--m-per-px", "1e-4", "--origin", "1,1"],
-        "--fps or --log",
+        &["--fps or --log"],
     );
     // A mask of the wrong size.
     let mask = dir.path().join("mask.png");
     image::GrayImage::new(64, 64).save(&mask).unwrap();
     refused(
         &["piv", f, "--mask", mask.to_str().unwrap()],
-        "the frames' size",
+        &["the frames' size"],
     );
     // One frame only; frames of two sizes.
     let one = dir.path().join("one");
@@ -169,15 +145,18 @@ fn bad_piv_input_is_refused_with_exit_status_2() {
         one.join("frame_000000.png"),
     )
     .unwrap();
-    refused(&["piv", one.to_str().unwrap()], "at least two");
+    refused(&["piv", one.to_str().unwrap()], &["at least two"]);
     image::GrayImage::new(64, 64)
         .save(one.join("frame_000001.png"))
         .unwrap();
-    refused(&["piv", one.to_str().unwrap()], "differs from");
+    refused(&["piv", one.to_str().unwrap()], &["differs from"]);
     // A bad foot file.
     let foot = dir.path().join("foot.csv");
     std::fs::write(&foot, "frame,x_px,y_px\n0,1,1\n0,2,2\n").unwrap();
-    refused(&["piv", f, "--foot", foot.to_str().unwrap()], "at least 3");
+    refused(
+        &["piv", f, "--foot", foot.to_str().unwrap()],
+        &["at least 3"],
+    );
 }
 
 #[test]
@@ -267,6 +246,6 @@ fn the_acquisition_log_times_the_pairs() {
     short.write_file(&spath).unwrap();
     refused(
         &["piv", f, "--log", spath.to_str().unwrap()],
-        "not in the log: 2",
+        &["not in the log: 2"],
     );
 }

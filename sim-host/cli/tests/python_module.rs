@@ -11,12 +11,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .expect("sim-host/cli sits in the workspace")
-}
+mod common;
+use common::workspace;
 
 fn skip_or_fail(why: &str) {
     if std::env::var_os("CI").is_some() {

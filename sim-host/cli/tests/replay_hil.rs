@@ -4,14 +4,9 @@
 //! with status 2 and a message naming the line.
 
 use std::path::Path;
-use std::process::Command;
 
-fn sandjumper(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("the sandjumper binary runs")
-}
+mod common;
+use common::sandjumper;
 
 fn json_field(out: &std::process::Output, key: &str) -> f64 {
     assert!(

@@ -17,25 +17,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn sandjumper(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .output()
-        .expect("run sandjumper")
-}
+mod common;
+use common::{ok, sandjumper, succeeded, workspace};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "exit {:?}\nstdout: {}\nstderr: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        stderr(o)
-    );
 }
 
 fn json(path: &Path) -> serde_json::Value {
@@ -114,14 +100,14 @@ fn jump(dir: &Path, link: &[&str]) -> PathBuf {
         s(&out),
     ];
     args.extend_from_slice(link);
-    ok(&sandjumper(&args));
+    ok(&args);
     out
 }
 
 #[test]
 fn status_through_sil_reports_an_idle_controller() {
     let o = sandjumper(&["rig", "status", "--link", "sil", "--json"]);
-    ok(&o);
+    succeeded(&o);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["link"], "sil");
     assert_eq!(v["status"]["state"], "Idle");
@@ -167,18 +153,14 @@ fn jump_through_sil_writes_a_complete_log_that_log_check_accepts() {
         top > 15_000 && bottom < -18_000,
         "stroke {bottom}..{top} counts"
     );
-    ok(&sandjumper(&[
-        "log",
-        "check",
-        s(&out.join("acquisition.csv")),
-    ]));
+    ok(&["log", "check", s(&out.join("acquisition.csv"))]);
 }
 
 #[test]
 fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("intrude");
-    ok(&sandjumper(&[
+    ok(&[
         "rig",
         "intrude",
         "--link",
@@ -188,7 +170,7 @@ fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
         "--out",
         s(&out),
         "--mcap",
-    ]));
+    ]);
     assert_files(
         &out,
         &[
@@ -233,7 +215,7 @@ fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
         "--first",
         "--json",
     ]);
-    ok(&fit);
+    succeeded(&fit);
     for (name, truth) in [("k1", 1600.0), ("k2", 1100.0), ("delta", 0.015)] {
         let v = fitted(&fit, name);
         assert!(
@@ -248,7 +230,7 @@ fn intrusion_measures_the_sands_penetration_force_and_fit_recovers_it() {
         "--reintrusion",
         "--json",
     ]);
-    ok(&re);
+    succeeded(&re);
     for (name, truth) in [("kappa", 1600.0), ("l_re", 0.005)] {
         let v = fitted(&re, name);
         assert!(
@@ -263,7 +245,7 @@ fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
     let dir = tempfile::tempdir().unwrap();
     let original = jump(dir.path(), &["--link", "sil"]);
     let out = dir.path().join("replay");
-    ok(&sandjumper(&[
+    ok(&[
         "rig",
         "replay",
         s(&original.join("acquisition.csv")),
@@ -271,7 +253,7 @@ fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
         "sil",
         "--out",
         s(&out),
-    ]));
+    ]);
     let sum = completed_run(
         &out,
         &[
@@ -463,7 +445,7 @@ fn bad_input_exits_2_with_a_message() {
 #[test]
 fn flash_is_a_no_op_for_sil_and_says_what_is_missing_for_a_board() {
     let o = sandjumper(&["rig", "flash", "--link", "sil"]);
-    ok(&o);
+    succeeded(&o);
     assert!(String::from_utf8_lossy(&o.stdout).contains("nothing to flash"));
     let dir = tempfile::tempdir().unwrap();
     let elf = dir.path().join("fw.elf");
@@ -493,13 +475,6 @@ fn flash_is_a_no_op_for_sil_and_says_what_is_missing_for_a_board() {
 }
 
 // --- PIL: the real firmware in QEMU ---------------------------------------------------------
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .canonicalize()
-        .expect("sim-host/cli sits in the workspace")
-}
 
 /// Build the emulated board's firmware; `None` (skip, or fail in CI) when QEMU or the
 /// firmware toolchain is missing or the firmware does not build here.
@@ -553,13 +528,13 @@ fn status_and_jump_through_pil_match_sil() {
         ],
         limit,
     );
-    ok(&o);
+    succeeded(&o);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["link"], "pil");
     assert_eq!(v["status"]["state"], "Idle");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("pil");
-    ok(&sandjumper_within(
+    succeeded(&sandjumper_within(
         &[
             "rig",
             "jump",
@@ -683,7 +658,7 @@ fn the_drive_calibration_is_sent_saved_and_sent_again_from_its_file() {
         sandjumper(&args)
     };
     let o = calibrate("2100", &["--save", s(&file)]);
-    ok(&o);
+    succeeded(&o);
     assert!(String::from_utf8_lossy(&o.stdout).contains("0 N -> code 2100"));
     let o = sandjumper(&[
         "rig",
@@ -694,7 +669,7 @@ fn the_drive_calibration_is_sent_saved_and_sent_again_from_its_file() {
         s(&file),
         "--json",
     ]);
-    ok(&o);
+    succeeded(&o);
     let status: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(status["status"]["drive_calibration"]["zero_code"], 2100);
     assert_eq!(status["status"]["reset_cause"], "PowerOn");
@@ -718,5 +693,5 @@ fn the_drive_calibration_is_sent_saved_and_sent_again_from_its_file() {
         stderr(&o)
     );
     let o = sandjumper(&["rig", "acknowledge-reset", "--link", "sil"]);
-    ok(&o);
+    succeeded(&o);
 }

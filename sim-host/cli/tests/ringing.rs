@@ -1,4 +1,4 @@
-//! The 5 Hz intrusion ringing (MODEL.md section 4, issue: "the paper's mechanism"): the
+//! The 5 Hz intrusion ringing (docs/model.md section 4, issue: "the paper's mechanism"): the
 //! natural frequency measured from the simulated time series after a small kick, on hard
 //! ground and on sand at every preset phi, against the series-spring estimate.
 

@@ -1,6 +1,6 @@
 //! One head-on binary collision, run through the same world and time step as a bed: the
 //! verification a DEM user checks first (restitution and contact time against the analytic
-//! spring-dashpot values of MODEL.md section 7).
+//! spring-dashpot values of docs/model.md section 7).
 //!
 //! Two disks approach along x at a relative speed `v` in their centre-of-mass frame (or one
 //! disk hits a wall). Between steps the centres move in straight lines under both

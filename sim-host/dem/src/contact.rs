@@ -191,7 +191,7 @@ impl ContactLaw {
     }
 }
 
-/// One spring-dashpot pair and its analytic head-on collision (MODEL.md section 7).
+/// One spring-dashpot pair and its analytic head-on collision (docs/model.md section 7).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SpringDashpot {
     /// Stiffness, N/m.

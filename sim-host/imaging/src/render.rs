@@ -1,5 +1,5 @@
 //! The rod camera, simulated: frames of the 9.5 mm ball on the thrust rod as a high-speed
-//! camera records them (MODEL.md section 6), from the rod's height over each exposure.
+//! camera records them (docs/model.md section 6), from the rod's height over each exposure.
 //!
 //! What the camera adds, all seeded and deterministic: motion blur (the ball's image averaged
 //! over the exposure, sampled finely enough that sub-images overlap), shading of the ball

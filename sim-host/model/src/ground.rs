@@ -1,4 +1,4 @@
-//! Ground force laws (MODEL.md section 3): penetration force `F_p(z)` (linear, two-resistance,
+//! Ground force laws (docs/model.md section 3): penetration force `F_p(z)` (linear, two-resistance,
 //! cone/RFT), the re-intrusion overshoot, constant drag alpha and the eq4 added mass.
 //!
 //! Depth `z` is measured down from the undisturbed free surface (m); `s` is depth within the
@@ -47,7 +47,7 @@ pub struct GroundLaw {
 }
 
 impl GroundLaw {
-    /// The named model's ingredients (MODEL.md's table), then the overrides. `hard` ignores
+    /// The named model's ingredients (docs/model.md's table), then the overrides. `hard` ignores
     /// the overrides (there is no sand).
     pub fn resolve(model: ModelName, overrides: &ModelOverrides) -> Self {
         let (penetration, reintrusion, drag) = match model {
@@ -406,7 +406,7 @@ impl Sand {
     }
 }
 
-/// One intrusion episode (MODEL.md section 3): the depth `z_start` where it began, the depth
+/// One intrusion episode (docs/model.md section 3): the depth `z_start` where it began, the depth
 /// its re-intrusion overshoot is anchored at, and its laws prepared as polynomials in the
 /// episode depth `s = z - z_start`: `F_p(z_start + s)` and `m_a(s)` cubic, `alpha(s)` at most
 /// quadratic, each the piece of its law that holds at `s = 0`. They are evaluated for

@@ -1,4 +1,4 @@
-//! Ground modes and their guards (MODEL.md section 3).
+//! Ground modes and their guards (docs/model.md section 3).
 
 use serde::Serialize;
 
@@ -54,7 +54,7 @@ pub struct Guard {
     pub value: f64,
 }
 
-/// The mode switches of MODEL.md section 3.
+/// The mode switches of docs/model.md section 3.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Transition {
     /// Aerial foot reaches the stored ground level moving down: `x_level - x_f > 0`.
@@ -67,7 +67,7 @@ pub enum Transition {
     Restart,
 }
 
-/// The hybrid state of the foot-ground contact (MODEL.md section 3, rules 1-6).
+/// The hybrid state of the foot-ground contact (docs/model.md section 3, rules 1-6).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contact {
     /// Current mode.

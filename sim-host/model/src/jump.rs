@@ -1,5 +1,5 @@
 //! One kinematic jump (the paper's simulation): the prescribed `p(t)` drives motor + rod as
-//! one body; the run ends by MODEL.md's run-length rules; jump heights are located exactly
+//! one body; the run ends by docs/model.md's run-length rules; jump heights are located exactly
 //! by apex events.
 
 use crate::error::SimError;
@@ -289,7 +289,7 @@ impl<S: Stroke> Actuation<4> for Kinematic<S> {
     }
 }
 
-/// A kinematic simulation at rest in static equilibrium at t = 0 (MODEL.md "Initial state"):
+/// A kinematic simulation at rest in static equilibrium at t = 0 (docs/model.md "Initial state"):
 /// `F_s = M g`; on sand the foot has sunk to `z0` with `F_p(z0) = (M + m_f) g`.
 pub fn kinematic_at_rest<S: Stroke>(
     params: &Params,
@@ -338,7 +338,7 @@ pub const GROUNDED_TAIL_S: f64 = 0.5;
 /// Run-length rule: while airborne, extend the run up to this long after the trajectory's end, s.
 pub const AIRBORNE_TAIL_S: f64 = 3.0;
 
-/// Run a kinematic simulation by MODEL.md's run-length rules: step onto every breakpoint
+/// Run a kinematic simulation by docs/model.md's run-length rules: step onto every breakpoint
 /// up to the stroke's end; then end at the first touchdown; if none comes, at end + 0.5 s,
 /// extended while airborne up to end + 3 s.
 pub fn run_kinematic<S: Stroke>(sim: &mut Simulation<Kinematic<S>, 4>) -> Result<(), SimError> {
@@ -383,7 +383,7 @@ pub fn sine_stroke(
     })
 }
 
-/// Simulate one kinematic jump (MODEL.md, the paper's method).
+/// Simulate one kinematic jump (docs/model.md, the paper's method).
 pub fn simulate_jump(
     params: &Params,
     spec: &JumpSpec,

@@ -1,4 +1,4 @@
-//! The plant of MODEL.md: the robot on simulated sand, and the integrator that runs it.
+//! The plant of docs/model.md: the robot on simulated sand, and the integrator that runs it.
 //!
 //! One module per concept, in the order a reader with the paper open meets them:
 //! [`params`] (serde + presets per packing fraction), [`robot`] (bodies, spring, equations of
@@ -11,13 +11,13 @@
 //! and what it records), [`error`] (why a run could not run).
 
 //!
-//! # Choices where MODEL.md is open
+//! # Choices where docs/model.md is open
 //! - **Events** are located on the dense output to 1e-12 s; the switch is applied at the
 //!   first time the guard is positive (right end of the bracket), so the new mode's
 //!   condition holds. Load guards (lift-off, restart of a static foot) need a margin of
 //!   1 uN ([`hybrid::LOAD_GUARD_MARGIN_N`]) and an apex needs the rod to have risen faster than
 //!   1e-9 m/s, so rounding noise at rest never switches modes.
-//! - **Re-intrusion anchor**: literal MODEL.md by default (every episode re-anchors the
+//! - **Re-intrusion anchor**: literal docs/model.md by default (every episode re-anchors the
 //!   overshoot, so a static foot restarts only above `F_p(z) + kappa z`);
 //!   `[model] reintrusion_anchor = "touchdown"` keeps the touchdown's anchor instead
 //!   ([`params::ReintrusionAnchor`]). The added-mass depth `s` restarts at every episode.
@@ -27,7 +27,7 @@
 //! - **Peak motor force** (kinematic runs) is sampled at every step end and event, not located.
 //! - **`hard`** ignores the `[model]` overrides (no sand); an intruding foot whose velocity
 //!   reaches 0 while its load still exceeds `F_p` keeps intruding (with v = 0).
-//! - **Drive** (force-driven): `K_f` = 10 N/A (chosen, no number in MODEL.md); the 0.2 ms
+//! - **Drive** (force-driven): `K_f` = 10 N/A (chosen, no number in docs/model.md); the 0.2 ms
 //!   current lag is on by default (`drive.current_lag_s = 0` disables it) and solved exactly
 //!   inside each zero-order-hold period; the stroke limit is not an end stop (not modelled).
 //! - **Spring rest length** L0 = 0.1 m (only differences of heights are reported).

@@ -1,8 +1,8 @@
-//! Model parameters (MODEL.md sections 1 and 3): serde + TOML, presets per packing fraction,
+//! Model parameters (docs/model.md sections 1 and 3): serde + TOML, presets per packing fraction,
 //! overrides from a user's TOML file, validation.
 //!
 //! Every field is SI and carries its unit in its name. [`Params::preset`] fills the sand
-//! section from MODEL.md's per-packing table (linear interpolation between rows); a user's
+//! section from docs/model.md's per-packing table (linear interpolation between rows); a user's
 //! TOML file then overrides any field ([`Params::with_overrides_toml`]); [`Params::to_toml`]
 //! writes the resolved set, which reads back to the same value.
 
@@ -10,7 +10,7 @@ use core::fmt;
 use core::str::FromStr;
 use serde::{Deserialize, Serialize};
 
-/// The named ground models of MODEL.md section 3 (the names the CLI and presets use).
+/// The named ground models of docs/model.md section 3 (the names the CLI and presets use).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ModelName {
@@ -26,7 +26,7 @@ pub enum ModelName {
 }
 
 impl ModelName {
-    /// Every model, in the order of MODEL.md's table.
+    /// Every model, in the order of docs/model.md's table.
     pub const ALL: [ModelName; 4] = [Self::Hard, Self::Eq1Linear, Self::Eq1, Self::Eq4];
 
     /// The name the CLI and files use.
@@ -62,7 +62,7 @@ impl FromStr for ModelName {
     }
 }
 
-/// The three bodies and the spring (MODEL.md section 1).
+/// The three bodies and the spring (docs/model.md section 1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotParams {
@@ -90,7 +90,7 @@ pub struct RobotParams {
 }
 
 impl RobotParams {
-    /// The robot of MODEL.md section 1 (the same at every packing fraction).
+    /// The robot of docs/model.md section 1 (the same at every packing fraction).
     pub const MODEL: Self = Self {
         motor_mass_kg: 1.125,
         rod_mass_kg: 0.125,
@@ -117,7 +117,7 @@ pub struct DriveParams {
     pub current_lag_s: f64,
 }
 
-/// The sand (MODEL.md section 3) at one packing fraction.
+/// The sand (docs/model.md section 3) at one packing fraction.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SandParams {
@@ -150,7 +150,7 @@ pub struct SandParams {
     /// l_re: decay length of the re-intrusion overshoot, m.
     pub reintrusion_length_m: f64,
     /// Foot radius the stiffnesses k1, k2 and kappa were given for, m. Stiffnesses scale with
-    /// foot area: the model uses `k1 (R / R_ref)^2` (MODEL.md: "Stiffnesses scale with foot area").
+    /// foot area: the model uses `k1 (R / R_ref)^2` (docs/model.md: "Stiffnesses scale with foot area").
     pub reference_foot_radius_m: f64,
 }
 
@@ -192,13 +192,13 @@ pub enum DragChoice {
     AddedMass,
 }
 
-/// Where the re-intrusion overshoot of an episode is anchored. MODEL.md anchors it at "that
+/// Where the re-intrusion overshoot of an episode is anchored. docs/model.md anchors it at "that
 /// episode's own z_start", where an episode starts at each touchdown and each time a static
 /// foot starts moving down again.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ReintrusionAnchor {
-    /// Literal MODEL.md: every episode (touchdown or restart of a static foot) re-anchors the
+    /// Literal docs/model.md: every episode (touchdown or restart of a static foot) re-anchors the
     /// overshoot at its own z_start. A static foot therefore restarts only once its load
     /// exceeds `F_p(z) + kappa z` (the capacity of the episode it would start).
     Episode,
@@ -208,7 +208,7 @@ pub enum ReintrusionAnchor {
     Touchdown,
 }
 
-/// Which preset alpha eq1 and eq1-linear use (MODEL.md section 3, "alpha for eq1").
+/// Which preset alpha eq1 and eq1-linear use (docs/model.md section 3, "alpha for eq1").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Eq1AlphaChoice {
@@ -216,7 +216,7 @@ pub enum Eq1AlphaChoice {
     /// over 4-20 Hz ([`EQ1_ALPHA_FITTED_KG_M`]; `sandjumper figures` refits it and a test
     /// checks the table against that fit).
     Fitted,
-    /// MODEL.md's alpha column, the fit's starting values.
+    /// docs/model.md's alpha column, the fit's starting values.
     Starting,
 }
 
@@ -224,7 +224,7 @@ pub enum Eq1AlphaChoice {
 /// (`sandjumper figures`, full grid: `eq1_alpha_fit.csv`).
 pub const EQ1_ALPHA_FITTED_KG_M: [f64; 6] = [90.6, 109.4, 141.5, 171.7, 281.6, 468.6];
 
-/// Overrides of the named model's ingredients (MODEL.md: "plus overrides").
+/// Overrides of the named model's ingredients (docs/model.md: "plus overrides").
 /// Ignored by the `hard` model (no sand).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -235,10 +235,10 @@ pub struct ModelOverrides {
     pub reintrusion: ReintrusionChoice,
     /// Drag: model | constant-alpha | added-mass.
     pub drag: DragChoice,
-    /// Overshoot anchor: episode (MODEL.md, literal) | touchdown.
+    /// Overshoot anchor: episode (docs/model.md, literal) | touchdown.
     pub reintrusion_anchor: ReintrusionAnchor,
     /// The preset alpha of eq1 and eq1-linear: fitted (to eq4's single jumps, the paper's
-    /// procedure) | starting (MODEL.md's column). Setting it in a params file replaces the
+    /// procedure) | starting (docs/model.md's column). Setting it in a params file replaces the
     /// preset's `sand.alpha_kg_m` unless the file sets that too.
     pub eq1_alpha: Eq1AlphaChoice,
 }
@@ -259,11 +259,11 @@ impl Default for ModelOverrides {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// The robot (MODEL.md section 1).
+    /// The robot (docs/model.md section 1).
     pub robot: RobotParams,
     /// The motor drive (force-driven runs).
     pub drive: DriveParams,
-    /// The sand (MODEL.md section 3).
+    /// The sand (docs/model.md section 3).
     pub sand: SandParams,
     /// Overrides of the named models' ingredients.
     pub model: ModelOverrides,
@@ -308,13 +308,13 @@ impl fmt::Display for ParamsError {
 
 impl std::error::Error for ParamsError {}
 
-/// One row of MODEL.md's per-packing table (7.6 cm foot).
+/// One row of docs/model.md's per-packing table (7.6 cm foot).
 struct PresetRow {
     phi: f64,
     k1_kn_m: f64,
     k2_kn_m: f64,
     delta_cm: f64,
-    /// MODEL.md's alpha column: the starting values of the fit.
+    /// docs/model.md's alpha column: the starting values of the fit.
     alpha_kg_m: f64,
     b: f64,
     sigma_cone_mn_m3: f64,
@@ -353,7 +353,7 @@ fn preset_interval(phi: f64) -> (usize, f64) {
     )
 }
 
-/// MODEL.md section 3, per-packing presets.
+/// docs/model.md section 3, per-packing presets.
 const PRESETS: [PresetRow; 6] = [
     row(0.57, 1.6, 1.1, 1.5, 50.0, 17.0, 0.12),
     row(0.58, 2.0, 1.3, 1.5, 60.0, 20.0, 0.15),
@@ -376,7 +376,7 @@ impl Default for Params {
 }
 
 impl Params {
-    /// Parameters for packing fraction `phi` (MODEL.md tables; sand values linearly
+    /// Parameters for packing fraction `phi` (docs/model.md tables; sand values linearly
     /// interpolated between rows). Errors if `phi` is outside 0.57..=0.62 or not finite.
     pub fn preset(phi: f64) -> Result<Params, ParamsError> {
         // Tolerate rounding of range endpoints such as 0.57 + 5 * 0.01.

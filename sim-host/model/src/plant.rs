@@ -14,7 +14,7 @@ use crate::robot::Robot;
 use crate::simulation::{Actuation, Simulation};
 use nalgebra::Vector6;
 
-/// The motor drive of MODEL.md: `F_m = clamp(K_f i, -F_peak, F_peak)`.
+/// The motor drive of docs/model.md: `F_m = clamp(K_f i, -F_peak, F_peak)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotorDrive {
     /// K_f, N/A.

@@ -1,10 +1,10 @@
-//! What a run records: its summary metrics (MODEL.md section 1) and its time series.
+//! What a run records: its summary metrics (docs/model.md section 1) and its time series.
 
 use crate::events::Event;
 use crate::hybrid::GroundMode;
 use serde::Serialize;
 
-/// The metrics of a run (MODEL.md section 1).
+/// The metrics of a run (docs/model.md section 1).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct JumpSummary {
     /// Max over the run of `x_r(t) - x_r(0)`, m (apex events, exact).

@@ -1,4 +1,4 @@
-//! The robot: three bodies on one vertical line and the spring (MODEL.md section 1).
+//! The robot: three bodies on one vertical line and the spring (docs/model.md section 1).
 //!
 //! Heights `x` positive up, m; velocities m/s; forces N. `F_s > 0`: spring compressed.
 

@@ -225,7 +225,7 @@ pub fn params(
     Ok(json_to_py(py, &value.to_string())?.unbind())
 }
 
-/// Simulate one jump (MODEL.md's plant, imposed stroke) as `sandjumper jump` does.
+/// Simulate one jump (docs/model.md's plant, imposed stroke) as `sandjumper jump` does.
 ///
 /// `kind`: `"single"`, `"stutter"` or `"delayed"`; `freq_hz`: forcing frequency, Hz;
 /// `model`: `"hard"`, `"eq1-linear"`, `"eq1"` or `"eq4"`; `phi`: packing fraction (presets

@@ -1,9 +1,11 @@
-//! Studies made with the model: one jump ([`jump_command`]), sweeps over a parameter space
-//! ([`sweep`]), replay of an encoder log (the paper's method, [`replay`]), fitting the model to
-//! a lab's measurements ([`fit`]) and the paper's figures ([`figures`]).
+//! `sandjumper-study`: studies made with the model: sweeps over a parameter space ([`sweep`]),
+//! replay of an encoder log (the paper's method, [`replay`]), fitting the model to a lab's
+//! measurements ([`fit`]), the paper's figures ([`figures`]) and the rod's ringing
+//! ([`ringing`]).
 //!
-//! Each study holds its subcommand (arguments and the code that runs it) beside its
-//! computation; all of them use [`sandjumper_model`] and none of them the rig.
+//! Each study takes typed values and returns typed results; the subcommands that run them
+//! (`jump`, `sweep`, `merge`, `replay`, `fit`, `figures`) live in the CLI crate. All of them
+//! use [`sandjumper_model`]; sweeps driven through the controller use `sandjumper-rig`.
 
 pub mod figures;
 pub mod fit;

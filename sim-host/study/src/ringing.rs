@@ -1,6 +1,6 @@
 //! The robot's natural frequencies, measured the way one would on the bench: the robot
-//! stands at rest (motor held, MODEL.md's initial equilibrium), the motor and rod get a small
-//! downward kick, and the spring force is watched (MODEL.md section 4: ~8 Hz on hard ground,
+//! stands at rest (motor held, docs/model.md's initial equilibrium), the motor and rod get a small
+//! downward kick, and the spring force is watched (docs/model.md section 4: ~8 Hz on hard ground,
 //! ~5 Hz during intrusion at low phi, "k1 acting as a series spring").
 //!
 //! Sand in this model is rigid-plastic: it resists a foot moving down with the force law and

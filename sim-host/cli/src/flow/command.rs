@@ -220,9 +220,8 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 }
 
 /// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
-/// The stages: the frames and their times ([`read_frames`]), the options ([`options`]), the
-/// analysis itself (`sandjumper_flow::analysis::run`), the summary, the output folder
-/// ([`write_outputs`]).
+/// The stages: the frames and their times (`read_frames`), the options (`options`), the
+/// analysis itself ([`analysis::run`]), the summary, the output folder (`write_outputs`).
 pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
     let frames = read_frames(a)?;
     let opts = options(a, &frames)?;

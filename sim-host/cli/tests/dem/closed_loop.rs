@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use super::{sandjumper, wide_bed};
+use super::{sandjumper_text, wide_bed};
 
 /// Foot speed, m/s, and width, m.
 const SPEED: f64 = 0.3;
@@ -110,7 +110,7 @@ fn piv_on_rendered_dem_frames_finds_the_dem_velocity_field() {
     let bed = wide_bed(tmp.path());
     let run = tmp.path().join("run");
     let piv = tmp.path().join("piv");
-    let (c, _, e) = sandjumper(&[
+    let (c, _, e) = sandjumper_text(&[
         "dem",
         "intrude",
         "--bed",
@@ -140,7 +140,7 @@ fn piv_on_rendered_dem_frames_finds_the_dem_velocity_field() {
             .or(origin[k].as_integer().map(|i| i as f64))
             .unwrap()
     };
-    let (c, out, e) = sandjumper(&[
+    let (c, out, e) = sandjumper_text(&[
         "piv",
         run.join("frames").to_str().unwrap(),
         "--m-per-px",

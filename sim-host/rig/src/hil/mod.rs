@@ -2,12 +2,13 @@
 //! foot and sand) and the controller cannot tell the difference.
 //!
 //! - [`rig_model`]: the force-driven plant behind a DAC-quantized drive, a quantized encoder
-//!   and a camera (MODEL.md sections 1 and 6).
+//!   and a camera (docs/model.md sections 1 and 6).
 //! - [`link`]: [`RigLink`], the one interface to the controller; [`sil`] (the core in this
 //!   process), [`framed`] (the wire protocol over a byte stream) used by [`pil`] (the real
 //!   firmware in QEMU) and [`serial`] (a real F407 over USB CDC).
 //! - [`run`]: one jump through the loop; [`log`]: its acquisition log and figure;
-//!   [`command`]: `sandjumper hil`; [`loop_margins`]: the position loop's stability margins
+//!   [`open`]: which link and opening it (`sandjumper hil` lives in the CLI crate);
+//!   [`loop_margins`]: the position loop's stability margins
 //!   on the rig, from its linear model.
 
 pub mod affinity;

@@ -1,5 +1,5 @@
 //! One jump through the loop: configure, arm and start the controller over a [`RigLink`], then
-//! one lockstep exchange per control period against the [`RigModel`], until MODEL.md's
+//! one lockstep exchange per control period against the [`RigModel`], until docs/model.md's
 //! run-length rule ends the run (first touchdown after the trajectory; else its end + 0.5 s,
 //! extended while airborne up to 3 s) or a fault has been latched for a few periods.
 
@@ -555,7 +555,7 @@ impl LockstepRun {
         Ok((Some(a), Some(tick)))
     }
 
-    /// The run-length rule (MODEL.md): a few periods after a fault; else, once the controller
+    /// The run-length rule (docs/model.md): a few periods after a fault; else, once the controller
     /// is done and the trajectory over, at the first touchdown, at the end of the grounded
     /// tail, or at the last period allowed. A controller that never reports done is an error.
     fn is_over(&mut self, plan: &RunPlan, rig: &RigModel) -> Result<bool, HilError> {

@@ -1,4 +1,4 @@
-//! The slow-intrusion fixture as the controller sees it (MODEL.md section 6): the motor is
+//! The slow-intrusion fixture as the controller sees it (docs/model.md section 6): the motor is
 //! clamped to the bed, so the rod and the foot (rigidly fixed to it for this test) are the only
 //! moving body, driven by the motor force into the sand below.
 //!

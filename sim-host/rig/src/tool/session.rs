@@ -60,7 +60,7 @@ pub struct Program {
 }
 
 impl Program {
-    /// The program of one sine jump (MODEL.md section 2) as `rig jump` runs it: the jump's
+    /// The program of one sine jump (docs/model.md section 2) as `rig jump` runs it: the jump's
     /// controller configuration, the spec's settle time, 0.5 s kept running after `Done`,
     /// and up to 5 s past the trajectory's end before the host gives up.
     /// `traj` is the jump's trajectory (`rig::hil::run::trajectory`).

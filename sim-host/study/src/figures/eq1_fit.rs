@@ -1,4 +1,4 @@
-//! The paper's fitting procedure, with eq4 standing in for the experiment (MODEL.md section
+//! The paper's fitting procedure, with eq4 standing in for the experiment (docs/model.md section
 //! 3, "alpha for eq1"): eq1's constant `alpha` is fitted per packing fraction to single-jump
 //! heights over forcing frequency (the existing `fit drag` code, [`fit_jumps`]), and only then
 //! are eq1 and eq4 compared on the other jumps. The paper's finding: fitted to single jumps,
@@ -33,7 +33,7 @@ pub const FIT_PHIS: [f64; 6] = [0.57, 0.58, 0.59, 0.60, 0.61, 0.62];
 pub const COMPARE_PHIS: [f64; 2] = [0.57, 0.62];
 /// Delay of the compared delayed stutter, s (as in the other figures).
 pub const DELAY_S: f64 = 0.75;
-/// Lowest forcing frequency fitted and compared, Hz (MODEL.md section 4 speaks of 4-20 Hz;
+/// Lowest forcing frequency fitted and compared, Hz (docs/model.md section 4 speaks of 4-20 Hz;
 /// below, the slow strokes barely lift the robot and carry no information on drag).
 pub const FIT_MIN_FREQ_HZ: f64 = 4.0;
 
@@ -44,7 +44,7 @@ pub struct AlphaRow {
     pub model: &'static str,
     /// Packing fraction.
     pub phi: f64,
-    /// MODEL.md's alpha (the table's column), where the fit started, kg/m.
+    /// docs/model.md's alpha (the table's column), where the fit started, kg/m.
     pub alpha_start_kg_m: f64,
     /// Fitted alpha, kg/m.
     pub alpha_fitted_kg_m: f64,
@@ -126,7 +126,7 @@ fn simulate(
     Ok((m.jump_height_m, m.final_jump_height_m))
 }
 
-/// MODEL.md's alpha column at `phi`, kg/m: where the fit starts.
+/// docs/model.md's alpha column at `phi`, kg/m: where the fit starts.
 fn starting_alpha(phi: f64) -> Result<f64, String> {
     Params::preset_eq1_alpha(phi, Eq1AlphaChoice::Starting)
         .ok_or_else(|| format!("no preset alpha at phi = {phi}"))
@@ -174,7 +174,7 @@ fn fit_alphas_on(
             })
         })
         .collect::<Result<_, String>>()?;
-    // The fit starts from MODEL.md's alpha column, not from the fitted presets.
+    // The fit starts from docs/model.md's alpha column, not from the fitted presets.
     let base = |phi: f64| -> Result<Params, String> {
         let mut p = preset(phi)?;
         p.sand.alpha_kg_m = starting_alpha(phi)?;
@@ -349,7 +349,7 @@ pub fn figure(rows: &[CompareRow]) -> GridFigure {
     }
 }
 
-/// The eq4 parameters whose effect on the gap is asked next (MODEL.md section 3): the
+/// The eq4 parameters whose effect on the gap is asked next (docs/model.md section 3): the
 /// added-mass drag factor b, the jamming-front rate mu, the added-mass constant C, the
 /// re-intrusion stiffness kappa and length l_re (the last two are shared with eq1: they come
 /// from quasi-static intrusion tests in the paper).

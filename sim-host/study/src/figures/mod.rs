@@ -265,7 +265,7 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport,
     w.text(
         "params.toml",
         &format!(
-            "# Parameters of the phi = {LOW_PHI} runs; every phi uses its own preset (MODEL.md tables),\n\
+            "# Parameters of the phi = {LOW_PHI} runs; every phi uses its own preset (docs/model.md tables),\n\
              # hard ground the robot of this file. Integrator rtol = {}; grids: {}.\n{}",
             opts.rtol,
             if opts.quick { "quick" } else { "full" },
@@ -353,7 +353,7 @@ fn mm(x: f64) -> String {
     format!("{:.2} mm", 1e3 * x)
 }
 
-/// The numbers MODEL.md section 4 speaks about, from the sweeps.
+/// The numbers docs/model.md section 4 speaks about, from the sweeps.
 fn findings(
     params: &Params,
     best: &[BestRow],

@@ -1,4 +1,4 @@
-//! The robot's natural frequencies after a small kick (MODEL.md section 4: ~8 Hz on hard
+//! The robot's natural frequencies after a small kick (docs/model.md section 4: ~8 Hz on hard
 //! ground, ~5 Hz during intrusion at low phi): the spring force after the kick on hard ground
 //! and on sand, and the measured frequencies against packing fraction beside the
 //! series-spring estimates ([`crate::ringing`]).

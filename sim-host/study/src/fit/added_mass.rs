@@ -1,4 +1,4 @@
-//! `fit added-mass`: the jamming-front rate `mu` and the constant `C` of MODEL.md's added
+//! `fit added-mass`: the jamming-front rate `mu` and the constant `C` of docs/model.md's added
 //! mass `m_a(s) = phi rho mu pi s (R^2 + (mu s)^2/(3 tan^2 theta) - R mu s / tan theta + C)`
 //! (only the `C` term keeps growing once `mu s > R tan theta`), from added mass against
 //! episode depth `s` (e.g. from PIV, `m_a = P / v_foot`). `phi`, `rho`, `R`, `theta` come from

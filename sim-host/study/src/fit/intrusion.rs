@@ -1,4 +1,4 @@
-//! `fit intrusion`: the quasi-static penetration force from slow-intrusion tests (MODEL.md
+//! `fit intrusion`: the quasi-static penetration force from slow-intrusion tests (docs/model.md
 //! section 6: rod driven at constant slow speed, force from the motor current, depth from
 //! the encoder).
 //!
@@ -9,7 +9,7 @@
 //!   two-resistance law of the base parameters (`--params`/`--phi`, e.g. the output of a
 //!   first-intrusion fit); fits `kappa` and `l_re`.
 //!
-//! Stiffnesses scale with foot area (MODEL.md): values fitted with the robot's foot of radius
+//! Stiffnesses scale with foot area (docs/model.md): values fitted with the robot's foot of radius
 //! `R` are written to the params file for the reference radius `R_ref`, i.e. divided by
 //! `(R / R_ref)^2` (a factor 1 with the default foot).
 

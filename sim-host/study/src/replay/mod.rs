@@ -7,7 +7,7 @@
 //! ([`crate::replay::differentiate`]) gives the smoothed `p`, `p'` and `p''` at every sample; between
 //! samples each is interpolated linearly, so `p''(t)` is continuous inside the log. Before
 //! the first sample the stroke holds the first smoothed position with zero velocity and
-//! acceleration, after the last it holds the last one (MODEL.md section 2, "hold last"); those
+//! acceleration, after the last it holds the last one (docs/model.md section 2, "hold last"); those
 //! two instants are the stroke's breakpoints, where the integrator stops exactly.
 //!
 //! Default window: [`DEFAULT_WINDOW_S`] = 1 ms (11 samples at 10 kHz), whose second-derivative
@@ -232,7 +232,7 @@ pub struct ReplayOutcome {
     pub measured: Option<MeasuredComparison>,
 }
 
-/// Replays `log` through the kinematic simulation with `model` and `params` (MODEL.md: the
+/// Replays `log` through the kinematic simulation with `model` and `params` (docs/model.md: the
 /// paper's method). Errors are bad input (a log too short for the window, a simulation that
 /// fails): a message saying what and why.
 pub fn replay_log(

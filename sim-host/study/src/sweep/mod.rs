@@ -2,8 +2,8 @@
 //! forcing frequency, run in parallel, in a deterministic order, optionally one shard of it.
 //!
 //! - [`range`]: `A:B:STEP` ranges; [`shard`]: `--shard I/N` slices; [`merge`]: joining shards;
-//!   [`plot`]: height against frequency and delay; [`command`] and [`merge_command`]: the
-//!   `sweep` and `merge` subcommands.
+//!   [`plot`]: height against frequency and delay. The `sweep` and `merge` subcommands live in
+//!   the CLI crate.
 //! - [`SweepSpec::combinations`] fixes the row order: kind, model, phi, tau, then frequency
 //!   (innermost, so each height-vs-frequency line is contiguous). The delay only applies to
 //!   the delayed stutter: other kinds run once with `tau_s = 0`.
@@ -49,7 +49,7 @@ pub struct Combination {
 /// How each jump of a sweep is driven.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SweepDrive {
-    /// The paper's method: the stroke `p(t)` imposed exactly (MODEL.md).
+    /// The paper's method: the stroke `p(t)` imposed exactly (docs/model.md).
     Kinematic,
     /// Through the software-in-the-loop rig: the core's controller, the drive model with its
     /// 300 N limit, the encoder; with the position gain lowered by `gain_lowering` during the

@@ -1,4 +1,4 @@
-//! `sandjumper rig intrude`: the slow-intrusion program (MODEL.md section 6; the core's
+//! `sandjumper rig intrude`: the slow-intrusion program (docs/model.md section 6; the core's
 //! [`sandjumper_core::SlowIntrusion`]) with the motor clamped to the bed: intrude, hold,
 //! withdraw part way, hold, re-intrude deeper, hold, withdraw. The paper's `F_p(z)`
 //! measurement.

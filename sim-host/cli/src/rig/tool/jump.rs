@@ -1,4 +1,4 @@
-//! `sandjumper rig jump`: configure, arm and run one sine jump (MODEL.md section 2) on the
+//! `sandjumper rig jump`: configure, arm and run one sine jump (docs/model.md section 2) on the
 //! controller; write its acquisition log, the parameters, a summary and a figure.
 
 use std::path::PathBuf;

@@ -1,0 +1,92 @@
+//! Helpers shared by the integration tests: running the `sandjumper` binary, expecting it to
+//! succeed or to refuse its input, reading files and finding the workspace.
+//!
+//! Each test file says `mod common;` and imports what it uses; a test binary uses only some
+//! of these, hence the `dead_code` allowance.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs this build's `sandjumper` binary with `args` and returns what it did.
+pub fn sandjumper(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args)
+        .output()
+        .expect("the sandjumper binary runs")
+}
+
+/// Runs [`sandjumper`] with `args`; returns its exit code (-1 when killed by a signal), its
+/// stdout and its stderr as text.
+pub fn sandjumper_text(args: &[&str]) -> (i32, String, String) {
+    let out = sandjumper(args);
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Asserts that `out` exited with status 0 and that its stderr shows no panic; returns its
+/// stdout, which must be UTF-8.
+pub fn succeeded(out: &Output) -> String {
+    assert_success("the command", out)
+}
+
+/// Runs [`sandjumper`] with `args` and asserts that it exited with status 0 and that its
+/// stderr shows no panic; returns its stdout, which must be UTF-8.
+pub fn ok(args: &[&str]) -> String {
+    assert_success(&format!("{args:?}"), &sandjumper(args))
+}
+
+fn assert_success(what: &str, out: &Output) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{what} failed\nstdout: {}\nstderr: {stderr}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert!(!stderr.contains("panicked"), "{what} panicked:\n{stderr}");
+    String::from_utf8(out.stdout.clone()).expect("UTF-8 output")
+}
+
+/// Runs [`sandjumper`] with `args` and asserts that it refused them: exit status 2, a stderr
+/// that mentions every one of `culprits` and shows no panic, and nothing on stdout. Returns
+/// the stderr.
+pub fn refused(args: &[&str], culprits: &[&str]) -> String {
+    let out = sandjumper(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{args:?} should exit 2; stderr:\n{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    for c in culprits {
+        assert!(
+            stderr.contains(c),
+            "{args:?}: stderr should mention `{c}`:\n{stderr}"
+        );
+    }
+    assert!(
+        out.stdout.is_empty(),
+        "{args:?} printed to stdout on error:\n{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    stderr
+}
+
+/// The text of the file at `p`; panics naming the file when it cannot be read.
+pub fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The workspace's root directory (two levels above `sim-host/cli`).
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .expect("sim-host/cli sits in the workspace")
+}
