@@ -73,6 +73,24 @@ fn a_synthetic_cone_goes_through_piv_to_an_added_mass_table() {
     assert_eq!(&npy[..6], b"\x93NUMPY");
     let header = String::from_utf8_lossy(&npy[10..120]);
     assert!(header.contains("'shape': (3, "), "{header}");
+    // piv.toml reads back as the resolved settings of this run.
+    let settings: toml::Value =
+        toml::from_str(&std::fs::read_to_string(out.join("piv.toml")).unwrap()).unwrap();
+    assert_eq!(settings["frames"].as_str(), Some(f));
+    assert_eq!(settings["fps"].as_float(), Some(500.0));
+    assert_eq!(settings["pairs"].as_str(), Some("consecutive"));
+    assert_eq!(settings["calibration"]["m_per_px"].as_float(), Some(2e-4));
+    let windows: Vec<i64> = settings["piv"]["windows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_integer().unwrap())
+        .collect();
+    assert_eq!(windows, [64, 32, 16]);
+    assert_eq!(
+        settings["preprocess"]["clahe_tile_px"].as_integer(),
+        Some(64)
+    );
     // The foot descends: the table `fit added-mass` reads has positive added masses.
     let table = std::fs::read_to_string(out.join("added_mass.csv")).unwrap();
     let rows: Vec<&str> = table.lines().collect();

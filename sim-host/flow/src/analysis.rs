@@ -212,13 +212,36 @@ impl PivRun {
 /// Check that `opts` can run on `frames`: at least two frames, the passes fit the frames, the
 /// mask has the frames' size, a calibration comes with frame times.
 pub fn check(frames: &Frames, opts: &PivOptions) -> Result<(), String> {
-    if frames.images.len() < 2 {
+    let n = frames.images.len();
+    if n < 2 {
+        return Err(format!("frames: {n} frame (allowed: at least two)"));
+    }
+    if frames.numbers.len() != n {
         return Err(format!(
-            "frames: {} frame (allowed: at least two)",
-            frames.images.len()
+            "frames: {n} images but {} frame numbers (allowed: one number per image)",
+            frames.numbers.len()
+        ));
+    }
+    if let Some(t) = &frames.times_s
+        && t.len() != n
+    {
+        return Err(format!(
+            "frames: {n} images but {} times (allowed: one time per image)",
+            t.len()
         ));
     }
     let (w, h) = frames.size();
+    if let Some((k, i)) = frames
+        .images
+        .iter()
+        .enumerate()
+        .find(|(_, i)| (i.width, i.height) != (w, h))
+    {
+        return Err(format!(
+            "frames: frame {} is {}x{} pixels, the first {w}x{h} (allowed: one size)",
+            frames.numbers[k], i.width, i.height
+        ));
+    }
     check_config(&opts.piv, w, h).map_err(|e| e.to_string())?;
     if let Some(m) = &opts.static_mask
         && m.len() != w * h
@@ -260,13 +283,15 @@ pub fn frame_pairs(n: usize, pairing: Pairing, every: usize) -> Vec<(usize, usiz
 }
 
 /// The mask of one pair (`w` x `h`, row-major): the static mask and the inside of the foot's
-/// outline in either frame; `None` when nothing is masked.
+/// outline in either frame. `None` when there is no static mask and the pair's first frame
+/// has no outline: a pair whose foot appears only in its second frame is not masked (the
+/// rule of `sandjumper piv` since its first version; its figures depend on it).
 pub fn pair_mask(
     static_mask: Option<&[bool]>,
     outlines: [Option<&Polygon>; 2],
     (w, h): (usize, usize),
 ) -> Option<Vec<bool>> {
-    if static_mask.is_none() && outlines.iter().all(Option::is_none) {
+    if static_mask.is_none() && outlines[0].is_none() {
         return None;
     }
     let mut m = static_mask.map_or_else(|| vec![false; w * h], <[bool]>::to_vec);
@@ -405,6 +430,68 @@ pub fn run(
 mod tests {
     use super::*;
 
+    fn frames(sizes: &[(usize, usize)]) -> Frames {
+        Frames {
+            numbers: (0..sizes.len() as u64).collect(),
+            images: sizes
+                .iter()
+                .map(|&(w, h)| Image {
+                    width: w,
+                    height: h,
+                    data: vec![0.0; w * h],
+                })
+                .collect(),
+            max_value: 255.0,
+            times_s: None,
+        }
+    }
+
+    fn options() -> PivOptions {
+        PivOptions {
+            piv: PivConfig {
+                windows: vec![16],
+                ..PivConfig::default()
+            },
+            preprocess: Preprocess {
+                clahe_tile_px: 0,
+                clahe_clip: 0.01,
+                subtract_background: false,
+                cap_sigma: 0.0,
+            },
+            pairing: Pairing::Consecutive,
+            every: 1,
+            calibration: None,
+            rho_phi_kg_m3: 570.0,
+            static_mask: None,
+            feet: None,
+        }
+    }
+
+    #[test]
+    fn inconsistent_frames_are_refused_not_indexed() {
+        let opts = options();
+        assert_eq!(check(&frames(&[(64, 64), (64, 64)]), &opts), Ok(()));
+        assert!(
+            check(&frames(&[(64, 64)]), &opts)
+                .unwrap_err()
+                .contains("at least two")
+        );
+        let mixed = check(&frames(&[(64, 64), (64, 48)]), &opts).unwrap_err();
+        assert!(mixed.contains("frame 1 is 64x48"), "{mixed}");
+        let mut f = frames(&[(64, 64), (64, 64)]);
+        f.numbers.pop();
+        assert!(check(&f, &opts).unwrap_err().contains("frame numbers"));
+        let mut f = frames(&[(64, 64), (64, 64)]);
+        f.times_s = Some(vec![0.0]);
+        assert!(check(&f, &opts).unwrap_err().contains("times"));
+        let mut cal = options();
+        cal.calibration = Some(Calibration {
+            m_per_px: 1e-4,
+            origin_px: (32.0, 0.0),
+        });
+        assert!(check(&frames(&[(64, 64), (64, 64)]), &cal).is_err());
+    }
+
     #[test]
     fn pairs_are_consecutive_or_ab_every_nth() {
         assert_eq!(
@@ -432,6 +519,10 @@ mod tests {
             "the pixels within the square are masked"
         );
         assert!(!m[0] && !m[3 * 4], "outside the square");
+        // Without a static mask, the first frame's outline decides whether the pair is masked.
+        assert_eq!(pair_mask(None, [None, Some(&square)], (4, 4)), None);
+        let both = pair_mask(None, [Some(&square), Some(&square)], (4, 4)).unwrap();
+        assert_eq!(both.iter().filter(|&&b| b).count(), 4);
     }
 
     #[test]

@@ -15,8 +15,6 @@ use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use sandjumper_model::record::SeriesRow;
-
 /// File written into every output directory; its presence allows replacing that directory.
 pub const MARKER_FILE: &str = ".sandjumper-output";
 
@@ -203,29 +201,6 @@ impl StagedDir {
     }
 }
 
-/// Header of `trajectory.csv` (SI units in the names).
-pub const SERIES_HEADER: [&str; 9] = [
-    "t_s", "x_m_m", "x_r_m", "x_f_m", "p_m", "f_s_n", "f_gm_n", "m_a_kg", "mode",
-];
-
-/// Write a time series as `trajectory.csv`: [`SERIES_HEADER`], one row per sample, floats in
-/// their shortest exact representation.
-pub fn write_series_csv(path: &Path, rows: &[SeriesRow]) -> Result<(), OutputError> {
-    let err = |e: &dyn fmt::Display| OutputError {
-        path: path.to_path_buf(),
-        action: "write".into(),
-        reason: e.to_string(),
-    };
-    let mut w = csv::Writer::from_path(path).map_err(|e| err(&e))?;
-    w.write_record(SERIES_HEADER).map_err(|e| err(&e))?;
-    for r in rows {
-        let nums = [r.t_s, r.x_m, r.x_r, r.x_f, r.p, r.f_s, r.f_gm, r.m_a].map(|v| v.to_string());
-        w.write_record(nums.iter().map(String::as_str).chain([r.mode.as_str()]))
-            .map_err(|e| err(&e))?;
-    }
-    w.flush().map_err(|e| err(&e))
-}
-
 /// Write records (with a header, even when there are none) as CSV to `path`.
 pub fn write_csv<T: serde::Serialize>(
     path: &Path,
@@ -252,8 +227,9 @@ pub fn write_csv<T: serde::Serialize>(
 /// lines, while the crates that also read it pull a Python-literal parser into every build.
 pub fn write_npy(path: &Path, shape: &[u64], data: Vec<f64>) -> Result<(), String> {
     let err = |e: &dyn std::fmt::Display| format!("cannot write `{}`: {e}", path.display());
-    let count: u64 = shape.iter().product();
-    if count != data.len() as u64 {
+    let count = shape.iter().try_fold(1u64, |n, &d| n.checked_mul(d));
+    if count != Some(data.len() as u64) {
+        let count = count.map_or("more than 2^64".into(), |n| n.to_string());
         return Err(format!(
             "cannot write `{}`: shape {shape:?} holds {count} values, not {}",
             path.display(),
@@ -277,30 +253,18 @@ pub fn write_npy(path: &Path, shape: &[u64], data: Vec<f64>) -> Result<(), Strin
     header.push_str(&" ".repeat(unpadded.next_multiple_of(64) - unpadded));
     header.push('\n');
     let header_len = u16::try_from(header.len()).map_err(|_| err(&"the shape is too long"))?;
-    let mut bytes = Vec::with_capacity(10 + header.len() + 8 * data.len());
-    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
-    bytes.extend_from_slice(&header_len.to_le_bytes());
-    bytes.extend_from_slice(header.as_bytes());
-    for v in data {
-        bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    fs::write(path, bytes).map_err(|e| err(&e))
-}
-
-/// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
-/// otherwise, so logs and pipes stay clean).
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
-        "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {what} (eta {{eta}})"
-    )) {
-        bar.set_style(style);
-    }
-    bar
+    let write = || -> io::Result<()> {
+        use io::Write;
+        let mut w = io::BufWriter::new(fs::File::create(path)?);
+        w.write_all(b"\x93NUMPY\x01\x00")?;
+        w.write_all(&header_len.to_le_bytes())?;
+        w.write_all(header.as_bytes())?;
+        for v in &data {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        w.flush()
+    };
+    write().map_err(|e| err(&e))
 }
 
 #[cfg(test)]

@@ -2,16 +2,14 @@
 //!
 //! - [`error`]: the one error a command returns ([`CliError`]: a message and an exit status,
 //!   2 for bad input) and [`Analysed`], an analysis's JSON and human summaries;
-//! - [`resolve`]: parameters resolved from a packing fraction and a `--params` file;
 //! - [`parse`]: number parsers and range checks that name what they check;
-//! - [`folder`]: atomically written output folders, CSV and `.npy` files, progress bars;
+//! - [`folder`]: atomically written output folders, CSV and `.npy` files;
 //! - [`plot`]: figures (PNG + SVG) in the project's style.
 
 pub mod error;
 pub mod folder;
 pub mod parse;
 pub mod plot;
-pub mod resolve;
 
 pub use error::*;
 pub use folder::*;

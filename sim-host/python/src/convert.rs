@@ -4,7 +4,7 @@ use numpy::PyArray1;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
-use sandjumper_output::resolve::ParamsFile;
+use sandjumper_cli::command::resolve::ParamsFile;
 use sandjumper_output::{CliError, EXIT_BAD_INPUT};
 
 /// The CLI's error as a Python exception: bad input (exit 2) is `ValueError`, anything else

@@ -9,10 +9,10 @@ use sandjumper_cli::cli::args::Command;
 use sandjumper_cli::command::args::{
     KindArg, ModelArg, check_freq, check_phi, check_tau, parse_gain_lowering, parse_rtol,
 };
+use sandjumper_cli::command::resolve::resolve_params;
 use sandjumper_cli::study::sweep::command::resolve_sweep_params;
 use sandjumper_model::SeriesRow;
-use sandjumper_output::SERIES_HEADER;
-use sandjumper_output::resolve::resolve_params;
+use sandjumper_study::series::SERIES_HEADER;
 use sandjumper_study::sweep::drive::run_driven;
 use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
 
@@ -420,7 +420,7 @@ pub fn sweep(
     let combos = spec.combinations();
     let outcome = py
         .detach(|| {
-            run_driven(&combos, threads, false, spec.drive, spec.rtol, |c| {
+            run_driven(&combos, threads, &|| {}, spec.drive, spec.rtol, |c| {
                 Ok(&params_by_phi[&c.phi.to_bits()])
             })
         })

@@ -98,7 +98,7 @@ fn sil_sweep_2000(c: &mut Criterion) {
         "SIL sweep: 2,000 delayed stutters (tau up to 0.3 s), 2 threads",
         |b| {
             b.iter(|| {
-                let out = run_parallel(&combos, 2, false, |c| {
+                let out = run_parallel(&combos, 2, &|| {}, |c| {
                     jump_metrics(spec.drive, &params, c, spec.rtol)
                 })
                 .unwrap();

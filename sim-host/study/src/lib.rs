@@ -9,6 +9,8 @@
 
 pub mod figures;
 pub mod fit;
+pub mod jump_figure;
 pub mod replay;
 pub mod ringing;
+pub mod series;
 pub mod sweep;

@@ -345,7 +345,7 @@ fn drive(
         })
         .map_err(CliError::internal)?;
     let total = state.points.len();
-    let bar = sandjumper_output::progress_bar(total as u64, "points");
+    let bar = crate::command::progress_bar(total as u64, "points");
     bar.set_position(state.done() as u64);
     let mut this_session = 0usize;
     loop {

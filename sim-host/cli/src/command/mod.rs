@@ -2,9 +2,9 @@
 //! the argument vocabulary ([`args`]).
 
 pub use sandjumper_output::error::*;
-pub use sandjumper_output::resolve;
 
 pub mod args;
+pub mod resolve;
 
 /// Print an analysis's JSON (`json`) or its human summary on stdout.
 pub fn print_analysed(analysed: &Analysed, json: bool) {
@@ -13,4 +13,36 @@ pub fn print_analysed(analysed: &Analysed, json: bool) {
     } else {
         print!("{}", analysed.human);
     }
+}
+
+/// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden
+/// otherwise, so logs and pipes stay clean).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {what} (eta {{eta}})"
+    )) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// A counter on stderr for work whose total is not known in advance (`N what` with the time
+/// elapsed), shown only on a terminal.
+pub fn progress_counter(what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{spinner}} [{{elapsed_precise}}] {{pos}} {what}"
+    )) {
+        bar.set_style(style);
+    }
+    bar
 }

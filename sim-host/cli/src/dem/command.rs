@@ -451,7 +451,7 @@ fn run_bed(a: &BedArgs) -> Result<(), CliError> {
         "dem bed: {n} grains, step {:.3e} s, contact time {:.3e} s, t_c v / d = {:.3e}, Froude v / sqrt(g d) = {:.2} at {} m/s",
         p.dt_s, dl.contact_time_s, dl.contact_time_speed_over_d, dl.froude, p.design_speed_m_s
     );
-    let bar = sandjumper_output::progress_bar(1000, "bed preparation (share)");
+    let bar = crate::command::progress_bar(1000, "bed preparation (share)");
     let (world, rep) =
         prepare(&p, &spec, |f| bar.set_position((f * 1000.0) as u64)).map_err(CliError::input)?;
     bar.finish_and_clear();
@@ -804,7 +804,7 @@ fn advance_intrusion(
     work: &Path,
     ckpt: &Path,
 ) -> Result<(), CliError> {
-    let bar = sandjumper_output::progress_bar(run.total_steps, "steps");
+    let bar = crate::command::progress_bar(run.total_steps, "steps");
     bar.set_position(run.steps());
     let until = a.stop_after.map_or(u64::MAX, |s| s);
     let vref = run.spec.trajectory().max_speed().max(1e-3);

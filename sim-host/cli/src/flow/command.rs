@@ -220,15 +220,26 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 }
 
 /// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
-/// The stages: the frames and their times (`read_frames`), the options (`options`), the
-/// analysis itself ([`analysis::run`]), the summary, the output folder (`write_outputs`).
+/// The stages: the sequence opened (`open_frames`), the passes (`piv_config`), the frames'
+/// times (`frame_clock`), the other options (`options`), the output folder claimed, the
+/// frames decoded, the passes checked against their size, the mask read, the analysis itself
+/// ([`analysis::run`]), the summary and the output folder (`write_outputs`). Input is checked
+/// in that order, so a bad argument is reported before any frame is decoded.
 pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
-    let frames = read_frames(a)?;
-    let opts = options(a, &frames)?;
-    analysis::check(&frames, &opts).map_err(input)?;
+    let seq = open_frames(a)?;
+    let piv = piv_config(a)?;
+    let numbers = seq.numbers();
+    let times_s = frame_clock(a, &numbers)?;
+    let mut opts = options(a, piv, times_s.is_some())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
+    let frames = decode_frames(&seq, numbers, times_s)?;
+    analysis::check(&frames, &opts).map_err(input)?;
+    opts.static_mask = match &a.mask {
+        Some(p) => Some(read_mask(p, frames.size())?),
+        None => None,
+    };
     let pairs = analysis::frame_pairs(frames.images.len(), opts.pairing, opts.every);
-    let progress = sandjumper_output::progress_bar(pairs.len() as u64, "PIV pairs");
+    let progress = crate::command::progress_bar(pairs.len() as u64, "PIV pairs");
     let run = analysis::run(&frames, &opts, || progress.inc(1)).map_err(input)?;
     progress.finish_and_clear();
     let totals = run.totals();
@@ -254,8 +265,8 @@ pub fn analyse(a: &PivArgs) -> Result<sandjumper_output::Analysed, CliError> {
     })
 }
 
-/// The frames `a` names, in memory, with their times (from `--fps` or `--log`).
-fn read_frames(a: &PivArgs) -> Result<Frames, CliError> {
+/// The sequence `a` names (at least two frames), not decoded yet.
+fn open_frames(a: &PivArgs) -> Result<ImageSequence, CliError> {
     let seq = ImageSequence::open(&a.frames).map_err(|e| input(format!("frames: {e}")))?;
     if seq.len() < 2 {
         return Err(input(format!(
@@ -264,7 +275,11 @@ fn read_frames(a: &PivArgs) -> Result<Frames, CliError> {
             seq.len()
         )));
     }
-    let numbers = seq.numbers();
+    Ok(seq)
+}
+
+/// The times of the frames `numbers`, s, from `--fps` or `--log` (`None`: not timed).
+fn frame_clock(a: &PivArgs, numbers: &[u64]) -> Result<Option<Vec<f64>>, CliError> {
     let clock = match (&a.log, a.fps) {
         (Some(p), _) => Some(log_clock(
             &AcqLog::read_file(p, &ReadOptions::default())
@@ -273,10 +288,18 @@ fn read_frames(a: &PivArgs) -> Result<Frames, CliError> {
         (None, Some(f)) => Some(FrameClock::Fps(f)),
         (None, None) => None,
     };
-    let times_s = match &clock {
-        Some(c) => Some(frame_times(&numbers, c).map_err(input)?),
-        None => None,
-    };
+    match &clock {
+        Some(c) => Ok(Some(frame_times(numbers, c).map_err(input)?)),
+        None => Ok(None),
+    }
+}
+
+/// Every frame of `seq`, in memory, as floats.
+fn decode_frames(
+    seq: &ImageSequence,
+    numbers: Vec<u64>,
+    times_s: Option<Vec<f64>>,
+) -> Result<Frames, CliError> {
     let mut images = Vec::with_capacity(seq.len());
     let mut max_value = 255.0f32;
     for f in seq.frames() {
@@ -292,9 +315,9 @@ fn read_frames(a: &PivArgs) -> Result<Frames, CliError> {
     })
 }
 
-/// The analysis options from the arguments: passes, pre-processing, calibration, masks.
-fn options(a: &PivArgs, frames: &Frames) -> Result<PivOptions, CliError> {
-    let piv = PivConfig {
+/// The correlation passes `a` asks for.
+fn piv_config(a: &PivArgs) -> Result<PivConfig, CliError> {
+    Ok(PivConfig {
         windows: parse_windows(&a.windows).map_err(|e| input(format!("--windows {e}")))?,
         overlap: a.overlap,
         deform: !a.no_deform,
@@ -304,7 +327,13 @@ fn options(a: &PivArgs, frames: &Frames) -> Result<PivOptions, CliError> {
         },
         median_threshold: a.median_threshold,
         min_peak_ratio: a.min_peak_ratio,
-    };
+    })
+}
+
+/// The analysis options from the arguments and the passes `piv` (the static mask is read once
+/// the frames' size is known): pre-processing, calibration (which needs frame times), the
+/// foot's outlines.
+fn options(a: &PivArgs, piv: PivConfig, timed: bool) -> Result<PivOptions, CliError> {
     let preprocess = Preprocess {
         clahe_tile_px: a.clahe_tile,
         clahe_clip: a.clahe_clip,
@@ -323,16 +352,12 @@ fn options(a: &PivArgs, frames: &Frames) -> Result<PivOptions, CliError> {
         }
         _ => None,
     };
-    if calibration.is_some() && frames.times_s.is_none() {
+    if calibration.is_some() && !timed {
         return Err(input(
             "--m-per-px needs --fps or --log to turn displacements into velocities",
         ));
     }
     let feet = a.foot.as_deref().map(read_foot).transpose()?;
-    let static_mask = match &a.mask {
-        Some(p) => Some(read_mask(p, frames.size())?),
-        None => None,
-    };
     Ok(PivOptions {
         piv,
         preprocess,
@@ -340,7 +365,7 @@ fn options(a: &PivArgs, frames: &Frames) -> Result<PivOptions, CliError> {
         every: a.every as usize,
         calibration,
         rho_phi_kg_m3: a.grain_density * a.phi,
-        static_mask,
+        static_mask: None,
         feet,
     })
 }

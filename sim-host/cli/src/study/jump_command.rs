@@ -3,6 +3,7 @@
 use serde::Serialize;
 
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
+use crate::command::resolve::{ParamsFile, resolve_params};
 use clap::Args;
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_model::jump::{JumpOutcome, JumpSpec, simulate_jump};
@@ -11,10 +12,10 @@ use sandjumper_model::params::ModelName;
 use sandjumper_model::record::JumpSummary;
 use sandjumper_model::trajectory::kind_name;
 use sandjumper_output::CliError;
-use sandjumper_output::plot::jump::JumpFigure;
+use sandjumper_output::StagedDir;
 use sandjumper_output::plot::save_figure;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
-use sandjumper_output::{StagedDir, write_series_csv};
+use sandjumper_study::jump_figure::JumpFigure;
+use sandjumper_study::series::write_series_csv;
 use std::path::PathBuf;
 
 /// `sandjumper jump`.

@@ -10,7 +10,6 @@
 //!
 //! Figures of a study live with it (the sweep's in `study::sweep::plot`).
 
-pub mod jump;
 pub mod lines;
 
 use std::fmt;

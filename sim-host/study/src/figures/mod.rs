@@ -38,16 +38,26 @@ use sandjumper_output::{OutputError, StagedDir};
 use sweeps::{BEST_HEADER, BestRow, Grids, LOW_PHI, best_rows, find_best};
 
 /// How to run the figures.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone)]
 pub struct FiguresOptions {
     /// Coarse grids ([`Grids::quick`]) instead of the full set.
     pub quick: bool,
     /// Worker threads (0: one per core).
     pub threads: usize,
-    /// Progress bars on stderr (shown only on a terminal).
-    pub progress: bool,
+    /// Called after every simulated jump, from any worker thread (e.g. a progress bar).
+    pub on_jump: std::sync::Arc<dyn Fn() + Send + Sync>,
     /// Relative tolerance of the integrator.
     pub rtol: f64,
+}
+
+impl std::fmt::Debug for FiguresOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FiguresOptions")
+            .field("quick", &self.quick)
+            .field("threads", &self.threads)
+            .field("rtol", &self.rtol)
+            .finish_non_exhaustive()
+    }
 }
 
 /// Why the figures could not be written.

@@ -66,7 +66,7 @@ pub fn params_for(model: ModelName, phi: f64) -> Result<Params, String> {
     .map_err(|e| e.to_string())
 }
 
-/// Simulate every combination in parallel (progress bar on a terminal), kinematically.
+/// Simulate every combination in parallel (calling `opts.on_jump` after each), kinematically.
 pub fn run(combos: &[Combination], opts: &FiguresOptions) -> Result<SweepOutcome, FiguresError> {
     run_driven(combos, opts, SweepDrive::Kinematic)
 }
@@ -77,9 +77,14 @@ pub fn run_driven(
     opts: &FiguresOptions,
     drive: SweepDrive,
 ) -> Result<SweepOutcome, FiguresError> {
-    drive::run_driven(combos, opts.threads, opts.progress, drive, opts.rtol, |c| {
-        params_for(c.model, c.phi)
-    })
+    drive::run_driven(
+        combos,
+        opts.threads,
+        &*opts.on_jump,
+        drive,
+        opts.rtol,
+        |c| params_for(c.model, c.phi),
+    )
     .map_err(FiguresError::Internal)
 }
 

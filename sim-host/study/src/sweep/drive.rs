@@ -62,13 +62,13 @@ pub fn jump_metrics(
     })
 }
 
-/// Run every combination on `threads` threads (progress bar on a terminal if `progress`),
+/// Run every combination on `threads` threads (calling `on_jump` after each),
 /// driven by `drive` on the parameters `params_for` gives each, at relative tolerance `rtol`;
 /// the rows name the drive. The result is in combination order.
 pub fn run_driven<P, F>(
     combos: &[Combination],
     threads: usize,
-    progress: bool,
+    on_jump: &(dyn Fn() + Sync),
     drive: SweepDrive,
     rtol: f64,
     params_for: F,
@@ -77,7 +77,7 @@ where
     P: Borrow<Params>,
     F: Fn(&Combination) -> Result<P, String> + Sync,
 {
-    let mut outcome = run_parallel(combos, threads, progress, |c| {
+    let mut outcome = run_parallel(combos, threads, on_jump, |c| {
         jump_metrics(drive, params_for(c)?.borrow(), c, rtol)
     })?;
     for row in &mut outcome.rows {

@@ -18,7 +18,6 @@ pub mod plot;
 pub mod range;
 pub mod shard;
 
-use std::io::IsTerminal;
 use std::path::Path;
 
 use rayon::prelude::*;
@@ -272,13 +271,13 @@ pub struct SweepOutcome {
     pub failures: Vec<SweepFailure>,
 }
 
-/// Run `jump` for every combination on a pool of `threads` threads (0: one per core), with
-/// an indicatif progress bar on stderr when `progress` is true and stderr is a terminal.
-/// The result is in combination order whatever the scheduling.
+/// Run `jump` for every combination on a pool of `threads` threads (0: one per core), calling
+/// `on_jump` after each (from any worker thread; e.g. a progress bar). The result is in
+/// combination order whatever the scheduling.
 pub fn run_parallel<F>(
     combos: &[Combination],
     threads: usize,
-    progress: bool,
+    on_jump: &(dyn Fn() + Sync),
     jump: F,
 ) -> Result<SweepOutcome, String>
 where
@@ -288,28 +287,16 @@ where
         .num_threads(threads)
         .build()
         .map_err(|e| format!("cannot start {threads} worker threads: {e}"))?;
-    let bar = if progress && std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::new(combos.len() as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} jumps (eta {eta})",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
     let results: Vec<Result<JumpMetrics, String>> = pool.install(|| {
         combos
             .par_iter()
             .map(|c| {
                 let r = jump(c);
-                bar.inc(1);
+                on_jump();
                 r
             })
             .collect()
     });
-    bar.finish_and_clear();
     let mut out = SweepOutcome::default();
     for (c, r) in combos.iter().zip(results) {
         match r {
@@ -492,7 +479,7 @@ mod tests {
     #[test]
     fn parallel_run_keeps_order_and_records_failures() {
         let combos = spec().combinations();
-        let out = run_parallel(&combos, 2, false, |c| {
+        let out = run_parallel(&combos, 2, &|| {}, |c| {
             if c.freq_hz == 15.0 {
                 Err("boom".into())
             } else {

@@ -13,6 +13,7 @@ use super::run::{HilOutcome, HilSpec, run_jump};
 use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
+use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_imaging::render::CameraModel;
 use sandjumper_model::params::{ModelName, Params};
@@ -21,7 +22,6 @@ use sandjumper_model::trajectory::kind_name;
 use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
 use sandjumper_output::plot::save_figure;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
 pub use sandjumper_rig::hil::open::{FaultEntry, LinkArg, open_link, parse_link};
 
 fn parse_factor(s: &str) -> Result<f32, String> {

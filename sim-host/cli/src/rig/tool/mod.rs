@@ -32,10 +32,10 @@ use std::time::Duration;
 use clap::{Args, Subcommand, ValueEnum};
 
 use crate::command::args::ModelArg;
+use crate::command::resolve::{ParamsFile, resolve_params};
 use crate::rig::hil::command::{LinkArg, open_link};
 use sandjumper_model::params::{ModelName, Params};
 use sandjumper_output::CliError;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
 use sandjumper_rig::hil::link::RigLink;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::serial;

@@ -27,16 +27,22 @@ pub struct FiguresArgs {
 /// Run `figures`: simulate, write, print what was written and the headline numbers.
 pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
     let started = Instant::now();
+    // One bar over all the figures' jumps (their count is known only as they run).
+    let bar = crate::command::progress_counter("jumps simulated");
     let opts = FiguresOptions {
         quick: a.quick,
         threads: a.threads.map_or(0, |t| t as usize),
-        progress: true,
+        on_jump: {
+            let bar = bar.clone();
+            std::sync::Arc::new(move || bar.inc(1))
+        },
         rtol: SimOptions::default().rtol,
     };
     let report = write_figures(&a.out, &opts).map_err(|e| match e {
         FiguresError::Output(e) => CliError::input(e.to_string()),
         FiguresError::Internal(m) => CliError::internal(m),
     })?;
+    bar.finish_and_clear();
     println!(
         "wrote {} files to {} ({} jumps, {} failed, {:.1} s)",
         report.files.len(),

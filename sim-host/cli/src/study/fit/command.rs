@@ -10,9 +10,9 @@ use super::intrusion::{CurveKind, fit_intrusion_file};
 use super::jumps::{DragParam, JumpFitSetup, fit_jumps_file};
 use super::{FitReport, write_params_files};
 use crate::command::args::{ModelArg, check_phi};
+use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_model::options::SimOptions;
 use sandjumper_output::CliError;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
 
 /// `sandjumper fit`.
 #[derive(Debug, Clone, Args)]

@@ -8,6 +8,7 @@ use clap::Args;
 use serde::Serialize;
 
 use crate::command::args::{ModelArg, ParamSource};
+use crate::command::resolve::{ParamsFile, resolve_params};
 use crate::study::jump_command::{human_summary, write_jump_files};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_model::options::SimOptions;
@@ -15,7 +16,6 @@ use sandjumper_model::params::ModelName;
 use sandjumper_model::record::JumpSummary;
 use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
 use sandjumper_study::replay::{DEFAULT_WINDOW_S, MeasuredComparison, ReplayInfo, replay_log};
 
 /// `sandjumper replay`.

@@ -5,13 +5,13 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::command::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
+use crate::command::resolve::{ParamsFile, resolve_params};
 use clap::Args;
 use sandjumper_model::params::Params;
 use sandjumper_model::trajectory::kind_name;
 use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
 use sandjumper_output::plot::save_figure;
-use sandjumper_output::resolve::{ParamsFile, resolve_params};
 use sandjumper_study::sweep::SweepDrive;
 use sandjumper_study::sweep::ValueRange;
 use sandjumper_study::sweep::drive::run_driven;
@@ -202,15 +202,17 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         .map(|t| t as usize)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let started = Instant::now();
+    let bar = crate::command::progress_bar(slice.len() as u64, "jumps");
     let outcome = run_driven(
         &combos[slice.clone()],
         threads,
-        true,
+        &|| bar.inc(1),
         spec.drive,
         spec.rtol,
         |c| Ok(&params_by_phi[&c.phi.to_bits()]),
     )
     .map_err(CliError::internal)?;
+    bar.finish_and_clear();
     let elapsed = started.elapsed();
     let meta = SweepMeta {
         format: SweepMeta::FORMAT.into(),

@@ -6,8 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
-use super::CliError;
 use sandjumper_model::params::{PRESET_PHI_MAX, PRESET_PHI_MIN, Params};
+use sandjumper_output::CliError;
 
 /// A user's parameter override file, read once.
 #[derive(Debug, Clone, PartialEq)]

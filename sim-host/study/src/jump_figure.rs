@@ -14,7 +14,7 @@ use plotters::prelude::*;
 use sandjumper_model::hybrid::GroundMode;
 use sandjumper_model::record::{JumpSummary, SeriesRow};
 
-use super::{
+use sandjumper_output::plot::{
     FONT, Figure, LegendEntry, PlotResult, XyChart, draw_legend_column, padded_range, palette,
     stroke_pieces, tick_label,
 };
