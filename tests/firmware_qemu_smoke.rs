@@ -19,7 +19,9 @@ fn workspace() -> &'static Path {
 
 /// QEMU and the firmware toolchain are there; if not, skip with a message (fail in CI).
 fn qemu_available() -> bool {
-    emulated_firmware::available_for_test("booting the emulated firmware")
+    emulated_firmware::test_prerequisites("booting the emulated firmware")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_ok()
 }
 
 /// The emulated-board firmware, built once per test run.

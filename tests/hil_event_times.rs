@@ -117,7 +117,10 @@ fn sil_and_jump_agree_on_every_event_time() {
 
 #[test]
 fn pil_and_jump_agree_on_every_event_time() {
-    if !emulated_firmware::available_for_test("the PIL event-time test") {
+    if emulated_firmware::test_prerequisites("the PIL event-time test")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
         return;
     }
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -96,7 +96,10 @@ fn the_two_boards_build_to_different_paths() {
 
 #[test]
 fn rig_flash_refuses_the_emulated_boards_image() {
-    if !sandjumper_rig::hil::emulated_firmware::available_for_test("the flash image check") {
+    if sandjumper_rig::hil::emulated_firmware::test_prerequisites("the flash image check")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

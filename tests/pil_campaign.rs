@@ -27,7 +27,10 @@ fn column(csv: &str, name: &str) -> Vec<f64> {
 
 #[test]
 fn a_two_point_campaign_through_the_firmware_matches_sil() {
-    if !emulated_firmware::available_for_test("the PIL campaign") {
+    if emulated_firmware::test_prerequisites("the PIL campaign")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
         return;
     }
     let ws = Path::new(env!("CARGO_MANIFEST_DIR"));

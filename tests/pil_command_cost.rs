@@ -28,7 +28,10 @@ const COMMAND_LIMIT_INSTRUCTIONS: u32 = F407_TICK_BUDGET_CYCLES / 2;
 
 #[test]
 fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
-    if !emulated_firmware::available_for_test("the PIL command-cost test") {
+    if emulated_firmware::test_prerequisites("the PIL command-cost test")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

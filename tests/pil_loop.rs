@@ -26,7 +26,9 @@ fn workspace() -> &'static Path {
 
 /// QEMU and the firmware toolchain are there; if not, skip with a message (fail in CI).
 fn qemu_available() -> bool {
-    emulated_firmware::available_for_test("the processor-in-the-loop tests")
+    emulated_firmware::test_prerequisites("the processor-in-the-loop tests")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_ok()
 }
 
 /// The emulated-board firmware, built once per test run.

@@ -479,7 +479,10 @@ fn flash_is_a_no_op_for_sil_and_says_what_is_missing_for_a_board() {
 /// Build the emulated board's firmware; `None` (skip, or fail in CI) when QEMU or the
 /// firmware toolchain is missing or the firmware does not build here.
 fn qemu_firmware() -> Option<PathBuf> {
-    if !emulated_firmware::available_for_test("rig through PIL") {
+    if emulated_firmware::test_prerequisites("rig through PIL")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
         return None;
     }
     match emulated_firmware::build_once(&workspace()) {

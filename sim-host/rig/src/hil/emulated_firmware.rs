@@ -87,22 +87,21 @@ pub fn build(workspace: &Path) -> Result<PathBuf, String> {
     Ok(PilConfig::elf_in(&workspace.join(EMULATED_TARGET_DIR)))
 }
 
-/// The policy of every test that needs the emulated firmware: `true` when this machine has
-/// its prerequisites; otherwise the test is skipped with a message naming `what` and the
-/// missing pieces (`false`), except under CI (`CI` set), where a missing prerequisite fails
-/// the test (panics) instead of hiding it.
-pub fn available_for_test(what: &str) -> bool {
+/// The policy of every test that needs the emulated firmware: `Ok` when this machine has its
+/// prerequisites; otherwise the message to skip the test with (`Err`, naming `what` and the
+/// missing pieces; the test prints it), except under CI (`CI` set), where a missing
+/// prerequisite fails the test (panics) instead of hiding it.
+pub fn test_prerequisites(what: &str) -> Result<(), String> {
     let missing = missing_prerequisites();
     if missing.is_empty() {
-        return true;
+        return Ok(());
     }
     assert!(
         std::env::var_os("CI").is_none(),
         "CI must have: {}",
         missing.join(", ")
     );
-    eprintln!("SKIPPED: {what} needs {}", missing.join(", "));
-    false
+    Err(format!("SKIPPED: {what} needs {}", missing.join(", ")))
 }
 
 /// [`build`] once per process (the first call builds, later calls return the same ELF or the
