@@ -6,9 +6,9 @@
 //! font backend by [`register_fonts`] (called by [`save_figure`]).
 //!
 //! - [`lines`]: generic line-chart panels ([`lines::LinePanel`], [`lines::LineFigure`]).
-//! - [`jump`]: the lab-notebook figure of one jump (heights, forces, added mass, ground modes).
 //!
-//! Figures of a study live with it (the sweep's in `study::sweep::plot`).
+//! Figures of a study live with it (one jump's in `sandjumper_study::jump_figure`, the
+//! sweep's in `sandjumper_study::sweep::plot`).
 
 pub mod lines;
 
