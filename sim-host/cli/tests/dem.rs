@@ -526,3 +526,63 @@ fn bad_intrusions_are_refused_with_exit_2() {
     assert!(e.contains("stiffness"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
 }
+
+/// A jump's trajectory starts with the foot at rest below the surface of an intact bed: it
+/// is refused as it is, and its push-off episode, shifted to the surface, is accepted.
+#[test]
+fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
+    let tmp = tempfile::tempdir().unwrap();
+    let b = bed(tmp.path(), &[]);
+    let jump = tmp.path().join("jump");
+    let (c, _, e) = sandjumper_text(&[
+        "jump",
+        "--kind",
+        "stutter",
+        "--freq",
+        "10",
+        "--model",
+        "eq4",
+        "--phi",
+        "0.57",
+        "--out",
+        jump.to_str().unwrap(),
+    ]);
+    assert_eq!(c, 0, "{e}");
+    let traj = jump.join("trajectory.csv");
+    let out = tmp.path().join("run");
+    let args = |extra: &[&'static str]| {
+        let mut v: Vec<String> = [
+            "dem",
+            "intrude",
+            "--bed",
+            &b,
+            "--trajectory",
+            traj.to_str().unwrap(),
+            "--foot-width",
+            "0.006",
+            "--overlap",
+            "0.02",
+            "--no-frames",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |extra: &[&'static str]| {
+        let a = args(extra);
+        sandjumper_text(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let (c, _, e) = run(&[]);
+    assert_eq!(c, 2, "{e}");
+    assert!(e.contains("below the bed's surface"), "{e}");
+    assert!(e.contains("--episode push-off"), "{e}");
+    let (c, _, e) = run(&["--episode", "push-off", "--from", "0.1"]);
+    assert_eq!(c, 2, "{e}");
+    let (c, stdout, e) = run(&["--episode", "push-off", "--stop-after", "20"]);
+    assert_eq!(c, 0, "{e}");
+    assert!(stdout.contains("stopped after 20"), "{stdout}");
+}

@@ -93,69 +93,162 @@ impl Trajectory {
     /// (`jump --out`'s `trajectory.csv`: depth = -x_f) or `depth_m` (a tracked foot).
     /// `window` (from, to) in the file's seconds keeps part of it; time then starts at 0.
     pub fn from_csv(path: &Path, window: (Option<f64>, Option<f64>)) -> Result<Self, String> {
-        let name = path.display().to_string();
-        let mut rdr =
-            csv::Reader::from_path(path).map_err(|e| format!("--trajectory {name}: {e}"))?;
-        let headers = rdr
-            .headers()
-            .map_err(|e| format!("--trajectory {name}: {e}"))?
-            .clone();
-        let col = |n: &str| headers.iter().position(|h| h.trim() == n);
-        let t_col = col("t_s").ok_or_else(|| {
-            format!(
-                "--trajectory {name}: no `t_s` column (columns: {}; allowed: t_s with x_f_m or depth_m)",
-                headers.iter().collect::<Vec<_>>().join(",")
-            )
-        })?;
-        let (d_col, sign) = match (col("depth_m"), col("x_f_m")) {
-            (Some(c), _) => (c, 1.0),
-            (None, Some(c)) => (c, -1.0),
-            (None, None) => {
-                return Err(format!(
-                    "--trajectory {name}: no `x_f_m` or `depth_m` column (columns: {})",
-                    headers.iter().collect::<Vec<_>>().join(",")
-                ));
-            }
-        };
-        let (mut ts, mut ds) = (Vec::new(), Vec::new());
-        for (k, rec) in rdr.records().enumerate() {
-            let line = k + 2;
-            let rec = rec.map_err(|e| format!("--trajectory {name} line {line}: {e}"))?;
-            let num = |c: usize, what: &str| -> Result<f64, String> {
-                let s = rec.get(c).unwrap_or("").trim();
-                sandjumper_output::parse::parse_number(s).map_err(|_| {
-                    format!("--trajectory {name} line {line}: {what} `{s}` is not a number")
-                })
-            };
-            let t = num(t_col, "t_s")?;
-            let d = sign * num(d_col, "depth")?;
-            if let Some(&prev) = ts.last()
-                && t <= prev
-            {
-                return Err(format!(
-                    "--trajectory {name} line {line}: time {t} s does not increase (previous {prev} s; allowed: strictly increasing)"
-                ));
-            }
-            if window.0.is_some_and(|a| t < a) || window.1.is_some_and(|b| t > b) {
-                continue;
-            }
-            ts.push(t);
-            ds.push(d);
-        }
-        if ts.len() < 2 {
+        let rows = read_rows(path)?;
+        let keep: Vec<&Row> = rows
+            .iter()
+            .filter(|r| {
+                !(window.0.is_some_and(|a| r.t_s < a) || window.1.is_some_and(|b| r.t_s > b))
+            })
+            .collect();
+        Self::table(&keep, 0.0, path, "in the window")
+    }
+
+    /// The push-off episode of a jump's `trajectory.csv` (`jump --out`: `t_s`, `x_f_m` and
+    /// `mode`): the foot's last intrusion before the jump's flight (the longest `Aerial` run),
+    /// shifted so that it starts at the bed's surface (depth 0, as the paper's DEM intrusions
+    /// do: the foot at rest of the jump sits below the surface of an intact bed) and at
+    /// time 0.
+    pub fn push_off_from_csv(path: &Path) -> Result<Self, String> {
+        let rows = read_rows(path)?;
+        let name = path.display();
+        if rows.iter().any(|r| r.mode.is_none()) {
             return Err(format!(
-                "--trajectory {name}: {} rows in the window (allowed: at least 2)",
-                ts.len()
+                "--trajectory {name}: --episode needs a `mode` column (a `jump --out` trajectory.csv)"
             ));
         }
-        let t0 = ts[0];
-        ts.iter_mut().for_each(|t| *t -= t0);
+        let is = |r: &Row, m: &str| r.mode.as_deref() == Some(m);
+        // The flight: the longest run of Aerial rows.
+        let (mut best, mut k) = ((0, 0), 0);
+        while k < rows.len() {
+            let start = k;
+            while k < rows.len() && is(&rows[k], "Aerial") {
+                k += 1;
+            }
+            if k - start > best.1 - best.0 {
+                best = (start, k);
+            }
+            k = k.max(start + 1);
+        }
+        if best.1 == best.0 {
+            return Err(format!(
+                "--trajectory {name}: the foot never leaves the ground (no `Aerial` rows): no push-off to take"
+            ));
+        }
+        // The last Intruding run before the flight (Static rows may lie between).
+        let before = &rows[..best.0];
+        let Some(end) = before.iter().rposition(|r| is(r, "Intruding")) else {
+            return Err(format!(
+                "--trajectory {name}: the foot does not intrude before its flight at {} s: no push-off to take",
+                rows[best.0].t_s
+            ));
+        };
+        let start = before[..=end]
+            .iter()
+            .rposition(|r| !is(r, "Intruding"))
+            .map_or(0, |k| k + 1);
+        // The episode from the last sample before it (where its depth starts) to its end.
+        let from = start.saturating_sub(1);
+        let episode: Vec<&Row> = rows[from..=end].iter().collect();
+        let surface = episode[0].depth_m;
+        Self::table(&episode, surface, path, "in its push-off episode")
+    }
+
+    fn table(rows: &[&Row], depth_offset_m: f64, path: &Path, what: &str) -> Result<Self, String> {
+        if rows.len() < 2 {
+            return Err(format!(
+                "--trajectory {}: {} rows {what} (allowed: at least 2)",
+                path.display(),
+                rows.len()
+            ));
+        }
+        let t0 = rows[0].t_s;
         Ok(Self::Table {
-            t_s: ts,
-            depth_m: ds,
-            source: name,
+            t_s: rows.iter().map(|r| r.t_s - t0).collect(),
+            depth_m: rows.iter().map(|r| r.depth_m - depth_offset_m).collect(),
+            source: path.display().to_string(),
         })
     }
+
+    /// Refuse a trajectory whose intruder starts below the bed's surface, inside grains that
+    /// were never displaced (its first force would be that of the overlap, not of the
+    /// intrusion): the start must be at or above the surface (depth <= 0).
+    pub fn check_starts_at_surface(&self) -> Result<(), String> {
+        let d0 = self.depth(0.0);
+        if d0 > 0.0 {
+            let source = match self {
+                Self::Table { source, .. } => format!("--trajectory {source}: "),
+                Self::Constant { .. } => String::new(),
+            };
+            return Err(format!(
+                "{source}the intruder starts {:.3} mm below the bed's surface (allowed: at or above it, depth <= 0; for a jump's trajectory.csv take its push-off with --episode push-off, which starts at the surface)",
+                1e3 * d0
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One row of a trajectory file.
+struct Row {
+    t_s: f64,
+    depth_m: f64,
+    mode: Option<String>,
+}
+
+/// The rows of a trajectory CSV (time strictly increasing).
+fn read_rows(path: &Path) -> Result<Vec<Row>, String> {
+    let name = path.display().to_string();
+    let mut rdr = csv::Reader::from_path(path).map_err(|e| format!("--trajectory {name}: {e}"))?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| format!("--trajectory {name}: {e}"))?
+        .clone();
+    let col = |n: &str| headers.iter().position(|h| h.trim() == n);
+    let t_col = col("t_s").ok_or_else(|| {
+        format!(
+            "--trajectory {name}: no `t_s` column (columns: {}; allowed: t_s with x_f_m or depth_m)",
+            headers.iter().collect::<Vec<_>>().join(",")
+        )
+    })?;
+    let (d_col, sign) = match (col("depth_m"), col("x_f_m")) {
+        (Some(c), _) => (c, 1.0),
+        (None, Some(c)) => (c, -1.0),
+        (None, None) => {
+            return Err(format!(
+                "--trajectory {name}: no `x_f_m` or `depth_m` column (columns: {})",
+                headers.iter().collect::<Vec<_>>().join(",")
+            ));
+        }
+    };
+    let mode_col = col("mode");
+    let mut rows: Vec<Row> = Vec::new();
+    for (k, rec) in rdr.records().enumerate() {
+        let line = k + 2;
+        let rec = rec.map_err(|e| format!("--trajectory {name} line {line}: {e}"))?;
+        let num = |c: usize, what: &str| -> Result<f64, String> {
+            let s = rec.get(c).unwrap_or("").trim();
+            sandjumper_output::parse::parse_number(s).map_err(|_| {
+                format!("--trajectory {name} line {line}: {what} `{s}` is not a number")
+            })
+        };
+        let t = num(t_col, "t_s")?;
+        let d = sign * num(d_col, "depth")?;
+        if let Some(prev) = rows.last().map(|r| r.t_s)
+            && t <= prev
+        {
+            return Err(format!(
+                "--trajectory {name} line {line}: time {t} s does not increase (previous {prev} s; allowed: strictly increasing)"
+            ));
+        }
+        rows.push(Row {
+            t_s: t,
+            depth_m: d,
+            mode: mode_col
+                .and_then(|c| rec.get(c))
+                .map(|m| m.trim().to_string()),
+        });
+    }
+    Ok(rows)
 }
 
 /// The intruder's geometry.
@@ -190,5 +283,89 @@ impl IntruderSpec {
             g.push(x, bottom_m + 0.5 * d, d, density_kg_m3, INTRUDER);
         }
         n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A jump's trajectory.csv in miniature: rest below the surface, a preliminary hop, a
+    /// short landing intrusion, rest, the push-off intrusion, the flight, the landing.
+    fn jump_csv(dir: &Path) -> std::path::PathBuf {
+        let rows: &[(f64, f64, &str)] = &[
+            (0.000, -0.0085, "Static"),
+            (0.001, -0.0086, "Intruding"),
+            (0.002, -0.0080, "Aerial"),
+            (0.003, -0.0082, "Intruding"),
+            (0.004, -0.0090, "Static"),
+            (0.005, -0.0095, "Intruding"),
+            (0.006, -0.0105, "Intruding"),
+            (0.007, -0.0110, "Intruding"),
+            (0.008, -0.0100, "Aerial"),
+            (0.009, 0.0300, "Aerial"),
+            (0.010, 0.0100, "Aerial"),
+            (0.011, -0.0120, "Intruding"),
+        ];
+        let mut text = String::from("t_s,x_f_m,mode\n");
+        for (t, x, m) in rows {
+            text += &format!("{t},{x},{m}\n");
+        }
+        let path = dir.join("trajectory.csv");
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    #[test]
+    fn the_push_off_episode_is_the_last_intrusion_before_the_flight_from_the_surface() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = jump_csv(dir.path());
+        let Trajectory::Table { t_s, depth_m, .. } = Trajectory::push_off_from_csv(&path).unwrap()
+        else {
+            panic!("a table");
+        };
+        // From the sample before the episode (depth 9.0 mm) to its last intruding sample.
+        assert_eq!(t_s.len(), 4);
+        assert!((t_s[3] - 0.003).abs() < 1e-12, "{t_s:?}");
+        let want = [0.0, 0.0005, 0.0015, 0.0020];
+        for (d, w) in depth_m.iter().zip(want) {
+            assert!((d - w).abs() < 1e-12, "{depth_m:?}");
+        }
+        let whole = Trajectory::from_csv(&path, (None, None)).unwrap();
+        assert!(
+            Trajectory::push_off_from_csv(&path)
+                .unwrap()
+                .check_starts_at_surface()
+                .is_ok()
+        );
+        let refused = whole.check_starts_at_surface().unwrap_err();
+        assert!(
+            refused.contains("8.500 mm below the bed's surface"),
+            "{refused}"
+        );
+        assert!(refused.contains("--episode push-off"), "{refused}");
+    }
+
+    #[test]
+    fn an_episode_needs_modes_and_a_flight() {
+        let dir = tempfile::tempdir().unwrap();
+        let no_mode = dir.path().join("a.csv");
+        std::fs::write(&no_mode, "t_s,depth_m\n0,0\n0.001,0.001\n").unwrap();
+        let e = Trajectory::push_off_from_csv(&no_mode).unwrap_err();
+        assert!(e.contains("`mode` column"), "{e}");
+        let grounded = dir.path().join("b.csv");
+        std::fs::write(
+            &grounded,
+            "t_s,x_f_m,mode\n0,0,Static\n0.001,-0.001,Intruding\n",
+        )
+        .unwrap();
+        let e = Trajectory::push_off_from_csv(&grounded).unwrap_err();
+        assert!(e.contains("never leaves the ground"), "{e}");
+        let constant = Trajectory::Constant {
+            speed_m_s: 0.3,
+            start_depth_m: -0.0005,
+            end_depth_m: 0.01,
+        };
+        assert!(constant.check_starts_at_surface().is_ok());
     }
 }

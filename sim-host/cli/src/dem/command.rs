@@ -73,6 +73,13 @@ impl From<IntegratorChoice> for Integrator {
     }
 }
 
+/// `--episode`: a part of a jump's trajectory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EpisodeChoice {
+    /// The foot's last intrusion before the jump's flight.
+    PushOff,
+}
+
 /// Grain and contact choices shared by `bed` and `intrude`.
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
@@ -218,9 +225,14 @@ pub struct IntrudeArgs {
     /// The bed (a `dem bed` output directory or its bed.ckpt).
     #[arg(long, value_name = "BED", required_unless_present = "resume")]
     pub bed: Option<PathBuf>,
-    /// Trajectory CSV (`t_s` with `x_f_m`, as `jump --out` writes, or `depth_m`).
+    /// Trajectory CSV (`t_s` with `x_f_m`, as `jump --out` writes, or `depth_m`); it must
+    /// start at or above the bed's surface.
     #[arg(long, value_name = "CSV", conflicts_with = "speed")]
     pub trajectory: Option<PathBuf>,
+    /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
+    /// `push-off`, the foot's last intrusion before the jump's flight.
+    #[arg(long, value_enum, value_name = "EPISODE", requires = "trajectory", conflicts_with_all = ["from", "to"])]
+    pub episode: Option<EpisodeChoice>,
     /// Use the trajectory from this time, s.
     #[arg(long, value_name = "S", value_parser = parse_number)]
     pub from: Option<f64>,
@@ -685,7 +697,15 @@ fn read_bed(bed_path: &Path) -> Result<Bed, CliError> {
 /// The intruder's motion: a trajectory file or a constant speed down to `--depth`.
 fn intruder_trajectory(a: &IntrudeArgs, params: &DemParams) -> Result<Trajectory, CliError> {
     let traj = match (&a.trajectory, a.speed) {
-        (Some(p), _) => Trajectory::from_csv(p, (a.from, a.to)).map_err(CliError::input)?,
+        (Some(p), _) => {
+            let t = match a.episode {
+                Some(EpisodeChoice::PushOff) => Trajectory::push_off_from_csv(p),
+                None => Trajectory::from_csv(p, (a.from, a.to)),
+            }
+            .map_err(CliError::input)?;
+            t.check_starts_at_surface().map_err(CliError::input)?;
+            t
+        }
         (None, Some(v)) => Trajectory::Constant {
             speed_m_s: v,
             start_depth_m: -0.5 * params.diameter_m,
