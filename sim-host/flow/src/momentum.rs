@@ -59,6 +59,66 @@ pub fn grain_momentum(
     rho_phi_kg_m3: f64,
     mask: Option<(&[bool], usize)>,
 ) -> Momentum {
+    momentum_in(
+        field,
+        cal,
+        dt_s,
+        rho_phi_kg_m3,
+        mask,
+        Region {
+            radius_m: f64::INFINITY,
+            top_h_m: f64::INFINITY,
+        },
+    )
+}
+
+/// The paper's control volume: the column under the foot, `r <= radius_m` from the axis and
+/// below the height `top_h_m` (the foot's bottom, m, up positive from the surface), down to
+/// the field's bottom. `P = rho phi Int_0^H Int_0^2pi Int_0^R v r dr dpsi dh`, each half-plane
+/// an estimate as in [`grain_momentum`].
+pub fn column_momentum(
+    field: &VectorField,
+    cal: &Calibration,
+    dt_s: f64,
+    rho_phi_kg_m3: f64,
+    mask: Option<(&[bool], usize)>,
+    radius_m: f64,
+    top_h_m: f64,
+) -> Momentum {
+    momentum_in(
+        field,
+        cal,
+        dt_s,
+        rho_phi_kg_m3,
+        mask,
+        Region { radius_m, top_h_m },
+    )
+}
+
+/// Where momentum is summed: pixels within `radius_m` of the axis and below `top_h_m`. A
+/// bounded column weights each grain pixel by its own `r` and half-plane (its edge cuts cells,
+/// and a cell-centre `r` would count the cut cells of one side at the radius beyond `R`); the
+/// whole window keeps the cell-centre weighting it has always had.
+#[derive(Clone, Copy)]
+struct Region {
+    radius_m: f64,
+    top_h_m: f64,
+}
+
+impl Region {
+    fn bounded(&self) -> bool {
+        self.radius_m.is_finite()
+    }
+}
+
+fn momentum_in(
+    field: &VectorField,
+    cal: &Calibration,
+    dt_s: f64,
+    rho_phi_kg_m3: f64,
+    mask: Option<(&[bool], usize)>,
+    region: Region,
+) -> Momentum {
     let cell = field.step_px as f64 * cal.m_per_px;
     let da = cell * cell;
     let half = 0.5 * field.step_px as f64;
@@ -77,10 +137,15 @@ pub fn grain_momentum(
                 (yc + half + 0.5).floor() as isize,
             );
             let (mut grain, mut total) = (0usize, 0usize);
+            // Sum of |x| over the grain pixels of each half-plane, m (bounded columns).
+            let (mut r_left, mut r_right) = (0.0, 0.0);
             for y in y0..y1 {
                 for x in x0..x1 {
                     total += 1;
-                    if (y as f64) < cal.origin_px.1 - 0.5 {
+                    if (y as f64) < cal.origin_px.1 - 0.5
+                        || cal.x_m(x as f64).abs() > region.radius_m
+                        || cal.h_m(y as f64) > region.top_h_m
+                    {
                         continue;
                     }
                     let masked = mask.is_some_and(|(m, w)| {
@@ -92,6 +157,12 @@ pub fn grain_momentum(
                     });
                     if !masked {
                         grain += 1;
+                        let xm = cal.x_m(x as f64);
+                        if xm < 0.0 {
+                            r_left -= xm;
+                        } else {
+                            r_right += xm;
+                        }
                     }
                 }
             }
@@ -110,11 +181,17 @@ pub fn grain_momentum(
             };
             let x = cal.x_m(xc);
             let w = -v_px * cal.m_per_px / dt_s;
-            let term = w * x.abs() * da * share;
-            if x < 0.0 {
-                left += term;
+            if region.bounded() {
+                let pixel_area = cal.m_per_px * cal.m_per_px;
+                left += w * r_left * pixel_area;
+                right += w * r_right * pixel_area;
             } else {
-                right += term;
+                let term = w * x.abs() * da * share;
+                if x < 0.0 {
+                    left += term;
+                } else {
+                    right += term;
+                }
             }
             cells += 1;
         }
@@ -150,4 +227,56 @@ pub fn inside(poly: &[(f64, f64)], x: f64, y: f64) -> bool {
 pub fn foot_depth_m(poly: &[(f64, f64)], cal: &Calibration) -> f64 {
     let lowest = poly.iter().map(|p| p.1).fold(f64::MIN, f64::max);
     -cal.h_m(lowest)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A uniform field moving down `v_px` px per frame on a grid every `step` px, `n` x `n`
+    /// vectors, window centres at `step * (i + 0.5)`.
+    fn uniform(n: usize, step: usize, v_px: f64) -> VectorField {
+        let centres: Vec<f64> = (0..n).map(|i| step as f64 * (i as f64 + 0.5)).collect();
+        VectorField {
+            nx: n,
+            ny: n,
+            step_px: step,
+            xs: centres.clone(),
+            ys: centres,
+            u: vec![0.0; n * n],
+            v: vec![v_px; n * n],
+            flag: vec![flag::VALID; n * n],
+            peak_ratio: vec![2.0; n * n],
+        }
+    }
+
+    #[test]
+    fn the_column_under_the_foot_holds_pi_rho_phi_v_r2_h() {
+        // 1 mm pixels, a 200 x 200 px field, the axis at x = 100 px, the surface at y = 0.
+        let field = uniform(50, 4, 1.0);
+        let cal = Calibration {
+            m_per_px: 1e-3,
+            origin_px: (100.0, 0.0),
+        };
+        let (dt, rho_phi) = (1e-3, 600.0);
+        let v = 1e-3 / dt; // 1 m/s down
+        let (r, foot_h) = (0.04, -0.05);
+        let depth = 0.2 - 0.05; // from the foot's bottom to the field's bottom, m
+        let col = column_momentum(&field, &cal, dt, rho_phi, None, r, foot_h);
+        let exact = -std::f64::consts::PI * rho_phi * v * r * r * depth;
+        let err = (col.momentum_kg_m_s - exact) / exact;
+        assert!(
+            err.abs() < 0.03,
+            "{} vs {exact} ({err:+.3})",
+            col.momentum_kg_m_s
+        );
+        // The two half-planes agree to the pixel column on the axis (one of 40 a side).
+        assert!((col.left_kg_m_s - col.right_kg_m_s).abs() < 0.05 * exact.abs());
+        // The wide window holds more than the column.
+        let wide = grain_momentum(&field, &cal, dt, rho_phi, None);
+        assert!(wide.momentum_kg_m_s.abs() > 2.0 * col.momentum_kg_m_s.abs());
+        // Nothing above the surface or beside a zero-width column.
+        let none = column_momentum(&field, &cal, dt, rho_phi, None, 0.0, foot_h);
+        assert!(none.momentum_kg_m_s.abs() < 1e-3 * exact.abs());
+    }
 }
