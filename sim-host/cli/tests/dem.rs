@@ -394,7 +394,7 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
     let bed_dir = wide_bed(tmp.path());
     let bd = bed_dir.to_str().unwrap();
     let out = tmp.path().join("run");
-    let (c, _, e) = sandjumper_text(&[
+    let (c, json, e) = sandjumper_text(&[
         "dem",
         "intrude",
         "--bed",
@@ -440,6 +440,25 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
     assert!(
         e.contains("Froude"),
         "the dimensionless numbers are printed: {e}"
+    );
+    // The paper's measurement: the column under the foot moves down with it, and its added
+    // mass is compared with eq. 6 (C scaled to this foot).
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let under = v["grain_momentum_under_foot_kg_m_s"].as_f64().unwrap();
+    assert!(under > 0.0, "{json}");
+    let vs_eq6 = v["added_mass_vs_eq6_median"].as_f64().unwrap();
+    assert!(vs_eq6.is_finite() && vs_eq6 > 0.0, "{json}");
+    assert!(
+        v.get("added_mass_ratio_to_model").is_none(),
+        "one name per quantity"
+    );
+    let flow = read(&out.join("flow.csv"));
+    assert!(
+        flow.lines()
+            .next()
+            .unwrap()
+            .contains(",momentum_kg_m_s,momentum_under_foot_kg_m_s,added_mass_kg,"),
+        "{flow}"
     );
     // Force on the intruder resists it; the added mass is positive, grows, then levels off.
     let force = read(&out.join("force_depth.csv"));

@@ -14,7 +14,7 @@ use serde::Serialize;
 use super::grains::FREE;
 use super::world::World;
 use sandjumper_flow::fields::Grid;
-use sandjumper_flow::momentum::{Calibration, Momentum, grain_momentum};
+use sandjumper_flow::momentum::{Calibration, Momentum, column_momentum, grain_momentum};
 use sandjumper_flow::piv::{VectorField, flag};
 
 /// A grid over the bed: nodes every `spacing_m`, from `x0` to the right and from `top` down.
@@ -208,4 +208,29 @@ pub fn momentum(
         }
     }
     grain_momentum(&field, &cal, dt, rho_phi_kg_m3, Some((&mask, w)))
+}
+
+/// The paper's measurement on a coarse-grained field: the momentum of the column under the
+/// intruder (`foot`: left, right, bottom, m), `r <= R` from `x_axis_m` and below the foot's
+/// bottom, by the PIV code's [`column_momentum`].
+pub fn column_momentum_under(
+    f: &CoarseField,
+    spec: &GridSpec,
+    x_axis_m: f64,
+    surface_m: f64,
+    rho_phi_kg_m3: f64,
+    foot: (f64, f64, f64),
+) -> Momentum {
+    let dt = 1.0e-3;
+    let (field, cal) = as_vector_field(f, spec, dt, x_axis_m, surface_m);
+    let radius_m = 0.5 * (foot.1 - foot.0);
+    column_momentum(
+        &field,
+        &cal,
+        dt,
+        rho_phi_kg_m3,
+        None,
+        radius_m,
+        foot.2 - surface_m,
+    )
 }

@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::coarse::{CoarseField, GridSpec, coarse_grain, momentum};
+use super::coarse::{CoarseField, GridSpec, coarse_grain, column_momentum_under, momentum};
 use super::intruder::{IntruderSpec, Trajectory};
 use super::params::DemParams;
 use super::render::SideCamera;
@@ -51,6 +51,28 @@ pub struct IntrudeSpec {
     pub surface_m: f64,
     /// Bed box: left and right, m.
     pub bed_x_m: (f64, f64),
+    /// The added mass `P / v_foot` is taken only while the foot moves down at least this
+    /// share of its fastest speed (the paper excluded the samples where `v_foot -> 0`).
+    #[serde(default = "default_min_speed_ratio")]
+    pub min_speed_ratio: f64,
+}
+
+/// The paper's exclusion of slow samples: `v_foot >= 0.3 v_max`.
+pub const DEFAULT_MIN_SPEED_RATIO: f64 = 0.3;
+
+fn default_min_speed_ratio() -> f64 {
+    DEFAULT_MIN_SPEED_RATIO
+}
+
+/// The paper's added mass: `P / v_foot` (the column's momentum over the foot's speed, both
+/// down positive) while the foot moves down at least `min_ratio` of its fastest speed
+/// `v_max_m_s`; NaN otherwise.
+pub fn paper_added_mass(p_kg_m_s: f64, v_m_s: f64, v_max_m_s: f64, min_ratio: f64) -> f64 {
+    if v_m_s > 0.0 && v_m_s >= min_ratio * v_max_m_s {
+        p_kg_m_s / v_m_s
+    } else {
+        f64::NAN
+    }
 }
 
 /// One row of `force_depth.csv`.
@@ -81,9 +103,14 @@ pub struct FlowRow {
     pub momentum_left_kg_m_s: f64,
     /// From the right half-plane.
     pub momentum_right_kg_m_s: f64,
-    /// Their mean.
+    /// Their mean: the wide window (every grain below the surface, r-weighted), kg m/s.
     pub momentum_kg_m_s: f64,
-    /// `P / v_foot`, kg (NaN when the intruder is nearly still).
+    /// The paper's `P`: the column under the foot (`r <= R`, below it), kg m/s (down
+    /// positive).
+    #[serde(default)]
+    pub momentum_under_foot_kg_m_s: f64,
+    /// The paper's added mass `P / v_foot` with `P` under the foot, kg; NaN while the foot
+    /// moves slower than the spec's share of its fastest speed.
     pub added_mass_kg: f64,
     /// Largest shear rate in the field, 1/s.
     pub max_shear_rate_per_s: f64,
@@ -314,8 +341,17 @@ impl Run {
             rho_phi,
             (edges.0, edges.1, bottom),
         );
+        let column = column_momentum_under(
+            &field,
+            &self.grid,
+            axis,
+            self.spec.surface_m,
+            rho_phi,
+            (edges.0, edges.1, bottom),
+        );
         // Momentum is computed height-up; the paper's P is along the intrusion (down).
         let (l, r, p) = (-m.left_kg_m_s, -m.right_kg_m_s, -m.momentum_kg_m_s);
+        let p_column = -column.momentum_kg_m_s;
         let max_shear = d
             .shear_rate
             .values
@@ -331,11 +367,13 @@ impl Run {
             momentum_left_kg_m_s: l,
             momentum_right_kg_m_s: r,
             momentum_kg_m_s: p,
-            added_mass_kg: if speed.abs() > 1e-3 {
-                p / speed
-            } else {
-                f64::NAN
-            },
+            momentum_under_foot_kg_m_s: p_column,
+            added_mass_kg: paper_added_mass(
+                p_column,
+                speed,
+                traj.max_speed(),
+                self.spec.min_speed_ratio,
+            ),
             max_shear_rate_per_s: max_shear,
             cells: m.cells,
         });
@@ -471,4 +509,24 @@ pub fn resume(world: World, record: &serde_json::Value, extra: &[f64]) -> Result
 /// The checkpoint record of a run.
 pub fn record(run: &Run) -> serde_json::Value {
     serde_json::json!({ "spec": run.spec, "state": run.state })
+}
+
+#[cfg(test)]
+mod paper_added_mass_tests {
+    use super::paper_added_mass;
+
+    #[test]
+    fn the_added_mass_is_taken_only_while_the_foot_moves_fast_enough() {
+        assert_eq!(paper_added_mass(0.03, 0.3, 0.3, 0.3), 0.1);
+        assert_eq!(paper_added_mass(0.03, 0.09, 0.3, 0.3), 0.03 / 0.09);
+        assert!(
+            paper_added_mass(0.03, 0.089, 0.3, 0.3).is_nan(),
+            "below 0.3 v_max"
+        );
+        assert!(
+            paper_added_mass(0.03, -0.3, 0.3, 0.3).is_nan(),
+            "withdrawing"
+        );
+        assert!(paper_added_mass(0.03, 0.0, 0.3, 0.0).is_nan(), "still");
+    }
 }

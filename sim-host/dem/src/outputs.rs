@@ -36,11 +36,14 @@ pub struct Summary {
     pub max_depth_m: f64,
     /// Largest force on the intruder, N.
     pub max_force_n: f64,
-    /// Added mass at the deepest sample, kg.
+    /// The paper's added mass (`P` under the foot over `v_foot`) at the last sample where the
+    /// foot still moved at least the spec's share of its fastest speed, kg.
     pub final_added_mass_kg: f64,
-    /// Median of DEM added mass over the model's eq. 6 (for a foot of this width), samples
-    /// deeper than a quarter of the deepest.
-    pub added_mass_ratio_to_model: f64,
+    /// Median over those samples of the DEM's added mass over the model's eq. 6 at the same
+    /// depth, with `C` scaled by `(R / 38 mm)^2` for this foot.
+    pub added_mass_vs_eq6_median: f64,
+    /// Largest momentum of the column under the foot (down positive), kg m/s.
+    pub grain_momentum_under_foot_kg_m_s: f64,
     /// Hexatic order of the bed at the end (1: crystal).
     pub hexatic_order: f64,
     /// The jammed region under the intruder at the last intruding sample.
@@ -65,7 +68,7 @@ impl Summary {
             1e3 * self.max_depth_m,
             self.max_force_n,
             self.final_added_mass_kg,
-            self.added_mass_ratio_to_model,
+            self.added_mass_vs_eq6_median,
             self.jammed.side_angle_deg,
             self.hexatic_order,
             self.contact_time_speed_over_d,
@@ -84,6 +87,7 @@ const FLOW_HEADER: &[&str] = &[
     "momentum_left_kg_m_s",
     "momentum_right_kg_m_s",
     "momentum_kg_m_s",
+    "momentum_under_foot_kg_m_s",
     "added_mass_kg",
     "max_shear_rate_per_s",
     "cells",
@@ -108,9 +112,13 @@ fn err(e: impl std::fmt::Display) -> CliError {
     CliError::internal(e.to_string())
 }
 
-/// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m`, kg.
+/// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m` at the episode
+/// depth `depth_m`, kg. `C` is an area calibrated for the paper's 38 mm foot; it scales with
+/// `R^2` like the cone, so a small foot is not compared with the big foot's `pi C s`.
 pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
     let mut params = sandjumper_model::params::Params::preset(phi).map_err(|e| e.to_string())?;
+    let reference = params.robot.foot_radius_m;
+    params.sand.added_mass_c_m2 *= (r_m / reference).powi(2);
     params.robot.foot_radius_m = r_m;
     let sand = sandjumper_model::ground::Sand::new(
         &params,
@@ -122,15 +130,13 @@ pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String>
     Ok(sand.added_mass(depth_m))
 }
 
-/// Median DEM/model added-mass ratio over intruding samples deeper than a quarter of the
-/// deepest.
-pub fn added_mass_ratio(flow: &[FlowRow], phi: f64, foot_radius_m: f64) -> f64 {
-    let deepest = flow.iter().map(|r| r.depth_m).fold(0.0, f64::max);
+/// Median DEM/eq. 6 added-mass ratio over the samples that have the paper's added mass
+/// (finite: the foot moving fast enough), at their depth, for a foot of radius
+/// `foot_radius_m`.
+pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) -> f64 {
     let mut ratios: Vec<f64> = flow
         .iter()
-        .filter(|r| {
-            r.depth_m > 0.25 * deepest && r.added_mass_kg.is_finite() && r.foot_speed_m_s > 0.0
-        })
+        .filter(|r| r.depth_m > 0.0 && r.added_mass_kg.is_finite())
         .filter_map(|r| {
             let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
             (m > 0.0).then(|| r.added_mass_kg / m)
@@ -309,7 +315,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     };
     let hex = hexatic_order(&run.world);
     let dl = p.dimensionless(spec.trajectory().max_speed());
-    let ratio = added_mass_ratio(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
+    let ratio = added_mass_vs_eq6_median(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
     let summary = Summary {
         out: out.display().to_string(),
         grains: run.world.g.len(),
@@ -325,8 +331,20 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
             .iter()
             .map(|r| r.force_n)
             .fold(0.0, f64::max),
-        final_added_mass_kg: last.map_or(f64::NAN, |r| r.added_mass_kg),
-        added_mass_ratio_to_model: ratio,
+        final_added_mass_kg: run
+            .state
+            .flow
+            .iter()
+            .rev()
+            .find(|r| r.added_mass_kg.is_finite())
+            .map_or(f64::NAN, |r| r.added_mass_kg),
+        added_mass_vs_eq6_median: ratio,
+        grain_momentum_under_foot_kg_m_s: run
+            .state
+            .flow
+            .iter()
+            .map(|r| r.momentum_under_foot_kg_m_s)
+            .fold(f64::NAN, f64::max),
         hexatic_order: hex,
         jammed,
         samples: run.state.flow.len(),
@@ -416,7 +434,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
             y_desc: "added mass (kg)".into(),
             lines: vec![
                 Line {
-                    label: "DEM, coarse-grained, momentum as from PIV".into(),
+                    label: "DEM: P under the foot / v_foot (v >= share of v_max)".into(),
                     points: am
                         .iter()
                         .map(|r| (1e3 * r.depth_m, r.added_mass_kg))
@@ -426,7 +444,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
                     markers: true,
                 },
                 Line {
-                    label: "eq. 6 (preset), same foot radius".into(),
+                    label: "eq. 6 (preset), C scaled with R^2".into(),
                     points: model,
                     color: palette(1),
                     dashed: true,
@@ -497,4 +515,36 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
         out: target.display().to_string(),
         ..summary
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::model_added_mass;
+
+    #[test]
+    fn eq6_scales_its_area_c_with_the_foot_radius_squared() {
+        // The paper's foot: the preset as it is.
+        let big = model_added_mass(0.57, 0.038, 0.01).unwrap();
+        let params = sandjumper_model::params::Params::preset(0.57).unwrap();
+        let sand = sandjumper_model::ground::Sand::new(
+            &params,
+            sandjumper_model::ground::GroundLaw::resolve(
+                sandjumper_model::params::ModelName::Eq4,
+                &params.model,
+            ),
+        );
+        assert!((big - sand.added_mass(0.01)).abs() < 1e-12 * big);
+        // Half the radius, a shallow depth where the cone is a frustum of the same shape:
+        // every term of eq. 6 scales with R^2 only if C does.
+        let s = 0.0005;
+        let (m1, m2) = (
+            model_added_mass(0.57, 0.038, s).unwrap(),
+            model_added_mass(0.57, 0.019, 0.5 * s).unwrap(),
+        );
+        assert!(
+            (m2 / m1 - 0.125).abs() < 1e-9,
+            "R^3 scaling at similar depths: {}",
+            m2 / m1
+        );
+    }
 }

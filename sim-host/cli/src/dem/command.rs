@@ -73,6 +73,16 @@ impl From<IntegratorChoice> for Integrator {
     }
 }
 
+/// A share in 0..=1.
+fn parse_share(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
+    }
+}
+
 /// `--episode`: a part of a jump's trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EpisodeChoice {
@@ -257,6 +267,10 @@ pub struct IntrudeArgs {
     /// Force rows per second.
     #[arg(long, value_name = "HZ", default_value = "10000", value_parser = positive)]
     pub force_rate: f64,
+    /// The added mass `P / v_foot` is taken only while the foot moves down at least this
+    /// share of its fastest speed, 0..1 (the paper excluded the samples where v -> 0).
+    #[arg(long, value_name = "F", default_value = "0.3", value_parser = parse_share)]
+    pub min_speed_ratio: f64,
     /// Coarse-graining grid spacing, m (default 2 grain diameters).
     #[arg(long, value_name = "M", value_parser = positive)]
     pub grid: Option<f64>,
@@ -765,6 +779,7 @@ fn intrude_spec(a: &IntrudeArgs, bed: &Bed) -> Result<IntrudeSpec, CliError> {
         seed: a.seed,
         surface_m: bed.report.surface_m,
         bed_x_m: (0.0, bed.spec.width_m),
+        min_speed_ratio: a.min_speed_ratio,
     })
 }
 
