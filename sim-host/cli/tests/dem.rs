@@ -547,7 +547,9 @@ fn bad_intrusions_are_refused_with_exit_2() {
 }
 
 /// A jump's trajectory starts with the foot at rest below the surface of an intact bed: it
-/// is refused as it is, and its push-off episode, shifted to the surface, is accepted.
+/// is refused as it is, and its push-off episode, shifted to the surface, is accepted, also
+/// from a stutter whose preliminary hop lasts longer than its flight (20 Hz), and a stopped
+/// run resumes (its slow samples have no added mass: NaN in the checkpoint).
 #[test]
 fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
     let tmp = tempfile::tempdir().unwrap();
@@ -558,7 +560,7 @@ fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
         "--kind",
         "stutter",
         "--freq",
-        "10",
+        "20",
         "--model",
         "eq4",
         "--phi",
@@ -601,7 +603,44 @@ fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
     assert!(e.contains("--episode push-off"), "{e}");
     let (c, _, e) = run(&["--episode", "push-off", "--from", "0.1"]);
     assert_eq!(c, 2, "{e}");
-    let (c, stdout, e) = run(&["--episode", "push-off", "--stop-after", "20"]);
+    let (c, stdout, e) = run(&[
+        "--episode",
+        "push-off",
+        "--checkpoint-every",
+        "200",
+        "--stop-after",
+        "400",
+    ]);
     assert_eq!(c, 0, "{e}");
-    assert!(stdout.contains("stopped after 20"), "{stdout}");
+    assert!(stdout.contains("stopped after 400"), "{stdout}");
+    let (c, json, e) = sandjumper_text(&[
+        "dem",
+        "intrude",
+        "--resume",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(c, 0, "{e}");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert!(
+        v["grain_momentum_under_foot_kg_m_s"].as_f64().unwrap() > 0.0,
+        "{json}"
+    );
+    let flow = read(&out.join("flow.csv"));
+    let added: Vec<&str> = flow
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(8).unwrap())
+        .collect();
+    assert!(
+        added.iter().any(|a| a.is_empty() || *a == "NaN"),
+        "slow samples: {flow}"
+    );
+    assert!(
+        added
+            .iter()
+            .any(|a| a.parse::<f64>().is_ok_and(f64::is_finite)),
+        "{flow}"
+    );
 }

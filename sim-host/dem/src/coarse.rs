@@ -223,6 +223,12 @@ pub fn column_momentum_under(
 ) -> Momentum {
     let dt = 1.0e-3;
     let (field, cal) = as_vector_field(f, spec, dt, x_axis_m, surface_m);
+    // The flow code puts a pixel's centre at its index; this grid's pixel `k` spans
+    // [k, k + 1): shift the origin by half a pixel so each pixel's `r` is its centre's.
+    let cal = Calibration {
+        origin_px: (cal.origin_px.0 - 0.5, cal.origin_px.1 - 0.5),
+        ..cal
+    };
     let radius_m = 0.5 * (foot.1 - foot.0);
     column_momentum(
         &field,

@@ -57,6 +57,11 @@ pub struct IntrudeSpec {
     pub min_speed_ratio: f64,
 }
 
+/// A number that JSON wrote as `null` (serde writes NaN so) is NaN again.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 /// The paper's exclusion of slow samples: `v_foot >= 0.3 v_max`.
 pub const DEFAULT_MIN_SPEED_RATIO: f64 = 0.3;
 
@@ -110,7 +115,9 @@ pub struct FlowRow {
     #[serde(default)]
     pub momentum_under_foot_kg_m_s: f64,
     /// The paper's added mass `P / v_foot` with `P` under the foot, kg; NaN while the foot
-    /// moves slower than the spec's share of its fastest speed.
+    /// moves slower than the spec's share of its fastest speed (`null` in a checkpoint's
+    /// JSON, read back as NaN).
+    #[serde(deserialize_with = "nan_if_null")]
     pub added_mass_kg: f64,
     /// Largest shear rate in the field, 1/s.
     pub max_shear_rate_per_s: f64,

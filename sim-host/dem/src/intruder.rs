@@ -104,10 +104,12 @@ impl Trajectory {
     }
 
     /// The push-off episode of a jump's `trajectory.csv` (`jump --out`: `t_s`, `x_f_m` and
-    /// `mode`): the foot's last intrusion before the jump's flight (the longest `Aerial` run),
-    /// shifted so that it starts at the bed's surface (depth 0, as the paper's DEM intrusions
-    /// do: the foot at rest of the jump sits below the surface of an intact bed) and at
-    /// time 0.
+    /// `mode`): the foot's last intrusion before the jump's flight (the last `Aerial` run that
+    /// follows an intrusion; a stutter's preliminary hop follows none), shifted so that its
+    /// first intruding sample is at the bed's surface (depth 0, as the paper's DEM intrusions
+    /// start: the foot at rest of the jump sits below the surface of an intact bed) and at
+    /// time 0. The sample before it (at rest, or in the air before a landing) stays, at or
+    /// above the surface.
     pub fn push_off_from_csv(path: &Path) -> Result<Self, String> {
         let rows = read_rows(path)?;
         let name = path.display();
@@ -117,21 +119,27 @@ impl Trajectory {
             ));
         }
         let is = |r: &Row, m: &str| r.mode.as_deref() == Some(m);
-        // The flight: the longest run of Aerial rows.
-        let (mut best, mut k) = ((0, 0), 0);
+        // The flight: the last run of Aerial rows with an intrusion before it.
+        let mut best = (0, 0);
+        let mut k = 0;
+        let mut intruded = false;
         while k < rows.len() {
-            let start = k;
-            while k < rows.len() && is(&rows[k], "Aerial") {
+            if is(&rows[k], "Aerial") {
+                let start = k;
+                while k < rows.len() && is(&rows[k], "Aerial") {
+                    k += 1;
+                }
+                if intruded {
+                    best = (start, k);
+                }
+            } else {
+                intruded |= is(&rows[k], "Intruding");
                 k += 1;
             }
-            if k - start > best.1 - best.0 {
-                best = (start, k);
-            }
-            k = k.max(start + 1);
         }
         if best.1 == best.0 {
             return Err(format!(
-                "--trajectory {name}: the foot never leaves the ground (no `Aerial` rows): no push-off to take"
+                "--trajectory {name}: the jump never takes off after an intrusion (no `Aerial` rows after an `Intruding` one): no push-off to take"
             ));
         }
         // The last Intruding run before the flight (Static rows may lie between).
@@ -146,10 +154,11 @@ impl Trajectory {
             .iter()
             .rposition(|r| !is(r, "Intruding"))
             .map_or(0, |k| k + 1);
-        // The episode from the last sample before it (where its depth starts) to its end.
+        // The episode from the sample before it to its end, its first intruding sample (the
+        // start event: a touchdown or a restart) at the surface.
         let from = start.saturating_sub(1);
         let episode: Vec<&Row> = rows[from..=end].iter().collect();
-        let surface = episode[0].depth_m;
+        let surface = rows[start].depth_m;
         Self::table(&episode, surface, path, "in its push-off episode")
     }
 
@@ -324,10 +333,11 @@ mod tests {
         else {
             panic!("a table");
         };
-        // From the sample before the episode (depth 9.0 mm) to its last intruding sample.
+        // From the sample before the episode (at rest, 9.0 mm) to its last intruding sample,
+        // the first intruding one (9.5 mm) at the surface.
         assert_eq!(t_s.len(), 4);
         assert!((t_s[3] - 0.003).abs() < 1e-12, "{t_s:?}");
-        let want = [0.0, 0.0005, 0.0015, 0.0020];
+        let want = [-0.0005, 0.0, 0.0010, 0.0015];
         for (d, w) in depth_m.iter().zip(want) {
             assert!((d - w).abs() < 1e-12, "{depth_m:?}");
         }
@@ -360,7 +370,31 @@ mod tests {
         )
         .unwrap();
         let e = Trajectory::push_off_from_csv(&grounded).unwrap_err();
-        assert!(e.contains("never leaves the ground"), "{e}");
+        assert!(e.contains("never takes off after an intrusion"), "{e}");
+        // A stutter whose preliminary hop (no intrusion before it) is longer than its flight.
+        let hop = dir.path().join("c.csv");
+        std::fs::write(
+            &hop,
+            "t_s,x_f_m,mode\n0,-0.008,Static\n1,-0.005,Aerial\n2,0.01,Aerial\n3,0.01,Aerial\n\
+             4,0.001,Aerial\n5,0,Intruding\n6,-0.002,Intruding\n7,-0.003,Aerial\n8,0.02,Aerial\n",
+        )
+        .unwrap();
+        let Trajectory::Table { t_s, depth_m, .. } = Trajectory::push_off_from_csv(&hop).unwrap()
+        else {
+            panic!("a table");
+        };
+        // The landing's touchdown sample is the surface; the air sample before it stays above.
+        assert_eq!(t_s, [0.0, 1.0, 2.0]);
+        assert_eq!(depth_m, [-0.001, 0.0, 0.002]);
+        // A hop and a landing, no take-off after it.
+        let no_jump = dir.path().join("d.csv");
+        std::fs::write(
+            &no_jump,
+            "t_s,x_f_m,mode\n0,-0.008,Static\n1,0.01,Aerial\n2,0,Intruding\n3,-0.002,Static\n",
+        )
+        .unwrap();
+        let e = Trajectory::push_off_from_csv(&no_jump).unwrap_err();
+        assert!(e.contains("never takes off after an intrusion"), "{e}");
         let constant = Trajectory::Constant {
             speed_m_s: 0.3,
             start_depth_m: -0.0005,

@@ -117,7 +117,7 @@ fn err(e: impl std::fmt::Display) -> CliError {
 /// `R^2` like the cone, so a small foot is not compared with the big foot's `pi C s`.
 pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
     let mut params = sandjumper_model::params::Params::preset(phi).map_err(|e| e.to_string())?;
-    let reference = params.robot.foot_radius_m;
+    let reference = params.sand.reference_foot_radius_m;
     params.sand.added_mass_c_m2 *= (r_m / reference).powi(2);
     params.robot.foot_radius_m = r_m;
     let sand = sandjumper_model::ground::Sand::new(

@@ -234,9 +234,12 @@ mod tests {
     use super::*;
 
     /// A uniform field moving down `v_px` px per frame on a grid every `step` px, `n` x `n`
-    /// vectors, window centres at `step * (i + 0.5)`.
+    /// vectors, window `i` over pixels `step i .. step (i + 1)` (pixel centres at their
+    /// indices, as in PIV).
     fn uniform(n: usize, step: usize, v_px: f64) -> VectorField {
-        let centres: Vec<f64> = (0..n).map(|i| step as f64 * (i as f64 + 0.5)).collect();
+        let centres: Vec<f64> = (0..n)
+            .map(|i| 0.5 * (step as f64 - 1.0) + (step * i) as f64)
+            .collect();
         VectorField {
             nx: n,
             ny: n,
@@ -252,11 +255,12 @@ mod tests {
 
     #[test]
     fn the_column_under_the_foot_holds_pi_rho_phi_v_r2_h() {
-        // 1 mm pixels, a 200 x 200 px field, the axis at x = 100 px, the surface at y = 0.
+        // 1 mm pixels, a 200 x 200 px field, the axis and the surface on pixel edges (the
+        // axis between pixels 99 and 100, the surface above row 0), as the DEM's grid has them.
         let field = uniform(50, 4, 1.0);
         let cal = Calibration {
             m_per_px: 1e-3,
-            origin_px: (100.0, 0.0),
+            origin_px: (99.5, -0.5),
         };
         let (dt, rho_phi) = (1e-3, 600.0);
         let v = 1e-3 / dt; // 1 m/s down
@@ -266,12 +270,12 @@ mod tests {
         let exact = -std::f64::consts::PI * rho_phi * v * r * r * depth;
         let err = (col.momentum_kg_m_s - exact) / exact;
         assert!(
-            err.abs() < 0.03,
+            err.abs() < 0.005,
             "{} vs {exact} ({err:+.3})",
             col.momentum_kg_m_s
         );
-        // The two half-planes agree to the pixel column on the axis (one of 40 a side).
-        assert!((col.left_kg_m_s - col.right_kg_m_s).abs() < 0.05 * exact.abs());
+        // The two half-planes agree.
+        assert!((col.left_kg_m_s - col.right_kg_m_s).abs() < 1e-9 * exact.abs());
         // The wide window holds more than the column.
         let wide = grain_momentum(&field, &cal, dt, rho_phi, None);
         assert!(wide.momentum_kg_m_s.abs() > 2.0 * col.momentum_kg_m_s.abs());
