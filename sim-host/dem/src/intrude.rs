@@ -378,7 +378,7 @@ impl Run {
             added_mass_kg: paper_added_mass(
                 p_column,
                 speed,
-                traj.max_speed(),
+                traj.max_intrusion_speed(),
                 self.spec.min_speed_ratio,
             ),
             max_shear_rate_per_s: max_shear,

@@ -89,6 +89,19 @@ impl Trajectory {
         }
     }
 
+    /// Fastest intrusion, m/s: the largest down rate over the segments that end below the
+    /// surface (a withdrawal, or the fall through the air before a landing, is not an
+    /// intrusion); 0 when the intruder never goes down into the bed.
+    pub fn max_intrusion_speed(&self) -> f64 {
+        match self {
+            Self::Constant { speed_m_s, .. } => speed_m_s.max(0.0),
+            Self::Table { t_s, depth_m, .. } => (1..t_s.len())
+                .filter(|&k| depth_m[k] > 0.0)
+                .map(|k| (depth_m[k] - depth_m[k - 1]) / (t_s[k] - t_s[k - 1]))
+                .fold(0.0, f64::max),
+        }
+    }
+
     /// Read a trajectory CSV: a time column `t_s` and either the foot height `x_f_m`
     /// (`jump --out`'s `trajectory.csv`: depth = -x_f) or `depth_m` (a tracked foot).
     /// `window` (from, to) in the file's seconds keeps part of it; time then starts at 0.
@@ -386,6 +399,14 @@ mod tests {
         // The landing's touchdown sample is the surface; the air sample before it stays above.
         assert_eq!(t_s, [0.0, 1.0, 2.0]);
         assert_eq!(depth_m, [-0.001, 0.0, 0.002]);
+        // Its fastest intrusion is in the bed, not the fall before the touchdown.
+        let landing = Trajectory::Table {
+            t_s: vec![0.0, 1.0, 2.0, 3.0],
+            depth_m: vec![-0.01, 0.0, 0.002, -0.005],
+            source: String::new(),
+        };
+        assert_eq!(landing.max_speed(), 0.01);
+        assert_eq!(landing.max_intrusion_speed(), 0.002);
         // A hop and a landing, no take-off after it.
         let no_jump = dir.path().join("d.csv");
         std::fs::write(
