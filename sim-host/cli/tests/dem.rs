@@ -452,12 +452,15 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
         v.get("added_mass_ratio_to_model").is_none(),
         "one name per quantity"
     );
+    // How much of P lies deeper than the jammed cone: a share, reported.
+    let beyond = v["momentum_beyond_cone_depth_share"].as_f64().unwrap();
+    assert!((0.0..1.0).contains(&beyond), "{json}");
     let flow = read(&out.join("flow.csv"));
     assert!(
         flow.lines()
             .next()
             .unwrap()
-            .contains(",momentum_kg_m_s,momentum_under_foot_kg_m_s,added_mass_kg,"),
+            .contains(",momentum_kg_m_s,momentum_under_foot_kg_m_s,momentum_under_foot_to_cone_depth_kg_m_s,added_mass_kg,"),
         "{flow}"
     );
     // Force on the intruder resists it; the added mass is positive, grows, then levels off.
@@ -631,7 +634,7 @@ fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
     let added: Vec<&str> = flow
         .lines()
         .skip(1)
-        .map(|l| l.split(',').nth(8).unwrap())
+        .map(|l| l.split(',').nth(9).unwrap())
         .collect();
     assert!(
         added.iter().any(|a| a.is_empty() || *a == "NaN"),

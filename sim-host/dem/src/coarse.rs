@@ -14,7 +14,7 @@ use serde::Serialize;
 use super::grains::FREE;
 use super::world::World;
 use sandjumper_flow::fields::Grid;
-use sandjumper_flow::momentum::{Calibration, Momentum, column_momentum, grain_momentum};
+use sandjumper_flow::momentum::{Calibration, Momentum, column_momentum_to, grain_momentum};
 use sandjumper_flow::piv::{VectorField, flag};
 
 /// A grid over the bed: nodes every `spacing_m`, from `x0` to the right and from `top` down.
@@ -212,7 +212,8 @@ pub fn momentum(
 
 /// The paper's measurement on a coarse-grained field: the momentum of the column under the
 /// intruder (`foot`: left, right, bottom, m), `r <= R` from `x_axis_m` and below the foot's
-/// bottom, by the PIV code's [`column_momentum`].
+/// bottom, down to `depth_m` under it (`None`: to the window's bottom), by the PIV code's
+/// [`column_momentum_to`].
 pub fn column_momentum_under(
     f: &CoarseField,
     spec: &GridSpec,
@@ -220,6 +221,7 @@ pub fn column_momentum_under(
     surface_m: f64,
     rho_phi_kg_m3: f64,
     foot: (f64, f64, f64),
+    depth_m: Option<f64>,
 ) -> Momentum {
     let dt = 1.0e-3;
     let (field, cal) = as_vector_field(f, spec, dt, x_axis_m, surface_m);
@@ -230,13 +232,21 @@ pub fn column_momentum_under(
         ..cal
     };
     let radius_m = 0.5 * (foot.1 - foot.0);
-    column_momentum(
+    let top = foot.2 - surface_m;
+    let bottom = depth_m.map_or(f64::NEG_INFINITY, |h| top - h);
+    column_momentum_to(
         &field,
         &cal,
         dt,
         rho_phi_kg_m3,
         None,
         radius_m,
-        foot.2 - surface_m,
+        (top, bottom),
     )
+}
+
+/// The jammed cone's depth under a foot of radius `r_m` with sides at the paper's 60 degrees,
+/// `R tan 60`, m: how deep the column must reach to hold the cone.
+pub fn cone_depth_m(r_m: f64) -> f64 {
+    r_m * 60f64.to_radians().tan()
 }

@@ -9,7 +9,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::coarse::{CoarseField, GridSpec, coarse_grain, column_momentum_under, momentum};
+use super::coarse::{
+    CoarseField, GridSpec, coarse_grain, column_momentum_under, cone_depth_m, momentum,
+};
 use super::intruder::{IntruderSpec, Trajectory};
 use super::params::DemParams;
 use super::render::SideCamera;
@@ -114,6 +116,10 @@ pub struct FlowRow {
     /// positive).
     #[serde(default)]
     pub momentum_under_foot_kg_m_s: f64,
+    /// The same column cut at the jammed cone's depth `R tan 60` under the foot, kg m/s:
+    /// how much of `P` comes from deeper (the column above runs to the window's bottom).
+    #[serde(default)]
+    pub momentum_under_foot_to_cone_depth_kg_m_s: f64,
     /// The paper's added mass `P / v_foot` with `P` under the foot, kg; NaN while the foot
     /// moves slower than the spec's share of its fastest speed (`null` in a checkpoint's
     /// JSON, read back as NaN).
@@ -348,17 +354,23 @@ impl Run {
             rho_phi,
             (edges.0, edges.1, bottom),
         );
-        let column = column_momentum_under(
-            &field,
-            &self.grid,
-            axis,
-            self.spec.surface_m,
-            rho_phi,
-            (edges.0, edges.1, bottom),
-        );
+        let column_to = |depth: Option<f64>| {
+            column_momentum_under(
+                &field,
+                &self.grid,
+                axis,
+                self.spec.surface_m,
+                rho_phi,
+                (edges.0, edges.1, bottom),
+                depth,
+            )
+        };
+        let column = column_to(None);
+        let cone = column_to(Some(cone_depth_m(0.5 * (edges.1 - edges.0))));
         // Momentum is computed height-up; the paper's P is along the intrusion (down).
         let (l, r, p) = (-m.left_kg_m_s, -m.right_kg_m_s, -m.momentum_kg_m_s);
         let p_column = -column.momentum_kg_m_s;
+        let p_cone = -cone.momentum_kg_m_s;
         let max_shear = d
             .shear_rate
             .values
@@ -375,6 +387,7 @@ impl Run {
             momentum_right_kg_m_s: r,
             momentum_kg_m_s: p,
             momentum_under_foot_kg_m_s: p_column,
+            momentum_under_foot_to_cone_depth_kg_m_s: p_cone,
             added_mass_kg: paper_added_mass(
                 p_column,
                 speed,

@@ -44,6 +44,10 @@ pub struct Summary {
     pub added_mass_vs_eq6_median: f64,
     /// Largest momentum of the column under the foot (down positive), kg m/s.
     pub grain_momentum_under_foot_kg_m_s: f64,
+    /// Median over the samples with the paper's added mass of the share of the column's
+    /// momentum that lies deeper than the jammed cone (`R tan 60` under the foot): how much
+    /// the measurement depends on the column's depth `H` (0: none).
+    pub momentum_beyond_cone_depth_share: f64,
     /// Hexatic order of the bed at the end (1: crystal).
     pub hexatic_order: f64,
     /// The jammed region under the intruder at the last intruding sample.
@@ -88,6 +92,7 @@ const FLOW_HEADER: &[&str] = &[
     "momentum_right_kg_m_s",
     "momentum_kg_m_s",
     "momentum_under_foot_kg_m_s",
+    "momentum_under_foot_to_cone_depth_kg_m_s",
     "added_mass_kg",
     "max_shear_rate_per_s",
     "cells",
@@ -147,6 +152,18 @@ pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) 
     }
     ratios.sort_by(f64::total_cmp);
     ratios[ratios.len() / 2]
+}
+
+/// Median over the samples with the paper's added mass of the share of the column's momentum
+/// deeper than the jammed cone.
+fn beyond_cone_share(flow: &[FlowRow]) -> f64 {
+    let mut shares: Vec<f64> = flow
+        .iter()
+        .filter(|r| r.added_mass_kg.is_finite() && r.momentum_under_foot_kg_m_s > 0.0)
+        .map(|r| 1.0 - r.momentum_under_foot_to_cone_depth_kg_m_s / r.momentum_under_foot_kg_m_s)
+        .collect();
+    shares.sort_by(f64::total_cmp);
+    shares.get(shares.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// Write the finished run into `out` (from the work directory `work`, removed after).
@@ -339,6 +356,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
             .find(|r| r.added_mass_kg.is_finite())
             .map_or(f64::NAN, |r| r.added_mass_kg),
         added_mass_vs_eq6_median: ratio,
+        momentum_beyond_cone_depth_share: beyond_cone_share(&run.state.flow),
         grain_momentum_under_foot_kg_m_s: run
             .state
             .flow

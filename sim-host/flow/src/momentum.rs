@@ -68,6 +68,7 @@ pub fn grain_momentum(
         Region {
             radius_m: f64::INFINITY,
             top_h_m: f64::INFINITY,
+            bottom_h_m: f64::NEG_INFINITY,
         },
     )
 }
@@ -85,13 +86,40 @@ pub fn column_momentum(
     radius_m: f64,
     top_h_m: f64,
 ) -> Momentum {
+    column_momentum_to(
+        field,
+        cal,
+        dt_s,
+        rho_phi_kg_m3,
+        mask,
+        radius_m,
+        (top_h_m, f64::NEG_INFINITY),
+    )
+}
+
+/// [`column_momentum`] between the heights `(top_h_m, bottom_h_m)`, m (up positive): the
+/// column cut at a depth `H` (e.g. the jammed cone's `R tan theta`), to see how much of `P`
+/// lies deeper.
+pub fn column_momentum_to(
+    field: &VectorField,
+    cal: &Calibration,
+    dt_s: f64,
+    rho_phi_kg_m3: f64,
+    mask: Option<(&[bool], usize)>,
+    radius_m: f64,
+    (top_h_m, bottom_h_m): (f64, f64),
+) -> Momentum {
     momentum_in(
         field,
         cal,
         dt_s,
         rho_phi_kg_m3,
         mask,
-        Region { radius_m, top_h_m },
+        Region {
+            radius_m,
+            top_h_m,
+            bottom_h_m,
+        },
     )
 }
 
@@ -103,6 +131,7 @@ pub fn column_momentum(
 struct Region {
     radius_m: f64,
     top_h_m: f64,
+    bottom_h_m: f64,
 }
 
 impl Region {
@@ -145,6 +174,7 @@ fn momentum_in(
                     if (y as f64) < cal.origin_px.1 - 0.5
                         || cal.x_m(x as f64).abs() > region.radius_m
                         || cal.h_m(y as f64) > region.top_h_m
+                        || cal.h_m(y as f64) < region.bottom_h_m
                     {
                         continue;
                     }
@@ -279,6 +309,18 @@ mod tests {
         // The wide window holds more than the column.
         let wide = grain_momentum(&field, &cal, dt, rho_phi, None);
         assert!(wide.momentum_kg_m_s.abs() > 2.0 * col.momentum_kg_m_s.abs());
+        // Cut at half its depth, the column holds half its momentum.
+        let half = column_momentum_to(
+            &field,
+            &cal,
+            dt,
+            rho_phi,
+            None,
+            r,
+            (foot_h, foot_h - 0.5 * depth),
+        );
+        let share = half.momentum_kg_m_s / col.momentum_kg_m_s;
+        assert!((share - 0.5).abs() < 0.01, "{share}");
         // Nothing above the surface or beside a zero-width column.
         let none = column_momentum(&field, &cal, dt, rho_phi, None, 0.0, foot_h);
         assert!(none.momentum_kg_m_s.abs() < 1e-3 * exact.abs());
