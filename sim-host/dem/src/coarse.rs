@@ -2,7 +2,7 @@
 //! same code as PIV ([`sandjumper_flow`]): eq. 2's shear rate, vorticity, grain momentum and
 //! added mass. The paper computed the DEM's momentum "identically to PIV"; here that holds by
 //! construction: the grid becomes a [`VectorField`] in virtual pixels and goes through
-//! [`grain_momentum`].
+//! [`grain_momentum`] and [`column_momentum_to`] ([`sample_momenta`]).
 //!
 //! Mass-weighted Gaussian coarse graining (Goldhirsch's): with `phi(r) = exp(-r^2 / 2w^2) /
 //! (2 pi w^2)`, density `rho(r) = sum m_i phi(r - r_i)`, momentum density `p(r) = sum m_i v_i
@@ -177,17 +177,31 @@ pub fn as_vector_field(
     (field, cal)
 }
 
-/// Grain momentum of a coarse-grained field, computed by the PIV code (`rho_phi`: grain
-/// density times the bed's packing fraction, kg/m^3). The intruder's own region is masked
-/// (`foot`: left, right, bottom, m), like the foot in a PIV frame.
-pub fn momentum(
+/// The momenta of one sample, computed by the PIV code on the coarse-grained field (down is
+/// negative: height up, as the flow code has it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleMomenta {
+    /// The wide window: every grain below the surface on each side of the axis, the
+    /// intruder's own region masked like the foot in a PIV frame (a diagnostic).
+    pub window: Momentum,
+    /// The paper's control volume: the column under the intruder, `r <= R` from the axis and
+    /// below its bottom, down to the window's bottom ([`column_momentum_to`]).
+    pub under_foot: Momentum,
+    /// The same column cut at the jammed cone's depth ([`cone_depth_m`]) under the intruder.
+    pub under_foot_to_cone: Momentum,
+}
+
+/// The momenta of the coarse-grained field `f` (`rho_phi`: grain density times the bed's
+/// packing fraction, kg/m^3) about the axis `x_axis_m`, with the intruder at `foot` (left,
+/// right, bottom, m).
+pub fn sample_momenta(
     f: &CoarseField,
     spec: &GridSpec,
     x_axis_m: f64,
     surface_m: f64,
     rho_phi_kg_m3: f64,
     foot: (f64, f64, f64),
-) -> Momentum {
+) -> SampleMomenta {
     let dt = 1.0e-3;
     let (field, cal) = as_vector_field(f, spec, dt, x_axis_m, surface_m);
     let w = spec.nx * PX_PER_NODE;
@@ -207,42 +221,32 @@ pub fn momentum(
             }
         }
     }
-    grain_momentum(&field, &cal, dt, rho_phi_kg_m3, Some((&mask, w)))
-}
-
-/// The paper's measurement on a coarse-grained field: the momentum of the column under the
-/// intruder (`foot`: left, right, bottom, m), `r <= R` from `x_axis_m` and below the foot's
-/// bottom, down to `depth_m` under it (`None`: to the window's bottom), by the PIV code's
-/// [`column_momentum_to`].
-pub fn column_momentum_under(
-    f: &CoarseField,
-    spec: &GridSpec,
-    x_axis_m: f64,
-    surface_m: f64,
-    rho_phi_kg_m3: f64,
-    foot: (f64, f64, f64),
-    depth_m: Option<f64>,
-) -> Momentum {
-    let dt = 1.0e-3;
-    let (field, cal) = as_vector_field(f, spec, dt, x_axis_m, surface_m);
+    let window = grain_momentum(&field, &cal, dt, rho_phi_kg_m3, Some((&mask, w)));
     // The flow code puts a pixel's centre at its index; this grid's pixel `k` spans
-    // [k, k + 1): shift the origin by half a pixel so each pixel's `r` is its centre's.
-    let cal = Calibration {
+    // [k, k + 1): the column shifts the origin by half a pixel so each pixel's `r` is its
+    // centre's (the window keeps the weighting it has always had).
+    let centred = Calibration {
         origin_px: (cal.origin_px.0 - 0.5, cal.origin_px.1 - 0.5),
         ..cal
     };
     let radius_m = 0.5 * (foot.1 - foot.0);
-    let top = foot.2 - surface_m;
-    let bottom = depth_m.map_or(f64::NEG_INFINITY, |h| top - h);
-    column_momentum_to(
-        &field,
-        &cal,
-        dt,
-        rho_phi_kg_m3,
-        None,
-        radius_m,
-        (top, bottom),
-    )
+    let foot_h = foot.2 - surface_m;
+    let column = |bottom_h_m: f64| {
+        column_momentum_to(
+            &field,
+            &centred,
+            dt,
+            rho_phi_kg_m3,
+            None,
+            radius_m,
+            (foot_h, bottom_h_m),
+        )
+    };
+    SampleMomenta {
+        window,
+        under_foot: column(f64::NEG_INFINITY),
+        under_foot_to_cone: column(foot_h - cone_depth_m(radius_m)),
+    }
 }
 
 /// The jammed cone's depth under a foot of radius `r_m` with sides at the paper's 60 degrees,

@@ -9,9 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::coarse::{
-    CoarseField, GridSpec, coarse_grain, column_momentum_under, cone_depth_m, momentum,
-};
+use super::coarse::{CoarseField, GridSpec, coarse_grain, sample_momenta};
 use super::intruder::{IntruderSpec, Trajectory};
 use super::params::DemParams;
 use super::render::SideCamera;
@@ -346,7 +344,7 @@ impl Run {
         let field = coarse_grain(&self.world, &self.grid, rho_plane);
         let d = derive(&field.u, &field.v);
         let bottom = self.spec.surface_m - depth;
-        let m = momentum(
+        let momenta = sample_momenta(
             &field,
             &self.grid,
             axis,
@@ -354,23 +352,11 @@ impl Run {
             rho_phi,
             (edges.0, edges.1, bottom),
         );
-        let column_to = |depth: Option<f64>| {
-            column_momentum_under(
-                &field,
-                &self.grid,
-                axis,
-                self.spec.surface_m,
-                rho_phi,
-                (edges.0, edges.1, bottom),
-                depth,
-            )
-        };
-        let column = column_to(None);
-        let cone = column_to(Some(cone_depth_m(0.5 * (edges.1 - edges.0))));
+        let m = momenta.window;
         // Momentum is computed height-up; the paper's P is along the intrusion (down).
         let (l, r, p) = (-m.left_kg_m_s, -m.right_kg_m_s, -m.momentum_kg_m_s);
-        let p_column = -column.momentum_kg_m_s;
-        let p_cone = -cone.momentum_kg_m_s;
+        let p_column = -momenta.under_foot.momentum_kg_m_s;
+        let p_cone = -momenta.under_foot_to_cone.momentum_kg_m_s;
         let max_shear = d
             .shear_rate
             .values

@@ -139,31 +139,34 @@ pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String>
 /// (finite: the foot moving fast enough), at their depth, for a foot of radius
 /// `foot_radius_m`.
 pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) -> f64 {
-    let mut ratios: Vec<f64> = flow
-        .iter()
-        .filter(|r| r.depth_m > 0.0 && r.added_mass_kg.is_finite())
-        .filter_map(|r| {
-            let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
-            (m > 0.0).then(|| r.added_mass_kg / m)
-        })
-        .collect();
-    if ratios.is_empty() {
-        return f64::NAN;
-    }
-    ratios.sort_by(f64::total_cmp);
-    ratios[ratios.len() / 2]
+    median(
+        flow.iter()
+            .filter(|r| r.depth_m > 0.0 && r.added_mass_kg.is_finite())
+            .filter_map(|r| {
+                let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
+                (m > 0.0).then(|| r.added_mass_kg / m)
+            })
+            .collect(),
+    )
+}
+
+/// The middle value (the upper one of an even count), NaN for none.
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 /// Median over the samples with the paper's added mass of the share of the column's momentum
 /// deeper than the jammed cone.
 fn beyond_cone_share(flow: &[FlowRow]) -> f64 {
-    let mut shares: Vec<f64> = flow
-        .iter()
-        .filter(|r| r.added_mass_kg.is_finite() && r.momentum_under_foot_kg_m_s > 0.0)
-        .map(|r| 1.0 - r.momentum_under_foot_to_cone_depth_kg_m_s / r.momentum_under_foot_kg_m_s)
-        .collect();
-    shares.sort_by(f64::total_cmp);
-    shares.get(shares.len() / 2).copied().unwrap_or(f64::NAN)
+    median(
+        flow.iter()
+            .filter(|r| r.added_mass_kg.is_finite() && r.momentum_under_foot_kg_m_s > 0.0)
+            .map(|r| {
+                1.0 - r.momentum_under_foot_to_cone_depth_kg_m_s / r.momentum_under_foot_kg_m_s
+            })
+            .collect(),
+    )
 }
 
 /// Write the finished run into `out` (from the work directory `work`, removed after).

@@ -138,6 +138,12 @@ impl Region {
     fn bounded(&self) -> bool {
         self.radius_m.is_finite()
     }
+
+    /// Whether pixel `(x, y)` lies within the column.
+    fn holds(&self, cal: &Calibration, x: isize, y: isize) -> bool {
+        let h = cal.h_m(y as f64);
+        cal.x_m(x as f64).abs() <= self.radius_m && h <= self.top_h_m && h >= self.bottom_h_m
+    }
 }
 
 fn momentum_in(
@@ -152,6 +158,7 @@ fn momentum_in(
     let da = cell * cell;
     let half = 0.5 * field.step_px as f64;
     let (mut left, mut right, mut cells) = (0.0, 0.0, 0);
+    let bounded = region.bounded();
     let usable = |k: usize| field.flag[k] != flag::MASKED && field.v[k].is_finite();
     for j in 0..field.ny {
         for i in 0..field.nx {
@@ -171,11 +178,7 @@ fn momentum_in(
             for y in y0..y1 {
                 for x in x0..x1 {
                     total += 1;
-                    if (y as f64) < cal.origin_px.1 - 0.5
-                        || cal.x_m(x as f64).abs() > region.radius_m
-                        || cal.h_m(y as f64) > region.top_h_m
-                        || cal.h_m(y as f64) < region.bottom_h_m
-                    {
+                    if (y as f64) < cal.origin_px.1 - 0.5 || (bounded && !region.holds(cal, x, y)) {
                         continue;
                     }
                     let masked = mask.is_some_and(|(m, w)| {
@@ -187,11 +190,13 @@ fn momentum_in(
                     });
                     if !masked {
                         grain += 1;
-                        let xm = cal.x_m(x as f64);
-                        if xm < 0.0 {
-                            r_left -= xm;
-                        } else {
-                            r_right += xm;
+                        if bounded {
+                            let xm = cal.x_m(x as f64);
+                            if xm < 0.0 {
+                                r_left -= xm;
+                            } else {
+                                r_right += xm;
+                            }
                         }
                     }
                 }
@@ -211,7 +216,7 @@ fn momentum_in(
             };
             let x = cal.x_m(xc);
             let w = -v_px * cal.m_per_px / dt_s;
-            if region.bounded() {
+            if bounded {
                 let pixel_area = cal.m_per_px * cal.m_per_px;
                 left += w * r_left * pixel_area;
                 right += w * r_right * pixel_area;
