@@ -1,0 +1,179 @@
+//! The virtual STM32F407 board: rigless's STM32F427 part (the F407's register-compatible
+//! superset at the addresses the F407 uses) with a 8 MHz crystal and a 3.3 V supply, and our
+//! models bound to the slots rigless leaves unmodelled: TIM7, the DAC, the four OTG FS blocks and
+//! the OTG FS FIFO window (0x5000_1000..0x5004_0000, a window the patched part leaves free).
+
+use std::num::{NonZeroU32, NonZeroU64};
+
+use rigless::device::{ErasedDevice, ResetCause};
+use rigless::machine::{Board, Target, armv7m};
+use rigless::mcu::{Mcu, Operate};
+use rigless::soc::stm32f427::Stm32f427;
+use rigless::soc::stm32f427::peripherals::rcc::Apb;
+use rigless::soc::{Bus, Window};
+use rigless::time::VirtualNanos;
+
+use crate::models::basic_timer::BasicTimer;
+use crate::models::dac::Dac;
+use crate::models::otg_fs::{OtgBlock, OtgFs};
+
+/// The external crystal, Hz (the Discovery board's).
+pub const HSE_HZ: u64 = 8_000_000;
+/// The supply rail, mV.
+pub const SUPPLY_MV: u32 = 3300;
+/// Where the OTG FS FIFOs start (RM0090 34.16: the FIFO of endpoint n at 0x1000 (n + 1)).
+pub const OTG_FS_FIFO_BASE: u64 = 0x5000_1000;
+/// Bytes of the FIFO window, up to the end of the OTG FS block.
+pub const OTG_FS_FIFO_SIZE: u64 = 0x5004_0000 - OTG_FS_FIFO_BASE;
+/// The core's interrupt line of OTG FS (RM0090 table 63).
+pub const OTG_FS_IRQ: u16 = 67;
+
+#[derive(Debug, Clone, Copy)]
+struct Slots {
+    tim7: usize,
+    dac: usize,
+    otg_global: usize,
+    otg_host: usize,
+    otg_device: usize,
+    otg_pwrclk: usize,
+    otg_fifo: usize,
+}
+
+/// The MCU: the part and our models, each bound to its slot.
+#[derive(Debug)]
+pub struct F407 {
+    /// rigless's part (its own models: RCC, GPIO, TIM2-5, ADC, IWDG, DWT, flash, ...).
+    pub part: Stm32f427,
+    /// TIM7, the control tick.
+    pub tim7: BasicTimer,
+    /// The DAC: the drive's force command (channel 1) and the blower (channel 2).
+    pub dac: Dac,
+    /// The USB OTG FS core and its virtual host.
+    pub otg: OtgFs,
+    slots: Slots,
+}
+
+impl F407 {
+    /// The part out of reset with the board's crystal and supply attached.
+    pub fn new() -> Result<Self, rigless::soc::Error> {
+        let mut part = Stm32f427::new()?;
+        part.rcc.attach_crystals(HSE_HZ, 0);
+        part.set_supply(SUPPLY_MV);
+        for adc in &mut part.adc {
+            adc.set_reference(SUPPLY_MV);
+        }
+        let size = NonZeroU64::new(OTG_FS_FIFO_SIZE).expect("non-zero");
+        static OTG_FS_LINES: [u16; 1] = [OTG_FS_IRQ];
+        let otg_fifo = part.bus_mut().add_window(
+            Window::new("OTG_FS_FIFO", OTG_FS_FIFO_BASE, size).raising(&OTG_FS_LINES),
+        )?;
+        let bus = part.bus();
+        let slots = Slots {
+            tim7: bus.slot("TIM7")?,
+            dac: bus.slot("DAC")?,
+            otg_global: bus.slot("OTG_FS_GLOBAL")?,
+            otg_host: bus.slot("OTG_FS_HOST")?,
+            otg_device: bus.slot("OTG_FS_DEVICE")?,
+            otg_pwrclk: bus.slot("OTG_FS_PWRCLK")?,
+            otg_fifo,
+        };
+        Ok(Self {
+            part,
+            tim7: BasicTimer::default(),
+            dac: Dac::default(),
+            otg: OtgFs::default(),
+            slots,
+        })
+    }
+}
+
+impl Mcu for F407 {
+    fn bus(&self) -> &Bus {
+        self.part.bus()
+    }
+    fn bus_mut(&mut self) -> &mut Bus {
+        self.part.bus_mut()
+    }
+    fn reset(&mut self, at: VirtualNanos, cause: ResetCause) {
+        self.part.reset(at, cause);
+        rigless::device::Device::reset(&mut self.tim7);
+        rigless::device::Device::reset(&mut self.dac);
+        self.otg.reset();
+    }
+    fn poll(&mut self, now: VirtualNanos) {
+        self.part.poll(now);
+    }
+    fn split(&mut self, slot: usize) -> (&mut Bus, Option<&mut dyn ErasedDevice>) {
+        let s = self.slots;
+        let block = if slot == s.tim7 {
+            let (rcc, regs) = self.part.clocks();
+            self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
+            return (self.part.bus_mut(), Some(&mut self.tim7));
+        } else if slot == s.dac {
+            return (self.part.bus_mut(), Some(&mut self.dac));
+        } else if slot == s.otg_global {
+            OtgBlock::Global
+        } else if slot == s.otg_host {
+            OtgBlock::Host
+        } else if slot == s.otg_device {
+            OtgBlock::Device
+        } else if slot == s.otg_pwrclk {
+            OtgBlock::PowerClock
+        } else if slot == s.otg_fifo {
+            OtgBlock::Fifo
+        } else {
+            return self.part.split(slot);
+        };
+        if self.otg.block(block).is_none() {
+            // A block the USB model leaves to the part (rigless's own partial, or none).
+            return self.part.split(slot);
+        }
+        (self.part.bus_mut(), self.otg.block(block))
+    }
+}
+
+/// The board: one target, the F407.
+#[derive(Debug)]
+pub struct VirtualF407 {
+    /// The MCU.
+    pub mcu: F407,
+}
+
+impl rigless::snapshot::Store for VirtualF407 {}
+
+impl VirtualF407 {
+    /// A board with nothing wired to its pins yet.
+    pub fn new() -> Result<Self, rigless::soc::Error> {
+        Ok(Self { mcu: F407::new()? })
+    }
+}
+
+impl Board for VirtualF407 {
+    fn name(&self) -> &'static str {
+        "virtual-f407"
+    }
+    fn target_names(&self) -> Vec<&'static str> {
+        vec!["stm32f407"]
+    }
+    fn mcu(&mut self, target: usize) -> Option<&mut dyn Mcu> {
+        (target == 0).then_some(&mut self.mcu)
+    }
+    fn targets(&mut self) -> Vec<Target<'_>> {
+        let core = armv7m::Core {
+            variant: armv7m::Variant::M4,
+            clock_hz: NonZeroU64::new(168_000_000).expect("non-zero"),
+            interrupt_lines: NonZeroU32::new(u32::from(self.mcu.cpu().interrupt_lines))
+                .expect("lines"),
+            priority_bits: 4,
+            refclk_divider: NonZeroU32::new(8).expect("non-zero"),
+            instructions_per_second: armv7m::INSTRUCTIONS_PER_SECOND,
+            boot: "flash",
+        }
+        .spec_with_parts(
+            &rigless::cpu::armv7m::windows(self.mcu.bus()),
+            armv7m::Fpu::FpV4Sp,
+            armv7m::MpuRegions::Eight,
+        );
+        vec![Target::new("stm32f407", &mut self.mcu, core)]
+    }
+}

@@ -1,0 +1,225 @@
+//! `virtual-f407`: the rig's F407 firmware ELF on the virtual board.
+//!
+//! ```text
+//! virtual-f407 --elf ELF [--ms N] [--bed ready|unwired] [--pace X] [--stdio]
+//!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
+//! ```
+//! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
+//! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
+//! `--ms`). The firmware's log goes to stderr. Exit status 2 on bad input.
+
+use std::io::{Read, Write};
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+
+use sandjumper_virtual_f407::rig::{BedWiring, Robot};
+use sandjumper_virtual_f407::run::{self, HostPort, NoHost, RunConfig, RunReport};
+
+fn fail(msg: impl std::fmt::Display) -> ! {
+    eprintln!("virtual-f407: {msg}");
+    std::process::exit(2);
+}
+
+/// The USB CDC port on stdin/stdout.
+struct Stdio {
+    rx: Receiver<Vec<u8>>,
+    out: std::io::Stdout,
+}
+
+impl HostPort for Stdio {
+    fn receive(&mut self) -> Option<Vec<u8>> {
+        let mut all = Vec::new();
+        loop {
+            match self.rx.try_recv() {
+                Ok(b) => all.extend(b),
+                Err(TryRecvError::Empty) => return Some(all),
+                Err(TryRecvError::Disconnected) => {
+                    return if all.is_empty() { None } else { Some(all) };
+                }
+            }
+        }
+    }
+    fn send(&mut self, bytes: &[u8]) {
+        let mut out = self.out.lock();
+        let _ = out.write_all(bytes);
+        let _ = out.flush();
+    }
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let mut elf: Option<PathBuf> = None;
+    let mut ms: Option<u64> = None;
+    let mut bed = BedWiring::READY;
+    let mut pace = None;
+    let mut stdio = false;
+    let mut robot_params: Option<PathBuf> = None;
+    let mut model = "eq4".to_string();
+    let mut p0 = 0.0;
+    let mut summary: Option<PathBuf> = None;
+    while let Some(a) = args.next() {
+        let mut value = |name: &str| {
+            args.next()
+                .unwrap_or_else(|| fail(format!("{name} needs a value")))
+        };
+        match a.as_str() {
+            "--elf" => elf = Some(value("--elf").into()),
+            "--ms" => {
+                ms = Some(
+                    value("--ms")
+                        .parse()
+                        .unwrap_or_else(|_| fail("--ms: a whole number of virtual milliseconds")),
+                )
+            }
+            "--bed" => {
+                bed = match value("--bed").as_str() {
+                    "ready" => BedWiring::READY,
+                    "unwired" => BedWiring::Unwired,
+                    other => fail(format!("--bed {other}: allowed ready, unwired")),
+                }
+            }
+            "--pace" => {
+                let x: f64 = value("--pace")
+                    .parse()
+                    .unwrap_or_else(|_| fail("--pace: a number > 0 (1 = real time)"));
+                if !(x > 0.0 && x.is_finite()) {
+                    fail("--pace: a number > 0 (1 = real time)");
+                }
+                pace = Some(x);
+            }
+            "--stdio" => stdio = true,
+            "--robot" => robot_params = Some(value("--robot").into()),
+            "--model" => model = value("--model"),
+            "--p0" => {
+                p0 = value("--p0")
+                    .parse()
+                    .unwrap_or_else(|_| fail("--p0: metres"))
+            }
+            "--summary" => summary = Some(value("--summary").into()),
+            "-h" | "--help" => {
+                println!(
+                    "{}",
+                    include_str!("main.rs")
+                        .lines()
+                        .skip(2)
+                        .take(8)
+                        .map(|l| l.trim_start_matches("//! "))
+                        .collect::<Vec<_>>()
+                        .join("\n")
+                );
+                return;
+            }
+            other => fail(format!("unknown argument {other} (see --help)")),
+        }
+    }
+    let Some(elf) = elf else {
+        fail(
+            "--elf ELF is required (the F407 release build: target/thumbv7em-none-eabihf/release/sandjumper-firmware)",
+        )
+    };
+    if !stdio && ms.is_none() {
+        fail("give --ms N (virtual milliseconds) or --stdio");
+    }
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = ms.map(|m| m * 1_000_000);
+    if let Ok(p) = std::env::var("VIRTUAL_F407_PERIOD_NS") {
+        cfg.period_ns = p
+            .parse()
+            .unwrap_or_else(|_| fail("VIRTUAL_F407_PERIOD_NS: ns"));
+    }
+    cfg.bed = bed;
+    cfg.pace = pace;
+    if let Some(path) = robot_params {
+        let text = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| fail(format!("--robot {}: {e}", path.display())));
+        let params: sandjumper_model::params::Params = toml::from_str(&text)
+            .unwrap_or_else(|e| fail(format!("--robot {}: {e}", path.display())));
+        let model: sandjumper_model::params::ModelName = model
+            .parse()
+            .unwrap_or_else(|e| fail(format!("--model {model}: {e}")));
+        cfg.robot = Some(
+            Robot::new(&params, model, p0).unwrap_or_else(|e| fail(format!("the robot: {e}"))),
+        );
+    }
+    let report = if stdio {
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let mut stdin = std::io::stdin();
+            let mut buf = [0u8; 4096];
+            while let Ok(n @ 1..) = stdin.read(&mut buf) {
+                if tx.send(buf[..n].to_vec()).is_err() {
+                    break;
+                }
+            }
+        });
+        run::run(
+            cfg,
+            Stdio {
+                rx,
+                out: std::io::stdout(),
+            },
+        )
+        .map(|(r, _)| r)
+    } else {
+        run::run(cfg, NoHost::default()).map(|(r, _)| r)
+    };
+    let report = report.unwrap_or_else(|e| fail(e));
+    print_report(&report, stdio);
+    if let Some(path) = summary {
+        std::fs::write(&path, summary_json(&report))
+            .unwrap_or_else(|e| fail(format!("--summary {}: {e}", path.display())));
+    }
+}
+
+fn print_report(r: &RunReport, stdio: bool) {
+    let mut err = std::io::stderr();
+    for line in &r.log {
+        let _ = writeln!(err, "firmware: {line}");
+    }
+    let _ = writeln!(
+        err,
+        "virtual-f407: {:.3} s virtual in {:.3} s wall ({:.2}x real time); SYSCLK {} Hz, 48 MHz domain {} Hz; stop {}",
+        r.end_ns as f64 * 1e-9,
+        r.wall_s,
+        r.end_ns as f64 * 1e-9 / r.wall_s.max(1e-9),
+        r.clocks_hz.0,
+        r.clocks_hz.1,
+        r.stop
+    );
+    if let Some(last) = r.last {
+        let _ = writeln!(
+            err,
+            "virtual-f407: outputs at the end {:?}; ticks {}; usb configured {}",
+            last.out, last.ticks, last.usb_configured
+        );
+    }
+    for g in &r.gaps {
+        let _ = writeln!(err, "virtual-f407: {g}");
+    }
+    for (t, c) in &r.resets {
+        let _ = writeln!(err, "virtual-f407: reset at {t} ns: {c}");
+    }
+    let _ = stdio;
+}
+
+fn summary_json(r: &RunReport) -> String {
+    let jump = r
+        .robot
+        .as_ref()
+        .map(|robot| robot.plant().summary().jump_height_m);
+    let num = |x: Option<f64>| {
+        x.filter(|v| v.is_finite())
+            .map_or("null".to_string(), |v| format!("{v}"))
+    };
+    format!(
+        "{{\n  \"virtual_s\": {},\n  \"wall_s\": {},\n  \"jump_height_m\": {},\n  \"plant_error\": {},\n  \"encoder_deferred_counts\": {},\n  \"log_lines\": {}\n}}\n",
+        r.end_ns as f64 * 1e-9,
+        r.wall_s,
+        num(jump),
+        r.plant_error
+            .as_ref()
+            .map_or("null".into(), |e| format!("{e:?}")),
+        r.encoder_deferred_counts,
+        r.log.len()
+    )
+}

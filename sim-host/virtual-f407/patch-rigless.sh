@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# rigless 0.4.0 as the virtual board builds it: the crate from crates.io (checksum verified
+# against Cargo.lock), with rigless-0.4.0.patch applied, in patched/rigless-0.4.0 (what
+# Cargo.toml's [patch.crates-io] names). The patch is two corrections of the STM32F427's tables
+# the USB model needs (see README.md): never a vendored copy. Idempotent.
+set -euo pipefail
+cd "$(dirname "$0")"
+version=0.4.0
+dest=patched/rigless-$version
+stamp=$dest/.sandjumper-patch
+want=$(sha256sum rigless-$version.patch | cut -d' ' -f1)
+if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+  exit 0
+fi
+checksum=$(awk '/^name = "rigless"$/ {f=1} f && /^checksum/ {gsub(/"/, "", $3); print $3; exit}' Cargo.lock)
+if [ -z "$checksum" ]; then
+  echo "patch-rigless: no checksum for rigless in Cargo.lock" >&2
+  exit 2
+fi
+crate=""
+for c in "${CARGO_HOME:-$HOME/.cargo}"/registry/cache/*/rigless-$version.crate; do
+  if [ -f "$c" ] && [ "$(sha256sum "$c" | cut -d' ' -f1)" = "$checksum" ]; then
+    crate=$c
+    break
+  fi
+done
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [ -z "$crate" ]; then
+  crate=$tmp/rigless-$version.crate
+  curl -fsSL --retry 3 -o "$crate" "https://static.crates.io/crates/rigless/rigless-$version.crate"
+fi
+got=$(sha256sum "$crate" | cut -d' ' -f1)
+if [ "$got" != "$checksum" ]; then
+  echo "patch-rigless: $crate has sha256 $got, Cargo.lock says $checksum" >&2
+  exit 2
+fi
+tar xzf "$crate" -C "$tmp"
+(cd "$tmp/rigless-$version" && patch -p1 --quiet < "$OLDPWD/rigless-$version.patch")
+rm -rf "$dest"
+mkdir -p patched
+mv "$tmp/rigless-$version" "$dest"
+echo "$want" > "$stamp"
+echo "patch-rigless: $dest ready (rigless $version + rigless-$version.patch)" >&2
