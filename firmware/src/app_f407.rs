@@ -192,7 +192,9 @@ mod app {
         // The sensors first, at a fixed time after the tick starts, whatever the host sent.
         let encoder_raw = io.encoder_count();
         let current_code = io.current_sense_code();
-        rig.set_bed_inputs(io.bed_inputs());
+        if let Some(bed) = io.bed_inputs() {
+            rig.set_bed_inputs(bed);
+        }
         let fault_before = rig.fault();
         let dropped = INBOUND_DROPPED.swap(0, Ordering::Relaxed);
         if dropped > 0 {

@@ -18,7 +18,9 @@
 //! the board must hold the drive's enable line low with an external pull-down (see
 //! `docs/firmware.md`, wiring).
 
-use crate::board::f407::{DAC_DHR12R1, DRIVE_ENABLE_PIN, GPIOE_BSRR, force_safe_state};
+use crate::board::f407::{
+    DAC_DHR12R1, DAC_DHR12R2, ENABLES_OFF, GPIOE_BSRR, TIM3_CCR1, force_safe_state,
+};
 use crate::drive::ZERO_FORCE_CODE;
 use cortex_m::peripheral::DCB;
 use defmt_rtt as _;
@@ -41,7 +43,8 @@ fn defmt_panic() -> ! {
 
 // The HardFault vector (cortex-m-rt's vector table takes the `HardFault` symbol). Registers
 // only until the stack pointer is valid again:
-//   1. drive enable low (GPIOE BSRR reset bit), 2. DAC to the zero-force code,
+//   1. drive and lift enables low (GPIOE BSRR reset bits), 2. DAC channel 1 to the zero-force
+//   code, channel 2 (blower) to 0 V, TIM3 CCR1 (shaker duty) to 0,
 //   3. r0 = the faulting stack pointer, MSP = the top of the stack, 4. branch to Rust.
 core::arch::global_asm!(
     ".section .HardFault.user, \"ax\"",
@@ -56,14 +59,21 @@ core::arch::global_asm!(
     "ldr r0, ={dac}",
     "ldr r1, ={zero}",
     "str r1, [r0]",
+    "ldr r0, ={blower}",
+    "movs r1, #0",
+    "str r1, [r0]",
+    "ldr r0, ={shaker}",
+    "str r1, [r0]",
     "mrs r0, msp",
     "ldr r1, =_stack_start",
     "msr msp, r1",
     "b {after}",
     ".ltorg",
     bsrr = const GPIOE_BSRR,
-    enable_off = const 1u32 << (16 + DRIVE_ENABLE_PIN),
+    enable_off = const ENABLES_OFF,
     dac = const DAC_DHR12R1,
+    blower = const DAC_DHR12R2,
+    shaker = const TIM3_CCR1,
     zero = const ZERO_FORCE_CODE as u32,
     after = sym hard_fault_after_safe,
 );
@@ -93,6 +103,22 @@ unsafe extern "C" fn hard_fault_after_safe(faulting_sp: u32) -> ! {
             faulting_sp
         );
     }
+    if DCB::is_debugger_attached() {
+        cortex_m::asm::bkpt();
+    }
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// Any interrupt or exception without a handler of its own (a vector the firmware never meant
+/// to enable): the whole safe state, a report, then the same stop as a HardFault (the watchdog
+/// resets the chip).
+#[cortex_m_rt::exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    cortex_m::interrupt::disable();
+    force_safe_state();
+    defmt::error!("unexpected exception or interrupt {=i16}", irqn);
     if DCB::is_debugger_attached() {
         cortex_m::asm::bkpt();
     }

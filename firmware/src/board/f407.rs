@@ -17,6 +17,7 @@
 //! | lift motor enable / direction | PE10 / PE11, push-pull | enable active high (low on reset, fit a pull-down); direction high = up |
 //! | lift limit switches up / down | PE12 / PE13, inputs with pull-up | switch closes to ground at its limit (low = at the limit) |
 //! | emergency stop | PE14, input with pull-up | normally-closed contact to ground: pressed **or a broken wire** reads high = stop |
+//! | bed apparatus present | PE15, input with pull-up | the apparatus's harness ties it to ground: until it has read low once since reset the apparatus is absent (its inputs are not reported, so a board with nothing wired is Idle and can be armed); once seen, losing it reads as the emergency stop (a harness pulled out is a stop) |
 //! | bed height sensor | PA2, ADC2 channel 2 | the laser distance sensor's 0..3.3 V output, raw 12-bit code to the host (sampled at the end of each tick) |
 //! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
 //! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick; keeps counting while the core is halted by a debugger |
@@ -29,7 +30,7 @@ use stm32f4xx_hal::{
     dac::{C1, C2, DacExt, DacOut, DacPin},
     gpio::{
         Analog, Input, Output, PA1, PA2, PD12, PD14, PE3, PE7, PE8, PE9, PE10, PE11, PE12, PE13,
-        PE14, PushPull,
+        PE14, PE15, PushPull,
     },
     pac,
     prelude::*,
@@ -103,6 +104,14 @@ pub const WATCHDOG_MS: u32 = 10;
 
 /// Drive enable: GPIOE pin 7.
 pub const DRIVE_ENABLE_PIN: u32 = 7;
+/// Lift motor enable: GPIOE pin 10.
+pub const LIFT_ENABLE_PIN: u32 = 10;
+/// The GPIOE BSRR word that drives both enables (drive, lift) low in one write.
+pub const ENABLES_OFF: u32 = (1 << (16 + DRIVE_ENABLE_PIN)) | (1 << (16 + LIFT_ENABLE_PIN));
+/// The DAC's channel-2 12-bit right-aligned data register (the blower's flow command).
+pub const DAC_DHR12R2: u32 = 0x4000_7400 + 0x14;
+/// TIM3's capture/compare register 1 (the shaker's PWM duty, RM0090 18.4.13).
+pub const TIM3_CCR1: u32 = 0x4000_0400 + 0x34;
 /// GPIOE's bit set/reset register (RM0090 8.4.7), for writes that need no HAL state.
 pub const GPIOE_BSRR: u32 = 0x4002_1000 + 0x18;
 /// The DAC's channel-1 12-bit right-aligned data register (RM0090 14.5.3).
@@ -128,19 +137,21 @@ pub fn take_reset_cause() -> ResetCause {
     }
 }
 
-/// Drive the actuator to a safe state with raw register writes: usable from the panic and
-/// HardFault handlers, whatever state the HAL objects are in. Disables the drive first, then
-/// sets the DAC to the zero-force code.
+/// The whole safe state with raw register writes, usable from the panic, HardFault and default
+/// handlers whatever state the HAL objects are in: drive and lift enables low (one write), the
+/// drive's DAC at the zero-force code, the blower's DAC at 0 V, the shaker's PWM duty at zero.
 pub fn force_safe_state() {
-    // SAFETY: single writes to the GPIOE bit set/reset register and the DAC data register;
-    // both are write-only side-effect-free for other pins/channels, and the handlers that call
-    // this never return to the code that owns those peripherals.
+    // SAFETY: single writes to the GPIOE bit set/reset register, the two DAC data registers and
+    // TIM3's compare register 1; each touches only the rig's own pin or channel, and the handlers
+    // that call this never return to the code that owns those peripherals.
     unsafe {
         let gpioe = &*pac::GPIOE::ptr();
-        gpioe.bsrr().write(|w| w.bits(1 << (16 + DRIVE_ENABLE_PIN)));
+        gpioe.bsrr().write(|w| w.bits(ENABLES_OFF));
         let dac = &*pac::DAC::ptr();
         dac.dhr12r1()
             .write(|w| w.daccdhr().bits(drive::ZERO_FORCE_CODE));
+        dac.dhr12r2().write(|w| w.daccdhr().bits(0));
+        (*pac::TIM3::ptr()).ccr1().write(|w| w.bits(0));
     }
 }
 
@@ -203,6 +214,8 @@ pub struct RigIo {
     lift_up_limit: PE12<Input>,
     lift_down_limit: PE13<Input>,
     emergency_stop: PE14<Input>,
+    bed_present: PE15<Input>,
+    bed_seen: bool,
     height_adc: BedHeightAdc,
     _height_pin: PA2<Analog>,
     _mems_cs: PE3<Output<PushPull>>,
@@ -236,6 +249,16 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     let (mut force_dac, mut blower_dac) = dp
         .DAC
         .constrain((gpioa.pa4.into_analog(), gpioa.pa5.into_analog()), &mut rcc);
+    // Output buffers off (BOFF1, BOFF2): buffered, the DAC is linear only from 0.2 V to
+    // VDDA - 0.2 V (DS8626 table 70), which would cut the force range to about +-260 N unseen
+    // and leave the blower at 0.6 V when off. The drive's and the blower's input stages are
+    // high-impedance op-amp stages, which the unbuffered output (~15 kOhm) drives.
+    // SAFETY: a read-modify-write of DAC_CR's two BOFF bits before either channel is enabled.
+    unsafe {
+        (*pac::DAC::ptr())
+            .cr()
+            .modify(|_, w| w.boff1().set_bit().boff2().set_bit());
+    }
     force_dac.set_value(drive::ZERO_FORCE_CODE);
     force_dac.enable();
     // The bed apparatus: everything off.
@@ -310,6 +333,17 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     // hold the force (the watchdog resets the chip and the enable line drops).
     watchdog.stop_on_debug(&dp.DBGMCU, false);
     watchdog.start(WATCHDOG_MS.millis());
+    // The counter starts from 0xFFF at the new prescaler (~8 s) and takes the new reload only
+    // at the first refresh: refresh as soon as the prescaler and reload have reached the LSI
+    // domain (PVU, RVU clear: at most 5 LSI periods, ~160 us), so a hang before the first tick
+    // resets the chip within one watchdog period.
+    // SAFETY: reads of IWDG_SR.
+    let iwdg_sr = unsafe { &(*pac::IWDG::ptr()).sr() };
+    let mut spins: u32 = 0;
+    while iwdg_sr.read().bits() & 0b11 != 0 && spins < SYSCLK_HZ / 1_000 {
+        spins += 1;
+    }
+    watchdog.feed();
 
     Parts {
         io: RigIo {
@@ -329,6 +363,8 @@ pub fn init(dp: pac::Peripherals) -> Parts {
             lift_up_limit: gpioe.pe12.into_pull_up_input(),
             lift_down_limit: gpioe.pe13.into_pull_up_input(),
             emergency_stop: gpioe.pe14.into_pull_up_input(),
+            bed_present: gpioe.pe15.into_pull_up_input(),
+            bed_seen: false,
             height_adc,
             _height_pin: height_pin,
             _mems_cs: mems_cs,
@@ -407,17 +443,24 @@ impl RigIo {
 
     /// The bed apparatus's inputs (limit switches low at their limit; the emergency stop's
     /// normally-closed contact reads high when pressed or broken), and starts the next
-    /// bed-height conversion.
+    /// bed-height conversion. `None` until the apparatus's presence line (PE15) has read low
+    /// once since reset: a board with nothing wired has no apparatus. Once seen, a presence
+    /// line that goes high reads as the emergency stop.
     #[inline(always)]
-    pub fn bed_inputs(&mut self) -> BedInputs {
+    pub fn bed_inputs(&mut self) -> Option<BedInputs> {
+        let present = self.bed_present.is_low();
+        self.bed_seen |= present;
+        if !self.bed_seen {
+            return None;
+        }
         let inputs = BedInputs {
             lift_up_limit: self.lift_up_limit.is_low(),
             lift_down_limit: self.lift_down_limit.is_low(),
-            emergency_stop: self.emergency_stop.is_high(),
+            emergency_stop: self.emergency_stop.is_high() || !present,
             height_raw: self.height_adc.read(),
         };
         self.height_adc.start();
-        inputs
+        Some(inputs)
     }
 
     /// Applies the bed apparatus's outputs.

@@ -3,7 +3,8 @@
 //! gain stage (0 V -> -300 N, 1.65 V -> 0 N, 3.3 V -> +300 N) gated by its enable (PE7), the
 //! linear encoder into TIM2, the motor current monitor on PA1 (ADC1 channel 1), the bed's lift
 //! limit switches (PE12 up, PE13 down: closed to ground at the limit), the emergency stop's
-//! normally-closed contact (PE14: to ground while released), the bed-height sensor (PA2, ADC2
+//! normally-closed contact (PE14: to ground while released), the harness's presence line
+//! (PE15: to ground while the apparatus is connected), the bed-height sensor (PA2, ADC2
 //! channel 2), and the outputs the bed apparatus reads: blower (DAC channel 2), shaker (PC6,
 //! TIM3 CH1), lift enable and direction (PE10, PE11), camera trigger (PE9), tick heartbeat (PE8).
 
@@ -36,9 +37,9 @@ pub const METRES_PER_COUNT: f64 = 1e-6;
 /// What is connected to the bed apparatus's inputs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BedWiring {
-    /// Nothing: PE12-PE14 float (their pull-ups read high), PA2 floats (0 V here).
+    /// Nothing: PE12-PE15 float (their pull-ups read high), PA2 floats (0 V here).
     Unwired,
-    /// The apparatus: the lift resting on its lower switch, the e-stop released.
+    /// The apparatus's harness, which ties the presence line PE15 to ground.
     Connected {
         /// E-stop pressed (or its wire broken).
         emergency_stop: bool,
@@ -128,7 +129,7 @@ pub fn outputs(mcu: &mut F407) -> Outputs {
 pub fn drive_bed_inputs(part: &mut Stm32f427, at: VirtualNanos, wiring: BedWiring, height_mv: u32) {
     let closed = |c: bool| if c { Some(Level::Low) } else { None };
     let levels = match wiring {
-        BedWiring::Unwired => [None, None, None],
+        BedWiring::Unwired => [None, None, None, None],
         BedWiring::Connected {
             emergency_stop,
             lift_up_limit,
@@ -142,9 +143,11 @@ pub fn drive_bed_inputs(part: &mut Stm32f427, at: VirtualNanos, wiring: BedWirin
             } else {
                 Some(Level::Low)
             },
+            // The harness's presence line.
+            Some(Level::Low),
         ],
     };
-    for (pin, level) in [12u8, 13, 14].into_iter().zip(levels) {
+    for (pin, level) in [12u8, 13, 14, 15].into_iter().zip(levels) {
         part.drive_port(at, PORT_E, |gpio, regs, cx| {
             gpio.drive(Pin::new(pin).expect("pin"), level, regs, cx)
         });

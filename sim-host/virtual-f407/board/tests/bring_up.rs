@@ -1,0 +1,133 @@
+//! The F407 release binary on the virtual board, nothing but power and wiring: clocks, the
+//! tick, the first power-up, the DAC's outputs, determinism. Observed at the pins and in
+//! virtual time, as a scope on the real board would.
+
+mod common;
+
+use sandjumper_virtual_f407::rig::BedWiring;
+use sandjumper_virtual_f407::run::{NoHost, RunConfig, RunReport, run};
+
+fn run_for(ms: u64, bed: BedWiring, trace_every: u64) -> Option<RunReport> {
+    let elf = common::firmware_elf()?;
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(ms * 1_000_000);
+    cfg.bed = bed;
+    cfg.trace_every = trace_every;
+    Some(run(cfg, NoHost::default()).expect("the run").0)
+}
+
+#[test]
+fn clocks_from_the_registers_and_an_exact_10_khz_tick() {
+    let Some(r) = run_for(1000, BedWiring::READY, 1) else {
+        return;
+    };
+    assert_eq!(
+        r.clocks_hz,
+        (168_000_000, 48_000_000),
+        "SYSCLK and the USB clock"
+    );
+    let boot = &r.log[0];
+    assert!(
+        boot.contains("tick 10000 Hz") && boot.contains("reset cause PowerOn"),
+        "{boot}"
+    );
+    // Ticks counted at 100 ms and at 1 s: exactly 10 per ms between them.
+    let at = |t_ms: u64| {
+        r.trace
+            .iter()
+            .find(|row| row.t_ns >= t_ms * 1_000_000)
+            .expect("a trace row")
+            .ticks
+    };
+    assert_eq!(
+        at(900) - at(100),
+        8_000,
+        "TIM7 updates between 100 ms and 900 ms"
+    );
+    assert!(
+        r.gaps
+            .iter()
+            .all(|g| !g.contains("TIM7") && !g.contains("\"DAC\"")),
+        "{:?}",
+        r.gaps
+    );
+}
+
+#[test]
+fn first_power_up_with_nothing_wired_is_idle_and_safe() {
+    let Some(r) = run_for(100, BedWiring::Unwired, 1) else {
+        return;
+    };
+    let last = r.last.expect("ran");
+    assert!(
+        !last.out.led_fault,
+        "the fault LED (PD14) is lit with nothing wired: the floating bed inputs read as a fault"
+    );
+    assert!(!last.out.drive_enable && !last.out.lift_enable);
+    // The heartbeat (PE8) toggles at every tick: it differs between consecutive 100 us stops
+    // once the tick runs.
+    let toggles = r
+        .trace
+        .windows(2)
+        .filter(|w| w[0].out.heartbeat != w[1].out.heartbeat)
+        .count();
+    assert!(
+        toggles > 900,
+        "heartbeat toggles between 100 us stops over 100 ms: {toggles}"
+    );
+}
+
+#[test]
+fn the_apparatus_connected_is_idle_and_its_emergency_stop_trips_it() {
+    let Some(r) = run_for(60, BedWiring::READY, 0) else {
+        return;
+    };
+    assert!(
+        !r.last.expect("ran").out.led_fault,
+        "the ready apparatus shows a fault"
+    );
+    let pressed = BedWiring::Connected {
+        emergency_stop: true,
+        lift_up_limit: false,
+        lift_down_limit: true,
+    };
+    let Some(r) = run_for(60, pressed, 0) else {
+        return;
+    };
+    let out = r.last.expect("ran").out;
+    assert!(
+        out.led_fault,
+        "the emergency stop pressed does not show as a fault"
+    );
+    assert!(out.drive_and_lift_safe());
+}
+
+#[test]
+fn the_dac_outputs_reach_the_rails_zero_force_and_blower_off() {
+    let Some(r) = run_for(20, BedWiring::READY, 0) else {
+        return;
+    };
+    let out = r.last.expect("ran").out;
+    assert!(
+        (out.force_dac_v - 1.65).abs() < 1e-3,
+        "zero force is 1.65 V: {}",
+        out.force_dac_v
+    );
+    assert!(
+        out.blower_dac_v < 1e-3,
+        "the blower off must be 0 V (the output buffer keeps it at 0.2 V = 0.6 V of flow command): {} V",
+        out.blower_dac_v
+    );
+}
+
+#[test]
+fn two_runs_are_identical() {
+    let Some(a) = run_for(50, BedWiring::READY, 1) else {
+        return;
+    };
+    let Some(b) = run_for(50, BedWiring::READY, 1) else {
+        return;
+    };
+    assert_eq!(a.trace, b.trace);
+    assert_eq!(a.log, b.log);
+}
