@@ -331,6 +331,17 @@ fn bad_input_exits_2_with_a_message() {
             "cannot be used with",
         ),
         (
+            vec![
+                "rig",
+                "status",
+                "--link",
+                "f407",
+                "--virtual-board",
+                "/nonexistent/virtual-f407",
+            ],
+            "sim-host/virtual-f407/build.sh",
+        ),
+        (
             vec!["rig", "status", "--port", "/nonexistent/tty"],
             "/nonexistent/tty",
         ),

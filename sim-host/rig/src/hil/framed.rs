@@ -339,6 +339,7 @@ impl RigLink for FramedLink {
                 .filter(|_| exit_code.is_some()),
             exit_code,
             host_frames_rejected: self.host_frames_rejected,
+            simulated_jump_height_m: None,
         })
     }
 }

@@ -69,6 +69,8 @@ pub struct LinkReport {
     pub exit_code: Option<i32>,
     /// Frames from the controller the host could not decode (bad CRC, malformed, ...).
     pub host_frames_rejected: u32,
+    /// The jump height of the plant a virtual board moved (`--link f407`), m.
+    pub simulated_jump_height_m: Option<f64>,
 }
 
 impl LinkReport {

@@ -5,7 +5,8 @@
 //!   and a camera (docs/model.md sections 1 and 6).
 //! - [`link`]: [`RigLink`], the one interface to the controller; [`sil`] (the core in this
 //!   process), [`framed`] (the wire protocol over a byte stream) used by [`pil`] (the real
-//!   firmware in QEMU) and [`serial`] (a real F407 over USB CDC).
+//!   firmware in QEMU) and [`serial`] (a real F407 over USB CDC); [`virtual_board`] (the F407
+//!   release binary on the virtual board, `--link f407`).
 //! - [`run`]: one jump through the loop; [`log`]: its acquisition log and figure;
 //!   [`open`]: which link and opening it (`sandjumper hil` lives in the CLI crate);
 //!   [`loop_margins`]: the position loop's stability margins
@@ -24,6 +25,7 @@ pub mod rig_model;
 pub mod run;
 pub mod serial;
 pub mod sil;
+pub mod virtual_board;
 
 pub use link::{LinkError, LinkReport, RigLink};
 pub use rig_model::{CameraFrame, DacScaling, EncoderInjection, RigModel, RigModelConfig};

@@ -21,6 +21,9 @@ pub enum LinkArg {
     Sil,
     /// The firmware in QEMU over semihosting FIFOs.
     Pil,
+    /// The F407 release ELF on the virtual board (free-running, coupled through its
+    /// peripherals).
+    F407,
     /// A board on a serial port.
     Serial(String),
 }
@@ -30,10 +33,11 @@ pub fn parse_link(s: &str) -> Result<LinkArg, String> {
     match s {
         "sil" => Ok(LinkArg::Sil),
         "pil" => Ok(LinkArg::Pil),
+        "f407" => Ok(LinkArg::F407),
         _ => match s.strip_prefix("serial:") {
             Some(path) if !path.is_empty() => Ok(LinkArg::Serial(path.to_string())),
             _ => Err(format!(
-                "unknown link `{s}` (allowed: sil, pil, serial:PATH e.g. serial:/dev/ttyACM0)"
+                "unknown link `{s}` (allowed: sil, pil, f407, serial:PATH e.g. serial:/dev/ttyACM0)"
             )),
         },
     }
@@ -62,6 +66,11 @@ pub fn open_link(
         LinkArg::Pil => {
             check_elf(firmware, Board::Emulated).map_err(|e| CliError::input(e.to_string()))?;
             Box::new(pil::start(&PilConfig::new(firmware)).map_err(fail)?)
+        }
+        LinkArg::F407 => {
+            let mut cfg = super::virtual_board::VirtualBoardConfig::new(std::path::Path::new("."));
+            cfg.elf = firmware.to_path_buf();
+            Box::new(super::virtual_board::start(&cfg).map_err(fail)?)
         }
         LinkArg::Serial(path) => {
             Box::new(serial::start(path, Duration::from_secs(2)).map_err(fail)?)

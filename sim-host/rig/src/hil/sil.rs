@@ -145,6 +145,7 @@ impl RigLink for SilLink {
             max_tick_instructions: None,
             exit_code: None,
             host_frames_rejected: 0,
+            simulated_jump_height_m: None,
         })
     }
 }

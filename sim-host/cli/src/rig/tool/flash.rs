@@ -43,6 +43,9 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
         let what = match link {
             SimLink::Sil => "--link sil runs the core's controller in this process",
             SimLink::Pil => "--link pil: QEMU loads the firmware ELF (--firmware) at every start",
+            SimLink::F407 => {
+                "--link f407: the virtual board loads the F407 ELF (--firmware) at every start"
+            }
         };
         println!("nothing to flash: {what}");
         return Ok(());

@@ -271,7 +271,7 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
     let params: Params = a.rig.resolve()?;
     let program_def = program_of(a)?;
     let model_config = RigModelConfig::default();
-    let mut fixture = if a.target.is_simulated() {
+    let mut fixture = if a.target.host_plays_the_rig() {
         Some(
             IntrusionFixture::new(&params, a.rig.model(), a.start, model_config)
                 .map_err(|e| CliError::input(e.to_string()))?,

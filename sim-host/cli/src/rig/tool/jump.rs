@@ -101,13 +101,15 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let camera = crate::rig::hil::command::read_camera(a.camera.as_deref())?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
-        a.target.is_simulated(),
+        a.target.host_plays_the_rig(),
         &params,
         spec.model,
         traj.eval(0.0).position_m,
         model_config,
     )?;
-    let mut link = a.target.open(&model_config)?;
+    let mut link = a
+        .target
+        .open_with_robot(&model_config, Some((params.clone(), spec.model)))?;
     let name = link.name();
     let record = run_program(
         link.as_mut(),
@@ -147,7 +149,10 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
             .filter(|s| s.camera_frame.is_some())
             .count(),
         tracking_error_max_m: max_tracking_error_m(&record.samples, mpc),
-        simulated_jump_height_m: robot.as_ref().map(|r| r.plant().summary().jump_height_m),
+        simulated_jump_height_m: robot
+            .as_ref()
+            .map(|r| r.plant().summary().jump_height_m)
+            .or(record.report.simulated_jump_height_m),
         wall_time_s: record.wall_time_s,
     };
     let json = serde_json::to_string_pretty(&report)

@@ -39,6 +39,7 @@ use sandjumper_output::CliError;
 use sandjumper_rig::hil::link::RigLink;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::serial;
+use sandjumper_rig::hil::virtual_board::{self, VirtualBoardConfig};
 
 /// `sandjumper rig`.
 #[derive(Debug, Clone, Args)]
@@ -77,6 +78,9 @@ pub enum SimLink {
     Sil,
     /// The real firmware in QEMU mps2-an386 (frames over semihosting FIFOs).
     Pil,
+    /// The F407 release ELF (the binary a board is flashed with) on the virtual board, the
+    /// robot coupled through its peripherals; built separately (sim-host/virtual-f407/build.sh).
+    F407,
 }
 
 /// Which controller: a board on a serial port, or a simulated one (exactly one of the two).
@@ -101,6 +105,10 @@ pub struct TargetArgs {
     /// F407 build.
     #[arg(long, value_name = "ELF")]
     pub firmware: Option<PathBuf>,
+    /// The virtual board's program for --link f407 (default:
+    /// sim-host/virtual-f407/target/release/virtual-f407).
+    #[arg(long, value_name = "PATH")]
+    pub virtual_board: Option<PathBuf>,
     /// Drive calibration saved by `rig calibrate-drive --save`: sent when the session opens.
     #[arg(long, value_name = "FILE.toml")]
     pub drive_calibration: Option<PathBuf>,
@@ -115,18 +123,57 @@ impl TargetArgs {
         match (&self.controller.port, self.controller.link) {
             (Some(p), _) => LinkArg::Serial(p.clone()),
             (None, Some(SimLink::Pil)) => LinkArg::Pil,
+            (None, Some(SimLink::F407)) => LinkArg::F407,
             _ => LinkArg::Sil,
         }
     }
 
-    /// True when the host plays the rig (sil/pil).
+    /// True when the rig is simulated (sil, pil, f407).
     pub fn is_simulated(&self) -> bool {
         self.controller.port.is_none()
+    }
+
+    /// True when the host plays the rig in lockstep (sil/pil); the virtual F407 board moves its
+    /// own robot.
+    pub fn host_plays_the_rig(&self) -> bool {
+        self.is_simulated() && self.controller.link != Some(SimLink::F407)
+    }
+
+    /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
+    /// `--drive-calibration` names one. `robot`: the robot a virtual F407 board moves.
+    pub fn open_with_robot(
+        &self,
+        model: &RigModelConfig,
+        robot: Option<(Params, ModelName)>,
+    ) -> Result<Box<dyn RigLink>, CliError> {
+        if self.controller.link == Some(SimLink::F407) {
+            let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
+            if let Some(p) = &self.virtual_board {
+                cfg.program = p.clone();
+            }
+            if let Some(elf) = &self.firmware {
+                cfg.elf = elf.clone();
+            }
+            cfg.robot = robot;
+            let board = virtual_board::start(&cfg).map_err(|e| {
+                CliError::input(format!("cannot start the virtual F407 board: {e}"))
+            })?;
+            let mut link: Box<dyn RigLink> = Box::new(board);
+            if let Some(path) = self.drive_calibration.as_deref() {
+                let cal = calibrate::read_calibration(path)?;
+                calibrate::send_calibration(link.as_mut(), cal)?;
+            }
+            return Ok(link);
+        }
+        self.open(model)
     }
 
     /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
     /// `--drive-calibration` names one.
     pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
+        if self.controller.link == Some(SimLink::F407) {
+            return self.open_with_robot(model, None);
+        }
         let calibration = self
             .drive_calibration
             .as_deref()

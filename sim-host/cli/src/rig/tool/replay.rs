@@ -354,13 +354,15 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     )?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
-        a.target.is_simulated(),
+        a.target.host_plays_the_rig(),
         &params,
         a.rig.model(),
         f64::from(plan.samples[0]),
         model_config,
     )?;
-    let mut link = a.target.open(&model_config)?;
+    let mut link = a
+        .target
+        .open_with_robot(&model_config, Some((params.clone(), a.rig.model())))?;
     let name = link.name();
     bring_to_idle(link.as_mut())
         .and_then(|()| upload(link.as_mut(), &plan))

@@ -1,0 +1,184 @@
+//! `--link f407`: the F407 release ELF (the binary a user flashes) on the virtual board, a
+//! separate program (`sim-host/virtual-f407`, its own workspace on rustc 1.98.0) that runs the
+//! firmware and the plant in one process in virtual time, coupled through the board's
+//! peripherals: the robot's motion drives TIM2's quadrature edges, the DAC's volts are the
+//! drive's force, the bed's inputs come through GPIO and ADC. The host reaches it exactly as it
+//! reaches a board on a serial port: the USB CDC byte stream (here the program's stdin and
+//! stdout) carries commands, replies and telemetry, nothing else. The firmware runs free on its
+//! own tick, so programs run through the free-running path of the rig tool's session.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command as Process, Stdio};
+use std::time::Duration;
+
+use super::framed::{ChildGuard, FramedLink};
+use super::link::{LinkError, LinkReport, RigLink};
+use crate::firmware_image::{Board, F407_BUILD, F407_ELF, check_elf};
+use sandjumper_core::protocol::FaultReport;
+use sandjumper_core::{ActuatorFrame, Command, Reply, SampleRecord, SensorFrame};
+use sandjumper_model::params::{ModelName, Params};
+
+/// The virtual board's program, relative to the workspace root.
+pub const VIRTUAL_BOARD_BIN: &str = "sim-host/virtual-f407/target/release/virtual-f407";
+/// How to build it.
+pub const VIRTUAL_BOARD_BUILD: &str = "sim-host/virtual-f407/build.sh (needs rustc 1.98.0: \
+     `rustup toolchain install 1.98.0 --profile minimal -c clippy,rustfmt`; about 3 min cold)";
+
+/// How to start the virtual board.
+#[derive(Clone, Debug)]
+pub struct VirtualBoardConfig {
+    /// The virtual board's program.
+    pub program: PathBuf,
+    /// The F407 ELF.
+    pub elf: PathBuf,
+    /// The robot on the rig and its ground model (None: the drive moves nothing).
+    pub robot: Option<(Params, ModelName)>,
+    /// Run no faster than this multiple of real time (None: as fast as it can).
+    pub pace: Option<f64>,
+    /// How long to wait for an answer.
+    pub answer_timeout: Duration,
+}
+
+impl VirtualBoardConfig {
+    /// The program and ELF at their default places under `root` (the workspace root).
+    pub fn new(root: &Path) -> Self {
+        Self {
+            program: root.join(VIRTUAL_BOARD_BIN),
+            elf: root.join(F407_ELF),
+            robot: None,
+            pace: None,
+            answer_timeout: Duration::from_secs(10),
+        }
+    }
+}
+
+/// A running virtual board: the link, and where its plant's summary will be once it ends.
+pub struct VirtualBoard {
+    /// The link (a [`FramedLink`] over the program's stdin/stdout).
+    pub link: FramedLink,
+    /// The plant's summary (`jump_height_m`, ...), written when the program ends (after
+    /// `finish`).
+    pub summary_path: PathBuf,
+}
+
+fn io(what: &str) -> impl Fn(std::io::Error) -> LinkError + '_ {
+    move |e| LinkError::Io {
+        what: what.to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// Start the virtual board with `cfg` and wait for its first status.
+pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
+    if !cfg.program.is_file() {
+        return Err(LinkError::Io {
+            what: format!("the virtual board {}", cfg.program.display()),
+            message: format!("not built: build it with {VIRTUAL_BOARD_BUILD}"),
+        });
+    }
+    if !cfg.elf.is_file() {
+        return Err(LinkError::Io {
+            what: format!("the F407 firmware {}", cfg.elf.display()),
+            message: format!("not built: build it with `{F407_BUILD}`"),
+        });
+    }
+    check_elf(&cfg.elf, Board::F407).map_err(|e| LinkError::Io {
+        what: "firmware image".into(),
+        message: e.to_string(),
+    })?;
+    let dir = tempfile::Builder::new()
+        .prefix("sandjumper-f407-")
+        .tempdir()
+        .map_err(io("creating the virtual board's directory"))?;
+    let summary_path = dir.path().join("summary.json");
+    let mut cmd = Process::new(&cfg.program);
+    cmd.arg("--elf")
+        .arg(&cfg.elf)
+        .arg("--stdio")
+        .arg("--summary")
+        .arg(&summary_path);
+    if let Some((params, model)) = &cfg.robot {
+        let params_path = dir.path().join("params.toml");
+        let text = toml::to_string(params).map_err(|e| LinkError::Io {
+            what: "the robot's parameters".into(),
+            message: e.to_string(),
+        })?;
+        std::fs::File::create(&params_path)
+            .and_then(|mut f| f.write_all(text.as_bytes()))
+            .map_err(io("writing the robot's parameters"))?;
+        cmd.arg("--robot")
+            .arg(&params_path)
+            .arg("--model")
+            .arg(model.to_string());
+    }
+    if let Some(p) = cfg.pace {
+        cmd.arg("--pace").arg(p.to_string());
+    }
+    let log = std::fs::File::create(dir.path().join("board.log"))
+        .map_err(io("creating the board's log"))?;
+    let mut child = cmd
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::from(log))
+        .spawn()
+        .map_err(io("starting the virtual board"))?;
+    let stdin = child.stdin.take().ok_or_else(|| LinkError::Io {
+        what: "the virtual board".into(),
+        message: "no stdin".into(),
+    })?;
+    let stdout = child.stdout.take().ok_or_else(|| LinkError::Io {
+        what: "the virtual board".into(),
+        message: "no stdout".into(),
+    })?;
+    let link = FramedLink::start(
+        "f407",
+        Box::new(stdout),
+        Box::new(stdin),
+        Some(ChildGuard::new(child, "the virtual board")),
+        cfg.answer_timeout,
+    )?;
+    Ok(VirtualBoard {
+        link: link.keep_alive(dir),
+        summary_path,
+    })
+}
+
+/// The plant's jump height from a finished virtual board's summary, m.
+pub fn jump_height_m(summary: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(summary).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get("jump_height_m")?.as_f64()
+}
+
+impl RigLink for VirtualBoard {
+    fn name(&self) -> String {
+        "f407".into()
+    }
+    fn command(&mut self, command: &Command) -> Result<Reply, LinkError> {
+        self.link.command(command)
+    }
+    fn exchange(&mut self, _frame: &SensorFrame) -> Result<ActuatorFrame, LinkError> {
+        Err(LinkError::Protocol(
+            "--link f407 couples the plant through the board's peripherals, not lockstep frames"
+                .into(),
+        ))
+    }
+    fn send_corrupted(&mut self, frame: &SensorFrame) -> Result<(), LinkError> {
+        self.link.send_corrupted(frame)
+    }
+    fn silent_period(&mut self) -> Result<Option<ActuatorFrame>, LinkError> {
+        Ok(None)
+    }
+    fn take_samples(&mut self) -> Vec<SampleRecord> {
+        self.link.take_samples()
+    }
+    fn take_faults(&mut self) -> Vec<FaultReport> {
+        self.link.take_faults()
+    }
+    fn finish(&mut self) -> Result<LinkReport, LinkError> {
+        let mut report = self.link.finish()?;
+        report.simulated_jump_height_m = jump_height_m(&self.summary_path);
+        Ok(report)
+    }
+}

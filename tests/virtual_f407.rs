@@ -1,0 +1,81 @@
+//! The tests on the F407 release binary on the virtual board (`sim-host/virtual-f407`: its own
+//! workspace on rustc 1.98.0, see its README) run from here, so that the README's test command
+//! runs them: this builds the board (`build.sh`) and runs its test suite. Skipped with a message
+//! when toolchain 1.98.0 or the F407 ELF is missing; under `CI` (which installs both) a skip is
+//! a failure.
+
+use std::path::Path;
+use std::process::Command;
+
+fn skip(why: &str) {
+    let msg = format!("skipped: the virtual F407 board tests: {why}");
+    if std::env::var_os("CI").is_some() {
+        panic!(
+            "{msg} (under CI they must run: .ci/run installs toolchain 1.98.0 and builds the ELF)"
+        );
+    }
+    eprintln!("{msg}");
+}
+
+/// A cargo/rustup invocation with the outer cargo's environment removed, so that the board's
+/// own `rust-toolchain.toml` (1.98.0) applies.
+fn clean(cmd: &mut Command) -> &mut Command {
+    for var in [
+        "RUSTUP_TOOLCHAIN",
+        "CARGO",
+        "RUSTC",
+        "RUSTDOC",
+        "CARGO_TARGET_DIR",
+        "CARGO_MANIFEST_DIR",
+        "CARGO_PKG_NAME",
+        "RUSTFLAGS",
+        "CARGO_ENCODED_RUSTFLAGS",
+        "CARGO_BUILD_TARGET",
+    ] {
+        cmd.env_remove(var);
+    }
+    cmd
+}
+
+#[test]
+fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let board = root.join("sim-host/virtual-f407");
+    let elf = root.join("target/thumbv7em-none-eabihf/release/sandjumper-firmware");
+    let has_toolchain = clean(Command::new("rustup").args(["run", "1.98.0", "rustc", "--version"]))
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_toolchain {
+        return skip(
+            "rustc 1.98.0 is not installed (`rustup toolchain install 1.98.0 --profile minimal -c clippy,rustfmt`)",
+        );
+    }
+    if !elf.is_file() {
+        return skip(&format!(
+            "no F407 ELF at {} (`cargo build -p sandjumper-firmware --target thumbv7em-none-eabihf --release`)",
+            elf.display()
+        ));
+    }
+    let build = clean(&mut Command::new(board.join("build.sh")))
+        .current_dir(&board)
+        .output()
+        .expect("run build.sh");
+    assert!(
+        build.status.success(),
+        "sim-host/virtual-f407/build.sh failed:\n{}",
+        String::from_utf8_lossy(&build.stderr)
+    );
+    let test = clean(Command::new("cargo").args(["test", "--release", "--locked"]))
+        .current_dir(&board)
+        .env("SANDJUMPER_F407_ELF", &elf)
+        .output()
+        .expect("run cargo test in sim-host/virtual-f407");
+    let out = String::from_utf8_lossy(&test.stdout);
+    let err = String::from_utf8_lossy(&test.stderr);
+    eprintln!("{out}");
+    assert!(
+        test.status.success(),
+        "the virtual board's tests failed:\n{out}\n{err}"
+    );
+    assert!(out.contains("test result: ok"), "no test ran:\n{out}");
+}
