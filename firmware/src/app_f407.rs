@@ -3,8 +3,8 @@
 //! Priorities (higher preempts lower):
 //! - 3 `control_tick` (TIM7 at [`board::TICK_HZ`]): the tick's start time to the core (a gap
 //!   of more than 1.5 periods is a missed tick), the encoder and the current sample read
-//!   first, then at most one host frame from the inbound queue, then the core tick -> DAC +
-//!   drive enable -> camera trigger, cycle-counted with the DWT (the count goes into the next
+//!   first, then the core tick -> DAC + drive enable -> camera trigger, then at most one host
+//!   command from the inbound queue (after the outputs, so its cost never shifts them), cycle-counted with the DWT (the count goes into the next
 //!   tick's `TickTiming`, so the core latches `DeadlineOverrun` past
 //!   [`board::TICK_BUDGET_CYCLES`]); sample records move to the telemetry queue; the watchdog
 //!   is fed. It owns the core's `Rig` and the peripherals outright. It never logs: a full RTT
@@ -22,7 +22,8 @@
 //!
 //! Hardware-in-the-loop on the real board: the first `HostMessage::Sensor` frame switches the
 //! tick to lockstep (one core tick per sensor frame, the actuator frame sent back) until reset;
-//! the real drive stays disabled at zero force in that mode. The core restarts its encoder
+//! the real drive stays disabled at zero force and the real bed apparatus off in that mode, and
+//! the real emergency stop still stops (it is OR-ed into the frame's bed inputs). The core restarts its encoder
 //! extension on entry (the host's count replaces TIM2's) and latches `LinkLost` when sensor
 //! frames stop for [`LOCKSTEP_TIMEOUT_TICKS`] timer ticks.
 //!
@@ -37,6 +38,7 @@ mod app {
     use core::sync::atomic::{AtomicU32, Ordering};
     use cortex_m::peripheral::DWT;
     use heapless::spsc::{Consumer, Producer, Queue};
+    use sandjumper_core::bed::BedOutputs;
     use sandjumper_core::protocol::{FrameDecoder, MAX_FRAME, SAMPLE_BATCH, encode_frame};
     use sandjumper_core::{
         CounterWidth, HostMessage, Rig, RigConfig, RigMessage, SampleRecord, TickInput, TickTiming,
@@ -91,6 +93,7 @@ mod app {
     }
 
     #[init(local = [
+        serial_number: [u8; 24] = [0; 24],
         ep_memory: [u32; 1024] = [0; 1024],
         usb_bus: Option<usb_device::bus::UsbBusAllocator<UsbBusType>> = None,
         inbound: Queue<Inbound, INBOUND> = Queue::new(),
@@ -135,7 +138,7 @@ mod app {
             .strings(&[StringDescriptors::default()
                 .manufacturer("sandjumper")
                 .product("sandjumper rig")
-                .serial_number("F407")])
+                .serial_number(board::serial_number(cx.local.serial_number))])
         {
             Ok(builder) => builder.build(),
             Err(_) => defmt::panic!("USB string descriptors rejected"),
@@ -192,7 +195,8 @@ mod app {
         // The sensors first, at a fixed time after the tick starts, whatever the host sent.
         let encoder_raw = io.encoder_count();
         let current_code = io.current_sense_code();
-        if let Some(bed) = io.bed_inputs() {
+        let real_bed = io.bed_inputs();
+        if let Some(bed) = real_bed {
             rig.set_bed_inputs(bed);
         }
         let fault_before = rig.fault();
@@ -201,31 +205,43 @@ mod app {
             rig.note_frames_dropped(dropped);
         }
         // At most one host frame per tick, and only when its answer (plus a fault report) has
-        // room to leave.
+        // room to leave. A sensor frame (lockstep) is the tick's input and is taken now; a
+        // command waits until the outputs are written, so the DAC update and the camera edge
+        // come at the same time in every tick whatever the host sent.
         let mut ticked = false;
+        let mut command = None;
         let room = outbound_tx.capacity() - outbound_tx.len();
         if room >= 2 {
-            match inbound_rx.dequeue() {
+            match inbound_rx.peek() {
                 None => {}
-                Some(Inbound::Rejected) => rig.note_frame_rejected(),
-                Some(Inbound::Message(HostMessage::Command { id, command })) => {
-                    let reply = link::reply_to(rig, id, &command);
-                    send(outbound_tx, rig, reply);
+                Some(Inbound::Message(HostMessage::Sensor(_))) => {
+                    if let Some(Inbound::Message(HostMessage::Sensor(mut frame))) =
+                        inbound_rx.dequeue()
+                    {
+                        *lockstep = true;
+                        rig.note_frame_ok();
+                        // The simulated bed stands in for the real one, except the real
+                        // emergency stop, which still stops.
+                        if let Some(real) = real_bed {
+                            let mut bed = frame.bed.unwrap_or(real);
+                            bed.emergency_stop |= real.emergency_stop;
+                            frame.bed = Some(bed);
+                        }
+                        let actuator = rig.lockstep(&frame, *timing);
+                        send(outbound_tx, rig, RigMessage::Actuator(actuator));
+                        ticked = true;
+                    }
                 }
-                Some(Inbound::Message(HostMessage::Sensor(frame))) => {
-                    *lockstep = true;
-                    rig.note_frame_ok();
-                    let actuator = rig.lockstep(&frame, *timing);
-                    send(outbound_tx, rig, RigMessage::Actuator(actuator));
-                    ticked = true;
-                }
+                Some(_) => command = inbound_rx.dequeue(),
             }
         }
 
         if *lockstep {
-            // Hardware-in-the-loop: the simulated plant is driven, never the real motor.
+            // Hardware-in-the-loop: the simulated plant is driven, never the real motor, and
+            // the real bed apparatus stays off.
             io.set_drive(rig.drive_calibration().zero_code, false);
             io.set_camera_trigger(false);
+            io.set_bed(&BedOutputs::default());
             if !ticked {
                 // A timer tick without a sensor frame: the core counts the silence.
                 rig.lockstep_silent_period();
@@ -244,6 +260,14 @@ mod app {
             io.start_current_sample();
             io.set_leds(out.drive_enabled, out.fault.is_some());
             ticked = true;
+        }
+        match command {
+            Some(Inbound::Rejected) => rig.note_frame_rejected(),
+            Some(Inbound::Message(HostMessage::Command { id, command })) => {
+                let reply = link::reply_to(rig, id, &command);
+                send(outbound_tx, rig, reply);
+            }
+            _ => {}
         }
         if let Some(report) = link::newly_latched(rig, fault_before) {
             send(outbound_tx, rig, report);

@@ -126,3 +126,17 @@ unsafe fn DefaultHandler(irqn: i16) {
         cortex_m::asm::nop();
     }
 }
+
+/// The clock security system's NMI (enabled in `board::init`): the crystal stopped and the part
+/// fell back to its 16 MHz HSI, so every rate (the tick, USB, the PWM) is wrong. The whole safe
+/// state, a report, then the same stop as a HardFault (the watchdog resets the chip; the
+/// start-up's bounded wait for the crystal then reports it).
+#[cortex_m_rt::exception]
+unsafe fn NonMaskableInt() {
+    cortex_m::interrupt::disable();
+    force_safe_state();
+    defmt::error!("clock security: the 8 MHz crystal (HSE) stopped; the rig is stopped");
+    loop {
+        cortex_m::asm::nop();
+    }
+}

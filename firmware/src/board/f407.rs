@@ -173,6 +173,9 @@ impl BedHeightAdc {
                 .apb2enr()
                 .modify(|_, w| w.adc2en().set_bit());
         }
+        // RM0090 6.3.x / ES0206 2.1.13: an access right after enabling a peripheral's clock may
+        // not see it enabled; the data barrier completes the enable first.
+        cortex_m::asm::dsb();
         adc.smpr2().modify(|_, w| w.smp2().cycles84());
         // SAFETY: 2 is a valid channel number for SQ1 (0..=18).
         adc.sqr3().write(|w| unsafe { w.sq1().bits(2) });
@@ -229,14 +232,66 @@ pub struct Parts {
     pub usb: stm32f4xx_hal::otg_fs::USB,
 }
 
+/// Core cycles (16 MHz HSI at this point) to wait for the crystal before giving up: 100 ms,
+/// twenty times an 8 MHz crystal's usual start-up.
+pub const HSE_STARTUP_SPINS: u32 = 1_600_000;
+
+/// Starts the crystal oscillator and waits for it with a bound. The HAL's clock setup waits for
+/// HSE and PLL ready with none: a board whose crystal does not start would hang there forever,
+/// before the watchdog runs. Returns false if the crystal did not start.
+fn start_crystal() -> bool {
+    // SAFETY: RCC_CR's HSEON set and HSERDY read before the HAL owns the RCC; the HAL's freeze
+    // sets HSEON again and finds the oscillator ready.
+    unsafe {
+        let rcc = &*pac::RCC::ptr();
+        rcc.cr().modify(|_, w| w.hseon().set_bit());
+        let mut spins: u32 = 0;
+        while rcc.cr().read().hserdy().bit_is_clear() {
+            spins += 1;
+            if spins >= HSE_STARTUP_SPINS {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// The chip's 96-bit unique ID (RM0090 39.1) as 24 hex digits: the USB serial number, so two
+/// boards on one host are told apart.
+pub fn serial_number(buf: &'static mut [u8; 24]) -> &'static str {
+    const HEX: &[u8; 16] = b"0123456789ABCDEF";
+    for word in 0..3 {
+        // SAFETY: the unique ID's three words, read-only system memory on every STM32F4.
+        let w = unsafe { core::ptr::read_volatile((0x1FFF_7A10 + 4 * word) as *const u32) };
+        for nibble in 0..8 {
+            buf[word * 8 + nibble] = HEX[((w >> (28 - 4 * nibble)) & 0xF) as usize];
+        }
+    }
+    // Only ASCII hex digits were written.
+    core::str::from_utf8(buf).unwrap_or("F407")
+}
+
 /// Clocks, pins and peripherals. The drive stays disabled at zero force; the tick timer is
-/// configured but not started ([`Rig::start_ticking`]).
+/// configured but not started ([`Rig::start_ticking`]). A crystal that does not start ends
+/// here in the safe state with a report (a panic): the board cannot keep time without it.
 pub fn init(dp: pac::Peripherals) -> Parts {
+    if !start_crystal() {
+        force_safe_state();
+        defmt::panic!(
+            "the 8 MHz crystal (HSE) did not start within 100 ms: check X2 and its load capacitors"
+        );
+    }
     let mut rcc: Rcc = dp.RCC.freeze(
         Config::hse(HSE_HZ.Hz())
             .sysclk(SYSCLK_HZ.Hz())
             .require_pll48clk(),
     );
+    // Clock security system: if the crystal stops, the part switches to HSI and raises the NMI,
+    // whose handler (the default handler) puts the rig in the safe state.
+    // SAFETY: RCC_CR's CSSON, set once the HAL has switched SYSCLK to the PLL on HSE.
+    unsafe {
+        (*pac::RCC::ptr()).cr().modify(|_, w| w.csson().set_bit());
+    }
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
     let gpiod = dp.GPIOD.split(&mut rcc);
@@ -288,12 +343,13 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         .into_push_pull_output_in_state(stm32f4xx_hal::gpio::PinState::Low);
 
     // PA15/PB3 leave reset as JTAG pins (AF0); SWD debugging does not need them. PB3 is also
-    // SWO: no trace output on this board.
+    // SWO: no trace output on this board. Pull-ups: an unplugged encoder holds its count
+    // instead of counting noise on floating inputs.
     let encoder = Qei::new(
         dp.TIM2,
         (
-            gpioa.pa15.into_floating_input(),
-            gpiob.pb3.into_floating_input(),
+            gpioa.pa15.into_pull_up_input(),
+            gpiob.pb3.into_pull_up_input(),
         ),
         &mut rcc,
     );

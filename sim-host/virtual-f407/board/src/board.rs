@@ -54,10 +54,11 @@ pub struct F407 {
 }
 
 impl F407 {
-    /// The part out of reset with the board's crystal and supply attached.
-    pub fn new() -> Result<Self, rigless::soc::Error> {
+    /// The part out of reset with a `hse_hz` crystal (0: none fitted, or one that does not
+    /// start) and the supply attached.
+    pub fn new(hse_hz: u64) -> Result<Self, rigless::soc::Error> {
         let mut part = Stm32f427::new()?;
-        part.rcc.attach_crystals(HSE_HZ, 0);
+        part.rcc.attach_crystals(hse_hz, 0);
         part.set_supply(SUPPLY_MV);
         for adc in &mut part.adc {
             adc.set_reference(SUPPLY_MV);
@@ -142,9 +143,16 @@ pub struct VirtualF407 {
 impl rigless::snapshot::Store for VirtualF407 {}
 
 impl VirtualF407 {
-    /// A board with nothing wired to its pins yet.
+    /// A board with its 8 MHz crystal and nothing wired to its pins yet.
     pub fn new() -> Result<Self, rigless::soc::Error> {
-        Ok(Self { mcu: F407::new()? })
+        Self::with_crystal(HSE_HZ)
+    }
+
+    /// A board with a `hse_hz` crystal (0: none that starts).
+    pub fn with_crystal(hse_hz: u64) -> Result<Self, rigless::soc::Error> {
+        Ok(Self {
+            mcu: F407::new(hse_hz)?,
+        })
     }
 }
 

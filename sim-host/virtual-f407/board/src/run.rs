@@ -22,6 +22,8 @@ use crate::rtt::RttLog;
 /// VREFINT_CAL, the factory calibration of the internal reference (read by the HAL's ADC
 /// setup); a typical part's 1.21 V at 3.3 V.
 pub const VREFINT_CAL: (u64, u16) = (0x1FFF_7A2A, 1500);
+/// The unique device ID (RM0090 39.1, 96 bits at 0x1FFF_7A10): the board's, fixed.
+pub const UNIQUE_ID: (u64, [u32; 3]) = (0x1FFF_7A10, [0x0030_0041, 0x3532_5108, 0x3636_3830]);
 
 /// The real host's side of the USB CDC port.
 pub trait HostPort {
@@ -60,9 +62,10 @@ pub enum Action {
     EncoderFrozen,
     /// The encoder's count jumps (a slipping scale), counts.
     EncoderJump(i64),
-    /// The core is held (a debugger halt or a hang in a handler): the emulator keeps time, the
-    /// firmware's instructions do not run.
-    Halt,
+    /// The core stops executing (true) or goes on (false), with time and the peripherals running
+    /// on: a hang, as a debugger's halt shows it (the watchdog keeps counting: the firmware does
+    /// not freeze it on debug).
+    Hold(bool),
 }
 
 /// How to run.
@@ -83,6 +86,8 @@ pub struct RunConfig {
     pub actions: Vec<(u64, Action)>,
     /// Keep one [`TraceRow`] every this many stops (0: none).
     pub trace_every: u64,
+    /// The crystal, Hz (0: none that starts).
+    pub crystal_hz: u64,
 }
 
 impl RunConfig {
@@ -97,6 +102,7 @@ impl RunConfig {
             pace: None,
             actions: Vec::new(),
             trace_every: 0,
+            crystal_hz: crate::board::HSE_HZ,
         }
     }
 }
@@ -172,12 +178,13 @@ struct BoardDriver<H> {
     host: H,
     host_closed: bool,
     wall: Instant,
-    halted: bool,
     plant_error: Option<String>,
+    held: bool,
+    resets_seen: usize,
 }
 
 impl<H> BoardDriver<H> {
-    fn apply(&mut self, s: &mut Session<VirtualF407>, action: Action) {
+    fn apply(&mut self, s: &mut Session<VirtualF407>, host: &mut dyn Host, action: Action) {
         let mcu = &mut s.board_mut().mcu;
         match action {
             Action::Bed(b) => self.bed = b,
@@ -185,7 +192,10 @@ impl<H> BoardDriver<H> {
             Action::HostBytes(b) => mcu.otg.host_send(&b),
             Action::EncoderFrozen => self.frozen = true,
             Action::EncoderJump(c) => self.encoder_offset += c,
-            Action::Halt => self.halted = true,
+            Action::Hold(held) => {
+                self.held = held;
+                host.hold(held);
+            }
         }
     }
 }
@@ -198,13 +208,22 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         host: &mut dyn Host,
     ) -> Option<VirtualNanos> {
         let now = stop.at.0;
+        // A reset restarts a held core (a hang ends with the reset that ends it).
+        let resets = s.resets().len();
+        if resets > self.resets_seen {
+            self.resets_seen = resets;
+            if self.held {
+                self.held = false;
+                host.hold(false);
+            }
+        }
         self.rtt.drain(host);
         while let Some((at, action)) = self.actions.get(self.next_action).cloned() {
             if at > now {
                 break;
             }
             self.next_action += 1;
-            self.apply(s, action);
+            self.apply(s, host, action);
         }
         let period = self.cfg_period;
         let mcu = &mut s.board_mut().mcu;
@@ -274,7 +293,8 @@ pub fn run<H: HostPort + Send + 'static>(
         .map_err(|e| format!("cannot read the firmware {}: {e}", cfg.elf.display()))?;
     let rtt = RttLog::new(&elf_bytes)?;
     let images = firmware_images(&cfg.elf)?;
-    let board = VirtualF407::new().map_err(|e| format!("the virtual board: {e}"))?;
+    let board =
+        VirtualF407::with_crystal(cfg.crystal_hz).map_err(|e| format!("the virtual board: {e}"))?;
     let session = Session::new(Box::new(board), 0, VirtualNanos(cfg.period_ns))
         .map_err(|e| format!("the emulator session: {e}"))?;
     let mut actions = cfg.actions;
@@ -298,8 +318,9 @@ pub fn run<H: HostPort + Send + 'static>(
         host,
         host_closed: false,
         wall: Instant::now(),
-        halted: false,
         plant_error: None,
+        held: false,
+        resets_seen: 0,
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)
@@ -320,7 +341,7 @@ pub fn run<H: HostPort + Send + 'static>(
     let resets = session
         .resets()
         .iter()
-        .map(|r| (0, format!("{r:?}")))
+        .map(|r| (r.at.0, format!("{:?}", r.cause)))
         .collect();
     let mcu = &mut session.board_mut().mcu;
     let (rcc, regs) = mcu.part.clocks();
@@ -354,5 +375,8 @@ pub fn firmware_images(elf: &Path) -> Result<Vec<Image>, String> {
         Some(VREFINT_CAL.0),
     )
     .map_err(|e| format!("VREFINT_CAL image: {e}"))?;
-    Ok(vec![firmware, cal])
+    let uid: Vec<u8> = UNIQUE_ID.1.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let uid = Image::new(Path::new("unique_id.bin"), uid, Some(UNIQUE_ID.0))
+        .map_err(|e| format!("unique ID image: {e}"))?;
+    Ok(vec![firmware, cal, uid])
 }

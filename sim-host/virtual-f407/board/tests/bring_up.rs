@@ -5,7 +5,7 @@
 mod common;
 
 use sandjumper_virtual_f407::rig::BedWiring;
-use sandjumper_virtual_f407::run::{NoHost, RunConfig, RunReport, run};
+use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
 
 fn run_for(ms: u64, bed: BedWiring, trace_every: u64) -> Option<RunReport> {
     let elf = common::firmware_elf()?;
@@ -130,4 +130,27 @@ fn two_runs_are_identical() {
     };
     assert_eq!(a.trace, b.trace);
     assert_eq!(a.log, b.log);
+}
+
+#[test]
+fn a_stalled_tick_is_reset_by_the_watchdog_and_the_reset_cause_reported() {
+    let Some(elf) = common::firmware_elf() else { return };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(200_000_000);
+    cfg.actions = vec![(50_000_000, Action::Hold(true))];
+    cfg.trace_every = 1;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let (at, cause) = r.resets.first().cloned().unwrap_or_else(|| panic!("no reset after the core stopped: {:?}", r.resets));
+    let after_ms = (at as f64 - 50e6) / 1e6;
+    // docs/firmware.md: prescaler /64 and a reload of 4 at the LSI's 17-47 kHz (nominal 32 kHz: 10 ms).
+    assert!((5.0..=20.0).contains(&after_ms), "watchdog reset {after_ms} ms after the stall ({cause})");
+    assert!(cause.contains("Watchdog") || cause.contains("Iwdg") || cause.contains("IWDG"), "{cause}");
+    // The firmware starts again and says why.
+    assert!(
+        r.log.iter().any(|l| l.contains("reset cause Watchdog")),
+        "the restarted firmware does not report the watchdog reset: {:?}",
+        r.log
+    );
+    let last = r.last.expect("ran");
+    assert!(last.out.drive_and_lift_safe() && !last.out.led_fault, "{last:?}");
 }
