@@ -66,6 +66,10 @@ pub enum Action {
     /// on: a hang, as a debugger's halt shows it (the watchdog keeps counting: the firmware does
     /// not freeze it on debug).
     Hold(bool),
+    /// The core stops at the first stop after the firmware's first log line (its boot line,
+    /// the last thing `init` does before the tick starts): a hang after the watchdog's start
+    /// and before the first tick (RTT blocking on a probe that stopped reading, say).
+    HoldAtTheBootLine,
 }
 
 /// How to run.
@@ -157,6 +161,8 @@ pub struct RunReport {
     pub usb: String,
     /// The robot's plant failed (its error).
     pub plant_error: Option<String>,
+    /// When the core was held ([`Action::Hold`]), ns.
+    pub holds: Vec<u64>,
 }
 
 struct BoardDriver<H> {
@@ -181,10 +187,18 @@ struct BoardDriver<H> {
     plant_error: Option<String>,
     held: bool,
     resets_seen: usize,
+    holds: Vec<u64>,
+    hold_at_first_log_line: bool,
 }
 
 impl<H> BoardDriver<H> {
-    fn apply(&mut self, s: &mut Session<VirtualF407>, host: &mut dyn Host, action: Action) {
+    fn apply(
+        &mut self,
+        s: &mut Session<VirtualF407>,
+        host: &mut dyn Host,
+        at: u64,
+        action: Action,
+    ) {
         let mcu = &mut s.board_mut().mcu;
         match action {
             Action::Bed(b) => self.bed = b,
@@ -195,7 +209,11 @@ impl<H> BoardDriver<H> {
             Action::Hold(held) => {
                 self.held = held;
                 host.hold(held);
+                if held {
+                    self.holds.push(at);
+                }
             }
+            Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
         }
     }
 }
@@ -218,12 +236,16 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             }
         }
         self.rtt.drain(host);
+        if self.hold_at_first_log_line && !self.rtt.lines.is_empty() {
+            self.hold_at_first_log_line = false;
+            self.apply(s, host, now, Action::Hold(true));
+        }
         while let Some((at, action)) = self.actions.get(self.next_action).cloned() {
             if at > now {
                 break;
             }
             self.next_action += 1;
-            self.apply(s, host, action);
+            self.apply(s, host, now, action);
         }
         let period = self.cfg_period;
         let mcu = &mut s.board_mut().mcu;
@@ -321,6 +343,8 @@ pub fn run<H: HostPort + Send + 'static>(
         plant_error: None,
         held: false,
         resets_seen: 0,
+        holds: Vec::new(),
+        hold_at_first_log_line: false,
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)
@@ -361,6 +385,7 @@ pub fn run<H: HostPort + Send + 'static>(
         gaps,
         usb: format!("{:?}", mcu.otg.stats()),
         plant_error: d.plant_error,
+        holds: d.holds,
     };
     Ok((report, d.host))
 }

@@ -134,17 +134,29 @@ fn two_runs_are_identical() {
 
 #[test]
 fn a_stalled_tick_is_reset_by_the_watchdog_and_the_reset_cause_reported() {
-    let Some(elf) = common::firmware_elf() else { return };
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(200_000_000);
     cfg.actions = vec![(50_000_000, Action::Hold(true))];
     cfg.trace_every = 1;
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
-    let (at, cause) = r.resets.first().cloned().unwrap_or_else(|| panic!("no reset after the core stopped: {:?}", r.resets));
+    let (at, cause) = r
+        .resets
+        .first()
+        .cloned()
+        .unwrap_or_else(|| panic!("no reset after the core stopped: {:?}", r.resets));
     let after_ms = (at as f64 - 50e6) / 1e6;
     // docs/firmware.md: prescaler /64 and a reload of 4 at the LSI's 17-47 kHz (nominal 32 kHz: 10 ms).
-    assert!((5.0..=20.0).contains(&after_ms), "watchdog reset {after_ms} ms after the stall ({cause})");
-    assert!(cause.contains("Watchdog") || cause.contains("Iwdg") || cause.contains("IWDG"), "{cause}");
+    assert!(
+        (5.0..=20.0).contains(&after_ms),
+        "watchdog reset {after_ms} ms after the stall ({cause})"
+    );
+    assert!(
+        cause.contains("Watchdog") || cause.contains("Iwdg") || cause.contains("IWDG"),
+        "{cause}"
+    );
     // The firmware starts again and says why.
     assert!(
         r.log.iter().any(|l| l.contains("reset cause Watchdog")),
@@ -152,5 +164,40 @@ fn a_stalled_tick_is_reset_by_the_watchdog_and_the_reset_cause_reported() {
         r.log
     );
     let last = r.last.expect("ran");
-    assert!(last.out.drive_and_lift_safe() && !last.out.led_fault, "{last:?}");
+    assert!(
+        last.out.drive_and_lift_safe() && !last.out.led_fault,
+        "{last:?}"
+    );
+}
+
+#[test]
+fn a_hang_between_the_watchdogs_start_and_the_first_tick_is_reset_within_its_period() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(100_000_000);
+    cfg.period_ns = 10_000;
+    cfg.actions = vec![(0, Action::HoldAtTheBootLine)];
+    cfg.trace_every = 1;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let held = *r.holds.first().expect("the watchdog never started");
+    let ticks_then = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns >= held)
+        .expect("row")
+        .ticks;
+    assert_eq!(
+        ticks_then, 0,
+        "held after the first tick: not the case this test is about"
+    );
+    let (at, cause) = r.resets.first().cloned().unwrap_or_else(|| {
+        panic!("no reset within {} ms of a hang after the watchdog's start (its first window is ~8 s until the first refresh)", (100_000_000 - held) / 1_000_000)
+    });
+    let after_ms = (at - held) as f64 / 1e6;
+    assert!(
+        (5.0..=20.0).contains(&after_ms),
+        "reset {after_ms} ms after the hang ({cause})"
+    );
 }
