@@ -271,10 +271,52 @@ pub fn serial_number(buf: &'static mut [u8; 24]) -> &'static str {
     core::str::from_utf8(buf).unwrap_or("F407")
 }
 
+/// Flash wait states at 168 MHz (RM0090 table 12): 7, which holds for any supply down to 2.4 V,
+/// where the HAL's 5 need at least 2.7 V. A Discovery board runs at about 3.0 V, too close to
+/// the 2.8 V brown-out level 3 for comfort, so the board uses level 2 (about 2.5 V falling)
+/// and the wait states that level allows.
+pub const FLASH_WAIT_STATES: u32 = 7;
+
+/// The brown-out reset at level 2 in the option bytes (RM0090 3.9.10, `BOR_LEV` = 0b01; the
+/// part leaves the factory with it off, 0b11, where only the ~1.7 V power-down reset acts): a
+/// sagging supply holds the part in reset instead of running its flash out of specification.
+/// Programmed once (the option bytes keep it); a no-op afterwards.
+fn ensure_brown_out_reset() {
+    const BOR_LEVEL_2: u32 = 0b01;
+    // SAFETY: the flash interface's option registers, before anything else uses the flash
+    // interface's registers; the unlock keys are RM0090 3.7.2's.
+    unsafe {
+        let flash = &*pac::FLASH::ptr();
+        let optcr = flash.optcr().read().bits();
+        if (optcr >> 2) & 0b11 == BOR_LEVEL_2 {
+            return;
+        }
+        flash.optkeyr().write(|w| w.bits(0x0819_2A3B));
+        flash.optkeyr().write(|w| w.bits(0x4C5D_6E7F));
+        flash
+            .optcr()
+            .modify(|r, w| w.bits((r.bits() & !(0b11 << 2)) | (BOR_LEVEL_2 << 2)));
+        flash.optcr().modify(|r, w| w.bits(r.bits() | 0b10)); // OPTSTRT
+        let mut spins: u32 = 0;
+        while flash.sr().read().bsy().bit_is_set() && spins < 16_000_000 {
+            spins += 1;
+        }
+        flash.optcr().modify(|r, w| w.bits(r.bits() | 0b01)); // OPTLOCK
+    }
+}
+
 /// Clocks, pins and peripherals. The drive stays disabled at zero force; the tick timer is
 /// configured but not started ([`Rig::start_ticking`]). A crystal that does not start ends
 /// here in the safe state with a report (a panic): the board cannot keep time without it.
 pub fn init(dp: pac::Peripherals) -> Parts {
+    ensure_brown_out_reset();
+    // More wait states before the clock rises (RM0090 3.5.1: raise LATENCY first).
+    // SAFETY: FLASH_ACR's LATENCY, read back as the manual asks before the clock changes.
+    unsafe {
+        let acr = (*pac::FLASH::ptr()).acr();
+        acr.modify(|_, w| w.latency().bits(FLASH_WAIT_STATES as u8));
+        while u32::from(acr.read().latency().bits()) != FLASH_WAIT_STATES {}
+    }
     if !start_crystal() {
         force_safe_state();
         defmt::panic!(
@@ -286,6 +328,13 @@ pub fn init(dp: pac::Peripherals) -> Parts {
             .sysclk(SYSCLK_HZ.Hz())
             .require_pll48clk(),
     );
+    // The HAL's freeze sets the 5 wait states that hold from 2.7 V up: back to ours.
+    // SAFETY: FLASH_ACR's LATENCY; more wait states are always safe at a given clock.
+    unsafe {
+        (*pac::FLASH::ptr())
+            .acr()
+            .modify(|_, w| w.latency().bits(FLASH_WAIT_STATES as u8));
+    }
     // Clock security system: if the crystal stops, the part switches to HSI and raises the NMI,
     // whose handler (the default handler) puts the rig in the safe state.
     // SAFETY: RCC_CR's CSSON, set once the HAL has switched SYSCLK to the PLL on HSE.

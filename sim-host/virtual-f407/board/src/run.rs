@@ -11,6 +11,7 @@ use std::time::Instant;
 use rigless::device::ResetCause;
 use rigless::emulator::{self, Driver, Host, Start, Stop};
 use rigless::image::Image;
+use rigless::mcu::Mcu;
 use rigless::session::Session;
 use rigless::time::VirtualNanos;
 
@@ -70,6 +71,12 @@ pub enum Action {
     /// the last thing `init` does before the tick starts): a hang after the watchdog's start
     /// and before the first tick (RTT blocking on a probe that stopped reading, say).
     HoldAtTheBootLine,
+    /// The supply rail changes, mV. Below the brown-out level the option bytes select (RM0090
+    /// 3.9.10 `BOR_LEV`; off: the ~1.75 V power-down reset) the board holds the part in reset
+    /// (the core stopped, every pin at its reset state), and releases it with a reset once the
+    /// supply is back above the level's rising threshold (rigless 0.4 leaves the brown-out reset
+    /// out; this is the board's model of it, DS8626's typical thresholds).
+    Supply(u32),
 }
 
 /// How to run.
@@ -92,6 +99,8 @@ pub struct RunConfig {
     pub trace_every: u64,
     /// The crystal, Hz (0: none that starts).
     pub crystal_hz: u64,
+    /// The supply rail at power-up, mV.
+    pub supply_mv: u32,
 }
 
 impl RunConfig {
@@ -107,6 +116,7 @@ impl RunConfig {
             actions: Vec::new(),
             trace_every: 0,
             crystal_hz: crate::board::HSE_HZ,
+            supply_mv: crate::board::SUPPLY_MV,
         }
     }
 }
@@ -163,6 +173,12 @@ pub struct RunReport {
     pub plant_error: Option<String>,
     /// When the core was held ([`Action::Hold`]), ns.
     pub holds: Vec<u64>,
+    /// When the supply fell below the brown-out level ([`Action::Supply`]), ns.
+    pub brown_outs: Vec<u64>,
+    /// What the part's models told the session (a firmware outside the manual's rules).
+    pub told: Vec<String>,
+    /// Flash wait states short of table 12 after a supply change ([`Action::Supply`]).
+    pub flash_violations: Vec<String>,
 }
 
 struct BoardDriver<H> {
@@ -189,6 +205,10 @@ struct BoardDriver<H> {
     resets_seen: usize,
     holds: Vec<u64>,
     hold_at_first_log_line: bool,
+    supply_mv: u32,
+    in_brown_out: bool,
+    brown_outs: Vec<u64>,
+    flash_violations: Vec<String>,
 }
 
 impl<H> BoardDriver<H> {
@@ -214,6 +234,80 @@ impl<H> BoardDriver<H> {
                 }
             }
             Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
+            Action::Supply(mv) => {
+                s.board_mut().mcu.part.set_supply(mv);
+                self.supply_mv = mv;
+                self.check_flash_latency(s, at);
+            }
+        }
+    }
+}
+
+/// Falling and rising brown-out thresholds of `BOR_LEV` (RM0090 3.9.10; DS8626 typical), mV.
+pub fn brown_out_thresholds_mv(bor_lev: u64) -> (u32, u32) {
+    match bor_lev & 0b11 {
+        0b00 => (2800, 2900),
+        0b01 => (2500, 2600),
+        0b10 => (2200, 2300),
+        _ => (1750, 1800),
+    }
+}
+
+/// The fewest flash wait states RM0090 table 12 allows at `hclk_hz` on a `supply_mv` rail
+/// (`None`: no count does).
+pub fn minimum_wait_states(hclk_hz: u64, supply_mv: u32) -> Option<u64> {
+    let step_hz: u64 = match supply_mv {
+        2700.. => 30_000_000,
+        2400..=2699 => 24_000_000,
+        2100..=2399 => 22_000_000,
+        _ => 20_000_000,
+    };
+    let ws = hclk_hz.div_ceil(step_hz).saturating_sub(1);
+    (ws <= 7).then_some(ws)
+}
+
+impl<H> BoardDriver<H> {
+    /// Table 12 checked whenever the supply changes (rigless 0.4 checks it only when `ACR` is
+    /// written or `HCLK` changes).
+    fn check_flash_latency(&mut self, s: &mut Session<VirtualF407>, at: u64) {
+        let acr = s
+            .board()
+            .mcu
+            .part
+            .bus()
+            .registers("FLASH")
+            .map_or(0, |r| r.get(rigless::soc::stm32f427::generated::flash::Register::Acr));
+        let (rcc, regs) = s.board_mut().mcu.part.clocks();
+        let hclk = rcc.hclk(regs);
+        let latency = acr & 0xF;
+        if minimum_wait_states(hclk, self.supply_mv).is_none_or(|min| latency < min) {
+            self.flash_violations.push(format!(
+                "at {at} ns: {latency} flash wait states at {hclk} Hz on {} mV (RM0090 table 12)",
+                self.supply_mv
+            ));
+        }
+    }
+
+    fn brown_out(&mut self, s: &mut Session<VirtualF407>, host: &mut dyn Host, stop: Stop) {
+        let optcr = s
+            .board()
+            .mcu
+            .part
+            .bus()
+            .registers("FLASH")
+            .map_or(0b11 << 2, |r| r.get(rigless::soc::stm32f427::generated::flash::Register::Optcr));
+        let (falling, rising) = brown_out_thresholds_mv(optcr >> 2);
+        if !self.in_brown_out && self.supply_mv < falling {
+            self.in_brown_out = true;
+            self.brown_outs.push(stop.at.0);
+            host.hold(true);
+            // BOR drives the part's internal reset (RM0090 6.1.2: the flags are BORRSTF and
+            // PINRSTF; rigless 0.4 carries no BORRSTF, so the pin's).
+            Mcu::reset(&mut s.board_mut().mcu, stop.at, rigless::device::ResetCause::Pin);
+        } else if self.in_brown_out && self.supply_mv >= rising {
+            self.in_brown_out = false;
+            host.hold(false);
+            s.reset_by_pin(stop.at, stop.instruction_count, host);
         }
     }
 }
@@ -236,6 +330,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             }
         }
         self.rtt.drain(host);
+        self.brown_out(s, host, stop);
         if self.hold_at_first_log_line && !self.rtt.lines.is_empty() {
             self.hold_at_first_log_line = false;
             self.apply(s, host, now, Action::Hold(true));
@@ -315,8 +410,9 @@ pub fn run<H: HostPort + Send + 'static>(
         .map_err(|e| format!("cannot read the firmware {}: {e}", cfg.elf.display()))?;
     let rtt = RttLog::new(&elf_bytes)?;
     let images = firmware_images(&cfg.elf)?;
-    let board =
+    let mut board =
         VirtualF407::with_crystal(cfg.crystal_hz).map_err(|e| format!("the virtual board: {e}"))?;
+    board.mcu.part.set_supply(cfg.supply_mv);
     let session = Session::new(Box::new(board), 0, VirtualNanos(cfg.period_ns))
         .map_err(|e| format!("the emulator session: {e}"))?;
     let mut actions = cfg.actions;
@@ -345,6 +441,10 @@ pub fn run<H: HostPort + Send + 'static>(
         resets_seen: 0,
         holds: Vec::new(),
         hold_at_first_log_line: false,
+        supply_mv: cfg.supply_mv,
+        in_brown_out: false,
+        brown_outs: Vec::new(),
+        flash_violations: Vec::new(),
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)
@@ -362,6 +462,7 @@ pub fn run<H: HostPort + Send + 'static>(
     for (a, u) in session.unimplemented() {
         gaps.push(format!("unimplemented at {a:#x}: {u:?}"));
     }
+    let told = session.told().map(|t| format!("{t:?}")).collect();
     let resets = session
         .resets()
         .iter()
@@ -386,6 +487,9 @@ pub fn run<H: HostPort + Send + 'static>(
         usb: format!("{:?}", mcu.otg.stats()),
         plant_error: d.plant_error,
         holds: d.holds,
+        brown_outs: d.brown_outs,
+        told,
+        flash_violations: d.flash_violations,
     };
     Ok((report, d.host))
 }
