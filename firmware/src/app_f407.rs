@@ -17,8 +17,10 @@
 //! Losses are counted: sample records that find the telemetry queue full stay in the core's
 //! queue, whose overflow the core counts (`samples_dropped` in every `Status`, and as gaps in
 //! the sequence numbers); frames the link cannot queue, either way, are counted in the core's
-//! `frames_dropped` (the link task's count reaches the tick through an atomic counter) and
-//! logged by the link task at every power of two.
+//! `frames_dropped` (the link task's count reaches the tick through an atomic counter). Only
+//! `init` and the fault handlers log: a defmt write holds a critical section (every interrupt
+//! masked), and RTT is non-blocking (`disable-blocking-mode`), so a probe that stops reading
+//! loses log lines instead of stalling the tick.
 //!
 //! Hardware-in-the-loop on the real board: the first `HostMessage::Sensor` frame switches the
 //! tick to lockstep (one core tick per sensor frame, the actuator frame sent back) until reset;
@@ -61,7 +63,10 @@ mod app {
     /// Timer ticks in lockstep without a sensor frame before `LinkLost`: 50 ms (USB full speed
     /// delivers a frame per 1 ms USB frame at best, so tens of ticks pass between frames).
     pub const LOCKSTEP_TIMEOUT_TICKS: u32 = board::TICK_HZ / 20;
-    /// Host frames the link task could not queue for the tick, not yet handed to the core.
+    /// Frames the link task lost (host frames it could not queue for the tick, messages that did
+    /// not fit a frame), not yet handed to the core's `frames_dropped`. The link task never logs:
+    /// defmt's RTT write masks every interrupt, the tick's included, and blocks while a probe's
+    /// buffer is full.
     static INBOUND_DROPPED: AtomicU32 = AtomicU32::new(0);
 
     type Serial = SerialPort<'static, UsbBusType, [u8; 256], [u8; 1024]>;
@@ -308,7 +313,6 @@ mod app {
         usb_dev, serial, decoder, inbound_tx, outbound_rx, samples_rx,
         tx: heapless::Vec<u8, MAX_FRAME> = heapless::Vec::new(),
         tx_sent: usize = 0,
-        inbound_dropped: u32 = 0,
     ])]
     fn host_link(cx: host_link::Context) {
         let host_link::LocalResources {
@@ -320,7 +324,6 @@ mod app {
             samples_rx,
             tx,
             tx_sent,
-            inbound_dropped,
             ..
         } = cx.local;
         usb_dev.poll(&mut [serial]);
@@ -335,15 +338,8 @@ mod app {
                     Some(Err(_)) => Inbound::Rejected,
                 };
                 if inbound_tx.enqueue(inbound).is_err() {
-                    // The core counts it (next tick); the log is rate-limited.
+                    // The core counts it (next tick) in `frames_dropped`.
                     INBOUND_DROPPED.fetch_add(1, Ordering::Relaxed);
-                    *inbound_dropped = inbound_dropped.wrapping_add(1);
-                    if inbound_dropped.is_power_of_two() {
-                        defmt::warn!(
-                            "host link: inbound queue full, {} frames dropped",
-                            *inbound_dropped
-                        );
-                    }
                 }
             }
         }
@@ -377,14 +373,14 @@ mod app {
             };
             tx.clear();
             *tx_sent = 0;
-            // SAFETY of the unwrap-free path: every RigMessage fits MAX_FRAME by the protocol's
-            // construction; a failure drops that message and is logged.
+            // Every RigMessage fits MAX_FRAME by the protocol's construction; a failure drops
+            // that message, counted in the core's `frames_dropped`.
             let _ = tx.resize_default(MAX_FRAME);
             match encode_frame(&msg, tx) {
                 Ok(n) => tx.truncate(n),
                 Err(_) => {
                     tx.clear();
-                    defmt::warn!("host link: a message did not fit a frame");
+                    INBOUND_DROPPED.fetch_add(1, Ordering::Relaxed);
                 }
             }
         }
