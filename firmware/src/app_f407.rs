@@ -327,6 +327,19 @@ mod app {
             ..
         } = cx.local;
         usb_dev.poll(&mut [serial]);
+        // The host has the port open: it configured the device and set DTR (a bus reset clears
+        // it). Nothing is written to the data endpoint otherwise: a write during a bus reset
+        // re-enables the IN endpoint the reset just disabled, and the driver's configure
+        // cannot disable it again (EPENA is set-only), which left it NAKing empty forever (found
+        // on the virtual board). A frame cut off by the reset is dropped and counted.
+        let open = serial.dtr();
+        if !open && !tx.is_empty() {
+            if *tx_sent < tx.len() {
+                INBOUND_DROPPED.fetch_add(1, Ordering::Relaxed);
+            }
+            tx.clear();
+            *tx_sent = 0;
+        }
 
         // Receive: decode, queue for the tick in arrival order.
         let mut buf = [0u8; 64];
@@ -346,6 +359,9 @@ mod app {
 
         // Transmit: finish the frame in flight, then replies/faults/actuator frames, then
         // sample batches; stop when the USB buffer is full.
+        if !open {
+            return;
+        }
         loop {
             if *tx_sent < tx.len() {
                 match serial.write(&tx[*tx_sent..]) {

@@ -270,13 +270,9 @@ impl<H> BoardDriver<H> {
     /// Table 12 checked whenever the supply changes (rigless 0.4 checks it only when `ACR` is
     /// written or `HCLK` changes).
     fn check_flash_latency(&mut self, s: &mut Session<VirtualF407>, at: u64) {
-        let acr = s
-            .board()
-            .mcu
-            .part
-            .bus()
-            .registers("FLASH")
-            .map_or(0, |r| r.get(rigless::soc::stm32f427::generated::flash::Register::Acr));
+        let acr = s.board().mcu.part.bus().registers("FLASH").map_or(0, |r| {
+            r.get(rigless::soc::stm32f427::generated::flash::Register::Acr)
+        });
         let (rcc, regs) = s.board_mut().mcu.part.clocks();
         let hclk = rcc.hclk(regs);
         let latency = acr & 0xF;
@@ -295,7 +291,9 @@ impl<H> BoardDriver<H> {
             .part
             .bus()
             .registers("FLASH")
-            .map_or(0b11 << 2, |r| r.get(rigless::soc::stm32f427::generated::flash::Register::Optcr));
+            .map_or(0b11 << 2, |r| {
+                r.get(rigless::soc::stm32f427::generated::flash::Register::Optcr)
+            });
         let (falling, rising) = brown_out_thresholds_mv(optcr >> 2);
         if !self.in_brown_out && self.supply_mv < falling {
             self.in_brown_out = true;
@@ -303,7 +301,11 @@ impl<H> BoardDriver<H> {
             host.hold(true);
             // BOR drives the part's internal reset (RM0090 6.1.2: the flags are BORRSTF and
             // PINRSTF; rigless 0.4 carries no BORRSTF, so the pin's).
-            Mcu::reset(&mut s.board_mut().mcu, stop.at, rigless::device::ResetCause::Pin);
+            Mcu::reset(
+                &mut s.board_mut().mcu,
+                stop.at,
+                rigless::device::ResetCause::Pin,
+            );
         } else if self.in_brown_out && self.supply_mv >= rising {
             self.in_brown_out = false;
             host.hold(false);
@@ -360,10 +362,10 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         let out = rig::outputs(mcu);
         let (mut p, mut x_r, mut x_f, mut current) = (0.0, 0.0, 0.0, 0.0);
         if let Some(robot) = self.robot.as_mut() {
-            if self.plant_error.is_none() {
-                if let Err(e) = robot.advance(period as f64 * 1e-9, out.force_n) {
-                    self.plant_error = Some(e.to_string());
-                }
+            if self.plant_error.is_none()
+                && let Err(e) = robot.advance(period as f64 * 1e-9, out.force_n)
+            {
+                self.plant_error = Some(e.to_string());
             }
             let st = robot.state();
             (p, x_r, x_f, current) = (st.p, st.x_r, st.x_f, robot.current_a());
@@ -384,7 +386,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             usb_configured: mcu.otg.configured(),
             ticks: mcu.tim7.updates,
         };
-        if self.trace_every > 0 && self.stops % self.trace_every == 0 {
+        if self.trace_every > 0 && self.stops.is_multiple_of(self.trace_every) {
             self.trace.push(row);
         }
         self.last = Some(row);
