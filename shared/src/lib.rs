@@ -21,6 +21,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod approach;
 pub mod bed;
 pub mod camera;
 pub mod command;

@@ -20,6 +20,7 @@
 //! watchdog, setpoint, camera trigger, position controller, stroke and tracking checks, sample
 //! record. Any fault found on a tick makes that same tick's force command exactly 0.
 
+use crate::approach::Approach;
 use crate::bed::{BedApparatus, BedInputs, BedOutputs, BedStatus};
 use crate::camera::CameraTrigger;
 use crate::command::{Command, CommandError, CommandKind, Reply};
@@ -115,6 +116,12 @@ pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     run_tick: u32,
     phase: Phase,
     hold: Setpoint,
+    /// The move to the start after an Arm away from it (see [`crate::approach`]).
+    approach: Option<Approach>,
+    /// A Start that arrived during the approach, honoured at its end.
+    start_pending: bool,
+    /// The position the encoder read last, m.
+    last_position_m: f32,
     ticks_since_host: u32,
     consecutive_rejected: u32,
     lockstep_link: LockstepLink,
@@ -148,6 +155,9 @@ impl<const Q: usize> Rig<Q> {
             run_tick: 0,
             phase: Phase::None,
             hold: Setpoint::default(),
+            approach: None,
+            start_pending: false,
+            last_position_m: f32::NAN,
             ticks_since_host: 0,
             consecutive_rejected: 0,
             lockstep_link: LockstepLink::new(),
@@ -287,6 +297,7 @@ impl<const Q: usize> Rig<Q> {
             self.fault_at(FaultCode::EmergencyStop, tick);
         }
         let (count, position_m) = self.read_encoder(input.encoder_raw, tick);
+        self.last_position_m = position_m;
         self.watch_host(tick);
         let target = self.advance_setpoint();
         let trigger = self.camera_tick();
@@ -406,6 +417,18 @@ impl<const Q: usize> Rig<Q> {
                 }
             }
             RigState::Done => self.phase = Phase::Finished,
+            RigState::Armed => {
+                if let Some(a) = self.approach.as_mut() {
+                    target.setpoint = a.advance();
+                    if a.done() {
+                        self.approach = None;
+                        if core::mem::take(&mut self.start_pending) {
+                            self.run_tick = 0;
+                            self.state = RigState::Running;
+                        }
+                    }
+                }
+            }
             _ => {}
         }
         target
@@ -655,6 +678,12 @@ impl<const Q: usize> Rig<Q> {
                 self.controller.reset();
                 self.velocity.reset();
                 self.hold = j.profile.start_setpoint(&self.replay);
+                self.approach = Approach::new(
+                    self.last_position_m,
+                    self.hold.position_m,
+                    self.config.tick_hz,
+                );
+                self.start_pending = false;
                 self.run_tick = 0;
                 self.phase = Phase::None;
                 // The camera runs from Arm: the frames before Start show the rod at rest,
@@ -671,6 +700,11 @@ impl<const Q: usize> Rig<Q> {
             (Command::Start, Armed) => {
                 if self.jump.is_none() {
                     return Err(CommandError::NotConfigured);
+                }
+                if self.approach.is_some() {
+                    // Still moving to the start: the jump begins at the end of the approach.
+                    self.start_pending = true;
+                    return Ok(Reply::Ack);
                 }
                 self.run_tick = 0;
                 self.state = Running;
@@ -727,6 +761,8 @@ impl<const Q: usize> Rig<Q> {
 
     /// To Idle: zero force, drive disabled, camera off.
     fn stop_motion(&mut self) {
+        self.approach = None;
+        self.start_pending = false;
         self.state = RigState::Idle;
         self.phase = Phase::None;
         self.camera.stop();

@@ -788,3 +788,65 @@ fn the_drive_calibration_is_checked_set_only_with_the_drive_off_and_reported() {
     ));
     assert_eq!(r.status().drive_calibration, cal);
 }
+
+#[test]
+fn arming_away_from_the_start_approaches_without_a_step_and_start_waits_for_it() {
+    // A board powers up with the carriage at its own zero, 18.75 mm from the sine's start.
+    let mut plant = Plant::new(0.0);
+    let mut r: Rig<64> = Rig::new(RigConfig {
+        metres_per_count: plant.metres_per_count as f32,
+        max_counts_per_tick: (1e-3 / plant.metres_per_count) as u32,
+        ..RigConfig::default()
+    })
+    .unwrap();
+    r.handle(&Command::Configure(sine(JumpKind::Single, 5.0, 0.0)))
+        .unwrap();
+    // Idle ticks: the encoder's position is known before the Arm.
+    for _ in 0..10 {
+        let out = r.tick(&input(plant.raw()));
+        plant.step(out.force_n, 1e-4);
+    }
+    r.handle(&Command::Arm).unwrap();
+    let start = r.hold.position_m;
+    assert!((start.abs() - 0.01875).abs() < 1e-6, "{start}");
+    let mut last_sp = 0.0f32;
+    let mut started_at = None;
+    for k in 0..20_000u32 {
+        if k == 100 {
+            // The host's Start arrives while the carriage is still on its way.
+            r.handle(&Command::Start).unwrap();
+        }
+        let out = r.tick(&input(plant.raw()));
+        while let Some(s) = r.samples().pop() {
+            if started_at.is_none() {
+                assert!(
+                    (s.commanded_position_m - last_sp).abs() < 2e-5,
+                    "a setpoint step of {} m at tick {k}",
+                    s.commanded_position_m - last_sp
+                );
+            }
+            last_sp = s.commanded_position_m;
+        }
+        assert!(out.fault.is_none(), "fault {:?} at tick {k}", out.fault);
+        assert!(out.force_n.abs() < 60.0, "{} N at tick {k}", out.force_n);
+        if out.state == RigState::Running && started_at.is_none() {
+            started_at = Some(k);
+            // At rest at the start when the jump begins.
+            assert!(
+                (plant.p - start as f64).abs() < 2e-4,
+                "{} m from the start",
+                plant.p - start as f64
+            );
+        }
+        plant.step(out.force_n, 1e-4);
+        if k % 1000 == 0 {
+            r.handle(&Command::Heartbeat).unwrap();
+        }
+    }
+    let started_at = started_at.expect("the jump never started");
+    // The half-cosine at 0.05 m/s peak takes pi d / 0.1 = 0.59 s, then 0.3 s of rest.
+    assert!(
+        (8_500..9_500).contains(&started_at),
+        "started at tick {started_at}"
+    );
+}

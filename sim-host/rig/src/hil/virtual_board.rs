@@ -34,6 +34,9 @@ pub struct VirtualBoardConfig {
     pub elf: PathBuf,
     /// The robot on the rig and its ground model (None: the drive moves nothing).
     pub robot: Option<(Params, ModelName)>,
+    /// Where the carriage rests at power-up, m (the encoder's zero is the rig's, p = 0; the
+    /// sil and pil rigs start the robot at the trajectory's start, which is what `rig` passes).
+    pub p0_m: f64,
     /// Run no faster than this multiple of real time (None: as fast as it can).
     pub pace: Option<f64>,
     /// How long to wait for an answer.
@@ -47,6 +50,7 @@ impl VirtualBoardConfig {
             program: root.join(VIRTUAL_BOARD_BIN),
             elf: root.join(F407_ELF),
             robot: None,
+            p0_m: 0.0,
             pace: None,
             answer_timeout: Duration::from_secs(10),
         }
@@ -110,7 +114,9 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
         cmd.arg("--robot")
             .arg(&params_path)
             .arg("--model")
-            .arg(model.to_string());
+            .arg(model.to_string())
+            .arg("--p0")
+            .arg(cfg.p0_m.to_string());
     }
     if let Some(p) = cfg.pace {
         cmd.arg("--pace").arg(p.to_string());

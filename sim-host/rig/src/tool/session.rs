@@ -226,6 +226,12 @@ fn free_running(link: &mut dyn RigLink, program: &Program) -> Result<RunRecord, 
     link.command(&Command::Arm)?;
     wait(link, program.settle_s)?;
     let start = query_status(link)?;
+    if let (RigState::Faulted, Some(fault)) = (start.state, start.fault) {
+        return Err(LinkError::Protocol(format!(
+            "the board latched {fault:?} at tick {} while armed, before the start",
+            start.fault_tick
+        )));
+    }
     link.command(&Command::Start)?;
     let deadline = Instant::now() + Duration::from_secs_f64(program.max_run_s);
     let mut record = RunRecord::default();

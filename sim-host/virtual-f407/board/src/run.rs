@@ -26,6 +26,9 @@ pub const VREFINT_CAL: (u64, u16) = (0x1FFF_7A2A, 1500);
 /// The unique device ID (RM0090 39.1, 96 bits at 0x1FFF_7A10): the board's, fixed.
 pub const UNIQUE_ID: (u64, [u32; 3]) = (0x1FFF_7A10, [0x0030_0041, 0x3532_5108, 0x3636_3830]);
 
+/// TIM2_CNT (RM0090 18.4.10).
+const TIM2_CNT: u64 = 0x4000_0024;
+
 /// The real host's side of the USB CDC port.
 pub trait HostPort {
     /// Bytes the host sends now (empty if none); `None` once the host has closed the port.
@@ -140,6 +143,8 @@ pub struct TraceRow {
     pub usb_configured: bool,
     /// TIM7 update events so far.
     pub ticks: u64,
+    /// TIM2's counter as the firmware reads it (a debugger's read).
+    pub tim2_count: u32,
 }
 
 /// What a run leaves.
@@ -209,6 +214,8 @@ struct BoardDriver<H> {
     in_brown_out: bool,
     brown_outs: Vec<u64>,
     flash_violations: Vec<String>,
+    pending_host_bytes: Vec<u8>,
+    robot_released: bool,
 }
 
 impl<H> BoardDriver<H> {
@@ -346,13 +353,18 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         }
         let period = self.cfg_period;
         let mcu = &mut s.board_mut().mcu;
-        // The host's bytes, both ways.
+        // The host's bytes, both ways. A real host cannot open the port before the device is
+        // enumerated: what it writes earlier waits here, not in the virtual host (which, like
+        // a bus with no device, discards it).
         if !self.host_closed {
             match self.host.receive() {
-                Some(bytes) if !bytes.is_empty() => mcu.otg.host_send(&bytes),
-                Some(_) => {}
+                Some(bytes) => self.pending_host_bytes.extend_from_slice(&bytes),
                 None => self.host_closed = true,
             }
+        }
+        if mcu.otg.configured() && !self.pending_host_bytes.is_empty() {
+            mcu.otg.host_send(&self.pending_host_bytes);
+            self.pending_host_bytes.clear();
         }
         let received = mcu.otg.host_take_received();
         if !received.is_empty() {
@@ -361,8 +373,12 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         // The rig over the next period: the drive's force as the board commands it now.
         let out = rig::outputs(mcu);
         let (mut p, mut x_r, mut x_f, mut current) = (0.0, 0.0, 0.0, 0.0);
+        // The carriage is held where it is until the drive first takes it (on the rig it rests
+        // on its support, not in free fall along the rod): the plant starts moving then.
+        self.robot_released |= out.drive_enable;
         if let Some(robot) = self.robot.as_mut() {
-            if self.plant_error.is_none()
+            if self.robot_released
+                && self.plant_error.is_none()
                 && let Err(e) = robot.advance(period as f64 * 1e-9, out.force_n)
             {
                 self.plant_error = Some(e.to_string());
@@ -385,6 +401,13 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             x_f_m: x_f,
             usb_configured: mcu.otg.configured(),
             ticks: mcu.tim7.updates,
+            tim2_count: rigless::mcu::Operate::peek(
+                mcu,
+                stop.at,
+                TIM2_CNT,
+                rigless::soc::Width::W32,
+            )
+            .unwrap_or(0) as u32,
         };
         if self.trace_every > 0 && self.stops.is_multiple_of(self.trace_every) {
             self.trace.push(row);
@@ -447,6 +470,8 @@ pub fn run<H: HostPort + Send + 'static>(
         in_brown_out: false,
         brown_outs: Vec::new(),
         flash_violations: Vec::new(),
+        pending_host_bytes: Vec::new(),
+        robot_released: false,
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)

@@ -107,9 +107,10 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         traj.eval(0.0).position_m,
         model_config,
     )?;
-    let mut link = a
-        .target
-        .open_with_robot(&model_config, Some((params.clone(), spec.model)))?;
+    let mut link = a.target.open_with_robot(
+        &model_config,
+        Some((params.clone(), spec.model, traj.eval(0.0).position_m)),
+    )?;
     let name = link.name();
     let record = run_program(
         link.as_mut(),

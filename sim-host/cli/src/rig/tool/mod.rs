@@ -140,11 +140,11 @@ impl TargetArgs {
     }
 
     /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
-    /// `--drive-calibration` names one. `robot`: the robot a virtual F407 board moves.
+    /// `--drive-calibration` names one. `robot`: the robot a virtual F407 board moves, and where its carriage rests at power-up, m.
     pub fn open_with_robot(
         &self,
         model: &RigModelConfig,
-        robot: Option<(Params, ModelName)>,
+        robot: Option<(Params, ModelName, f64)>,
     ) -> Result<Box<dyn RigLink>, CliError> {
         if self.controller.link == Some(SimLink::F407) {
             let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
@@ -154,7 +154,10 @@ impl TargetArgs {
             if let Some(elf) = &self.firmware {
                 cfg.elf = elf.clone();
             }
-            cfg.robot = robot;
+            if let Some((params, model, p0_m)) = robot {
+                cfg.robot = Some((params, model));
+                cfg.p0_m = p0_m;
+            }
             let board = virtual_board::start(&cfg).map_err(|e| {
                 CliError::input(format!("cannot start the virtual F407 board: {e}"))
             })?;

@@ -360,9 +360,10 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         f64::from(plan.samples[0]),
         model_config,
     )?;
-    let mut link = a
-        .target
-        .open_with_robot(&model_config, Some((params.clone(), a.rig.model())))?;
+    let mut link = a.target.open_with_robot(
+        &model_config,
+        Some((params.clone(), a.rig.model(), f64::from(plan.samples[0]))),
+    )?;
     let name = link.name();
     bring_to_idle(link.as_mut())
         .and_then(|()| upload(link.as_mut(), &plan))
