@@ -78,8 +78,8 @@ pub struct Outputs {
     pub lift_up: bool,
     /// DAC channel 2, V.
     pub blower_dac_v: f64,
-    /// TIM3 CH1's output on PC6 is high now (the shaker's PWM).
-    pub shaker_pwm_high: bool,
+    /// TIM3 CH1's PWM duty on PC6 (the shaker's), 0-1 (0 when not a running PWM).
+    pub shaker_duty: f64,
     /// PD12 (green, running).
     pub led_running: bool,
     /// PD14 (red, fault).
@@ -87,16 +87,31 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// The safe state: drive disabled at zero force, the bed's actuators off (blower below
-    /// 10 mV, lift disabled; the shaker is judged by its duty elsewhere).
+    /// The whole safe state: drive disabled, the bed's actuators off (blower below 10 mV, lift
+    /// disabled, shaker duty zero).
     pub fn drive_and_lift_safe(&self) -> bool {
-        !self.drive_enable && !self.lift_enable && self.blower_dac_v < 0.01
+        !self.drive_enable
+            && !self.lift_enable
+            && self.blower_dac_v < 0.01
+            && self.shaker_duty == 0.0
     }
 }
 
 fn high(part: &mut Stm32f427, port: usize, pin: u8) -> bool {
     let (gpio, regs) = part.port(port);
     gpio.level(Pin::new(pin).expect("pin 0..15"), regs) == Level::High
+}
+
+/// TIM3 channel 1's PWM duty (the shaker), read off the timer as a scope would see its pin.
+fn shaker_duty(part: &mut Stm32f427) -> f64 {
+    let (tim, regs) = part.timer(1);
+    match tim.pulse(
+        rigless::soc::st::tim::Channel::new(1).expect("channel 1"),
+        regs,
+    ) {
+        Some(p) if p.period.0 > 0 => p.width.0 as f64 / p.period.0 as f64,
+        _ => 0.0,
+    }
 }
 
 /// Reads the board's outputs.
@@ -119,7 +134,7 @@ pub fn outputs(mcu: &mut F407) -> Outputs {
         lift_enable: high(part, PORT_E, 10),
         lift_up: high(part, PORT_E, 11),
         blower_dac_v: mcu.dac.volts(1),
-        shaker_pwm_high: high(part, PORT_C, 6),
+        shaker_duty: shaker_duty(part),
         led_running: high(part, PORT_D, 12),
         led_fault: high(part, PORT_D, 14),
     }

@@ -80,6 +80,13 @@ pub enum Action {
     /// supply is back above the level's rising threshold (rigless 0.4 leaves the brown-out reset
     /// out; this is the board's model of it, DS8626's typical thresholds).
     Supply(u32),
+    /// The core's next access to `[from, to)` fails as a bus error (no model sees it).
+    BusError {
+        /// First address.
+        from: u64,
+        /// One past the last.
+        to: u64,
+    },
 }
 
 /// How to run.
@@ -241,6 +248,7 @@ impl<H> BoardDriver<H> {
                 }
             }
             Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
+            Action::BusError { from, to } => s.fail_next(from, to),
             Action::Supply(mv) => {
                 s.board_mut().mcu.part.set_supply(mv);
                 self.supply_mv = mv;

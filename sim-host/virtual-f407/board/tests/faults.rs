@@ -1,0 +1,277 @@
+//! Every fault path of the F407 binary ends in the whole safe state (drive enable low, force
+//! zero, lift, shaker and blower off) within the time the docs promise, observed at the pins
+//! of the virtual board: the robot armed on hard ground, the host (commands over USB) keeping
+//! it alive with heartbeats, then one fault.
+
+mod common;
+
+use sandjumper_core::config::{JumpConfig, TrajectorySpec};
+use sandjumper_core::protocol::encode_frame_vec;
+use sandjumper_core::trajectory::JumpKind;
+use sandjumper_core::{Command, HostMessage};
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_virtual_f407::rig::{BedWiring, Robot};
+use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, TraceRow, run};
+
+const MS: u64 = 1_000_000;
+/// When the host arms the rig (the board is enumerated by ~140 ms).
+const ARM_AT: u64 = 200 * MS;
+/// When the fault is injected.
+const FAULT_AT: u64 = 600 * MS;
+
+fn frame(id: u16, command: Command) -> Vec<u8> {
+    encode_frame_vec(&HostMessage::Command { id, command })
+        .expect("a frame")
+        .to_vec()
+}
+
+/// Configure a single 5 Hz sine and arm at `ARM_AT`; heartbeats every 20 ms until `silent_from`.
+fn armed_run(silent_from: u64, end: u64, mut extra: Vec<(u64, Action)>) -> Option<RunReport> {
+    let elf = common::firmware_elf()?;
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(end);
+    cfg.trace_every = 1;
+    let params = Params::preset(0.57).expect("preset");
+    // At the single sine's start (-A), as the lockstep rigs start it: no approach after Arm.
+    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 5.0,
+        tau_s: 0.0,
+    });
+    let mut actions = vec![
+        (
+            ARM_AT - 10 * MS,
+            Action::HostBytes(frame(1, Command::Configure(jc))),
+        ),
+        (ARM_AT, Action::HostBytes(frame(2, Command::Arm))),
+    ];
+    let mut id = 3;
+    let mut t = ARM_AT + 20 * MS;
+    while t < silent_from.min(end) {
+        actions.push((t, Action::HostBytes(frame(id, Command::Heartbeat))));
+        id += 1;
+        t += 20 * MS;
+    }
+    actions.append(&mut extra);
+    cfg.actions = actions;
+    Some(run(cfg, NoHost::default()).expect("the run").0)
+}
+
+fn at(r: &RunReport, t: u64) -> TraceRow {
+    *r.trace
+        .iter()
+        .find(|row| row.t_ns >= t)
+        .expect("a trace row")
+}
+
+/// The drive was on just before `from`, and everything is safe from `from + within` to the end.
+fn safe_within(r: &RunReport, from: u64, within: u64, what: &str) {
+    let before = at(r, from - MS);
+    assert!(
+        before.out.drive_enable,
+        "{what}: the drive was not enabled before the fault: {before:?}\nlog {:?}",
+        r.log
+    );
+    let first_safe = r
+        .trace
+        .iter()
+        .filter(|row| row.t_ns >= from)
+        .find(|row| row.out.drive_and_lift_safe() && row.out.force_n == 0.0)
+        .unwrap_or_else(|| panic!("{what}: never safe after the fault; log {:?}", r.log));
+    assert!(
+        first_safe.t_ns <= from + within,
+        "{what}: safe only {} us after the fault",
+        (first_safe.t_ns - from) / 1000
+    );
+    for row in r.trace.iter().filter(|row| row.t_ns >= first_safe.t_ns) {
+        assert!(
+            !row.out.drive_enable && !row.out.lift_enable && row.out.blower_dac_v < 0.01,
+            "{what}: not safe at {} ns: {row:?}",
+            row.t_ns
+        );
+    }
+}
+
+#[test]
+fn the_host_falling_silent_stops_the_drive_after_the_command_watchdog() {
+    let Some(r) = armed_run(FAULT_AT, FAULT_AT + 700 * MS, vec![]) else {
+        return;
+    };
+    // The command watchdog: 500 ms without a frame from the host (RigConfig::watchdog_ticks).
+    let last_heartbeat = FAULT_AT - 20 * MS;
+    let row = at(&r, last_heartbeat + 450 * MS);
+    assert!(
+        row.out.drive_enable,
+        "stopped before the watchdog's 500 ms: {row:?}"
+    );
+    safe_within(&r, last_heartbeat + 450 * MS, 60 * MS, "host silent");
+    assert!(at(&r, FAULT_AT + 690 * MS).out.led_fault);
+}
+
+#[test]
+fn the_usb_cable_pulled_stops_the_drive_after_the_command_watchdog() {
+    let Some(r) = armed_run(
+        FAULT_AT + 600 * MS,
+        FAULT_AT + 700 * MS,
+        vec![(FAULT_AT, Action::UsbAttached(false))],
+    ) else {
+        return;
+    };
+    safe_within(&r, FAULT_AT + 450 * MS, 80 * MS, "cable pulled");
+}
+
+/// A frozen encoder (its cable pulled): the count stops, so the jump that starts next moves a
+/// carriage the loop cannot see; the tracking error stops it. (Through TIM2's input filter a
+/// real scale's edges never arrive faster than the core's plausibility limit, so the core's
+/// `EncoderFault` is the lockstep rigs' fault, not this board's.)
+#[test]
+fn a_frozen_encoder_stops_the_drive_on_the_tracking_error() {
+    let start = FAULT_AT + 10 * MS;
+    let Some(r) = armed_run(
+        FAULT_AT + 400 * MS,
+        FAULT_AT + 300 * MS,
+        vec![
+            (FAULT_AT, Action::EncoderFrozen),
+            (start, Action::HostBytes(frame(99, Command::Start))),
+        ],
+    ) else {
+        return;
+    };
+    safe_within(&r, start, 100 * MS, "frozen encoder");
+}
+
+#[test]
+fn the_emergency_stop_stops_drive_and_bed_within_a_tick() {
+    let pressed = BedWiring::Connected {
+        emergency_stop: true,
+        lift_up_limit: false,
+        lift_down_limit: true,
+    };
+    let Some(r) = armed_run(
+        FAULT_AT + 200 * MS,
+        FAULT_AT + 100 * MS,
+        vec![(FAULT_AT, Action::Bed(pressed))],
+    ) else {
+        return;
+    };
+    safe_within(&r, FAULT_AT, 300_000, "emergency stop");
+}
+
+#[test]
+fn the_bed_harness_pulled_out_is_an_emergency_stop() {
+    let Some(r) = armed_run(
+        FAULT_AT + 200 * MS,
+        FAULT_AT + 100 * MS,
+        vec![(FAULT_AT, Action::Bed(BedWiring::Unwired))],
+    ) else {
+        return;
+    };
+    safe_within(&r, FAULT_AT, 300_000, "harness pulled out");
+}
+
+#[test]
+fn a_bus_error_hardfault_stops_everything_and_the_watchdog_restarts_the_board() {
+    // The next access to GPIOE (the tick writes it every period) fails: a precise bus error,
+    // escalated to HardFault.
+    let Some(r) = armed_run(
+        FAULT_AT + 200 * MS,
+        FAULT_AT + 100 * MS,
+        vec![(
+            FAULT_AT,
+            Action::BusError {
+                from: 0x4002_1000,
+                to: 0x4002_1400,
+            },
+        )],
+    ) else {
+        return;
+    };
+    safe_within(&r, FAULT_AT, 300_000, "HardFault");
+    assert!(r.log.iter().any(|l| l.contains("HardFault")), "{:?}", r.log);
+    let (reset_at, cause) = r
+        .resets
+        .first()
+        .cloned()
+        .expect("the watchdog resets the board");
+    assert!(
+        reset_at > FAULT_AT && reset_at < FAULT_AT + 25 * MS && cause.contains("IWDG"),
+        "{reset_at} {cause}"
+    );
+}
+
+#[test]
+fn the_fault_runs_are_identical_twice() {
+    let pressed = BedWiring::Connected {
+        emergency_stop: true,
+        lift_up_limit: false,
+        lift_down_limit: true,
+    };
+    let a = armed_run(
+        FAULT_AT + 200 * MS,
+        FAULT_AT + 50 * MS,
+        vec![(FAULT_AT, Action::Bed(pressed))],
+    );
+    let b = armed_run(
+        FAULT_AT + 200 * MS,
+        FAULT_AT + 50 * MS,
+        vec![(FAULT_AT, Action::Bed(pressed))],
+    );
+    let (Some(a), Some(b)) = (a, b) else { return };
+    assert_eq!(a.trace, b.trace);
+    assert_eq!(a.log, b.log);
+}
+
+/// A HardFault while the bed apparatus runs (blower, shaker, lift: the host prepares the bed
+/// with the rig Idle) turns all of it off, not only the drive.
+#[test]
+fn a_hardfault_while_the_bed_runs_turns_the_bed_off_too() {
+    use sandjumper_core::bed::{BedCommand, LiftMove};
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(400 * MS);
+    cfg.trace_every = 1;
+    cfg.actions = vec![
+        (
+            200 * MS,
+            Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+        ),
+        (
+            205 * MS,
+            Action::HostBytes(frame(2, Command::Bed(BedCommand::Shaker { duty: 0.5 }))),
+        ),
+        (
+            210 * MS,
+            Action::HostBytes(frame(3, Command::Bed(BedCommand::Lift(LiftMove::Up)))),
+        ),
+        (
+            300 * MS,
+            Action::BusError {
+                from: 0x4002_1000,
+                to: 0x4002_1400,
+            },
+        ),
+    ];
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let running = at(&r, 290 * MS);
+    assert!(
+        running.out.lift_enable && running.out.blower_dac_v > 1.0,
+        "the bed did not run: {running:?}"
+    );
+    assert!(
+        (running.out.shaker_duty - 0.5).abs() < 0.01,
+        "the shaker is not at half duty: {running:?}"
+    );
+    let after: Vec<_> = r.trace.iter().filter(|row| row.t_ns >= 301 * MS).collect();
+    assert!(
+        after.iter().all(|row| !row.out.lift_enable
+            && row.out.blower_dac_v < 0.01
+            && row.out.shaker_duty == 0.0
+            && !row.out.drive_enable),
+        "the bed still runs after the HardFault: {:?}",
+        after.first()
+    );
+}
