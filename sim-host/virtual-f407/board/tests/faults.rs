@@ -275,3 +275,38 @@ fn a_hardfault_while_the_bed_runs_turns_the_bed_off_too() {
         after.first()
     );
 }
+
+/// docs/bringup.md steps 2, 4 and 7 with nothing wired to the bed inputs: the board answers,
+/// takes a configuration and arms (the drive enable rises), where the floating inputs used to
+/// latch the emergency stop and refuse `Arm` ("lift not down").
+#[test]
+fn a_board_with_nothing_wired_can_be_armed() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(ARM_AT + 5 * MS);
+    cfg.trace_every = 1;
+    cfg.bed = BedWiring::Unwired;
+    let params = Params::preset(0.57).expect("preset");
+    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 5.0,
+        tau_s: 0.0,
+    });
+    cfg.actions = vec![
+        (
+            ARM_AT - 10 * MS,
+            Action::HostBytes(frame(1, Command::Configure(jc))),
+        ),
+        (ARM_AT, Action::HostBytes(frame(2, Command::Arm))),
+    ];
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let after = at(&r, ARM_AT + 4 * MS);
+    assert!(
+        after.out.drive_enable && !after.out.led_fault,
+        "not armed with nothing wired: {after:?}"
+    );
+}
