@@ -191,6 +191,9 @@ pub struct RunReport {
     pub told: Vec<String>,
     /// Flash wait states short of table 12 after a supply change ([`Action::Supply`]).
     pub flash_violations: Vec<String>,
+    /// (shortest, longest) interval between two writes of the force DAC, ns: the control
+    /// tick's output jitter (100,000 ns apart when nothing delays the tick).
+    pub force_dac_interval_ns: Option<(u64, u64)>,
 }
 
 struct BoardDriver<H> {
@@ -525,6 +528,7 @@ pub fn run<H: HostPort + Send + 'static>(
         brown_outs: d.brown_outs,
         told,
         flash_violations: d.flash_violations,
+        force_dac_interval_ns: mcu.dac.ch1_interval_ns,
     };
     Ok((report, d.host))
 }

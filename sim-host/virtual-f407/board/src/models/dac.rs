@@ -27,6 +27,11 @@ pub struct Dac {
     /// Writes of registers this model does not convert (8-bit, left-aligned, dual).
     pub other_writes: u64,
     cr: u64,
+    /// Virtual time of the last channel-1 write and the spread of the intervals between them
+    /// (min, max), ns: the control tick's output jitter as a scope on PA4 would show it.
+    last_ch1_write_ns: Option<u64>,
+    /// (shortest, longest) interval between two channel-1 writes, ns.
+    pub ch1_interval_ns: Option<(u64, u64)>,
 }
 
 impl Dac {
@@ -66,7 +71,7 @@ impl Device for Dac {
         reg: dac::Register,
         v: u64,
         r: &mut RegisterFile,
-        _cx: &mut DeviceContext<'_>,
+        cx: &mut DeviceContext<'_>,
     ) {
         let ch = match reg {
             dac::Register::Cr => {
@@ -82,6 +87,18 @@ impl Device for Dac {
             }
         };
         self.writes += 1;
+        if ch == 0 {
+            let now = cx.now().0;
+            // From 5 ms on: init's writes and the first tick are not the tick's rhythm.
+            if let Some(last) = self.last_ch1_write_ns.filter(|_| now > 5_000_000) {
+                let d = now - last;
+                self.ch1_interval_ns = Some(match self.ch1_interval_ns {
+                    None => (d, d),
+                    Some((lo, hi)) => (lo.min(d), hi.max(d)),
+                });
+            }
+            self.last_ch1_write_ns = Some(now);
+        }
         let code = (v & 0xFFF) as u16;
         self.codes[ch] = code;
         r.set(
