@@ -44,6 +44,7 @@ pub mod fastmath;
 pub mod ground;
 pub mod hybrid;
 pub mod integrate;
+pub mod intrusion_rig;
 pub mod jump;
 pub mod options;
 pub mod params;

@@ -32,11 +32,8 @@ pub struct VirtualBoardConfig {
     pub program: PathBuf,
     /// The F407 ELF.
     pub elf: PathBuf,
-    /// The robot on the rig and its ground model (None: the drive moves nothing).
-    pub robot: Option<(Params, ModelName)>,
-    /// Where the carriage rests at power-up, m (the encoder's zero is the rig's, p = 0; the
-    /// sil and pil rigs start the robot at the trajectory's start, which is what `rig` passes).
-    pub p0_m: f64,
+    /// What the drive moves (None: nothing).
+    pub load: Option<VirtualLoad>,
     /// Run no faster than this multiple of real time (None: as fast as it can).
     pub pace: Option<f64>,
     /// How long to wait for an answer.
@@ -49,12 +46,36 @@ impl VirtualBoardConfig {
         Self {
             program: root.join(VIRTUAL_BOARD_BIN),
             elf: root.join(F407_ELF),
-            robot: None,
-            p0_m: 0.0,
+            load: None,
             pace: None,
             answer_timeout: Duration::from_secs(10),
         }
     }
+}
+
+/// What the virtual board's drive moves.
+#[derive(Clone, Debug)]
+pub enum VirtualLoad {
+    /// The robot on its ground model, the carriage resting at `p0_m` at power-up (the encoder's
+    /// zero is the rig's, p = 0; the sil and pil rigs start the robot at the trajectory's start,
+    /// which is what `rig` passes).
+    Robot {
+        /// Parameters.
+        params: Params,
+        /// Ground model.
+        model: ModelName,
+        /// m.
+        p0_m: f64,
+    },
+    /// The slow-intrusion fixture (motor clamped, foot on the surface at `surface_p_m`).
+    Intrusion {
+        /// Parameters.
+        params: Params,
+        /// Ground model (a sand model).
+        model: ModelName,
+        /// m.
+        surface_p_m: f64,
+    },
 }
 
 /// A running virtual board: the link, and where its plant's summary will be once it ends.
@@ -102,21 +123,33 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
         .arg("--stdio")
         .arg("--summary")
         .arg(&summary_path);
-    if let Some((params, model)) = &cfg.robot {
+    if let Some(load) = &cfg.load {
+        let (params, model, flag, at_flag, at_m) = match load {
+            VirtualLoad::Robot {
+                params,
+                model,
+                p0_m,
+            } => (params, model, "--robot", "--p0", p0_m),
+            VirtualLoad::Intrusion {
+                params,
+                model,
+                surface_p_m,
+            } => (params, model, "--intrusion", "--surface-p", surface_p_m),
+        };
         let params_path = dir.path().join("params.toml");
         let text = toml::to_string(params).map_err(|e| LinkError::Io {
-            what: "the robot's parameters".into(),
+            what: "the rig's parameters".into(),
             message: e.to_string(),
         })?;
         std::fs::File::create(&params_path)
             .and_then(|mut f| f.write_all(text.as_bytes()))
-            .map_err(io("writing the robot's parameters"))?;
-        cmd.arg("--robot")
+            .map_err(io("writing the rig's parameters"))?;
+        cmd.arg(flag)
             .arg(&params_path)
             .arg("--model")
             .arg(model.to_string())
-            .arg("--p0")
-            .arg(cfg.p0_m.to_string());
+            .arg(at_flag)
+            .arg(at_m.to_string());
     }
     if let Some(p) = cfg.pace {
         cmd.arg("--pace").arg(p.to_string());

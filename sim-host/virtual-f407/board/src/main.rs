@@ -3,6 +3,7 @@
 //! ```text
 //! virtual-f407 --elf ELF [--ms N] [--bed ready|unwired] [--pace X] [--stdio]
 //!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
+//!              [--intrusion PARAMS.toml --model eq4|... --surface-p M]
 //! ```
 //! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
 //! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
@@ -54,6 +55,8 @@ fn main() {
     let mut pace = None;
     let mut stdio = false;
     let mut robot_params: Option<PathBuf> = None;
+    let mut intrusion_params: Option<PathBuf> = None;
+    let mut surface_p = 0.0;
     let mut model = "eq4".to_string();
     let mut p0 = 0.0;
     let mut summary: Option<PathBuf> = None;
@@ -89,6 +92,12 @@ fn main() {
             }
             "--stdio" => stdio = true,
             "--robot" => robot_params = Some(value("--robot").into()),
+            "--intrusion" => intrusion_params = Some(value("--intrusion").into()),
+            "--surface-p" => {
+                surface_p = value("--surface-p")
+                    .parse()
+                    .unwrap_or_else(|_| fail("--surface-p: metres"))
+            }
             "--model" => model = value("--model"),
             "--p0" => {
                 p0 = value("--p0")
@@ -102,7 +111,7 @@ fn main() {
                     include_str!("main.rs")
                         .lines()
                         .skip(2)
-                        .take(8)
+                        .take(9)
                         .map(|l| l.trim_start_matches("//! "))
                         .collect::<Vec<_>>()
                         .join("\n")
@@ -130,15 +139,25 @@ fn main() {
     cfg.bed = bed;
     cfg.pace = pace;
     if let Some(path) = robot_params {
-        let text = std::fs::read_to_string(&path)
-            .unwrap_or_else(|e| fail(format!("--robot {}: {e}", path.display())));
-        let params: sandjumper_model::params::Params = toml::from_str(&text)
-            .unwrap_or_else(|e| fail(format!("--robot {}: {e}", path.display())));
+        let params = read_params(&path, "--robot");
         let model: sandjumper_model::params::ModelName = model
             .parse()
             .unwrap_or_else(|e| fail(format!("--model {model}: {e}")));
         cfg.robot = Some(
             Robot::new(&params, model, p0).unwrap_or_else(|e| fail(format!("the robot: {e}"))),
+        );
+    }
+    if let Some(path) = intrusion_params {
+        if cfg.robot.is_some() {
+            fail("--robot and --intrusion are exclusive: the drive moves one or the other");
+        }
+        let params = read_params(&path, "--intrusion");
+        let model: sandjumper_model::params::ModelName = model
+            .parse()
+            .unwrap_or_else(|e| fail(format!("--model {model}: {e}")));
+        cfg.intrusion = Some(
+            sandjumper_model::intrusion_rig::IntrusionRig::new(&params, model, surface_p)
+                .unwrap_or_else(|e| fail(format!("the intrusion fixture: {e}"))),
         );
     }
     let report = if stdio {
@@ -169,6 +188,13 @@ fn main() {
         std::fs::write(&path, summary_json(&report))
             .unwrap_or_else(|e| fail(format!("--summary {}: {e}", path.display())));
     }
+}
+
+/// Resolved parameters (TOML, every field) from `path`, named as `flag` in errors.
+fn read_params(path: &std::path::Path, flag: &str) -> sandjumper_model::params::Params {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| fail(format!("{flag} {}: {e}", path.display())));
+    toml::from_str(&text).unwrap_or_else(|e| fail(format!("{flag} {}: {e}", path.display())))
 }
 
 fn print_report(r: &RunReport, stdio: bool) {

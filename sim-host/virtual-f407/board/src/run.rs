@@ -19,6 +19,7 @@ use crate::board::VirtualF407;
 use crate::encoder::QuadratureEncoder;
 use crate::rig::{self, BedWiring, METRES_PER_COUNT, Outputs, Robot};
 use crate::rtt::RttLog;
+use sandjumper_model::intrusion_rig::{IntrusionRig, SUBSTEP_S};
 
 /// VREFINT_CAL, the factory calibration of the internal reference (read by the HAL's ADC
 /// setup); a typical part's 1.21 V at 3.3 V.
@@ -101,6 +102,8 @@ pub struct RunConfig {
     pub bed: BedWiring,
     /// The robot the drive moves (None: the drive's output goes nowhere, the encoder is still).
     pub robot: Option<Robot>,
+    /// Or the slow-intrusion fixture (the motor clamped; `p` is the rod's travel).
+    pub intrusion: Option<IntrusionRig>,
     /// Run no faster than `pace` x real time (None: as fast as possible).
     pub pace: Option<f64>,
     /// Actions at virtual times, ns.
@@ -122,6 +125,7 @@ impl RunConfig {
             until_ns: None,
             bed: BedWiring::READY,
             robot: None,
+            intrusion: None,
             pace: None,
             actions: Vec::new(),
             trace_every: 0,
@@ -201,6 +205,7 @@ struct BoardDriver<H> {
     until: Option<u64>,
     bed: BedWiring,
     robot: Option<Robot>,
+    intrusion: Option<IntrusionRig>,
     encoder: QuadratureEncoder,
     frozen: bool,
     encoder_offset: i64,
@@ -397,6 +402,17 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             let st = robot.state();
             (p, x_r, x_f, current) = (st.p, st.x_r, st.x_f, robot.current_a());
         }
+        if let Some(rig) = self.intrusion.as_mut() {
+            let steps = ((period as f64 * 1e-9) / SUBSTEP_S).round().max(1.0) as u32;
+            if self.robot_released
+                && self.plant_error.is_none()
+                && let Err(e) = rig.advance_steps(steps, out.force_n)
+            {
+                self.plant_error = Some(e.to_string());
+            }
+            p = rig.position_m();
+            current = rig.motor_force_n() / rig.force_constant_n_a();
+        }
         if !self.frozen {
             let target = (p / METRES_PER_COUNT).round() as i64 + self.encoder_offset;
             self.encoder.move_to(&mut mcu.part, stop.at, period, target);
@@ -458,6 +474,7 @@ pub fn run<H: HostPort + Send + 'static>(
         until: cfg.until_ns,
         bed: cfg.bed,
         robot: cfg.robot,
+        intrusion: cfg.intrusion,
         encoder: QuadratureEncoder::default(),
         frozen: false,
         encoder_offset: 0,

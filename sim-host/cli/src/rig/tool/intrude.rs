@@ -34,6 +34,7 @@ use sandjumper_output::StagedDir;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::palette;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
+use sandjumper_rig::hil::virtual_board::VirtualLoad;
 
 fn metres(
     what: &'static str,
@@ -301,7 +302,14 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         max_run_s: program_def.end_s() + 5.0,
     };
     let staged = StagedDir::create(&a.out)?;
-    let mut link = a.target.open(&model_config)?;
+    let mut link = a.target.open_with_load(
+        &model_config,
+        Some(VirtualLoad::Intrusion {
+            params: params.clone(),
+            model: a.rig.model(),
+            surface_p_m: a.start,
+        }),
+    )?;
     let name = link.name();
     let record = run_program(
         link.as_mut(),

@@ -19,6 +19,7 @@ use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::run::{HilSpec, trajectory};
+use sandjumper_rig::hil::virtual_board::VirtualLoad;
 
 /// `rig jump`.
 #[derive(Debug, Clone, Args)]
@@ -107,9 +108,13 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         traj.eval(0.0).position_m,
         model_config,
     )?;
-    let mut link = a.target.open_with_robot(
+    let mut link = a.target.open_with_load(
         &model_config,
-        Some((params.clone(), spec.model, traj.eval(0.0).position_m)),
+        Some(VirtualLoad::Robot {
+            params: params.clone(),
+            model: spec.model,
+            p0_m: traj.eval(0.0).position_m,
+        }),
     )?;
     let name = link.name();
     let record = run_program(

@@ -39,7 +39,7 @@ use sandjumper_output::CliError;
 use sandjumper_rig::hil::link::RigLink;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::serial;
-use sandjumper_rig::hil::virtual_board::{self, VirtualBoardConfig};
+use sandjumper_rig::hil::virtual_board::{self, VirtualBoardConfig, VirtualLoad};
 
 /// `sandjumper rig`.
 #[derive(Debug, Clone, Args)]
@@ -140,11 +140,11 @@ impl TargetArgs {
     }
 
     /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
-    /// `--drive-calibration` names one. `robot`: the robot a virtual F407 board moves, and where its carriage rests at power-up, m.
-    pub fn open_with_robot(
+    /// `--drive-calibration` names one. `load`: what a virtual F407 board's drive moves.
+    pub fn open_with_load(
         &self,
         model: &RigModelConfig,
-        robot: Option<(Params, ModelName, f64)>,
+        load: Option<VirtualLoad>,
     ) -> Result<Box<dyn RigLink>, CliError> {
         if self.controller.link == Some(SimLink::F407) {
             let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
@@ -154,10 +154,7 @@ impl TargetArgs {
             if let Some(elf) = &self.firmware {
                 cfg.elf = elf.clone();
             }
-            if let Some((params, model, p0_m)) = robot {
-                cfg.robot = Some((params, model));
-                cfg.p0_m = p0_m;
-            }
+            cfg.load = load;
             let board = virtual_board::start(&cfg).map_err(|e| {
                 CliError::input(format!("cannot start the virtual F407 board: {e}"))
             })?;
@@ -175,7 +172,7 @@ impl TargetArgs {
     /// `--drive-calibration` names one.
     pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
         if self.controller.link == Some(SimLink::F407) {
-            return self.open_with_robot(model, None);
+            return self.open_with_load(model, None);
         }
         let calibration = self
             .drive_calibration

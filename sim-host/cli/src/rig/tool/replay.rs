@@ -37,6 +37,7 @@ use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::link::{LinkError, RigLink};
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::run::HilSpec;
+use sandjumper_rig::hil::virtual_board::VirtualLoad;
 
 fn factor(
     what: &'static str,
@@ -360,9 +361,13 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         f64::from(plan.samples[0]),
         model_config,
     )?;
-    let mut link = a.target.open_with_robot(
+    let mut link = a.target.open_with_load(
         &model_config,
-        Some((params.clone(), a.rig.model(), f64::from(plan.samples[0]))),
+        Some(VirtualLoad::Robot {
+            params: params.clone(),
+            model: a.rig.model(),
+            p0_m: f64::from(plan.samples[0]),
+        }),
     )?;
     let name = link.name();
     bring_to_idle(link.as_mut())
