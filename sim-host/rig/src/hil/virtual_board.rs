@@ -40,12 +40,24 @@ pub struct VirtualBoardConfig {
     pub answer_timeout: Duration,
 }
 
+/// `relative` under `start` or the nearest of its ancestors that has it (the workspace root,
+/// from anywhere inside it), else under `start`.
+fn find_up(start: &Path, relative: &str) -> PathBuf {
+    start
+        .ancestors()
+        .map(|dir| dir.join(relative))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| start.join(relative))
+}
+
 impl VirtualBoardConfig {
-    /// The program and ELF at their default places under `root` (the workspace root).
+    /// The program and ELF at their default places under `root` (the workspace root, or any
+    /// folder inside it).
     pub fn new(root: &Path) -> Self {
+        let root = std::path::absolute(root).unwrap_or_else(|_| root.to_path_buf());
         Self {
-            program: root.join(VIRTUAL_BOARD_BIN),
-            elf: root.join(F407_ELF),
+            program: find_up(&root, VIRTUAL_BOARD_BIN),
+            elf: find_up(&root, F407_ELF),
             load: None,
             pace: None,
             answer_timeout: Duration::from_secs(10),

@@ -66,8 +66,9 @@ fn parse_repeats(s: &str) -> Result<u32, String> {
 #[derive(Debug, Clone, Args)]
 pub struct HilArgs {
     /// Where the controller runs: `sil` (the core in this process), `pil` (the real firmware
-    /// in QEMU mps2-an386, frames over semihosting FIFOs), `serial:PATH` (a board in HIL mode
-    /// on its USB CDC port).
+    /// in QEMU mps2-an386, frames over semihosting FIFOs), `f407` (the F407 release ELF on the
+    /// virtual board, the plant behind its pins: runs as `rig jump --link f407`), `serial:PATH`
+    /// (a board in HIL mode on its USB CDC port).
     #[arg(long, value_name = "LINK", default_value = "sil", value_parser = parse_link)]
     pub link: LinkArg,
     /// Jump kind.
@@ -306,6 +307,9 @@ pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
 
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
+    if a.link == LinkArg::F407 {
+        return run_on_the_virtual_board(a);
+    }
     let file = ParamsFile::read_opt(a.params.as_deref())?;
     let params = resolve_params(a.phi, file.as_ref())?;
     let spec = spec_of(a);
@@ -455,4 +459,63 @@ fn bench(
         println!("  max tick cost {m} instructions");
     }
     Ok(())
+}
+
+/// `hil --link f407`: the F407 release binary on the virtual board runs the jump free on its own
+/// tick, the robot coupled through its peripherals, so the jump goes the way `rig jump` runs it
+/// on a board (the same program, log, summary and figure; `--out` optional here). What only a
+/// lockstep link can do is refused.
+fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
+    let lockstep_only = [
+        (a.bench.is_some(), "--bench"),
+        (a.encoder_noise != 0.0, "--encoder-noise"),
+        (a.rtol.is_some(), "--rtol"),
+        (a.gain_lowering.is_some(), "--gain-lowering"),
+    ];
+    if let Some((_, flag)) = lockstep_only.iter().find(|(set, _)| *set) {
+        return Err(CliError::input(format!(
+            "{flag} is not available with --link f407 (the virtual board runs the flashed binary \
+             free on its own tick, the plant behind its pins; allowed there: --kind, --freq, --tau, \
+             --model, --phi, --params, --camera-fps, --camera, --firmware, --out, --mcap, --json)"
+        )));
+    }
+    let scratch = match &a.out {
+        Some(_) => None,
+        None => Some(
+            tempfile::tempdir()
+                .map_err(|e| CliError::internal(format!("cannot make a scratch directory: {e}")))?,
+        ),
+    };
+    let out = a
+        .out
+        .clone()
+        .or_else(|| scratch.as_ref().map(|d| d.path().join("jump")))
+        .ok_or_else(|| CliError::internal("no output directory"))?;
+    let emulated = PathBuf::from(sandjumper_rig::firmware_image::EMULATED_ELF);
+    let jump = crate::rig::tool::jump::JumpArgs {
+        target: crate::rig::tool::TargetArgs {
+            controller: crate::rig::tool::ControllerArgs {
+                port: None,
+                link: Some(crate::rig::tool::SimLink::F407),
+            },
+            // hil's default is the QEMU build's ELF: the virtual board takes the F407 build's.
+            firmware: (a.firmware != emulated).then(|| a.firmware.clone()),
+            virtual_board: None,
+            drive_calibration: None,
+        },
+        kind: a.kind,
+        freq: a.freq,
+        tau: a.tau,
+        camera_fps: a.camera_fps,
+        rig: crate::rig::tool::RigParamArgs {
+            model: a.model,
+            phi: a.phi,
+            params: a.params.clone(),
+        },
+        camera: a.camera.clone(),
+        out,
+        mcap: a.mcap,
+        json: a.json,
+    };
+    crate::rig::tool::jump::run(&jump)
 }
