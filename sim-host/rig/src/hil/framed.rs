@@ -340,6 +340,7 @@ impl RigLink for FramedLink {
             exit_code,
             host_frames_rejected: self.host_frames_rejected,
             simulated_jump_height_m: None,
+            board_realtime_factor: None,
         })
     }
 }

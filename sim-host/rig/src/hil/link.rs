@@ -71,6 +71,8 @@ pub struct LinkReport {
     pub host_frames_rejected: u32,
     /// The jump height of the plant a virtual board moved (`--link f407`), m.
     pub simulated_jump_height_m: Option<f64>,
+    /// Virtual over wall time of a virtual board's run (`--link f407`), start-up included.
+    pub board_realtime_factor: Option<f64>,
 }
 
 impl LinkReport {

@@ -146,6 +146,7 @@ impl RigLink for SilLink {
             exit_code: None,
             host_frames_rejected: 0,
             simulated_jump_height_m: None,
+            board_realtime_factor: None,
         })
     }
 }

@@ -195,11 +195,16 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
     })
 }
 
-/// The plant's jump height from a finished virtual board's summary, m.
-pub fn jump_height_m(summary: &Path) -> Option<f64> {
+/// A number from a finished virtual board's summary.
+fn summary_number(summary: &Path, key: &str) -> Option<f64> {
     let text = std::fs::read_to_string(summary).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v.get("jump_height_m")?.as_f64()
+    v.get(key)?.as_f64()
+}
+
+/// The plant's jump height from a finished virtual board's summary, m.
+pub fn jump_height_m(summary: &Path) -> Option<f64> {
+    summary_number(summary, "jump_height_m")
 }
 
 impl RigLink for VirtualBoard {
@@ -230,6 +235,10 @@ impl RigLink for VirtualBoard {
     fn finish(&mut self) -> Result<LinkReport, LinkError> {
         let mut report = self.link.finish()?;
         report.simulated_jump_height_m = jump_height_m(&self.summary_path);
+        report.board_realtime_factor = summary_number(&self.summary_path, "virtual_s")
+            .zip(summary_number(&self.summary_path, "wall_s"))
+            .filter(|(_, wall)| *wall > 0.0)
+            .map(|(virt, wall)| virt / wall);
         Ok(report)
     }
 }

@@ -88,6 +88,9 @@ pub struct JumpReport {
     pub simulated_jump_height_m: Option<f64>,
     /// Wall-clock time, s.
     pub wall_time_s: f64,
+    /// Virtual over wall time of the virtual board (`--link f407`), start-up included.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub board_realtime_factor: Option<f64>,
 }
 
 /// Run `rig jump`.
@@ -160,6 +163,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
             .map(|r| r.plant().summary().jump_height_m)
             .or(record.report.simulated_jump_height_m),
         wall_time_s: record.wall_time_s,
+        board_realtime_factor: record.report.board_realtime_factor,
     };
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
