@@ -24,6 +24,8 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     // The F407's control tick rate (firmware/src/board/f407.rs reads it with option_env!).
     println!("cargo:rerun-if-env-changed=SANDJUMPER_TICK_HZ");
+    // A fault built into a bring-up test image (firmware/src/inject_f407.rs).
+    println!("cargo:rerun-if-env-changed=SANDJUMPER_INJECT");
     let manifest_dir =
         PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));

@@ -56,6 +56,31 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
             elf.display()
         ));
     }
+    // The bring-up's three test images (firmware/src/inject_f407.rs), which the board's
+    // injected.rs runs.
+    for kind in ["panic", "hardfault", "stack-overflow"] {
+        let target_dir = root.join(format!("target/inject-{kind}"));
+        let out = Command::new(env!("CARGO"))
+            .args([
+                "build",
+                "-p",
+                "sandjumper-firmware",
+                "--target",
+                "thumbv7em-none-eabihf",
+                "--release",
+                "--target-dir",
+            ])
+            .arg(&target_dir)
+            .env("SANDJUMPER_INJECT", kind)
+            .current_dir(root)
+            .output()
+            .expect("run cargo build for a test image");
+        assert!(
+            out.status.success(),
+            "building the {kind} test image failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
     let build = clean(&mut Command::new(board.join("build.sh")))
         .current_dir(&board)
         .output()

@@ -197,6 +197,9 @@ mod app {
         } = cx.local;
         io.acknowledge_tick();
         rig.note_tick_start(start);
+        if crate::inject_f407::INJECTED.is_some() {
+            crate::inject_f407::at_tick(rig.status().tick);
+        }
         // The sensors first, at a fixed time after the tick starts, whatever the host sent.
         let encoder_raw = io.encoder_count();
         let current_code = io.current_sense_code();

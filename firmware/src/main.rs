@@ -30,6 +30,8 @@ mod app_f407;
 mod board;
 #[cfg(all(target_os = "none", feature = "board-f407"))]
 mod fault_f407;
+#[cfg(all(target_os = "none", feature = "board-f407"))]
+mod inject_f407;
 
 #[cfg(all(target_os = "none", feature = "board-qemu"))]
 mod app_qemu;

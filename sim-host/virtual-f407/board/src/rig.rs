@@ -29,6 +29,9 @@ pub const PORT_D: usize = 3;
 /// Port E.
 pub const PORT_E: usize = 4;
 
+/// The enable gate's monostable period, ns (docs/firmware.md: a 74HC123 with ~1 ms).
+pub const MONOSTABLE_NS: u64 = 1_000_000;
+
 /// Drive force at the DAC's full scale, N (the drive's peak force).
 pub const DRIVE_FULL_SCALE_N: f64 = 300.0;
 /// The encoder's resolution, m per count.
@@ -64,10 +67,14 @@ impl BedWiring {
 pub struct Outputs {
     /// DAC channel 1, V.
     pub force_dac_v: f64,
-    /// The force the drive is commanded with (zero while disabled), N.
+    /// The force the drive is commanded with (zero while its gated enable is low), N.
     pub force_n: f64,
     /// PE7.
     pub drive_enable: bool,
+    /// The enable the drive sees: PE7 through the external retriggerable monostable the tick
+    /// heartbeat (PE8) keeps triggered (docs/firmware.md: ~1 ms, [`MONOSTABLE_NS`]); a halted
+    /// or locked-up core stops the heartbeat and the gate closes.
+    pub drive_gated: bool,
     /// PE8.
     pub heartbeat: bool,
     /// PE9.
@@ -87,8 +94,8 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// The whole safe state: drive disabled, the bed's actuators off (blower below 10 mV, lift
-    /// disabled, shaker duty zero).
+    /// The whole safe state as the firmware drives it: drive enable (PE7) low, the bed's
+    /// actuators off (blower below 10 mV, lift disabled, shaker duty zero).
     pub fn drive_and_lift_safe(&self) -> bool {
         !self.drive_enable
             && !self.lift_enable
@@ -129,6 +136,7 @@ pub fn outputs(mcu: &mut F407) -> Outputs {
         force_dac_v,
         force_n,
         drive_enable,
+        drive_gated: drive_enable,
         heartbeat: high(part, PORT_E, 8),
         camera_trigger: high(part, PORT_E, 9),
         lift_enable: high(part, PORT_E, 10),

@@ -231,6 +231,8 @@ struct BoardDriver<H> {
     flash_violations: Vec<String>,
     pending_host_bytes: Vec<u8>,
     robot_released: bool,
+    heartbeat_level: bool,
+    last_heartbeat_edge_ns: Option<u64>,
 }
 
 impl<H> BoardDriver<H> {
@@ -387,11 +389,23 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.host.send(&received);
         }
         // The rig over the next period: the drive's force as the board commands it now.
-        let out = rig::outputs(mcu);
+        let mut out = rig::outputs(mcu);
+        // The external enable gate: retriggered by every heartbeat edge.
+        if out.heartbeat != self.heartbeat_level {
+            self.heartbeat_level = out.heartbeat;
+            self.last_heartbeat_edge_ns = Some(now);
+        }
+        out.drive_gated = out.drive_enable
+            && self
+                .last_heartbeat_edge_ns
+                .is_some_and(|t| now - t <= rig::MONOSTABLE_NS);
+        if !out.drive_gated {
+            out.force_n = 0.0;
+        }
         let (mut p, mut x_r, mut x_f, mut current) = (0.0, 0.0, 0.0, 0.0);
         // The carriage is held where it is until the drive first takes it (on the rig it rests
         // on its support, not in free fall along the rod): the plant starts moving then.
-        self.robot_released |= out.drive_enable;
+        self.robot_released |= out.drive_gated;
         if let Some(robot) = self.robot.as_mut() {
             if self.robot_released
                 && self.plant_error.is_none()
@@ -500,6 +514,8 @@ pub fn run<H: HostPort + Send + 'static>(
         flash_violations: Vec::new(),
         pending_host_bytes: Vec::new(),
         robot_released: false,
+        heartbeat_level: false,
+        last_heartbeat_edge_ns: None,
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)

@@ -1,0 +1,189 @@
+//! The bring-up's test images (firmware `inject_f407.rs`: `SANDJUMPER_INJECT=panic`,
+//! `hardfault`, `stack-overflow`, each fired by the control tick 2 s after start-up) on the
+//! virtual board, armed with the robot on hard ground: the fault handlers put the whole rig in
+//! the safe state at once, report over RTT, and the watchdog restarts the board, which reports
+//! the watchdog reset. The images are built into `target/inject-<kind>` of the main workspace
+//! (`tests/virtual_f407.rs` builds them; `SANDJUMPER_F407_INJECT_DIR` names another place).
+
+mod common;
+
+use std::path::PathBuf;
+
+use sandjumper_core::config::{JumpConfig, TrajectorySpec};
+use sandjumper_core::protocol::encode_frame_vec;
+use sandjumper_core::trajectory::JumpKind;
+use sandjumper_core::{Command, HostMessage};
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_virtual_f407::rig::Robot;
+use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
+
+const MS: u64 = 1_000_000;
+
+fn image(kind: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("SANDJUMPER_F407_INJECT_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../target"));
+    let elf = dir.join(format!(
+        "inject-{kind}/thumbv7em-none-eabihf/release/sandjumper-firmware"
+    ));
+    if elf.is_file() {
+        return Some(elf);
+    }
+    let msg = format!(
+        "skipped: no test image at {} (SANDJUMPER_INJECT={kind} cargo build -p sandjumper-firmware --target thumbv7em-none-eabihf --release --target-dir target/inject-{kind})",
+        elf.display()
+    );
+    assert!(std::env::var_os("CI").is_none(), "{msg}");
+    eprintln!("{msg}");
+    None
+}
+
+fn frame(id: u16, command: Command) -> Vec<u8> {
+    encode_frame_vec(&HostMessage::Command { id, command })
+        .expect("a frame")
+        .to_vec()
+}
+
+/// Armed at 200 ms with heartbeats, run to 2.1 s.
+fn armed(elf: PathBuf) -> RunReport {
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(2_100 * MS);
+    cfg.trace_every = 1;
+    let params = Params::preset(0.57).expect("preset");
+    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 5.0,
+        tau_s: 0.0,
+    });
+    let mut actions = vec![
+        (
+            190 * MS,
+            Action::HostBytes(frame(1, Command::Configure(jc))),
+        ),
+        (200 * MS, Action::HostBytes(frame(2, Command::Arm))),
+    ];
+    for (k, t) in (220..2_100).step_by(20).enumerate() {
+        actions.push((
+            t * MS,
+            Action::HostBytes(frame(3 + k as u16, Command::Heartbeat)),
+        ));
+    }
+    cfg.actions = actions;
+    run(cfg, NoHost::default()).expect("the run").0
+}
+
+/// The drive on until the fault, the whole safe state within 100 us of it, the report, and the
+/// watchdog's restart.
+fn check(kind: &str, report: &str) {
+    let Some(elf) = image(kind) else { return };
+    let r = armed(elf);
+    let fault_at = r
+        .trace
+        .windows(2)
+        .find(|w| w[0].out.drive_enable && !w[1].out.drive_enable)
+        .map(|w| w[1].t_ns)
+        .unwrap_or_else(|| panic!("{kind}: the drive never went off; log {:?}", r.log));
+    assert!(
+        (1_990 * MS..2_010 * MS).contains(&fault_at),
+        "{kind}: the drive went off at {fault_at} ns, not at the 2 s fault"
+    );
+    let row = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns >= fault_at)
+        .expect("row");
+    assert!(
+        row.out.drive_and_lift_safe()
+            && row.out.force_n == 0.0
+            && (row.out.force_dac_v - 1.65).abs() < 1e-3,
+        "{kind}: {row:?}"
+    );
+    assert!(
+        r.log.iter().any(|l| l.contains(report)),
+        "{kind}: no `{report}` in {:?}",
+        r.log
+    );
+    let (reset_at, cause) = r
+        .resets
+        .first()
+        .cloned()
+        .unwrap_or_else(|| panic!("{kind}: no watchdog reset"));
+    assert!(
+        reset_at > fault_at && reset_at < fault_at + 25 * MS && cause.contains("IWDG"),
+        "{kind}: {reset_at} {cause}"
+    );
+    assert!(
+        r.log.iter().any(|l| l.contains("reset cause Watchdog")),
+        "{kind}: {:?}",
+        r.log
+    );
+    for row in r.trace.iter().filter(|row| row.t_ns >= fault_at) {
+        assert!(
+            !row.out.drive_enable,
+            "{kind}: the drive came back at {} ns",
+            row.t_ns
+        );
+    }
+}
+
+#[test]
+fn an_injected_panic_makes_the_rig_safe_reports_and_restarts() {
+    check("panic", "panic: ");
+}
+
+#[test]
+fn an_injected_hardfault_makes_the_rig_safe_reports_and_restarts() {
+    check("hardfault", "HardFault: pc=");
+}
+
+/// A stack overflow is not caught by the HardFault handler: the core pushes the exception's
+/// frame below the stack, which (flip-link's stack at the bottom of RAM) faults again while
+/// entering HardFault, and the core locks up (ARMv7-M B1.5.15): nothing runs, PE7 stays high,
+/// nothing is reported. The external enable gate closes within its period (the heartbeat
+/// stopped), and the watchdog restarts the board, which reports it.
+#[test]
+fn a_stack_overflow_locks_the_core_up_the_enable_gate_drops_the_drive_and_the_watchdog_restarts() {
+    let Some(elf) = image("stack-overflow") else {
+        return;
+    };
+    let r = armed(elf);
+    let gate_closed = r
+        .trace
+        .windows(2)
+        .find(|w| w[0].out.drive_gated && !w[1].out.drive_gated)
+        .map(|w| w[1].t_ns)
+        .expect("the drive's gated enable never dropped");
+    let (reset_at, cause) = r.resets.first().cloned().expect("no watchdog reset");
+    assert!(cause.contains("IWDG"), "{cause}");
+    // The overflow comes at the 2 s tick; the heartbeat's last edge is then; the gate closes
+    // one monostable period later, long before the watchdog.
+    assert!(
+        (2_000 * MS..2_003 * MS).contains(&gate_closed),
+        "the gate closed at {gate_closed} ns"
+    );
+    assert!(
+        reset_at > gate_closed + 3 * MS && reset_at < gate_closed + 25 * MS,
+        "reset at {reset_at} ns"
+    );
+    let stuck = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns > gate_closed && row.t_ns < reset_at)
+        .expect("row");
+    assert!(
+        stuck.out.drive_enable && !stuck.out.drive_gated && stuck.out.force_n == 0.0,
+        "{stuck:?}"
+    );
+    assert!(
+        !r.log.iter().any(|l| l.contains("HardFault")),
+        "the handler ran: {:?}",
+        r.log
+    );
+    assert!(
+        r.log.iter().any(|l| l.contains("reset cause Watchdog")),
+        "{:?}",
+        r.log
+    );
+}
