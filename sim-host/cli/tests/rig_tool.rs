@@ -784,10 +784,12 @@ fn status_and_jump_through_the_f407_binary_match_sil() {
     assert!(hil.status.success(), "{}", stderr(&hil));
     let h: serde_json::Value = serde_json::from_slice(&hil.stdout).expect("hil JSON");
     assert_eq!(h["link"], "f407");
-    assert_eq!(
-        h["simulated_jump_height_m"].as_f64(),
-        Some(f407),
-        "the same binary, the same jump"
+    // The host paces a board's program by the wall clock (the settle, the status polls), so the
+    // virtual time of the Start varies from run to run (seen: 0.45 mm apart): within 1 mm.
+    let h407 = h["simulated_jump_height_m"].as_f64().expect("a height");
+    assert!(
+        (h407 - f407).abs() < 1e-3,
+        "hil {h407} m, rig jump {f407} m"
     );
     // Measured 61.1 mm against 62.8 mm (2.7 %): see docs/firmware.md on what still differs.
     assert!((f407 - sil).abs() < 2.5e-3, "f407 {f407} m, sil {sil} m");
