@@ -427,7 +427,12 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             p = rig.position_m();
             current = rig.motor_force_n() / rig.force_constant_n_a();
         }
-        if !self.frozen {
+        // Edges reach the count only once TIM2 counts in encoder mode (CEN, SMS 1-3): before
+        // that the firmware has not set it up, and edges it cannot count would put its zero
+        // off the plant's (the first period's burst to the robot's start position was lost so,
+        // 0.83 mm). The count then starts at the plant's position, as the lockstep rigs' does:
+        // the rig's encoder zeroed at p = 0.
+        if !self.frozen && tim2_counts_the_encoder(&mut mcu.part) {
             let target = (p / METRES_PER_COUNT).round() as i64 + self.encoder_offset;
             self.encoder.move_to(&mut mcu.part, stop.at, period, target);
         }
@@ -465,6 +470,13 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         let done = self.until.is_some_and(|u| now >= u) || self.host_closed;
         (!done).then_some(VirtualNanos(now + period))
     }
+}
+
+/// TIM2 is enabled (CR1.CEN) in one of the encoder modes (SMCR.SMS 1-3, RM0090 18.3.12).
+fn tim2_counts_the_encoder(part: &mut rigless::soc::stm32f427::Stm32f427) -> bool {
+    use rigless::soc::stm32f427::generated::tim2::Register;
+    let (_, regs) = part.timer(0);
+    regs.get(Register::Cr1) & 1 != 0 && (1..=3).contains(&(regs.get(Register::Smcr) & 0b111))
 }
 
 /// Runs the firmware `cfg.elf` on the board with `host` on its USB port; gives the host back.
