@@ -15,7 +15,8 @@
 //! - the lift stops by itself at the limit switch it is moving toward.
 //!
 //! A board without the apparatus never reports its inputs ([`BedApparatus::present`] stays
-//! false): the `Arm` interlock then does not apply, and its outputs stay off.
+//! false): the `Arm` interlock then does not apply, and its outputs stay off (every command
+//! that would switch something on is refused, [`BedError::Absent`]).
 
 use core::fmt;
 
@@ -109,6 +110,9 @@ pub enum BedError {
     ShakerOn,
     /// The lift is already at the limit it was told to move to.
     LiftAtLimit,
+    /// No apparatus has reported its inputs (its limit switches and emergency stop unread):
+    /// nothing of it may be switched on.
+    Absent,
 }
 
 impl fmt::Display for BedError {
@@ -121,6 +125,9 @@ impl fmt::Display for BedError {
                 "the bed apparatus tripped (emergency stop or fault): clear the fault first"
             }
             Self::EmergencyStop => "the emergency stop is pressed",
+            Self::Absent => {
+                "no bed apparatus is connected (its limit switches and emergency stop are not read): nothing of it can be switched on"
+            }
             Self::OutOfRange => "out of range (blower 0 to 10 V, shaker duty 0 to 1)",
             Self::LiftNotDown => "the lift is not down at its limit switch (or still moving)",
             Self::BlowerOn => "the blower is on",
@@ -193,6 +200,9 @@ impl BedApparatus {
     /// A host command; `jump_active`: the rig is Armed or Running.
     pub fn command(&mut self, cmd: &BedCommand, jump_active: bool) -> Result<(), BedError> {
         if !cmd.is_off() {
+            if !self.present {
+                return Err(BedError::Absent);
+            }
             if self.inputs.emergency_stop {
                 return Err(BedError::EmergencyStop);
             }

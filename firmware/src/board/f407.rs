@@ -17,7 +17,7 @@
 //! | lift motor enable / direction | PE10 / PE11, push-pull | enable active high (low on reset, fit a pull-down); direction high = up |
 //! | lift limit switches up / down | PE12 / PE13, inputs with pull-up | switch closes to ground at its limit (low = at the limit) |
 //! | emergency stop | PE14, input with pull-up | normally-closed contact to ground: pressed **or a broken wire** reads high = stop |
-//! | bed apparatus present | PE15, input with pull-up | the apparatus's harness ties it to ground: until it has read low once since reset the apparatus is absent (its inputs are not reported, so a board with nothing wired is Idle and can be armed); once seen, losing it reads as the emergency stop (a harness pulled out is a stop) |
+//! | bed apparatus present | PE15, input with pull-up | the apparatus's harness ties it to ground: until it (or a released emergency stop on PE14) has read low once since reset the apparatus is absent (its inputs are not reported and nothing of it can be switched on, so a board with nothing wired is Idle and can be armed); once seen, losing PE15 reads as the emergency stop (a harness pulled out is a stop) |
 //! | bed height sensor | PA2, ADC2 channel 2 | the laser distance sensor's 0..3.3 V output, raw 12-bit code to the host (sampled at the end of each tick) |
 //! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
 //! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick; keeps counting while the core is halted by a debugger |
@@ -554,7 +554,10 @@ impl RigIo {
     #[inline(always)]
     pub fn bed_inputs(&mut self) -> Option<BedInputs> {
         let present = self.bed_present.is_low();
-        self.bed_seen |= present;
+        // A wired, released emergency stop (its normally-closed contact to ground) proves the
+        // harness as well: a harness whose presence link is broken then reads as a stop, never
+        // as no apparatus.
+        self.bed_seen |= present || self.emergency_stop.is_low();
         if !self.bed_seen {
             return None;
         }

@@ -51,6 +51,9 @@ pub enum BedWiring {
         /// The lift's lower limit switch closed.
         lift_down_limit: bool,
     },
+    /// The apparatus's harness with its presence link (PE15) broken: the e-stop released, the
+    /// lift down, PE15 floating.
+    BrokenPresenceLink,
 }
 
 impl BedWiring {
@@ -153,6 +156,7 @@ pub fn drive_bed_inputs(part: &mut Stm32f427, at: VirtualNanos, wiring: BedWirin
     let closed = |c: bool| if c { Some(Level::Low) } else { None };
     let levels = match wiring {
         BedWiring::Unwired => [None, None, None, None],
+        BedWiring::BrokenPresenceLink => [None, Some(Level::Low), Some(Level::Low), None],
         BedWiring::Connected {
             emergency_stop,
             lift_up_limit,

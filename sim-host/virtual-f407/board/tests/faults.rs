@@ -310,3 +310,56 @@ fn a_board_with_nothing_wired_can_be_armed() {
         "not armed with nothing wired: {after:?}"
     );
 }
+
+/// With nothing wired the apparatus is absent: nothing of it can be switched on (no limit
+/// switch or emergency stop is read). The binary before the review ran the lift, blower and
+/// shaker of an absent apparatus.
+#[test]
+fn an_absent_bed_apparatus_cannot_be_switched_on() {
+    use sandjumper_core::bed::{BedCommand, LiftMove};
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(300 * MS);
+    cfg.trace_every = 1;
+    cfg.bed = BedWiring::Unwired;
+    cfg.actions = vec![
+        (
+            200 * MS,
+            Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+        ),
+        (
+            205 * MS,
+            Action::HostBytes(frame(2, Command::Bed(BedCommand::Shaker { duty: 0.5 }))),
+        ),
+        (
+            210 * MS,
+            Action::HostBytes(frame(3, Command::Bed(BedCommand::Lift(LiftMove::Up)))),
+        ),
+    ];
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let last = r.last.expect("ran").out;
+    assert!(
+        last.drive_and_lift_safe(),
+        "an absent apparatus was switched on: {last:?}"
+    );
+}
+
+/// A harness whose presence link is broken but whose emergency stop is wired and released:
+/// the e-stop proves the harness, and the missing link reads as a stop (never as "no
+/// apparatus", which would leave the e-stop unread).
+#[test]
+fn a_broken_presence_link_reads_as_an_emergency_stop() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(100 * MS);
+    cfg.bed = BedWiring::BrokenPresenceLink;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    assert!(
+        r.last.expect("ran").out.led_fault,
+        "a broken presence link left the e-stop unmonitored"
+    );
+}

@@ -83,6 +83,44 @@ pub fn describe(s: &Status) -> String {
         },
         s.drive_calibration.zero_code,
         s.drive_calibration.codes_per_newton,
+    ) + &bed_line(s)
+}
+
+/// The bed apparatus: present with its inputs, or absent, which a user must know (its
+/// emergency stop input is not monitored then).
+fn bed_line(s: &Status) -> String {
+    let b = &s.bed;
+    if !b.present {
+        return "  bed apparatus      absent: its limit switches and emergency stop input are not \
+                read, and nothing of it can be switched on\n"
+            .to_string();
+    }
+    format!(
+        "  bed apparatus      e-stop {}, lift {}{}, blower {} V, shaker {}{}\n",
+        if b.inputs.emergency_stop {
+            "PRESSED"
+        } else {
+            "released"
+        },
+        if b.inputs.lift_down_limit {
+            "down"
+        } else if b.inputs.lift_up_limit {
+            "up"
+        } else {
+            "between limits"
+        },
+        if b.outputs.lift_enable {
+            " (moving)"
+        } else {
+            ""
+        },
+        b.outputs.blower_v,
+        b.outputs.shaker_duty,
+        if b.tripped {
+            ", TRIPPED (clear the fault)"
+        } else {
+            ""
+        },
     )
 }
 
