@@ -50,10 +50,30 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
             "rustc 1.98.0 is not installed (`rustup toolchain install 1.98.0 --profile minimal -c clippy,rustfmt`)",
         );
     }
-    if !elf.is_file() {
+    // The F407 release ELF, built now so the board never runs a stale one (a no-op when it is
+    // up to date); without the target or flip-link it cannot be built: skipped.
+    let built = Command::new(env!("CARGO"))
+        .args([
+            "build",
+            "-p",
+            "sandjumper-firmware",
+            "--target",
+            "thumbv7em-none-eabihf",
+            "--release",
+        ])
+        .current_dir(root)
+        .output();
+    if !built.as_ref().is_ok_and(|o| o.status.success()) || !elf.is_file() {
         return skip(&format!(
-            "no F407 ELF at {} (`cargo build -p sandjumper-firmware --target thumbv7em-none-eabihf --release`)",
-            elf.display()
+            "the F407 ELF {} cannot be built here (`rustup target add thumbv7em-none-eabihf`, `cargo install flip-link`): {}",
+            elf.display(),
+            built
+                .map(|o| String::from_utf8_lossy(&o.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+                    .to_string())
+                .unwrap_or_else(|e| e.to_string())
         ));
     }
     // The bring-up's three test images (firmware/src/inject_f407.rs), which the board's

@@ -99,7 +99,8 @@ const fn parse_hz(text: &str) -> u32 {
 /// Cycle budget of one control tick before it counts as an overrun: 80 % of the period, so the
 /// lower-priority link and telemetry always get at least a fifth of the CPU.
 pub const TICK_BUDGET_CYCLES: u32 = SYSCLK_HZ / TICK_HZ * 8 / 10;
-/// Independent watchdog timeout, ms: ~100 missed ticks reset the chip (drive enable drops).
+/// Independent watchdog timeout, ms (nominal): prescaler /64 and reload 4 at the LSI's
+/// 17-47 kHz make it 6.8-18.8 ms, 68-188 missed ticks, before the chip resets (drive enable drops).
 pub const WATCHDOG_MS: u32 = 10;
 
 /// Drive enable: GPIOE pin 7.
@@ -232,8 +233,8 @@ pub struct Parts {
     pub usb: stm32f4xx_hal::otg_fs::USB,
 }
 
-/// Core cycles (16 MHz HSI at this point) to wait for the crystal before giving up: 100 ms,
-/// twenty times an 8 MHz crystal's usual start-up.
+/// Wait-loop iterations for the crystal before giving up: at the 16 MHz HSI, a few cycles
+/// each, about 0.4-0.6 s, a hundred times an 8 MHz crystal's usual start-up.
 pub const HSE_STARTUP_SPINS: u32 = 1_600_000;
 
 /// Starts the crystal oscillator and waits for it with a bound. The HAL's clock setup waits for
@@ -271,7 +272,7 @@ pub fn serial_number(buf: &'static mut [u8; 24]) -> &'static str {
     core::str::from_utf8(buf).unwrap_or("F407")
 }
 
-/// Flash wait states at 168 MHz (RM0090 table 12): 7, which holds for any supply down to 2.4 V,
+/// Flash wait states at 168 MHz (RM0090 table 12): 7, which holds for any supply down to 2.1 V,
 /// where the HAL's 5 need at least 2.7 V. A Discovery board runs at about 3.0 V, too close to
 /// the 2.8 V brown-out level 3 for comfort, so the board uses level 2 (about 2.5 V falling)
 /// and the wait states that level allows.
@@ -280,15 +281,17 @@ pub const FLASH_WAIT_STATES: u32 = 7;
 /// The brown-out reset at level 2 in the option bytes (RM0090 3.9.10, `BOR_LEV` = 0b01; the
 /// part leaves the factory with it off, 0b11, where only the ~1.7 V power-down reset acts): a
 /// sagging supply holds the part in reset instead of running its flash out of specification.
-/// Programmed once (the option bytes keep it); a no-op afterwards.
+/// Programmed only where the option bytes say BOR off (the factory's 0b11): a level set on
+/// purpose is left alone. Programmed once (the option bytes keep it); a no-op afterwards.
 fn ensure_brown_out_reset() {
     const BOR_LEVEL_2: u32 = 0b01;
+    const BOR_OFF: u32 = 0b11;
     // SAFETY: the flash interface's option registers, before anything else uses the flash
     // interface's registers; the unlock keys are RM0090 3.7.2's.
     unsafe {
         let flash = &*pac::FLASH::ptr();
         let optcr = flash.optcr().read().bits();
-        if (optcr >> 2) & 0b11 == BOR_LEVEL_2 {
+        if (optcr >> 2) & 0b11 != BOR_OFF {
             return;
         }
         flash.optkeyr().write(|w| w.bits(0x0819_2A3B));
@@ -319,9 +322,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     }
     if !start_crystal() {
         force_safe_state();
-        defmt::panic!(
-            "the 8 MHz crystal (HSE) did not start within 100 ms: check X2 and its load capacitors"
-        );
+        defmt::panic!("the 8 MHz crystal (HSE) did not start: check X2 and its load capacitors");
     }
     let mut rcc: Rcc = dp.RCC.freeze(
         Config::hse(HSE_HZ.Hz())

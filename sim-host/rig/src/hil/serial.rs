@@ -24,6 +24,9 @@ pub fn start(path: &str, answer_timeout: Duration) -> Result<FramedLink, LinkErr
         .parity(serialport::Parity::None)
         .stop_bits(serialport::StopBits::One)
         .flow_control(serialport::FlowControl::None)
+        // The board writes only while the host holds DTR (docs/firmware.md); Windows opens
+        // ports without it.
+        .dtr_on_open(true)
         .timeout(Duration::from_millis(100))
         .open()
         .map_err(io("opening serial port"))?;

@@ -266,18 +266,43 @@ fn a_sagging_supply_never_runs_the_flash_out_of_its_table() {
     assert!(r.flash_violations.is_empty(), "{:?}", r.flash_violations);
 }
 
-/// The control tick's outputs keep their rhythm while USB streams telemetry to a reading host:
-/// the force DAC is written every 100 us give or take 2 us (the USB driver's poll masks every
-/// interrupt in places; on the virtual board, at 4 ns per instruction, those places cost under
-/// half a microsecond: silicon's wait states and bus stalls come on top).
+/// The control tick's outputs keep their rhythm while USB streams telemetry to a reading host
+/// and the host sends bursts of configurations: the force DAC is written every 100 us give or
+/// take 5 us (measured 96.9-103.1 us: the USB driver's interrupt-masked sections, at 4 ns per
+/// instruction; silicon's wait states and bus stalls come on top). A regression bound, not the
+/// test of items 5 and 7: the binary before them measures the same here (USB's flow control
+/// keeps the inbound queue from overflowing, so its link task never logged).
 #[test]
-fn the_tick_keeps_its_rhythm_while_usb_streams() {
-    let Some(r) = run_for(400, BedWiring::READY, 0) else {
+fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
+    use sandjumper_core::protocol::encode_frame_vec;
+    use sandjumper_core::{Command, HostMessage};
+    let Some(elf) = common::firmware_elf() else {
         return;
     };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(400_000_000);
+    let frame = |id: u16| {
+        encode_frame_vec(&HostMessage::Command {
+            id,
+            command: Command::StatusQuery,
+        })
+        .expect("frame")
+        .to_vec()
+    };
+    // Bursts of 20 (more than the firmware's inbound queue holds: some are dropped, counted).
+    cfg.actions = (0..10u64)
+        .map(|burst| {
+            let bytes: Vec<u8> = (0..20u16)
+                .flat_map(|k| frame(burst as u16 * 20 + k + 1))
+                .collect();
+            (200_000_000 + burst * 20_000_000, Action::HostBytes(bytes))
+        })
+        .collect();
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
     let (lo, hi) = r.force_dac_interval_ns.expect("the force DAC was written");
+    eprintln!("force DAC writes {lo}..{hi} ns apart");
     assert!(
-        lo >= 98_000 && hi <= 102_000,
+        lo >= 95_000 && hi <= 105_000,
         "force DAC writes {lo}..{hi} ns apart"
     );
     assert!(r.last.expect("ran").usb_configured, "USB did not stream");

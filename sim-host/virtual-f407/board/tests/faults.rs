@@ -78,7 +78,7 @@ fn safe_within(r: &RunReport, from: u64, within: u64, what: &str) {
         .trace
         .iter()
         .filter(|row| row.t_ns >= from)
-        .find(|row| row.out.drive_and_lift_safe() && row.out.force_n == 0.0)
+        .find(|row| row.out.drive_and_lift_safe() && (row.out.force_dac_v - 1.65).abs() < 1e-3)
         .unwrap_or_else(|| panic!("{what}: never safe after the fault; log {:?}", r.log));
     assert!(
         first_safe.t_ns <= from + within,
