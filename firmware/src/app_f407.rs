@@ -363,6 +363,9 @@ mod app {
         // Transmit: finish the frame in flight, then replies/faults/actuator frames, then
         // sample batches; stop when the USB buffer is full.
         if !open {
+            // Telemetry for nobody: discarded, so a host that opens the port gets the samples
+            // from then on, not a stale queue and a gap (Status's samples_produced counts them).
+            while samples_rx.dequeue().is_some() {}
             return;
         }
         loop {

@@ -97,6 +97,22 @@ pub struct VirtualBoard {
     /// The plant's summary (`jump_height_m`, ...), written when the program ends (after
     /// `finish`).
     pub summary_path: PathBuf,
+    /// The program's stderr (the firmware's log, its own report).
+    pub log_path: PathBuf,
+}
+
+/// `e` with the last lines the virtual board wrote (why it stopped, the firmware's last log).
+fn with_log_tail(e: LinkError, log: &Path) -> LinkError {
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    let tail: Vec<&str> = text.lines().rev().take(8).collect();
+    if tail.is_empty() {
+        return e;
+    }
+    let tail: Vec<&str> = tail.into_iter().rev().collect();
+    LinkError::Io {
+        what: e.to_string(),
+        message: format!("the virtual board's last words:\n{}", tail.join("\n")),
+    }
 }
 
 fn io(what: &str) -> impl Fn(std::io::Error) -> LinkError + '_ {
@@ -166,8 +182,8 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
     if let Some(p) = cfg.pace {
         cmd.arg("--pace").arg(p.to_string());
     }
-    let log = std::fs::File::create(dir.path().join("board.log"))
-        .map_err(io("creating the board's log"))?;
+    let log_path = dir.path().join("board.log");
+    let log = std::fs::File::create(&log_path).map_err(io("creating the board's log"))?;
     let mut child = cmd
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -188,8 +204,10 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
         Box::new(stdin),
         Some(ChildGuard::new(child, "the virtual board")),
         cfg.answer_timeout,
-    )?;
+    )
+    .map_err(|e| with_log_tail(e, &log_path))?;
     Ok(VirtualBoard {
+        log_path,
         link: link.keep_alive(dir),
         summary_path,
     })
@@ -202,6 +220,13 @@ fn summary_number(summary: &Path, key: &str) -> Option<f64> {
     v.get(key)?.as_f64()
 }
 
+/// A text from a finished virtual board's summary (`None` if absent or null).
+fn summary_text(summary: &Path, key: &str) -> Option<String> {
+    let text = std::fs::read_to_string(summary).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v.get(key)?.as_str().map(str::to_string)
+}
+
 /// The plant's jump height from a finished virtual board's summary, m.
 pub fn jump_height_m(summary: &Path) -> Option<f64> {
     summary_number(summary, "jump_height_m")
@@ -212,7 +237,11 @@ impl RigLink for VirtualBoard {
         "f407".into()
     }
     fn command(&mut self, command: &Command) -> Result<Reply, LinkError> {
-        self.link.command(command)
+        let log = self.log_path.clone();
+        self.link.command(command).map_err(|e| match e {
+            LinkError::Rejected { .. } => e,
+            other => with_log_tail(other, &log),
+        })
     }
     fn exchange(&mut self, _frame: &SensorFrame) -> Result<ActuatorFrame, LinkError> {
         Err(LinkError::Protocol(
@@ -233,7 +262,13 @@ impl RigLink for VirtualBoard {
         self.link.take_faults()
     }
     fn finish(&mut self) -> Result<LinkReport, LinkError> {
-        let mut report = self.link.finish()?;
+        let log = self.log_path.clone();
+        let mut report = self.link.finish().map_err(|e| with_log_tail(e, &log))?;
+        if let Some(error) = summary_text(&self.summary_path, "plant_error") {
+            return Err(LinkError::Protocol(format!(
+                "the virtual board's simulated rig failed: {error}"
+            )));
+        }
         report.simulated_jump_height_m = jump_height_m(&self.summary_path);
         report.board_realtime_factor = summary_number(&self.summary_path, "virtual_s")
             .zip(summary_number(&self.summary_path, "wall_s"))

@@ -130,11 +130,22 @@ fn main() {
         fail("give --ms N (virtual milliseconds) or --stdio");
     }
     let mut cfg = RunConfig::new(elf);
-    cfg.until_ns = ms.map(|m| m * 1_000_000);
+    cfg.until_ns = ms.map(|m| {
+        m.checked_mul(1_000_000)
+            .filter(|&ns| ns > 0)
+            .unwrap_or_else(|| {
+                fail(format!(
+                    "--ms {m}: 1 to {} virtual milliseconds",
+                    u64::MAX / 1_000_000
+                ))
+            })
+    });
     if let Ok(p) = std::env::var("VIRTUAL_F407_PERIOD_NS") {
         cfg.period_ns = p
             .parse()
-            .unwrap_or_else(|_| fail("VIRTUAL_F407_PERIOD_NS: ns"));
+            .ok()
+            .filter(|ns| (1_000..=1_000_000).contains(ns))
+            .unwrap_or_else(|| fail(format!("VIRTUAL_F407_PERIOD_NS={p}: 1000 to 1000000 ns")));
     }
     cfg.bed = bed;
     cfg.pace = pace;
