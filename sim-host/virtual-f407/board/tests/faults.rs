@@ -363,3 +363,78 @@ fn a_broken_presence_link_reads_as_an_emergency_stop() {
         "a broken presence link left the e-stop unmonitored"
     );
 }
+
+/// Lockstep (hardware in the loop on the real board, the host's sensor frames): the real bed
+/// apparatus is held off whatever it was doing, and the real emergency stop still stops, though
+/// the frames carry simulated bed inputs. The binary before issue 38 left the real blower
+/// running and read only the frames' e-stop.
+#[test]
+fn lockstep_keeps_the_real_bed_off_and_the_real_emergency_stop_stops() {
+    use sandjumper_core::bed::{BedCommand, BedInputs};
+    use sandjumper_core::protocol::FrameDecoder;
+    use sandjumper_core::{FaultCode, RigMessage, SensorFrame};
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(420 * MS);
+    cfg.trace_every = 1;
+    let mut actions = vec![(
+        200 * MS,
+        Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+    )];
+    let simulated_bed = BedInputs {
+        lift_up_limit: false,
+        lift_down_limit: true,
+        emergency_stop: false,
+        height_raw: 2000,
+    };
+    for k in 0..100u32 {
+        let sensor = SensorFrame {
+            frame: k,
+            encoder_count: 0,
+            current_a: None,
+            overrun: false,
+            bed: Some(simulated_bed),
+        };
+        let bytes = encode_frame_vec(&HostMessage::Sensor(sensor))
+            .expect("a frame")
+            .to_vec();
+        actions.push((300 * MS + u64::from(k) * MS, Action::HostBytes(bytes)));
+    }
+    let pressed = BedWiring::Connected {
+        emergency_stop: true,
+        lift_up_limit: false,
+        lift_down_limit: true,
+    };
+    actions.push((350 * MS, Action::Bed(pressed)));
+    cfg.actions = actions;
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    assert!(
+        at(&r, 290 * MS).out.blower_dac_v > 1.0,
+        "the blower never ran"
+    );
+    let locked = at(&r, 310 * MS).out;
+    assert!(
+        locked.blower_dac_v < 0.01,
+        "the real blower runs on in lockstep: {locked:?}"
+    );
+    let mut decoder = FrameDecoder::new();
+    let mut faults = Vec::new();
+    for &b in &host.received {
+        if let Some(Ok(RigMessage::Actuator(a))) = decoder.push::<RigMessage>(b) {
+            faults.push((a.frame, a.fault));
+        }
+    }
+    assert!(
+        faults.iter().any(|(f, _)| *f < 40),
+        "no actuator frames answered"
+    );
+    assert!(
+        faults
+            .iter()
+            .any(|(f, fault)| *f >= 50 && *fault == Some(FaultCode::EmergencyStop)),
+        "the real emergency stop did not stop the lockstep rig: {:?}",
+        faults.iter().rev().take(3).collect::<Vec<_>>()
+    );
+}
