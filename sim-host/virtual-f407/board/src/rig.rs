@@ -84,6 +84,8 @@ pub struct Outputs {
     pub camera_trigger: bool,
     /// PE10.
     pub lift_enable: bool,
+    /// The enable the lift motor sees: PE10 through the same monostable as the drive's.
+    pub lift_gated: bool,
     /// PE11.
     pub lift_up: bool,
     /// DAC channel 2, V.
@@ -143,6 +145,7 @@ pub fn outputs(mcu: &mut F407) -> Outputs {
         heartbeat: high(part, PORT_E, 8),
         camera_trigger: high(part, PORT_E, 9),
         lift_enable: high(part, PORT_E, 10),
+        lift_gated: high(part, PORT_E, 10),
         lift_up: high(part, PORT_E, 11),
         blower_dac_v: mcu.dac.volts(1),
         shaker_duty: shaker_duty(part),

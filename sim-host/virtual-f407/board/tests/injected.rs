@@ -141,8 +141,9 @@ fn an_injected_hardfault_makes_the_rig_safe_reports_and_restarts() {
 /// A stack overflow is not caught by the HardFault handler: the core pushes the exception's
 /// frame below the stack, which (flip-link's stack at the bottom of RAM) faults again while
 /// entering HardFault, and the core locks up (ARMv7-M B1.5.15): nothing runs, PE7 stays high,
-/// nothing is reported. The external enable gate closes within its period (the heartbeat
-/// stopped), and the watchdog restarts the board, which reports it.
+/// nothing is reported. The external enable gate (drive and lift enables) closes within its
+/// period (the heartbeat stopped), and the watchdog's reset ends the rest (blower and shaker:
+/// the DAC and TIM3 back to their reset state), then the board reports it.
 #[test]
 fn a_stack_overflow_locks_the_core_up_the_enable_gate_drops_the_drive_and_the_watchdog_restarts() {
     let Some(elf) = image("stack-overflow") else {
