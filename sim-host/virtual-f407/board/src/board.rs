@@ -111,6 +111,7 @@ impl Mcu for F407 {
             self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
             return (self.part.bus_mut(), Some(&mut self.tim7));
         } else if slot == s.dac {
+            self.dac.tick_ns = self.tim7.last_update_ns;
             return (self.part.bus_mut(), Some(&mut self.dac));
         } else if slot == s.otg_global {
             OtgBlock::Global

@@ -198,6 +198,13 @@ pub struct RunReport {
     /// (shortest, longest) interval between two writes of the force DAC, ns: the control
     /// tick's output jitter (100,000 ns apart when nothing delays the tick).
     pub force_dac_interval_ns: Option<(u64, u64)>,
+    /// (earliest, latest) force DAC write after its tick's timer update, ns.
+    pub force_dac_offset_ns: Option<(u64, u64)>,
+    /// The USB serial number string the virtual host read.
+    pub usb_serial: Option<String>,
+    /// PA15 and PB3 (the encoder's A and B pins) read high at the end: nothing drives them on
+    /// the board (the encoder model drives TIM2's inputs), so their pulls decide.
+    pub encoder_pins_high: (bool, bool),
 }
 
 struct BoardDriver<H> {
@@ -476,6 +483,17 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
     }
 }
 
+/// PA15 and PB3 read high.
+fn encoder_pins_high(part: &mut rigless::soc::stm32f427::Stm32f427) -> (bool, bool) {
+    use rigless::device::Level;
+    use rigless::soc::stm32f427::peripherals::gpio::Pin;
+    let mut high = |port: usize, pin: u8| {
+        let (gpio, regs) = part.port(port);
+        gpio.level(Pin::new(pin).expect("pin"), regs) == Level::High
+    };
+    (high(0, 15), high(1, 3))
+}
+
 /// TIM2 is enabled (CR1.CEN) in one of the encoder modes (SMCR.SMS 1-3, RM0090 18.3.12).
 fn tim2_counts_the_encoder(part: &mut rigless::soc::stm32f427::Stm32f427) -> bool {
     use rigless::soc::stm32f427::generated::tim2::Register;
@@ -578,6 +596,9 @@ pub fn run<H: HostPort + Send + 'static>(
         told,
         flash_violations: d.flash_violations,
         force_dac_interval_ns: mcu.dac.ch1_interval_ns,
+        force_dac_offset_ns: mcu.dac.ch1_offset_ns,
+        usb_serial: mcu.otg.device_info().serial.clone(),
+        encoder_pins_high: encoder_pins_high(&mut mcu.part),
     };
     Ok((report, d.host))
 }

@@ -307,3 +307,83 @@ fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
     );
     assert!(r.last.expect("ran").usb_configured, "USB did not stream");
 }
+
+/// Issue 38 item 10: the USB serial number is the chip's unique ID (two boards on one host are
+/// told apart), and the encoder's inputs are pulled up (an unplugged encoder holds its count
+/// instead of counting noise on floating pins).
+#[test]
+fn the_serial_number_is_the_unique_id_and_the_encoder_inputs_are_pulled_up() {
+    let Some(r) = run_for(300, BedWiring::READY, 0) else {
+        return;
+    };
+    let uid = sandjumper_virtual_f407::run::UNIQUE_ID.1;
+    let expected: String = uid.iter().map(|w| format!("{w:08X}")).collect();
+    assert_eq!(
+        r.usb_serial.as_deref(),
+        Some(expected.as_str()),
+        "the USB serial number"
+    );
+    assert_eq!(
+        r.encoder_pins_high,
+        (true, true),
+        "PA15, PB3 with nothing driving them"
+    );
+}
+
+/// Issue 38 item 7: host commands run after the tick's outputs, so the force DAC lands at the
+/// same point of every tick whatever the host sends (here bursts of configurations, the
+/// costliest command). The binary that ran commands before the control law moved it by the
+/// command's cost.
+#[test]
+fn commands_never_move_the_force_update_within_the_tick() {
+    use sandjumper_core::protocol::encode_frame_vec;
+    use sandjumper_core::{Command, HostMessage};
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let quiet = {
+        let mut cfg = RunConfig::new(elf.clone());
+        cfg.until_ns = Some(400_000_000);
+        run(cfg, NoHost::default())
+            .expect("the run")
+            .0
+            .force_dac_offset_ns
+            .expect("DAC writes")
+    };
+    let jc =
+        sandjumper_core::config::JumpConfig::new(sandjumper_core::config::TrajectorySpec::Sine {
+            kind: sandjumper_core::trajectory::JumpKind::DelayedStutter,
+            amplitude_m: 0.01875,
+            freq_hz: 10.0,
+            tau_s: 0.1,
+        });
+    let frame = |id: u16| {
+        encode_frame_vec(&HostMessage::Command {
+            id,
+            command: Command::Configure(jc),
+        })
+        .expect("frame")
+        .to_vec()
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(400_000_000);
+    cfg.actions = (0..150u16)
+        .map(|k| {
+            (
+                200_000_000 + u64::from(k) * 1_000_000,
+                Action::HostBytes(frame(k + 1)),
+            )
+        })
+        .collect();
+    let busy = run(cfg, NoHost::default())
+        .expect("the run")
+        .0
+        .force_dac_offset_ns
+        .expect("DAC writes");
+    eprintln!("force DAC after the tick's update: quiet {quiet:?} ns, with commands {busy:?} ns");
+    assert!(
+        busy.1 <= quiet.1 + 2_000,
+        "a command moved the force update {} ns later in the tick",
+        busy.1 - quiet.1
+    );
+}

@@ -20,6 +20,8 @@ pub struct BasicTimer {
     period_ns: u64,
     /// Update events since reset.
     pub updates: u64,
+    /// Virtual time of the last update event, ns.
+    pub last_update_ns: u64,
 }
 
 impl BasicTimer {
@@ -72,6 +74,7 @@ impl Device for BasicTimer {
             return;
         }
         self.updates += 1;
+        self.last_update_ns = cx.now().0;
         r.set(tim6::Register::Sr, 1);
         if r.get(tim6::Register::Dier) & 1 != 0 {
             cx.raise(0);

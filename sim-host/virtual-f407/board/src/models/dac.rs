@@ -32,6 +32,11 @@ pub struct Dac {
     last_ch1_write_ns: Option<u64>,
     /// (shortest, longest) interval between two channel-1 writes, ns.
     pub ch1_interval_ns: Option<(u64, u64)>,
+    /// The control tick's last update event, ns (the board sets it before every access).
+    pub tick_ns: u64,
+    /// (earliest, latest) channel-1 write after the tick's update event, ns: where in the tick
+    /// the force command lands.
+    pub ch1_offset_ns: Option<(u64, u64)>,
 }
 
 impl Dac {
@@ -98,6 +103,13 @@ impl Device for Dac {
                 });
             }
             self.last_ch1_write_ns = Some(now);
+            if now > 5_000_000 && now >= self.tick_ns {
+                let d = now - self.tick_ns;
+                self.ch1_offset_ns = Some(match self.ch1_offset_ns {
+                    None => (d, d),
+                    Some((lo, hi)) => (lo.min(d), hi.max(d)),
+                });
+            }
         }
         let code = (v & 0xFFF) as u16;
         self.codes[ch] = code;
