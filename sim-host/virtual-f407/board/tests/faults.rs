@@ -140,6 +140,18 @@ fn a_frozen_encoder_stops_the_drive_on_the_tracking_error() {
         return;
     };
     safe_within(&r, start, 100 * MS, "frozen encoder");
+    // Issue 38 item 4: before the tracking error stops it, the loop drives the force to the
+    // drive's full scale, and the DAC reaches its rail (buffered, it stopped 0.2 V short: about
+    // 260 N instead of 300 N).
+    let (lo, hi) = r
+        .trace
+        .iter()
+        .map(|row| row.out.force_dac_v)
+        .fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    assert!(
+        lo < 0.01 || hi > 3.29,
+        "the force DAC never reached a rail: {lo:.3}..{hi:.3} V"
+    );
 }
 
 #[test]
