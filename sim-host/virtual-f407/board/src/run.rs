@@ -81,6 +81,8 @@ pub enum Action {
     /// supply is back above the level's rising threshold (rigless 0.4 leaves the brown-out reset
     /// out; this is the board's model of it, DS8626's typical thresholds).
     Supply(u32),
+    /// The reset button (NRST pulled low): the part restarts with the pin's flag.
+    ResetButton,
     /// The core's next access to `[from, to)` fails as a bus error (no model sees it).
     BusError {
         /// First address.
@@ -266,6 +268,10 @@ impl<H> BoardDriver<H> {
             }
             Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
             Action::BusError { from, to } => s.fail_next(from, to),
+            Action::ResetButton => {
+                let instructions = 0;
+                s.reset_by_pin(VirtualNanos(at), instructions, host);
+            }
             Action::Supply(mv) => {
                 s.board_mut().mcu.part.set_supply(mv);
                 self.supply_mv = mv;

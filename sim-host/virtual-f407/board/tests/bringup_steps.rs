@@ -1,0 +1,127 @@
+//! docs/bringup.md's steps that need no scope, run as written against the F407 binary on the
+//! virtual board, the host's commands and the board's replies over USB.
+
+mod common;
+
+use std::collections::BTreeMap;
+
+use sandjumper_core::config::{JumpConfig, TrajectorySpec};
+use sandjumper_core::protocol::{FrameDecoder, encode_frame_vec};
+use sandjumper_core::trajectory::JumpKind;
+use sandjumper_core::{Command, HostMessage, Reply, ResetCause, RigMessage};
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_virtual_f407::rig::Robot;
+use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, run};
+
+const MS: u64 = 1_000_000;
+
+fn send(id: u16, command: Command) -> Action {
+    Action::HostBytes(
+        encode_frame_vec(&HostMessage::Command { id, command })
+            .expect("a frame")
+            .to_vec(),
+    )
+}
+
+/// Every reply the board sent, by command id.
+fn replies(bytes: &[u8]) -> BTreeMap<u16, String> {
+    let mut decoder = FrameDecoder::new();
+    let mut out = BTreeMap::new();
+    for &b in bytes {
+        if let Some(Ok(RigMessage::Reply { id, result })) = decoder.push::<RigMessage>(b) {
+            let text = match result {
+                Ok(Reply::Ack) => "Ack".to_string(),
+                Ok(Reply::Status(s)) => format!("Status {:?} {:?}", s.state, s.reset_cause),
+                Err(why) => format!("Rejected {why:?}"),
+            };
+            out.insert(id, text);
+        }
+    }
+    out
+}
+
+/// Step 9: the reset button while Idle; `rig status` shows the pin reset and `Arm` refused until
+/// `rig acknowledge-reset`; then it arms.
+#[test]
+fn step_9_a_reset_needs_an_acknowledgement_before_arm() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(900 * MS);
+    let params = Params::preset(0.57).expect("preset");
+    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 5.0,
+        tau_s: 0.0,
+    });
+    // The board re-enumerates after the reset (~150 ms), then the host talks to it again.
+    cfg.actions = vec![
+        (200 * MS, Action::ResetButton),
+        (600 * MS, send(1, Command::StatusQuery)),
+        (610 * MS, send(2, Command::Configure(jc))),
+        (620 * MS, send(3, Command::Arm)),
+        (630 * MS, send(4, Command::AcknowledgeReset)),
+        (640 * MS, send(5, Command::Arm)),
+        (650 * MS, send(6, Command::Heartbeat)),
+    ];
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    let got = replies(&host.received);
+    assert!(
+        got.get(&1)
+            .is_some_and(|s| s.contains("Idle") && s.contains(&format!("{:?}", ResetCause::Pin))),
+        "status after the reset button: {got:?}; resets {:?}",
+        r.resets
+    );
+    assert!(
+        got.get(&3).is_some_and(|s| s.starts_with("Rejected")),
+        "Arm before the acknowledgement: {got:?}"
+    );
+    assert_eq!(got.get(&4).map(String::as_str), Some("Ack"), "{got:?}");
+    assert_eq!(
+        got.get(&5).map(String::as_str),
+        Some("Ack"),
+        "Arm after the acknowledgement: {got:?}"
+    );
+}
+
+/// Step 6: with the drive disabled the firmware writes the calibration's zero code, so the
+/// multimeter on the force input reads what `rig calibrate-drive --zero-code` sent.
+#[test]
+fn step_6_the_drive_disabled_holds_the_calibrations_zero_code() {
+    use sandjumper_core::drive_calibration::DriveCalibration;
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(300 * MS);
+    cfg.trace_every = 1;
+    let cal = DriveCalibration {
+        zero_code: 2080,
+        codes_per_newton: 6.7,
+    };
+    cfg.actions = vec![(200 * MS, send(1, Command::SetDriveCalibration(cal)))];
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    assert_eq!(
+        replies(&host.received).get(&1).map(String::as_str),
+        Some("Ack")
+    );
+    let before = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns >= 190 * MS)
+        .expect("row")
+        .out
+        .force_dac_v;
+    let after = r.last.expect("ran").out.force_dac_v;
+    assert!(
+        (before - 2048.0 * 3.3 / 4095.0).abs() < 1e-6,
+        "nominal zero before: {before} V"
+    );
+    assert!(
+        (after - 2080.0 * 3.3 / 4095.0).abs() < 1e-6,
+        "the calibration's zero after: {after} V"
+    );
+}
