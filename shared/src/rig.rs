@@ -422,6 +422,7 @@ impl<const Q: usize> Rig<Q> {
                     target.setpoint = a.advance();
                     if a.done() {
                         self.approach = None;
+                        self.camera.start();
                         if core::mem::take(&mut self.start_pending) {
                             self.run_tick = 0;
                             self.state = RigState::Running;
@@ -693,7 +694,11 @@ impl<const Q: usize> Rig<Q> {
                     self.config.tick_hz,
                     j.config.camera_pulse_ticks,
                 );
-                self.camera.start();
+                // After an approach, from its end: the frames before Start must show the rod at
+                // rest, and during the approach it is not.
+                if self.approach.is_none() {
+                    self.camera.start();
+                }
                 self.state = Armed;
                 Ok(Reply::Ack)
             }
