@@ -77,9 +77,9 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
         ));
     }
     // The bring-up's three test images (firmware/src/inject_f407.rs), which the board's
-    // injected.rs runs.
+    // injected.rs runs: built one after the other in one target directory (only the firmware
+    // crate rebuilds between them), each copied to target/inject-<kind>.
     for kind in ["panic", "hardfault", "stack-overflow"] {
-        let target_dir = root.join(format!("target/inject-{kind}"));
         let out = Command::new(env!("CARGO"))
             .args([
                 "build",
@@ -89,8 +89,8 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
                 "thumbv7em-none-eabihf",
                 "--release",
                 "--target-dir",
+                "target/inject-build",
             ])
-            .arg(&target_dir)
             .env("SANDJUMPER_INJECT", kind)
             .current_dir(root)
             .output()
@@ -100,6 +100,15 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
             "building the {kind} test image failed:\n{}",
             String::from_utf8_lossy(&out.stderr)
         );
+        let dir = root.join(format!(
+            "target/inject-{kind}/thumbv7em-none-eabihf/release"
+        ));
+        std::fs::create_dir_all(&dir).expect("the test image's folder");
+        std::fs::copy(
+            root.join("target/inject-build/thumbv7em-none-eabihf/release/sandjumper-firmware"),
+            dir.join("sandjumper-firmware"),
+        )
+        .expect("copy the test image");
     }
     let build = clean(&mut Command::new(board.join("build.sh")))
         .current_dir(&board)

@@ -819,7 +819,10 @@ fn arming_away_from_the_start_approaches_without_a_step_and_start_waits_for_it()
         let out = r.tick(&input(plant.raw()));
         if k < 5_000 {
             // Moving to the start: no camera frame counts as the rod's rest before the jump.
-            assert!(!out.camera_trigger, "a camera frame during the approach at tick {k}");
+            assert!(
+                !out.camera_trigger,
+                "a camera frame during the approach at tick {k}"
+            );
         }
         while let Some(s) = r.samples().pop() {
             if started_at.is_none() {
