@@ -116,6 +116,9 @@ pub struct RunConfig {
     pub crystal_hz: u64,
     /// The supply rail at power-up, mV.
     pub supply_mv: u32,
+    /// The drive's power stage is on (false: the bring-up's first steps, the drive's input
+    /// wired but its output off: the carriage does not follow the force).
+    pub drive_powered: bool,
 }
 
 impl RunConfig {
@@ -133,6 +136,7 @@ impl RunConfig {
             trace_every: 0,
             crystal_hz: crate::board::HSE_HZ,
             supply_mv: crate::board::SUPPLY_MV,
+            drive_powered: true,
         }
     }
 }
@@ -242,6 +246,7 @@ struct BoardDriver<H> {
     robot_released: bool,
     heartbeat_level: bool,
     last_heartbeat_edge_ns: Option<u64>,
+    drive_powered: bool,
 }
 
 impl<H> BoardDriver<H> {
@@ -412,7 +417,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             && self
                 .last_heartbeat_edge_ns
                 .is_some_and(|t| now - t <= rig::MONOSTABLE_NS);
-        if !out.drive_gated {
+        if !out.drive_gated || !self.drive_powered {
             out.force_n = 0.0;
         }
         out.lift_gated = out.lift_enable
@@ -556,6 +561,7 @@ pub fn run<H: HostPort + Send + 'static>(
         robot_released: false,
         heartbeat_level: false,
         last_heartbeat_edge_ns: None,
+        drive_powered: cfg.drive_powered,
     };
     let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)

@@ -125,3 +125,53 @@ fn step_6_the_drive_disabled_holds_the_calibrations_zero_code() {
         "the calibration's zero after: {after} V"
     );
 }
+
+/// Step 7.1: the drive's power stage off, a jump armed: the controller drives a carriage that
+/// does not follow and stops on a tracking-error fault within milliseconds, force to zero.
+#[test]
+fn step_7_1_an_unpowered_drive_ends_on_a_tracking_error() {
+    use sandjumper_core::FaultCode;
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(400 * MS);
+    cfg.trace_every = 1;
+    cfg.drive_powered = false;
+    let params = Params::preset(0.57).expect("preset");
+    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::Single,
+        amplitude_m: 0.01875,
+        freq_hz: 5.0,
+        tau_s: 0.0,
+    });
+    cfg.actions = vec![
+        (190 * MS, send(1, Command::Configure(jc))),
+        (200 * MS, send(2, Command::Arm)),
+        (210 * MS, send(3, Command::Start)),
+    ];
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    let mut decoder = FrameDecoder::new();
+    let mut faults = Vec::new();
+    for &b in &host.received {
+        if let Some(Ok(RigMessage::Fault(f))) = decoder.push::<RigMessage>(b) {
+            faults.push(f);
+        }
+    }
+    let first = faults
+        .first()
+        .unwrap_or_else(|| panic!("no fault reported; log {:?}", r.log));
+    assert_eq!(first.code, FaultCode::TrackingError, "{faults:?}");
+    let off = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns >= 200 * MS && !row.out.drive_enable && row.t_ns > 201 * MS)
+        .expect("the drive went off");
+    assert!(
+        off.t_ns < 300 * MS,
+        "the drive stayed enabled until {} ns",
+        off.t_ns
+    );
+    assert!((off.out.force_dac_v - 1.65).abs() < 1e-3, "{off:?}");
+}
