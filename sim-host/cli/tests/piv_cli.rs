@@ -91,6 +91,15 @@ fn a_synthetic_cone_goes_through_piv_to_an_added_mass_table() {
         settings["preprocess"]["clahe_tile_px"].as_integer(),
         Some(64)
     );
+    // The paper's control volume, the column under the foot, beside the whole window's.
+    let flow = std::fs::read_to_string(out.join("flow.csv")).unwrap();
+    assert!(
+        flow.lines()
+            .next()
+            .unwrap()
+            .contains("momentum_kg_m_s,momentum_under_foot_kg_m_s,added_mass_kg"),
+        "{flow}"
+    );
     // The foot descends: the table `fit added-mass` reads has positive added masses.
     let table = std::fs::read_to_string(out.join("added_mass.csv")).unwrap();
     let rows: Vec<&str> = table.lines().collect();
@@ -123,6 +132,10 @@ fn bad_piv_input_is_refused_with_exit_status_2() {
         &["larger than the 128x96 image"],
     );
     refused(&["piv", f, "--windows", "24"], &["power of two"]);
+    refused(
+        &["piv", f, "--min-speed-ratio", "1.5"],
+        &["speed ratio", "0 to 1"],
+    );
     refused(&["piv", f, "--windows", "16,32"], &["do not grow"]);
     refused(&["piv", f, "--windows", "a,b"], &["window sizes"]);
     refused(&["piv", f, "--overlap", "0.95"], &["overlap"]);

@@ -10,7 +10,9 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::fields::{Grid, derive};
-use crate::momentum::{Calibration, Momentum, Polygon, foot_depth_m, grain_momentum, inside};
+use crate::momentum::{
+    Calibration, Momentum, Polygon, column_momentum, foot_depth_m, grain_momentum, inside,
+};
 use crate::piv::{Image, PivConfig, VectorField, check_config, flag, piv_pair};
 use crate::preprocess::{Preprocess, apply, background};
 
@@ -63,9 +65,15 @@ pub struct PivOptions {
     /// Pixels that are not grain flow in every frame (row-major, the frames' size).
     pub static_mask: Option<Vec<bool>>,
     /// The foot's outline per frame number (its inside is masked; its lowest point gives the
-    /// foot's depth and velocity).
+    /// foot's depth and velocity, its half width the column's radius `R`).
     pub feet: Option<BTreeMap<u64, Polygon>>,
+    /// The added mass `P / v_foot` is kept only while the foot intrudes at least this fraction
+    /// of its fastest intrusion (the paper: near `v = 0` the ratio is singular), 0..1.
+    pub min_speed_ratio: f64,
 }
+
+/// The paper's threshold: `m_a` only while `v_foot >= 0.3 v_max`.
+pub const DEFAULT_MIN_SPEED_RATIO: f64 = 0.3;
 
 /// One row of `flow.csv`: one pair's momentum, foot and vector counts.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -88,7 +96,10 @@ pub struct FlowRow {
     pub momentum_right_kg_m_s: f64,
     /// Mean, kg m/s.
     pub momentum_kg_m_s: f64,
-    /// `P / v_foot`, kg.
+    /// The paper's control volume: the column under the foot (`r <= R`, below the foot), kg m/s.
+    pub momentum_under_foot_kg_m_s: f64,
+    /// The paper's added mass: the column's momentum over the foot's velocity, kg, while the
+    /// foot intrudes at least `min_speed_ratio` of its fastest (NaN otherwise).
     pub added_mass_kg: f64,
     /// Vectors measured and accepted.
     pub vectors_valid: usize,
@@ -99,7 +110,7 @@ pub struct FlowRow {
 }
 
 /// Header of `flow.csv`.
-pub const FLOW_HEADER: [&str; 13] = [
+pub const FLOW_HEADER: [&str; 14] = [
     "pair",
     "frame_a",
     "frame_b",
@@ -109,6 +120,7 @@ pub const FLOW_HEADER: [&str; 13] = [
     "momentum_left_kg_m_s",
     "momentum_right_kg_m_s",
     "momentum_kg_m_s",
+    "momentum_under_foot_kg_m_s",
     "added_mass_kg",
     "vectors_valid",
     "vectors_replaced",
@@ -192,6 +204,15 @@ impl PivRun {
     /// The rows of `flow.csv`, one per pair.
     pub fn rows(&self) -> Vec<FlowRow> {
         self.results.iter().map(|r| r.row.clone()).collect()
+    }
+
+    /// The foot's radius `R` the column under it used: half the outlines' mean width, m
+    /// (`None` without outlines or a calibration).
+    pub fn foot_radius_m(opts: &PivOptions) -> Option<f64> {
+        let (feet, cal) = (opts.feet.as_ref()?, opts.calibration.as_ref()?);
+        let n = feet.len();
+        (n > 0)
+            .then(|| feet.values().map(|p| half_width_px(p)).sum::<f64>() / n as f64 * cal.m_per_px)
     }
 
     /// The intruding pairs' `(foot depth m, added mass kg)`, depth increasing (what
@@ -345,6 +366,7 @@ pub fn analyse_pair(
         momentum_left_kg_m_s: f64::NAN,
         momentum_right_kg_m_s: f64::NAN,
         momentum_kg_m_s: f64::NAN,
+        momentum_under_foot_kg_m_s: f64::NAN,
         added_mass_kg: f64::NAN,
         vectors_valid: valid,
         vectors_replaced: replaced,
@@ -377,8 +399,20 @@ pub fn analyse_pair(
         let (da, db) = (foot_depth_m(pa, &cal), foot_depth_m(pb, &cal));
         row.foot_depth_m = 0.5 * (da + db);
         row.foot_velocity_m_s = -(db - da) / dt;
+        // The column under the foot: r <= R (the foot's half width), below its bottom.
+        let radius_m = 0.5 * (half_width_px(pa) + half_width_px(pb)) * cal.m_per_px;
+        let column = column_momentum(
+            &field,
+            &cal,
+            dt,
+            opts.rho_phi_kg_m3,
+            mask.as_deref().map(|m| (m, w)),
+            radius_m,
+            -row.foot_depth_m,
+        );
+        row.momentum_under_foot_kg_m_s = column.momentum_kg_m_s;
         if row.foot_velocity_m_s.abs() > 1e-9 {
-            row.added_mass_kg = m.momentum_kg_m_s / row.foot_velocity_m_s;
+            row.added_mass_kg = column.momentum_kg_m_s / row.foot_velocity_m_s;
         }
     }
     let s = cal.m_per_px / dt;
@@ -423,7 +457,32 @@ pub fn run(
         results.push(analyse_pair(k, pair, frames, &prepared, opts)?);
         on_pair();
     }
+    apply_speed_threshold(&mut results, opts.min_speed_ratio);
     Ok(PivRun { pairs, results })
+}
+
+/// Half the width of a foot outline, px.
+pub fn half_width_px(poly: &[(f64, f64)]) -> f64 {
+    let (lo, hi) = poly.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+        (lo.min(p.0), hi.max(p.0))
+    });
+    if hi > lo { 0.5 * (hi - lo) } else { 0.0 }
+}
+
+/// The paper's rule: `m_a` only while the foot intrudes at least `ratio` of its fastest
+/// intrusion in the run; other pairs' added mass becomes NaN (their momentum stays).
+fn apply_speed_threshold(results: &mut [PairResult], ratio: f64) {
+    let v_max = results
+        .iter()
+        .map(|r| -r.row.foot_velocity_m_s)
+        .filter(|v| v.is_finite())
+        .fold(0.0_f64, f64::max);
+    for r in results.iter_mut() {
+        let intruding = -r.row.foot_velocity_m_s;
+        if !(intruding.is_finite() && v_max > 0.0 && intruding >= ratio * v_max) {
+            r.row.added_mass_kg = f64::NAN;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -464,6 +523,7 @@ mod tests {
             rho_phi_kg_m3: 570.0,
             static_mask: None,
             feet: None,
+            min_speed_ratio: DEFAULT_MIN_SPEED_RATIO,
         }
     }
 
@@ -549,6 +609,7 @@ mod tests {
                 momentum_left_kg_m_s: 0.0,
                 momentum_right_kg_m_s: 0.0,
                 momentum_kg_m_s: 0.0,
+                momentum_under_foot_kg_m_s: 0.0,
                 added_mass_kg: ma,
                 vectors_valid: 0,
                 vectors_replaced: 0,
@@ -571,5 +632,28 @@ mod tests {
             run.added_mass_points(),
             vec![(0.001, 0.01), (0.0025, 0.03), (0.004, 0.04)]
         );
+        // The paper's speed rule: below 0.3 of the fastest intrusion (1 m/s here) no added
+        // mass; withdrawing pairs none either; the momentum stays.
+        let mut results = vec![
+            row(0.001, -1.0, 0.01),
+            row(0.002, -0.31, 0.02),
+            row(0.003, -0.29, 0.03),
+            row(0.004, 0.5, 0.04),
+        ];
+        apply_speed_threshold(&mut results, DEFAULT_MIN_SPEED_RATIO);
+        let kept: Vec<bool> = results
+            .iter()
+            .map(|r| r.row.added_mass_kg.is_finite())
+            .collect();
+        assert_eq!(kept, [true, true, false, false]);
+        apply_speed_threshold(&mut results, 0.0);
+        assert!(results[0].row.added_mass_kg.is_finite());
+    }
+
+    #[test]
+    fn the_column_radius_is_half_the_outlines_width() {
+        let square = vec![(10.0, 0.0), (30.0, 0.0), (30.0, 8.0), (10.0, 8.0)];
+        assert_eq!(half_width_px(&square), 10.0);
+        assert_eq!(half_width_px(&[]), 0.0);
     }
 }

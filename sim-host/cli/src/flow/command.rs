@@ -126,6 +126,11 @@ pub struct PivArgs {
     /// Grain density, kg/m^3.
     #[arg(long, value_name = "KG_M3", default_value = "1000", value_parser = parse_positive)]
     pub grain_density: f64,
+    /// The added mass `P / v_foot` (P: the column under the foot) is kept only while the foot
+    /// intrudes at least this fraction of its fastest intrusion (the paper's 0.3; near v = 0
+    /// the ratio is singular), 0 to 1.
+    #[arg(long, value_name = "RATIO", default_value = "0.3", value_parser = parse_ratio)]
+    pub min_speed_ratio: f64,
     /// Write fields/, the .npy arrays, flow.csv, added_mass.csv, figures and piv.toml into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -367,7 +372,17 @@ fn options(a: &PivArgs, piv: PivConfig, timed: bool) -> Result<PivOptions, CliEr
         rho_phi_kg_m3: a.grain_density * a.phi,
         static_mask: None,
         feet,
+        min_speed_ratio: a.min_speed_ratio,
     })
+}
+
+fn parse_ratio(s: &str) -> Result<f64, String> {
+    let v = crate::command::args::parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("speed ratio {v} out of range (allowed: 0 to 1)"))
+    }
 }
 
 /// A static mask image of the frames' size `(w, h)`: non-zero pixels are not grain flow.
@@ -463,7 +478,8 @@ fn write_outputs(
     write_settings(staged, a, opts)?;
     write_maps(staged, frames.size(), run, rows, opts.feet.as_ref())?;
     if !added_mass.is_empty() {
-        write_added_mass_figure(staged, a.phi, &added_mass)?;
+        let radius_m = PivRun::foot_radius_m(opts).unwrap_or(f64::NAN);
+        write_added_mass_figure(staged, a.phi, radius_m, &added_mass)?;
     }
     staged.write_text("summary.json", &format!("{json}\n"))?;
     Ok(())
@@ -767,21 +783,30 @@ fn write_maps(
     Ok(())
 }
 
-/// `added_mass.png/svg`: PIV's added mass against foot depth beside the model's eq. 6 at `phi`.
+/// `added_mass.png/svg`: PIV's added mass (the column under the foot over the foot's velocity)
+/// against foot depth beside the model's eq. 6 at `phi`, its `C` scaled with `R^2` for the
+/// foot's radius `radius_m` (the paper's `C` is the 38 mm foot's; NaN: unscaled).
 fn write_added_mass_figure(
     staged: &StagedDir,
     phi: f64,
+    radius_m: f64,
     points: &[(f64, f64)],
 ) -> Result<(), CliError> {
-    use sandjumper_model::ground::{GroundLaw, Sand};
-    use sandjumper_model::params::{ModelName, Params};
-    let params = Params::preset(phi).map_err(internal)?;
-    let sand = Sand::new(&params, GroundLaw::resolve(ModelName::Eq4, &params.model));
+    let reference = sandjumper_model::params::Params::preset(phi)
+        .map_err(internal)?
+        .sand
+        .reference_foot_radius_m;
+    let r = if radius_m.is_finite() && radius_m > 0.0 {
+        radius_m
+    } else {
+        reference
+    };
     let zmax = points.iter().map(|p| p.0).fold(0.0, f64::max) * 1.1;
     let model: Vec<(f64, f64)> = (0..=100)
         .map(|i| {
             let z = zmax * f64::from(i) / 100.0;
-            (1e3 * z, sand.added_mass(z))
+            let m = crate::dem::outputs::model_added_mass(phi, r, z).unwrap_or(f64::NAN);
+            (1e3 * z, m)
         })
         .collect();
     let fig = LineFigure {
