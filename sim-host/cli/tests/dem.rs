@@ -455,12 +455,20 @@ fn an_intrusion_writes_its_folder_and_the_added_mass_grows_then_saturates() {
     // How much of P lies deeper than the jammed cone: a share, reported.
     let beyond = v["momentum_beyond_cone_depth_share"].as_f64().unwrap();
     assert!((0.0..1.0).contains(&beyond), "{json}");
+    // And how much reaches the window's bottom tenth (a warning above 5 %).
+    let bottom = v["momentum_in_window_bottom_tenth_share"].as_f64().unwrap();
+    assert!((-0.5..1.0).contains(&bottom), "{json}");
+    assert_eq!(
+        v.get("window_depth_warning").is_some(),
+        bottom > 0.05,
+        "{json}"
+    );
     let flow = read(&out.join("flow.csv"));
     assert!(
         flow.lines()
             .next()
             .unwrap()
-            .contains(",momentum_kg_m_s,momentum_under_foot_kg_m_s,momentum_under_foot_to_cone_depth_kg_m_s,added_mass_kg,"),
+            .contains(",momentum_kg_m_s,momentum_under_foot_kg_m_s,momentum_under_foot_to_cone_depth_kg_m_s,momentum_band_r_to_2r_kg_m_s,momentum_band_2r_to_3r_kg_m_s,momentum_elsewhere_kg_m_s,momentum_in_window_bottom_tenth_kg_m_s,added_mass_kg,"),
         "{flow}"
     );
     // Force on the intruder resists it; the added mass is positive, grows, then levels off.
@@ -631,10 +639,17 @@ fn a_jump_trajectory_is_refused_below_the_surface_and_its_push_off_is_taken() {
         "{json}"
     );
     let flow = read(&out.join("flow.csv"));
+    let column = flow
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "added_mass_kg")
+        .expect("an added_mass_kg column");
     let added: Vec<&str> = flow
         .lines()
         .skip(1)
-        .map(|l| l.split(',').nth(9).unwrap())
+        .map(|l| l.split(',').nth(column).unwrap())
         .collect();
     assert!(
         added.iter().any(|a| a.is_empty() || *a == "NaN"),

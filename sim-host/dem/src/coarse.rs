@@ -189,6 +189,15 @@ pub struct SampleMomenta {
     pub under_foot: Momentum,
     /// The same column cut at the jammed cone's depth ([`cone_depth_m`]) under the intruder.
     pub under_foot_to_cone: Momentum,
+    /// The columns of radius `2R` and `3R` below the foot (the wide window's split into bands
+    /// around the paper's column).
+    pub under_foot_2r: Momentum,
+    /// Radius `3R`.
+    pub under_foot_3r: Momentum,
+    /// The column under the foot down to a tenth of its depth above the window's bottom: the
+    /// rest is the column's momentum in the window's bottom tenth (motion there means `P`
+    /// depends on how deep the window reaches).
+    pub under_foot_above_bottom_tenth: Momentum,
 }
 
 /// The momenta of the coarse-grained field `f` (`rho_phi`: grain density times the bed's
@@ -231,7 +240,7 @@ pub fn sample_momenta(
     };
     let radius_m = 0.5 * (foot.1 - foot.0);
     let foot_h = foot.2 - surface_m;
-    let column = |bottom_h_m: f64| {
+    let column = |radius_m: f64, bottom_h_m: f64| {
         column_momentum_to(
             &field,
             &centred,
@@ -244,8 +253,14 @@ pub fn sample_momenta(
     };
     SampleMomenta {
         window,
-        under_foot: column(f64::NEG_INFINITY),
-        under_foot_to_cone: column(foot_h - cone_depth_m(radius_m)),
+        under_foot: column(radius_m, f64::NEG_INFINITY),
+        under_foot_to_cone: column(radius_m, foot_h - cone_depth_m(radius_m)),
+        under_foot_2r: column(2.0 * radius_m, f64::NEG_INFINITY),
+        under_foot_3r: column(3.0 * radius_m, f64::NEG_INFINITY),
+        under_foot_above_bottom_tenth: {
+            let bottom_h = spec.top_m - (spec.ny as f64 - 0.5) * spec.spacing_m - surface_m;
+            column(radius_m, bottom_h + 0.1 * (foot_h - bottom_h))
+        },
     }
 }
 
@@ -253,4 +268,52 @@ pub fn sample_momenta(
 /// `R tan 60`, m: how deep the column must reach to hold the cone.
 pub fn cone_depth_m(r_m: f64) -> f64 {
     r_m * 60f64.to_radians().tan()
+}
+
+#[cfg(test)]
+mod momenta_tests {
+    use super::*;
+
+    /// Every grain below the surface moving down at 1 m/s: the columns' momenta go as the
+    /// square of their radius (`Int_0^R v r dr`), so the bands `R..2R` and `2R..3R` hold 3 and
+    /// 5 times the column's; a tenth of the column's depth holds a tenth of its momentum.
+    #[test]
+    fn bands_and_the_bottom_tenth_of_a_uniform_downflow() {
+        let spec = GridSpec {
+            x0_m: -0.05,
+            top_m: 0.0,
+            nx: 101,
+            ny: 61,
+            spacing_m: 0.001,
+            width_m: 0.001,
+            min_density_share: 0.1,
+        };
+        let n = spec.nx * spec.ny;
+        let field = CoarseField {
+            u: Grid::new(spec.nx, spec.ny, spec.spacing_m, vec![0.0; n]),
+            v: Grid::new(spec.nx, spec.ny, spec.spacing_m, vec![-1.0; n]),
+            density: Grid::new(spec.nx, spec.ny, spec.spacing_m, vec![1.0; n]),
+        };
+        // A 10 mm foot (R = 5 mm) with its bottom 10 mm below the surface at 0.
+        let m = sample_momenta(&field, &spec, 0.0, 0.0, 1000.0, (-0.005, 0.005, -0.010));
+        let col = m.under_foot.momentum_kg_m_s;
+        let band1 = m.under_foot_2r.momentum_kg_m_s - col;
+        let band2 = m.under_foot_3r.momentum_kg_m_s - m.under_foot_2r.momentum_kg_m_s;
+        assert!(col < 0.0, "down is negative height-up: {col}");
+        assert!(
+            (band1 / col - 3.0).abs() < 0.05,
+            "R..2R holds {} x the column",
+            band1 / col
+        );
+        assert!(
+            (band2 / col - 5.0).abs() < 0.05,
+            "2R..3R holds {} x the column",
+            band2 / col
+        );
+        let bottom = 1.0 - m.under_foot_above_bottom_tenth.momentum_kg_m_s / col;
+        assert!(
+            (bottom - 0.1).abs() < 0.02,
+            "the bottom tenth holds {bottom} of the column"
+        );
+    }
 }

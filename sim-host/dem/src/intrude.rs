@@ -118,6 +118,22 @@ pub struct FlowRow {
     /// how much of `P` comes from deeper (the column above runs to the window's bottom).
     #[serde(default)]
     pub momentum_under_foot_to_cone_depth_kg_m_s: f64,
+    /// The wide window split in bands (a diagnostic): below the foot between `R` and `2R` from
+    /// the axis, kg m/s (down positive).
+    #[serde(default)]
+    pub momentum_band_r_to_2r_kg_m_s: f64,
+    /// Between `2R` and `3R`.
+    #[serde(default)]
+    pub momentum_band_2r_to_3r_kg_m_s: f64,
+    /// The rest of the window: beyond `3R`, and every grain above the foot's bottom (pushed up
+    /// beside it), kg m/s. The bands and the column add up to the window (within the window's
+    /// cell-centre weighting against the columns' per-pixel `r`).
+    #[serde(default)]
+    pub momentum_elsewhere_kg_m_s: f64,
+    /// The column's momentum in the window's bottom tenth (between the window's bottom and a
+    /// tenth of the column's depth above it), kg m/s: motion reaching the bottom.
+    #[serde(default)]
+    pub momentum_in_window_bottom_tenth_kg_m_s: f64,
     /// The paper's added mass `P / v_foot` with `P` under the foot, kg; NaN while the foot
     /// moves slower than the spec's share of its fastest speed (`null` in a checkpoint's
     /// JSON, read back as NaN).
@@ -357,6 +373,9 @@ impl Run {
         let (l, r, p) = (-m.left_kg_m_s, -m.right_kg_m_s, -m.momentum_kg_m_s);
         let p_column = -momenta.under_foot.momentum_kg_m_s;
         let p_cone = -momenta.under_foot_to_cone.momentum_kg_m_s;
+        let p_2r = -momenta.under_foot_2r.momentum_kg_m_s;
+        let p_3r = -momenta.under_foot_3r.momentum_kg_m_s;
+        let p_above_bottom = -momenta.under_foot_above_bottom_tenth.momentum_kg_m_s;
         let max_shear = d
             .shear_rate
             .values
@@ -374,6 +393,10 @@ impl Run {
             momentum_kg_m_s: p,
             momentum_under_foot_kg_m_s: p_column,
             momentum_under_foot_to_cone_depth_kg_m_s: p_cone,
+            momentum_band_r_to_2r_kg_m_s: p_2r - p_column,
+            momentum_band_2r_to_3r_kg_m_s: p_3r - p_2r,
+            momentum_elsewhere_kg_m_s: p - p_3r,
+            momentum_in_window_bottom_tenth_kg_m_s: p_column - p_above_bottom,
             added_mass_kg: paper_added_mass(
                 p_column,
                 speed,

@@ -48,6 +48,13 @@ pub struct Summary {
     /// momentum that lies deeper than the jammed cone (`R tan 60` under the foot): how much
     /// the measurement depends on the column's depth `H` (0: none).
     pub momentum_beyond_cone_depth_share: f64,
+    /// Median over the same samples of the share of the column's momentum in the window's
+    /// bottom tenth: above [`WINDOW_BOTTOM_SHARE_LIMIT`] the motion reaches the window's
+    /// bottom and the added mass depends on the window's depth `H`.
+    pub momentum_in_window_bottom_tenth_share: f64,
+    /// Said when the motion reaches the window's bottom (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_depth_warning: Option<String>,
     /// Hexatic order of the bed at the end (1: crystal).
     pub hexatic_order: f64,
     /// The jammed region under the intruder at the last intruding sample.
@@ -93,6 +100,10 @@ const FLOW_HEADER: &[&str] = &[
     "momentum_kg_m_s",
     "momentum_under_foot_kg_m_s",
     "momentum_under_foot_to_cone_depth_kg_m_s",
+    "momentum_band_r_to_2r_kg_m_s",
+    "momentum_band_2r_to_3r_kg_m_s",
+    "momentum_elsewhere_kg_m_s",
+    "momentum_in_window_bottom_tenth_kg_m_s",
     "added_mass_kg",
     "max_shear_rate_per_s",
     "cells",
@@ -154,6 +165,21 @@ pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) 
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Above this share of the column's momentum in the window's bottom tenth, the summary warns
+/// that the window is too shallow.
+pub const WINDOW_BOTTOM_SHARE_LIMIT: f64 = 0.05;
+
+/// Median over the samples with the paper's added mass of the share of the column's momentum
+/// in the window's bottom tenth.
+fn bottom_share(flow: &[FlowRow]) -> f64 {
+    median(
+        flow.iter()
+            .filter(|r| r.added_mass_kg.is_finite() && r.momentum_under_foot_kg_m_s > 0.0)
+            .map(|r| r.momentum_in_window_bottom_tenth_kg_m_s / r.momentum_under_foot_kg_m_s)
+            .collect(),
+    )
 }
 
 /// Median over the samples with the paper's added mass of the share of the column's momentum
@@ -336,6 +362,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     let hex = hexatic_order(&run.world);
     let dl = p.dimensionless(spec.trajectory().max_speed());
     let ratio = added_mass_vs_eq6_median(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
+    let bottom_share = bottom_share(&run.state.flow);
     let summary = Summary {
         out: out.display().to_string(),
         grains: run.world.g.len(),
@@ -360,6 +387,13 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
             .map_or(f64::NAN, |r| r.added_mass_kg),
         added_mass_vs_eq6_median: ratio,
         momentum_beyond_cone_depth_share: beyond_cone_share(&run.state.flow),
+        momentum_in_window_bottom_tenth_share: bottom_share,
+        window_depth_warning: (bottom_share > WINDOW_BOTTOM_SHARE_LIMIT).then(|| {
+            format!(
+                "{:.0} % of the column's momentum is in the window's bottom tenth: the motion reaches the window's bottom, so the added mass depends on its depth (make the bed deeper)",
+                100.0 * bottom_share
+            )
+        }),
         grain_momentum_under_foot_kg_m_s: run
             .state
             .flow
