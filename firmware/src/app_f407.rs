@@ -155,10 +155,11 @@ mod app {
 
         io.start_ticking(board::TICK_HZ);
         defmt::info!(
-            "sandjumper firmware: STM32F407, tick {} Hz, budget {} cycles, reset cause {}",
+            "sandjumper firmware: STM32F407, tick {} Hz, budget {} cycles, reset cause {}, brown-out level {}",
             board::TICK_HZ,
             board::TICK_BUDGET_CYCLES,
-            reset_cause
+            reset_cause,
+            board::brown_out_level()
         );
         (
             Shared {},

@@ -305,6 +305,26 @@ fn ensure_brown_out_reset() {
             spins += 1;
         }
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b01)); // OPTLOCK
+        // OPERR, WRPERR, PGAERR, PGPERR, PGSERR (RM0090 3.9.5): the level did not take.
+        let errors = flash.sr().read().bits() & 0xF2;
+        if errors != 0 || spins >= 16_000_000 {
+            defmt::warn!(
+                "option bytes: the brown-out level was not programmed (FLASH_SR {=u32:#x}); the board runs with BOR off",
+                errors
+            );
+        }
+    }
+}
+
+/// The brown-out reset level in the option bytes (RM0090 3.9.10): 3, 2, 1, or 0 for off.
+pub fn brown_out_level() -> u8 {
+    // SAFETY: a read of FLASH_OPTCR.
+    let optcr = unsafe { (*pac::FLASH::ptr()).optcr().read().bits() };
+    match (optcr >> 2) & 0b11 {
+        0b00 => 3,
+        0b01 => 2,
+        0b10 => 1,
+        _ => 0,
     }
 }
 

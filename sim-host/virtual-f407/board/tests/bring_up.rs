@@ -31,6 +31,13 @@ fn clocks_from_the_registers_and_an_exact_10_khz_tick() {
         boot.contains("tick 10000 Hz") && boot.contains("reset cause PowerOn"),
         "{boot}"
     );
+    // The option bytes leave the factory with BOR off: the first start programs level 2.
+    assert!(boot.contains("brown-out level 2"), "{boot}");
+    assert!(
+        !r.log.iter().any(|l| l.contains("not programmed")),
+        "{:?}",
+        r.log
+    );
     // Ticks counted at 100 ms and at 1 s: exactly 10 per ms between them.
     let at = |t_ms: u64| {
         r.trace
