@@ -332,6 +332,14 @@ pub fn brown_out_level() -> u8 {
 /// configured but not started ([`Rig::start_ticking`]). A crystal that does not start ends
 /// here in the safe state with a report (a panic): the board cannot keep time without it.
 pub fn init(dp: pac::Peripherals) -> Parts {
+    // The watchdog first, at its reset settings (prescaler /4, reload 0xFFF: 0.35-0.96 s over
+    // the LSI's 17-47 kHz): a hang anywhere in the start-up (the HAL waits for the PLL with no
+    // bound) resets the chip instead of holding it, and the reset cause says so. The 10 ms
+    // setting replaces it at the end of `init`.
+    // SAFETY: IWDG_KR's start key; nothing else owns the IWDG yet.
+    unsafe {
+        (*pac::IWDG::ptr()).kr().write(|w| w.key().bits(0xCCCC));
+    }
     ensure_brown_out_reset();
     // More wait states before the clock rises (RM0090 3.5.1: raise LATENCY first).
     // SAFETY: FLASH_ACR's LATENCY, read back as the manual asks before the clock changes.

@@ -75,6 +75,10 @@ pub enum Action {
     /// the last thing `init` does before the tick starts): a hang after the watchdog's start
     /// and before the first tick (RTT blocking on a probe that stopped reading, say).
     HoldAtTheBootLine,
+    /// The core stops as soon as the independent watchdog runs (its start forces the LSI on,
+    /// RM0090 6.2.9: `LSIRDY`; the firmware never starts the LSI otherwise): a hang anywhere
+    /// after the watchdog's start.
+    HoldOnceTheWatchdogRuns,
     /// The supply rail changes, mV. Below the brown-out level the option bytes select (RM0090
     /// 3.9.10 `BOR_LEV`; off: the ~1.75 V power-down reset) the board holds the part in reset
     /// (the core stopped, every pin at its reset state), and releases it with a reset once the
@@ -238,6 +242,7 @@ struct BoardDriver<H> {
     resets_seen: usize,
     holds: Vec<u64>,
     hold_at_first_log_line: bool,
+    hold_when_watchdog_runs: bool,
     supply_mv: u32,
     in_brown_out: bool,
     brown_outs: Vec<u64>,
@@ -272,6 +277,7 @@ impl<H> BoardDriver<H> {
                 }
             }
             Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
+            Action::HoldOnceTheWatchdogRuns => self.hold_when_watchdog_runs = true,
             Action::BusError { from, to } => s.fail_next(from, to),
             Action::ResetButton => {
                 let instructions = 0;
@@ -376,6 +382,15 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         }
         self.rtt.drain(host);
         self.brown_out(s, host, stop);
+        if self.hold_when_watchdog_runs {
+            let (_, regs) = s.board_mut().mcu.part.clocks();
+            let csr = regs.get(rigless::soc::stm32f427::generated::rcc::Register::Csr);
+            if csr & (1 << 1) != 0 {
+                // LSIRDY
+                self.hold_when_watchdog_runs = false;
+                self.apply(s, host, now, Action::Hold(true));
+            }
+        }
         if self.hold_at_first_log_line && !self.rtt.lines.is_empty() {
             self.hold_at_first_log_line = false;
             self.apply(s, host, now, Action::Hold(true));
@@ -553,6 +568,7 @@ pub fn run<H: HostPort + Send + 'static>(
         resets_seen: 0,
         holds: Vec::new(),
         hold_at_first_log_line: false,
+        hold_when_watchdog_runs: false,
         supply_mv: cfg.supply_mv,
         in_brown_out: false,
         brown_outs: Vec::new(),

@@ -396,3 +396,34 @@ fn commands_never_move_the_force_update_within_the_tick() {
         busy.1 - quiet.1
     );
 }
+
+/// Issue 38 item 9: a hang early in the start-up (the HAL waits for the crystal and the PLL
+/// with no bound) is ended by the watchdog, started first at its reset settings (0.35-0.96 s),
+/// and the restarted firmware reports it. Held as soon as the watchdog runs: the binary that
+/// started it only at the end of `init`, with its 8 s first window, is not reset in 1.5 s.
+#[test]
+fn a_hang_early_in_the_start_up_is_reset_by_the_watchdog() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(1_500_000_000);
+    cfg.period_ns = 10_000;
+    cfg.actions = vec![(0, Action::HoldOnceTheWatchdogRuns)];
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let (at, cause) = r.resets.first().cloned().unwrap_or_else(|| {
+        panic!(
+            "still hung after 1.5 s: no reset (end {} ns, stop {}, log {:?})",
+            r.end_ns, r.stop, r.log
+        )
+    });
+    assert!(
+        cause.contains("IWDG") && (300_000_000..1_000_000_000).contains(&at),
+        "{cause} at {at} ns"
+    );
+    assert!(
+        r.log.iter().any(|l| l.contains("reset cause Watchdog")),
+        "{:?}",
+        r.log
+    );
+}
