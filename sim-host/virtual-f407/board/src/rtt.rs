@@ -104,6 +104,13 @@ impl RttLog {
         }
     }
 
+    /// Puts up-buffer 0 in blocking mode (`SEGGER_RTT_MODE_BLOCK_IF_FULL`), as probe-rs does
+    /// when it attaches.
+    pub fn set_blocking(&self, host: &mut dyn Host) {
+        let flags = self.control_block + 24 + 20;
+        let _ = host.write(flags, Width::W32, 2);
+    }
+
     /// Every byte read from the buffer.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes

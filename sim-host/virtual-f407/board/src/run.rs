@@ -67,6 +67,9 @@ pub enum Action {
     EncoderFrozen,
     /// The encoder's count jumps (a slipping scale), counts.
     EncoderJump(i64),
+    /// A probe attaches, puts RTT in blocking mode and stops reading it (a debugger session left
+    /// open, a probe that went away): a full buffer then blocks a writer that waits.
+    ProbeStopsReading,
     /// The core stops executing (true) or goes on (false), with time and the peripherals running
     /// on: a hang, as a debugger's halt shows it (the watchdog keeps counting: the firmware does
     /// not freeze it on debug).
@@ -243,6 +246,7 @@ struct BoardDriver<H> {
     holds: Vec<u64>,
     hold_at_first_log_line: bool,
     hold_when_watchdog_runs: bool,
+    rtt_draining: bool,
     supply_mv: u32,
     in_brown_out: bool,
     brown_outs: Vec<u64>,
@@ -277,6 +281,10 @@ impl<H> BoardDriver<H> {
                 }
             }
             Action::HoldAtTheBootLine => self.hold_at_first_log_line = true,
+            Action::ProbeStopsReading => {
+                self.rtt.set_blocking(host);
+                self.rtt_draining = false;
+            }
             Action::HoldOnceTheWatchdogRuns => self.hold_when_watchdog_runs = true,
             Action::BusError { from, to } => s.fail_next(from, to),
             Action::ResetButton => {
@@ -380,7 +388,9 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
                 host.hold(false);
             }
         }
-        self.rtt.drain(host);
+        if self.rtt_draining {
+            self.rtt.drain(host);
+        }
         self.brown_out(s, host, stop);
         if self.hold_when_watchdog_runs {
             let (_, regs) = s.board_mut().mcu.part.clocks();
@@ -569,6 +579,7 @@ pub fn run<H: HostPort + Send + 'static>(
         holds: Vec::new(),
         hold_at_first_log_line: false,
         hold_when_watchdog_runs: false,
+        rtt_draining: true,
         supply_mv: cfg.supply_mv,
         in_brown_out: false,
         brown_outs: Vec::new(),

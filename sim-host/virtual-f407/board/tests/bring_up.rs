@@ -427,3 +427,50 @@ fn a_hang_early_in_the_start_up_is_reset_by_the_watchdog() {
         r.log
     );
 }
+
+/// Issue 38 item 5: a probe that put RTT in blocking mode and stopped reading never stalls the
+/// tick, while the host sends bursts of small commands, more than the firmware's inbound queue
+/// holds (frames dropped, counted). A regression bound, not the fix's test: the binary whose link
+/// task logged each power of two of drops wrote too little to fill the 1 KiB buffer here (its
+/// stall needed a buffer already full); `tests/f407_disassembly.rs` shows the link task no longer
+/// reaches defmt at all.
+#[test]
+fn a_probe_that_stops_reading_never_stalls_the_tick() {
+    use sandjumper_core::protocol::encode_frame_vec;
+    use sandjumper_core::{Command, HostMessage};
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(600_000_000);
+    let frame = |id: u16| {
+        encode_frame_vec(&HostMessage::Command {
+            id,
+            command: Command::Heartbeat,
+        })
+        .expect("frame")
+        .to_vec()
+    };
+    let mut actions = vec![(150_000_000, Action::ProbeStopsReading)];
+    for burst in 0..40u16 {
+        let bytes: Vec<u8> = (0..200u16)
+            .flat_map(|k| frame(burst * 200 + k + 1))
+            .collect();
+        actions.push((
+            200_000_000 + u64::from(burst) * 10_000_000,
+            Action::HostBytes(bytes),
+        ));
+    }
+    cfg.actions = actions;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    assert!(
+        r.resets.is_empty(),
+        "the tick stalled and the watchdog reset the chip: {:?}",
+        r.resets
+    );
+    let (lo, hi) = r.force_dac_interval_ns.expect("the force DAC was written");
+    assert!(
+        lo >= 95_000 && hi <= 105_000,
+        "force DAC writes {lo}..{hi} ns apart"
+    );
+}
