@@ -517,5 +517,11 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         mcap: a.mcap,
         json: a.json,
     };
-    crate::rig::tool::jump::run(&jump)
+    let result = crate::rig::tool::jump::run(&jump);
+    if scratch.is_some() {
+        eprintln!(
+            "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)"
+        );
+    }
+    result
 }
