@@ -175,3 +175,53 @@ fn step_7_1_an_unpowered_drive_ends_on_a_tracking_error() {
     );
     assert!((off.out.force_dac_v - 1.65).abs() < 1e-3, "{off:?}");
 }
+
+/// Step 3: `rig status` a second apart: `tick` advances by 10,000, `max tick` stays below the
+/// 13,440-cycle budget and `ticks missed` at 0, with a configuration sent in between (a command
+/// runs in the tick that receives it).
+#[test]
+fn step_3_the_tick_advances_10000_a_second_within_its_budget() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(1_400 * MS);
+    let jc = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::DelayedStutter,
+        amplitude_m: 0.01875,
+        freq_hz: 10.0,
+        tau_s: 0.1,
+    });
+    cfg.actions = vec![
+        (300 * MS, send(1, Command::StatusQuery)),
+        (800 * MS, send(2, Command::Configure(jc))),
+        (1_300 * MS, send(3, Command::StatusQuery)),
+    ];
+    let (_, host) = run(cfg, NoHost::default()).expect("the run");
+    let mut decoder = FrameDecoder::new();
+    let mut status = BTreeMap::new();
+    for &b in &host.received {
+        if let Some(Ok(RigMessage::Reply {
+            id,
+            result: Ok(Reply::Status(s)),
+        })) = decoder.push::<RigMessage>(b)
+        {
+            status.insert(id, s);
+        }
+    }
+    let (a, b) = (
+        status.get(&1).expect("the first status"),
+        status.get(&3).expect("the second status"),
+    );
+    let advanced = b.tick.wrapping_sub(a.tick);
+    assert!(
+        (9_999..=10_001).contains(&advanced),
+        "the tick advanced {advanced} in a second"
+    );
+    assert!(
+        b.counters.max_tick_cycles < 13_440,
+        "max tick {} cycles",
+        b.counters.max_tick_cycles
+    );
+    assert_eq!(b.counters.ticks_missed, 0);
+}
