@@ -288,10 +288,16 @@ fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(400_000_000);
+    // Configure: the costliest command to decode and to apply.
+    let jc = common::sine(
+        sandjumper_core::trajectory::JumpKind::DelayedStutter,
+        10.0,
+        0.1,
+    );
     let frame = |id: u16| {
         encode_frame_vec(&HostMessage::Command {
             id,
-            command: Command::StatusQuery,
+            command: Command::Configure(jc),
         })
         .expect("frame")
         .to_vec()
