@@ -39,13 +39,7 @@ fn clocks_from_the_registers_and_an_exact_10_khz_tick() {
         r.log
     );
     // Ticks counted at 100 ms and at 1 s: exactly 10 per ms between them.
-    let at = |t_ms: u64| {
-        r.trace
-            .iter()
-            .find(|row| row.t_ns >= t_ms * 1_000_000)
-            .expect("a trace row")
-            .ticks
-    };
+    let at = |t_ms: u64| common::at(&r, t_ms * 1_000_000).ticks;
     assert_eq!(
         at(900) - at(100),
         8_000,
@@ -189,12 +183,7 @@ fn a_hang_between_the_watchdogs_start_and_the_first_tick_is_reset_within_its_per
     cfg.trace_every = 1;
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
     let held = *r.holds.first().expect("the watchdog never started");
-    let ticks_then = r
-        .trace
-        .iter()
-        .find(|row| row.t_ns >= held)
-        .expect("row")
-        .ticks;
+    let ticks_then = common::at(&r, held).ticks;
     assert_eq!(
         ticks_then, 0,
         "held after the first tick: not the case this test is about"
@@ -250,11 +239,7 @@ fn a_sagging_supply_never_runs_the_flash_out_of_its_table() {
         1,
         "no brown-out reset at 2.3 V (BOR off: the part runs on to 1.7 V)"
     );
-    let during = r
-        .trace
-        .iter()
-        .find(|row| row.t_ns >= 60_000_000)
-        .expect("row");
+    let during = common::at(&r, 60_000_000);
     assert!(
         during.out.drive_and_lift_safe() && !during.out.heartbeat,
         "{during:?}"
@@ -281,8 +266,7 @@ fn a_sagging_supply_never_runs_the_flash_out_of_its_table() {
 /// keeps the inbound queue from overflowing, so its link task never logged).
 #[test]
 fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
-    use sandjumper_core::protocol::encode_frame_vec;
-    use sandjumper_core::{Command, HostMessage};
+    use sandjumper_core::Command;
     let Some(elf) = common::firmware_elf() else {
         return;
     };
@@ -294,14 +278,7 @@ fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
         10.0,
         0.1,
     );
-    let frame = |id: u16| {
-        encode_frame_vec(&HostMessage::Command {
-            id,
-            command: Command::Configure(jc),
-        })
-        .expect("frame")
-        .to_vec()
-    };
+    let frame = |id: u16| common::command_frame(id, Command::Configure(jc));
     // Bursts of 20 (more than the firmware's inbound queue holds: some are dropped, counted).
     cfg.actions = (0..10u64)
         .map(|burst| {
@@ -349,8 +326,7 @@ fn the_serial_number_is_the_unique_id_and_the_encoder_inputs_are_pulled_up() {
 /// command's cost.
 #[test]
 fn commands_never_move_the_force_update_within_the_tick() {
-    use sandjumper_core::protocol::encode_frame_vec;
-    use sandjumper_core::{Command, HostMessage};
+    use sandjumper_core::Command;
     let Some(elf) = common::firmware_elf() else {
         return;
     };
@@ -363,21 +339,12 @@ fn commands_never_move_the_force_update_within_the_tick() {
             .force_dac_offset_ns
             .expect("DAC writes")
     };
-    let jc =
-        sandjumper_core::config::JumpConfig::new(sandjumper_core::config::TrajectorySpec::Sine {
-            kind: sandjumper_core::trajectory::JumpKind::DelayedStutter,
-            amplitude_m: 0.01875,
-            freq_hz: 10.0,
-            tau_s: 0.1,
-        });
-    let frame = |id: u16| {
-        encode_frame_vec(&HostMessage::Command {
-            id,
-            command: Command::Configure(jc),
-        })
-        .expect("frame")
-        .to_vec()
-    };
+    let jc = common::sine(
+        sandjumper_core::trajectory::JumpKind::DelayedStutter,
+        10.0,
+        0.1,
+    );
+    let frame = |id: u16| common::command_frame(id, Command::Configure(jc));
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(400_000_000);
     cfg.actions = (0..150u16)
@@ -442,21 +409,13 @@ fn a_hang_early_in_the_start_up_is_reset_by_the_watchdog() {
 /// reaches defmt at all.
 #[test]
 fn a_probe_that_stops_reading_never_stalls_the_tick() {
-    use sandjumper_core::protocol::encode_frame_vec;
-    use sandjumper_core::{Command, HostMessage};
+    use sandjumper_core::Command;
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(600_000_000);
-    let frame = |id: u16| {
-        encode_frame_vec(&HostMessage::Command {
-            id,
-            command: Command::Heartbeat,
-        })
-        .expect("frame")
-        .to_vec()
-    };
+    let frame = |id: u16| common::command_frame(id, Command::Heartbeat);
     let mut actions = vec![(150_000_000, Action::ProbeStopsReading)];
     for burst in 0..40u16 {
         let bytes: Vec<u8> = (0..200u16)

@@ -5,30 +5,16 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use sandjumper_core::config::{JumpConfig, TrajectorySpec};
-use sandjumper_core::protocol::{FrameDecoder, encode_frame_vec};
+use common::{MS, rig_messages, robot_at_single_start, send, sine, single_sine};
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_core::{Command, HostMessage, Reply, ResetCause, RigMessage};
-use sandjumper_model::params::{ModelName, Params};
-use sandjumper_virtual_f407::rig::Robot;
+use sandjumper_core::{Command, Reply, ResetCause, RigMessage};
 use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, run};
-
-const MS: u64 = 1_000_000;
-
-fn send(id: u16, command: Command) -> Action {
-    Action::HostBytes(
-        encode_frame_vec(&HostMessage::Command { id, command })
-            .expect("a frame")
-            .to_vec(),
-    )
-}
 
 /// Every reply the board sent, by command id.
 fn replies(bytes: &[u8]) -> BTreeMap<u16, String> {
-    let mut decoder = FrameDecoder::new();
     let mut out = BTreeMap::new();
-    for &b in bytes {
-        if let Some(Ok(RigMessage::Reply { id, result })) = decoder.push::<RigMessage>(b) {
+    for m in rig_messages(bytes) {
+        if let RigMessage::Reply { id, result } = m {
             let text = match result {
                 Ok(Reply::Ack) => "Ack".to_string(),
                 Ok(Reply::Status(s)) => format!("Status {:?} {:?}", s.state, s.reset_cause),
@@ -49,14 +35,8 @@ fn step_9_a_reset_needs_an_acknowledgement_before_arm() {
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(900 * MS);
-    let params = Params::preset(0.57).expect("preset");
-    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::Single,
-        amplitude_m: 0.01875,
-        freq_hz: 5.0,
-        tau_s: 0.0,
-    });
+    cfg.robot = Some(robot_at_single_start());
+    let jc = single_sine();
     // The board re-enumerates after the reset (~150 ms), then the host talks to it again.
     cfg.actions = vec![
         (200 * MS, Action::ResetButton),
@@ -108,13 +88,7 @@ fn step_6_the_drive_disabled_holds_the_calibrations_zero_code() {
         replies(&host.received).get(&1).map(String::as_str),
         Some("Ack")
     );
-    let before = r
-        .trace
-        .iter()
-        .find(|row| row.t_ns >= 190 * MS)
-        .expect("row")
-        .out
-        .force_dac_v;
+    let before = common::at(&r, 190 * MS).out.force_dac_v;
     let after = r.last.expect("ran").out.force_dac_v;
     assert!(
         (before - 2048.0 * 3.3 / 4095.0).abs() < 1e-6,
@@ -138,27 +112,21 @@ fn step_7_1_an_unpowered_drive_ends_on_a_tracking_error() {
     cfg.until_ns = Some(400 * MS);
     cfg.trace_every = 1;
     cfg.drive_powered = false;
-    let params = Params::preset(0.57).expect("preset");
-    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::Single,
-        amplitude_m: 0.01875,
-        freq_hz: 5.0,
-        tau_s: 0.0,
-    });
+    cfg.robot = Some(robot_at_single_start());
+    let jc = single_sine();
     cfg.actions = vec![
         (190 * MS, send(1, Command::Configure(jc))),
         (200 * MS, send(2, Command::Arm)),
         (210 * MS, send(3, Command::Start)),
     ];
     let (r, host) = run(cfg, NoHost::default()).expect("the run");
-    let mut decoder = FrameDecoder::new();
-    let mut faults = Vec::new();
-    for &b in &host.received {
-        if let Some(Ok(RigMessage::Fault(f))) = decoder.push::<RigMessage>(b) {
-            faults.push(f);
-        }
-    }
+    let faults: Vec<_> = rig_messages(&host.received)
+        .into_iter()
+        .filter_map(|m| match m {
+            RigMessage::Fault(f) => Some(f),
+            _ => None,
+        })
+        .collect();
     let first = faults
         .first()
         .unwrap_or_else(|| panic!("no fault reported; log {:?}", r.log));
@@ -192,25 +160,19 @@ fn step_3_the_tick_advances_10000_a_second_within_its_budget() {
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(1_400 * MS);
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::DelayedStutter,
-        amplitude_m: 0.01875,
-        freq_hz: 10.0,
-        tau_s: 0.1,
-    });
+    let jc = sine(JumpKind::DelayedStutter, 10.0, 0.1);
     cfg.actions = vec![
         (300 * MS, send(1, Command::StatusQuery)),
         (800 * MS, send(2, Command::Configure(jc))),
         (1_300 * MS, send(3, Command::StatusQuery)),
     ];
     let (_, host) = run(cfg, NoHost::default()).expect("the run");
-    let mut decoder = FrameDecoder::new();
     let mut status = BTreeMap::new();
-    for &b in &host.received {
-        if let Some(Ok(RigMessage::Reply {
+    for m in rig_messages(&host.received) {
+        if let RigMessage::Reply {
             id,
             result: Ok(Reply::Status(s)),
-        })) = decoder.push::<RigMessage>(b)
+        } = m
         {
             status.insert(id, s);
         }

@@ -5,25 +5,15 @@
 
 mod common;
 
-use sandjumper_core::config::{JumpConfig, TrajectorySpec};
+use common::{MS, armed_actions, at, rig_messages, robot_at_single_start, send};
+use sandjumper_core::Command;
 use sandjumper_core::protocol::encode_frame_vec;
-use sandjumper_core::trajectory::JumpKind;
-use sandjumper_core::{Command, HostMessage};
-use sandjumper_model::params::{ModelName, Params};
-use sandjumper_virtual_f407::rig::{BedWiring, Robot};
-use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, TraceRow, run};
-
-const MS: u64 = 1_000_000;
+use sandjumper_virtual_f407::rig::BedWiring;
+use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
 /// When the host arms the rig (the board is enumerated by ~140 ms).
 const ARM_AT: u64 = 200 * MS;
 /// When the fault is injected.
 const FAULT_AT: u64 = 600 * MS;
-
-fn frame(id: u16, command: Command) -> Vec<u8> {
-    encode_frame_vec(&HostMessage::Command { id, command })
-        .expect("a frame")
-        .to_vec()
-}
 
 /// Configure a single 5 Hz sine and arm at `ARM_AT`; heartbeats every 20 ms until `silent_from`.
 fn armed_run(silent_from: u64, end: u64, mut extra: Vec<(u64, Action)>) -> Option<RunReport> {
@@ -31,39 +21,11 @@ fn armed_run(silent_from: u64, end: u64, mut extra: Vec<(u64, Action)>) -> Optio
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(end);
     cfg.trace_every = 1;
-    let params = Params::preset(0.57).expect("preset");
-    // At the single sine's start (-A), as the lockstep rigs start it: no approach after Arm.
-    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::Single,
-        amplitude_m: 0.01875,
-        freq_hz: 5.0,
-        tau_s: 0.0,
-    });
-    let mut actions = vec![
-        (
-            ARM_AT - 10 * MS,
-            Action::HostBytes(frame(1, Command::Configure(jc))),
-        ),
-        (ARM_AT, Action::HostBytes(frame(2, Command::Arm))),
-    ];
-    let mut id = 3;
-    let mut t = ARM_AT + 20 * MS;
-    while t < silent_from.min(end) {
-        actions.push((t, Action::HostBytes(frame(id, Command::Heartbeat))));
-        id += 1;
-        t += 20 * MS;
-    }
+    cfg.robot = Some(robot_at_single_start());
+    let mut actions = armed_actions(ARM_AT, silent_from.min(end));
     actions.append(&mut extra);
     cfg.actions = actions;
     Some(run(cfg, NoHost::default()).expect("the run").0)
-}
-
-fn at(r: &RunReport, t: u64) -> TraceRow {
-    *r.trace
-        .iter()
-        .find(|row| row.t_ns >= t)
-        .expect("a trace row")
 }
 
 /// The drive was on just before `from`, and everything is safe from `from + within` to the end.
@@ -134,7 +96,7 @@ fn a_frozen_encoder_stops_the_drive_on_the_tracking_error() {
         FAULT_AT + 300 * MS,
         vec![
             (FAULT_AT, Action::EncoderFrozen),
-            (start, Action::HostBytes(frame(99, Command::Start))),
+            (start, send(99, Command::Start)),
         ],
     ) else {
         return;
@@ -249,15 +211,15 @@ fn a_hardfault_while_the_bed_runs_turns_the_bed_off_too() {
     cfg.actions = vec![
         (
             200 * MS,
-            Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+            send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
         ),
         (
             205 * MS,
-            Action::HostBytes(frame(2, Command::Bed(BedCommand::Shaker { duty: 0.5 }))),
+            send(2, Command::Bed(BedCommand::Shaker { duty: 0.5 })),
         ),
         (
             210 * MS,
-            Action::HostBytes(frame(3, Command::Bed(BedCommand::Lift(LiftMove::Up)))),
+            send(3, Command::Bed(BedCommand::Lift(LiftMove::Up))),
         ),
         (
             300 * MS,
@@ -300,21 +262,8 @@ fn a_board_with_nothing_wired_can_be_armed() {
     cfg.until_ns = Some(ARM_AT + 5 * MS);
     cfg.trace_every = 1;
     cfg.bed = BedWiring::Unwired;
-    let params = Params::preset(0.57).expect("preset");
-    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::Single,
-        amplitude_m: 0.01875,
-        freq_hz: 5.0,
-        tau_s: 0.0,
-    });
-    cfg.actions = vec![
-        (
-            ARM_AT - 10 * MS,
-            Action::HostBytes(frame(1, Command::Configure(jc))),
-        ),
-        (ARM_AT, Action::HostBytes(frame(2, Command::Arm))),
-    ];
+    cfg.robot = Some(robot_at_single_start());
+    cfg.actions = armed_actions(ARM_AT, ARM_AT);
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
     let after = at(&r, ARM_AT + 4 * MS);
     assert!(
@@ -339,15 +288,15 @@ fn an_absent_bed_apparatus_cannot_be_switched_on() {
     cfg.actions = vec![
         (
             200 * MS,
-            Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+            send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
         ),
         (
             205 * MS,
-            Action::HostBytes(frame(2, Command::Bed(BedCommand::Shaker { duty: 0.5 }))),
+            send(2, Command::Bed(BedCommand::Shaker { duty: 0.5 })),
         ),
         (
             210 * MS,
-            Action::HostBytes(frame(3, Command::Bed(BedCommand::Lift(LiftMove::Up)))),
+            send(3, Command::Bed(BedCommand::Lift(LiftMove::Up))),
         ),
     ];
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
@@ -383,8 +332,7 @@ fn a_broken_presence_link_reads_as_an_emergency_stop() {
 #[test]
 fn lockstep_keeps_the_real_bed_off_and_the_real_emergency_stop_stops() {
     use sandjumper_core::bed::{BedCommand, BedInputs};
-    use sandjumper_core::protocol::FrameDecoder;
-    use sandjumper_core::{FaultCode, RigMessage, SensorFrame};
+    use sandjumper_core::{FaultCode, HostMessage, RigMessage, SensorFrame};
     let Some(elf) = common::firmware_elf() else {
         return;
     };
@@ -393,7 +341,7 @@ fn lockstep_keeps_the_real_bed_off_and_the_real_emergency_stop_stops() {
     cfg.trace_every = 1;
     let mut actions = vec![(
         200 * MS,
-        Action::HostBytes(frame(1, Command::Bed(BedCommand::Blower { volts: 5.0 }))),
+        send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
     )];
     let simulated_bed = BedInputs {
         lift_up_limit: false,
@@ -431,13 +379,13 @@ fn lockstep_keeps_the_real_bed_off_and_the_real_emergency_stop_stops() {
         locked.blower_dac_v < 0.01,
         "the real blower runs on in lockstep: {locked:?}"
     );
-    let mut decoder = FrameDecoder::new();
-    let mut faults = Vec::new();
-    for &b in &host.received {
-        if let Some(Ok(RigMessage::Actuator(a))) = decoder.push::<RigMessage>(b) {
-            faults.push((a.frame, a.fault));
-        }
-    }
+    let faults: Vec<_> = rig_messages(&host.received)
+        .into_iter()
+        .filter_map(|m| match m {
+            RigMessage::Actuator(a) => Some((a.frame, a.fault)),
+            _ => None,
+        })
+        .collect();
     assert!(
         faults.iter().any(|(f, _)| *f < 40),
         "no actuator frames answered"

@@ -9,15 +9,8 @@ mod common;
 
 use std::path::PathBuf;
 
-use sandjumper_core::config::{JumpConfig, TrajectorySpec};
-use sandjumper_core::protocol::encode_frame_vec;
-use sandjumper_core::trajectory::JumpKind;
-use sandjumper_core::{Command, HostMessage};
-use sandjumper_model::params::{ModelName, Params};
-use sandjumper_virtual_f407::rig::Robot;
-use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
-
-const MS: u64 = 1_000_000;
+use common::{MS, armed_actions, robot_at_single_start};
+use sandjumper_virtual_f407::run::{NoHost, RunConfig, RunReport, run};
 
 fn image(kind: &str) -> Option<PathBuf> {
     let dir = std::env::var_os("SANDJUMPER_F407_INJECT_DIR")
@@ -38,39 +31,13 @@ fn image(kind: &str) -> Option<PathBuf> {
     None
 }
 
-fn frame(id: u16, command: Command) -> Vec<u8> {
-    encode_frame_vec(&HostMessage::Command { id, command })
-        .expect("a frame")
-        .to_vec()
-}
-
 /// Armed at 200 ms with heartbeats, run to 2.1 s.
 fn armed(elf: PathBuf) -> RunReport {
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(2_100 * MS);
     cfg.trace_every = 1;
-    let params = Params::preset(0.57).expect("preset");
-    cfg.robot = Some(Robot::new(&params, ModelName::Hard, -0.01875).expect("robot"));
-    let jc = JumpConfig::new(TrajectorySpec::Sine {
-        kind: JumpKind::Single,
-        amplitude_m: 0.01875,
-        freq_hz: 5.0,
-        tau_s: 0.0,
-    });
-    let mut actions = vec![
-        (
-            190 * MS,
-            Action::HostBytes(frame(1, Command::Configure(jc))),
-        ),
-        (200 * MS, Action::HostBytes(frame(2, Command::Arm))),
-    ];
-    for (k, t) in (220..2_100).step_by(20).enumerate() {
-        actions.push((
-            t * MS,
-            Action::HostBytes(frame(3 + k as u16, Command::Heartbeat)),
-        ));
-    }
-    cfg.actions = actions;
+    cfg.robot = Some(robot_at_single_start());
+    cfg.actions = armed_actions(200 * MS, 2_100 * MS);
     run(cfg, NoHost::default()).expect("the run").0
 }
 
@@ -89,11 +56,7 @@ fn check(kind: &str, report: &str) {
         (1_990 * MS..2_010 * MS).contains(&fault_at),
         "{kind}: the drive went off at {fault_at} ns, not at the 2 s fault"
     );
-    let row = r
-        .trace
-        .iter()
-        .find(|row| row.t_ns >= fault_at)
-        .expect("row");
+    let row = common::at(&r, fault_at);
     assert!(
         row.out.drive_and_lift_safe()
             && row.out.force_n == 0.0

@@ -25,3 +25,84 @@ pub fn firmware_elf() -> Option<PathBuf> {
     eprintln!("{msg}");
     None
 }
+
+use sandjumper_core::config::{JumpConfig, TrajectorySpec};
+use sandjumper_core::protocol::{FrameDecoder, encode_frame_vec};
+use sandjumper_core::trajectory::JumpKind;
+use sandjumper_core::{Command, HostMessage, RigMessage};
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_virtual_f407::rig::Robot;
+use sandjumper_virtual_f407::run::{Action, RunReport, TraceRow};
+
+/// A millisecond, ns.
+pub const MS: u64 = 1_000_000;
+/// The sine's amplitude, m (the robot's stroke amplitude).
+pub const AMPLITUDE_M: f64 = 0.01875;
+
+/// The COBS frame of the host's `command` with `id`.
+pub fn command_frame(id: u16, command: Command) -> Vec<u8> {
+    encode_frame_vec(&HostMessage::Command { id, command })
+        .expect("a frame")
+        .to_vec()
+}
+
+/// The host sends `command` with `id`.
+pub fn send(id: u16, command: Command) -> Action {
+    Action::HostBytes(command_frame(id, command))
+}
+
+/// Every message the board sent in `bytes`, decoded in order (undecodable frames skipped).
+pub fn rig_messages(bytes: &[u8]) -> Vec<RigMessage> {
+    let mut decoder = FrameDecoder::new();
+    bytes
+        .iter()
+        .filter_map(|&b| decoder.push::<RigMessage>(b).and_then(Result::ok))
+        .collect()
+}
+
+/// A one-cycle sine of the robot's amplitude.
+pub fn sine(kind: JumpKind, freq_hz: f64, tau_s: f64) -> JumpConfig {
+    JumpConfig::new(TrajectorySpec::Sine {
+        kind,
+        amplitude_m: AMPLITUDE_M,
+        freq_hz,
+        tau_s,
+    })
+}
+
+/// The single 5 Hz sine the fault tests arm.
+pub fn single_sine() -> JumpConfig {
+    sine(JumpKind::Single, 5.0, 0.0)
+}
+
+/// The robot on hard ground at the single sine's start (-A), as the lockstep rigs start it:
+/// no approach after Arm.
+pub fn robot_at_single_start() -> Robot {
+    let params = Params::preset(0.57).expect("preset");
+    Robot::new(&params, ModelName::Hard, -AMPLITUDE_M).expect("robot")
+}
+
+/// The host configures [`single_sine`] 10 ms before `arm_at`, arms at `arm_at`, then sends a
+/// heartbeat every 20 ms until `heartbeats_until` (the command watchdog stays fed).
+pub fn armed_actions(arm_at: u64, heartbeats_until: u64) -> Vec<(u64, Action)> {
+    let mut actions = vec![
+        (arm_at - 10 * MS, send(1, Command::Configure(single_sine()))),
+        (arm_at, send(2, Command::Arm)),
+    ];
+    let mut id = 3;
+    let mut t = arm_at + 20 * MS;
+    while t < heartbeats_until {
+        actions.push((t, send(id, Command::Heartbeat)));
+        id += 1;
+        t += 20 * MS;
+    }
+    actions
+}
+
+/// The trace row at virtual time `t` (the first at or after it).
+pub fn at(r: &RunReport, t: u64) -> TraceRow {
+    *r.trace
+        .iter()
+        .find(|row| row.t_ns >= t)
+        .expect("a trace row")
+}
