@@ -37,11 +37,37 @@ fn clean(cmd: &mut Command) -> &mut Command {
     cmd
 }
 
+/// `cargo build` of the F407 release firmware in the workspace `root`, into `target_dir` (the
+/// workspace's own by default), with the bring-up fault `inject` built in (none by default).
+fn firmware_build(
+    root: &Path,
+    target_dir: Option<&str>,
+    inject: Option<&str>,
+) -> std::io::Result<std::process::Output> {
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.args([
+        "build",
+        "-p",
+        "sandjumper-firmware",
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--release",
+    ])
+    .current_dir(root);
+    if let Some(dir) = target_dir {
+        cmd.args(["--target-dir", dir]);
+    }
+    if let Some(kind) = inject {
+        cmd.env("SANDJUMPER_INJECT", kind);
+    }
+    cmd.output()
+}
+
 #[test]
 fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let board = root.join("sim-host/virtual-f407");
-    let elf = root.join("target/thumbv7em-none-eabihf/release/sandjumper-firmware");
+    let elf = root.join(sandjumper_rig::firmware_image::F407_ELF);
     let has_toolchain = clean(Command::new("rustup").args(["run", "1.98.0", "rustc", "--version"]))
         .output()
         .is_ok_and(|o| o.status.success());
@@ -52,17 +78,7 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     }
     // The F407 release ELF, built now so the board never runs a stale one (a no-op when it is
     // up to date); without the target or flip-link it cannot be built: skipped.
-    let built = Command::new(env!("CARGO"))
-        .args([
-            "build",
-            "-p",
-            "sandjumper-firmware",
-            "--target",
-            "thumbv7em-none-eabihf",
-            "--release",
-        ])
-        .current_dir(root)
-        .output();
+    let built = firmware_build(root, None, None);
     if !built.as_ref().is_ok_and(|o| o.status.success()) || !elf.is_file() {
         return skip(&format!(
             "the F407 ELF {} cannot be built here (`rustup target add thumbv7em-none-eabihf`, `cargo install flip-link`): {}",
@@ -80,20 +96,7 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     // injected.rs runs: built one after the other in one target directory (only the firmware
     // crate rebuilds between them), each copied to target/inject-<kind>.
     for kind in ["panic", "hardfault", "stack-overflow"] {
-        let out = Command::new(env!("CARGO"))
-            .args([
-                "build",
-                "-p",
-                "sandjumper-firmware",
-                "--target",
-                "thumbv7em-none-eabihf",
-                "--release",
-                "--target-dir",
-                "target/inject-build",
-            ])
-            .env("SANDJUMPER_INJECT", kind)
-            .current_dir(root)
-            .output()
+        let out = firmware_build(root, Some("target/inject-build"), Some(kind))
             .expect("run cargo build for a test image");
         assert!(
             out.status.success(),
