@@ -194,7 +194,7 @@ fn main() {
         run::run(cfg, NoHost::default()).map(|(r, _)| r)
     };
     let report = report.unwrap_or_else(|e| fail(e));
-    print_report(&report, stdio);
+    print_report(&report);
     if let Some(path) = summary {
         std::fs::write(&path, summary_json(&report))
             .unwrap_or_else(|e| fail(format!("--summary {}: {e}", path.display())));
@@ -208,7 +208,7 @@ fn read_params(path: &std::path::Path, flag: &str) -> sandjumper_model::params::
     toml::from_str(&text).unwrap_or_else(|e| fail(format!("{flag} {}: {e}", path.display())))
 }
 
-fn print_report(r: &RunReport, stdio: bool) {
+fn print_report(r: &RunReport) {
     let mut err = std::io::stderr();
     for line in &r.log {
         let _ = writeln!(err, "firmware: {line}");
@@ -236,7 +236,6 @@ fn print_report(r: &RunReport, stdio: bool) {
     for (t, c) in &r.resets {
         let _ = writeln!(err, "virtual-f407: reset at {t} ns: {c}");
     }
-    let _ = stdio;
 }
 
 fn summary_json(r: &RunReport) -> String {

@@ -22,6 +22,8 @@ use crate::models::dac::VDDA_V;
 
 /// Port indices (rigless's `PORTS` order).
 pub const PORT_A: usize = 0;
+/// Port B.
+pub const PORT_B: usize = 1;
 /// Port C.
 pub const PORT_C: usize = 2;
 /// Port D.
@@ -109,7 +111,8 @@ impl Outputs {
     }
 }
 
-fn high(part: &mut Stm32f427, port: usize, pin: u8) -> bool {
+/// `pin` of port `port` reads high (its electrical level: driven, or its pull).
+pub fn high(part: &mut Stm32f427, port: usize, pin: u8) -> bool {
     let (gpio, regs) = part.port(port);
     gpio.level(Pin::new(pin).expect("pin 0..15"), regs) == Level::High
 }

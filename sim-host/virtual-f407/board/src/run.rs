@@ -521,13 +521,10 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
 
 /// PA15 and PB3 read high.
 fn encoder_pins_high(part: &mut rigless::soc::stm32f427::Stm32f427) -> (bool, bool) {
-    use rigless::device::Level;
-    use rigless::soc::stm32f427::peripherals::gpio::Pin;
-    let mut high = |port: usize, pin: u8| {
-        let (gpio, regs) = part.port(port);
-        gpio.level(Pin::new(pin).expect("pin"), regs) == Level::High
-    };
-    (high(0, 15), high(1, 3))
+    (
+        rig::high(part, rig::PORT_A, 15),
+        rig::high(part, rig::PORT_B, 3),
+    )
 }
 
 /// TIM2 is enabled (CR1.CEN) in one of the encoder modes (SMCR.SMS 1-3, RM0090 18.3.12).
@@ -590,12 +587,11 @@ pub fn run<H: HostPort + Send + 'static>(
         last_heartbeat_edge_ns: None,
         drive_powered: cfg.drive_powered,
     };
-    let wall = Instant::now();
     let finished = emulator::run(session, &Start::new(&images), driver)
         .map_err(|e| format!("the emulator stopped: {e}"))?;
-    let wall_s = wall.elapsed().as_secs_f64();
     let mut session = finished.session;
     let d = finished.driver;
+    let wall_s = d.wall.elapsed().as_secs_f64();
     let mut gaps = Vec::new();
     for u in session.unmapped() {
         gaps.push(format!("unmapped {u}"));
