@@ -213,23 +213,10 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
     })
 }
 
-/// A number from a finished virtual board's summary.
-fn summary_number(summary: &Path, key: &str) -> Option<f64> {
-    let text = std::fs::read_to_string(summary).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v.get(key)?.as_f64()
-}
-
-/// A text from a finished virtual board's summary (`None` if absent or null).
-fn summary_text(summary: &Path, key: &str) -> Option<String> {
-    let text = std::fs::read_to_string(summary).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v.get(key)?.as_str().map(str::to_string)
-}
-
-/// The plant's jump height from a finished virtual board's summary, m.
-pub fn jump_height_m(summary: &Path) -> Option<f64> {
-    summary_number(summary, "jump_height_m")
+/// A finished virtual board's summary (`jump_height_m`, `plant_error`, `virtual_s`, `wall_s`),
+/// if it wrote one.
+fn read_summary(path: &Path) -> Option<serde_json::Value> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
 }
 
 impl RigLink for VirtualBoard {
@@ -264,14 +251,17 @@ impl RigLink for VirtualBoard {
     fn finish(&mut self) -> Result<LinkReport, LinkError> {
         let log = self.log_path.clone();
         let mut report = self.link.finish().map_err(|e| with_log_tail(e, &log))?;
-        if let Some(error) = summary_text(&self.summary_path, "plant_error") {
+        let summary = read_summary(&self.summary_path);
+        let field = |key: &str| summary.as_ref().and_then(|v| v.get(key));
+        if let Some(error) = field("plant_error").and_then(|e| e.as_str()) {
             return Err(LinkError::Protocol(format!(
                 "the virtual board's simulated rig failed: {error}"
             )));
         }
-        report.simulated_jump_height_m = jump_height_m(&self.summary_path);
-        report.board_realtime_factor = summary_number(&self.summary_path, "virtual_s")
-            .zip(summary_number(&self.summary_path, "wall_s"))
+        let number = |key: &str| field(key).and_then(|n| n.as_f64());
+        report.simulated_jump_height_m = number("jump_height_m");
+        report.board_realtime_factor = number("virtual_s")
+            .zip(number("wall_s"))
             .filter(|(_, wall)| *wall > 0.0)
             .map(|(virt, wall)| virt / wall);
         Ok(report)

@@ -146,7 +146,12 @@ impl TargetArgs {
         model: &RigModelConfig,
         load: Option<VirtualLoad>,
     ) -> Result<Box<dyn RigLink>, CliError> {
-        if self.controller.link == Some(SimLink::F407) {
+        let calibration = self
+            .drive_calibration
+            .as_deref()
+            .map(calibrate::read_calibration)
+            .transpose()?;
+        let mut link = if self.controller.link == Some(SimLink::F407) {
             let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
             if let Some(p) = &self.virtual_board {
                 cfg.program = p.clone();
@@ -158,32 +163,19 @@ impl TargetArgs {
             let board = virtual_board::start(&cfg).map_err(|e| {
                 CliError::input(format!("cannot start the virtual F407 board: {e}"))
             })?;
-            let mut link: Box<dyn RigLink> = Box::new(board);
-            if let Some(path) = self.drive_calibration.as_deref() {
-                let cal = calibrate::read_calibration(path)?;
-                calibrate::send_calibration(link.as_mut(), cal)?;
-            }
-            return Ok(link);
-        }
-        self.open(model)
-    }
-
-    /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
-    /// `--drive-calibration` names one.
-    pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
-        if self.controller.link == Some(SimLink::F407) {
-            return self.open_with_load(model, None);
-        }
-        let calibration = self
-            .drive_calibration
-            .as_deref()
-            .map(calibrate::read_calibration)
-            .transpose()?;
-        let mut link = self.open_link(model)?;
+            Box::new(board)
+        } else {
+            self.open_link(model)?
+        };
         if let Some(cal) = calibration {
             calibrate::send_calibration(link.as_mut(), cal)?;
         }
         Ok(link)
+    }
+
+    /// [`TargetArgs::open_with_load`] with nothing for a virtual board's drive to move.
+    pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
+        self.open_with_load(model, None)
     }
 
     fn open_link(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
