@@ -300,14 +300,16 @@ fn ensure_brown_out_reset() {
             .optcr()
             .modify(|r, w| w.bits((r.bits() & !(0b11 << 2)) | (BOR_LEVEL_2 << 2)));
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b10)); // OPTSTRT
+        // Far beyond an option-byte write's ~16 ms at the 16 MHz HSI.
+        const OPTION_WRITE_SPINS: u32 = 16_000_000;
         let mut spins: u32 = 0;
-        while flash.sr().read().bsy().bit_is_set() && spins < 16_000_000 {
+        while flash.sr().read().bsy().bit_is_set() && spins < OPTION_WRITE_SPINS {
             spins += 1;
         }
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b01)); // OPTLOCK
         // OPERR, WRPERR, PGAERR, PGPERR, PGSERR (RM0090 3.9.5): the level did not take.
         let errors = flash.sr().read().bits() & 0xF2;
-        if errors != 0 || spins >= 16_000_000 {
+        if errors != 0 || spins >= OPTION_WRITE_SPINS {
             defmt::warn!(
                 "option bytes: the brown-out level was not programmed (FLASH_SR {=u32:#x}); the board runs with BOR off",
                 errors

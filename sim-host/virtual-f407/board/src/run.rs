@@ -438,17 +438,14 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.heartbeat_level = out.heartbeat;
             self.last_heartbeat_edge_ns = Some(now);
         }
-        out.drive_gated = out.drive_enable
-            && self
-                .last_heartbeat_edge_ns
-                .is_some_and(|t| now - t <= rig::MONOSTABLE_NS);
+        let gate_open = self
+            .last_heartbeat_edge_ns
+            .is_some_and(|t| now - t <= rig::MONOSTABLE_NS);
+        out.drive_gated = out.drive_enable && gate_open;
+        out.lift_gated = out.lift_enable && gate_open;
         if !out.drive_gated || !self.drive_powered {
             out.force_n = 0.0;
         }
-        out.lift_gated = out.lift_enable
-            && self
-                .last_heartbeat_edge_ns
-                .is_some_and(|t| now - t <= rig::MONOSTABLE_NS);
         let (mut p, mut x_r, mut x_f, mut current) = (0.0, 0.0, 0.0, 0.0);
         // The carriage is held where it is until the drive first takes it (on the rig it rests
         // on its support, not in free fall along the rod): the plant starts moving then.
