@@ -201,34 +201,20 @@ fn the_fault_runs_are_identical_twice() {
 /// with the rig Idle) turns all of it off, not only the drive.
 #[test]
 fn a_hardfault_while_the_bed_runs_turns_the_bed_off_too() {
-    use sandjumper_core::bed::{BedCommand, LiftMove};
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(400 * MS);
     cfg.trace_every = 1;
-    cfg.actions = vec![
-        (
-            200 * MS,
-            send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
-        ),
-        (
-            205 * MS,
-            send(2, Command::Bed(BedCommand::Shaker { duty: 0.5 })),
-        ),
-        (
-            210 * MS,
-            send(3, Command::Bed(BedCommand::Lift(LiftMove::Up))),
-        ),
-        (
-            300 * MS,
-            Action::BusError {
-                from: 0x4002_1000,
-                to: 0x4002_1400,
-            },
-        ),
-    ];
+    cfg.actions = bed_switched_on();
+    cfg.actions.push((
+        300 * MS,
+        Action::BusError {
+            from: 0x4002_1000,
+            to: 0x4002_1400,
+        },
+    ));
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
     let running = at(&r, 290 * MS);
     assert!(
@@ -272,20 +258,10 @@ fn a_board_with_nothing_wired_can_be_armed() {
     );
 }
 
-/// With nothing wired the apparatus is absent: nothing of it can be switched on (no limit
-/// switch or emergency stop is read). The binary before the review ran the lift, blower and
-/// shaker of an absent apparatus.
-#[test]
-fn an_absent_bed_apparatus_cannot_be_switched_on() {
+/// The host switches the bed apparatus on at 200-210 ms: blower 5 V, shaker half duty, lift up.
+fn bed_switched_on() -> Vec<(u64, Action)> {
     use sandjumper_core::bed::{BedCommand, LiftMove};
-    let Some(elf) = common::firmware_elf() else {
-        return;
-    };
-    let mut cfg = RunConfig::new(elf);
-    cfg.until_ns = Some(300 * MS);
-    cfg.trace_every = 1;
-    cfg.bed = BedWiring::Unwired;
-    cfg.actions = vec![
+    vec![
         (
             200 * MS,
             send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
@@ -298,7 +274,22 @@ fn an_absent_bed_apparatus_cannot_be_switched_on() {
             210 * MS,
             send(3, Command::Bed(BedCommand::Lift(LiftMove::Up))),
         ),
-    ];
+    ]
+}
+
+/// With nothing wired the apparatus is absent: nothing of it can be switched on (no limit
+/// switch or emergency stop is read). The binary before the review ran the lift, blower and
+/// shaker of an absent apparatus.
+#[test]
+fn an_absent_bed_apparatus_cannot_be_switched_on() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(300 * MS);
+    cfg.trace_every = 1;
+    cfg.bed = BedWiring::Unwired;
+    cfg.actions = bed_switched_on();
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
     let last = r.last.expect("ran").out;
     assert!(
