@@ -89,7 +89,11 @@ fn a_synthetic_cone_goes_through_piv_to_an_added_mass_table() {
     assert_eq!(windows, [64, 32, 16]);
     assert_eq!(
         settings["preprocess"]["clahe_tile_px"].as_integer(),
-        Some(64)
+        Some(0)
+    );
+    assert_eq!(
+        settings["preprocess"]["local_contrast_sigma_px"].as_float(),
+        Some(4.0)
     );
     // The paper's control volume, the column under the foot, beside the whole window's.
     let flow = std::fs::read_to_string(out.join("flow.csv")).unwrap();

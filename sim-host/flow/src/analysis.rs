@@ -512,6 +512,7 @@ mod tests {
                 ..PivConfig::default()
             },
             preprocess: Preprocess {
+                local_contrast_sigma_px: 0.0,
                 clahe_tile_px: 0,
                 clahe_clip: 0.01,
                 subtract_background: false,

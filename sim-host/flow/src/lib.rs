@@ -3,9 +3,12 @@
 //! grain images with known motion for testing ([`synthetic`]).
 
 pub mod analysis;
+pub mod cone;
 pub mod fields;
 pub mod figure;
+pub mod local_contrast;
 pub mod momentum;
 pub mod piv;
 pub mod preprocess;
+pub mod shift;
 pub mod synthetic;
