@@ -59,6 +59,10 @@ pub struct Summary {
     pub hexatic_order: f64,
     /// The jammed region under the intruder at the last intruding sample.
     pub jammed: JammedRegion,
+    /// The jammed cone from the shear bands of the strain-rate field, averaged in the foot's
+    /// frame over the samples where the added mass is taken (`null`: fewer than three rows
+    /// show bands); its rows are in `cone.csv`.
+    pub shear_band_cone: Option<sandjumper_flow::cone::ShearBandCone>,
     /// Samples.
     pub samples: usize,
     /// Side-wall frames written.
@@ -235,6 +239,17 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     let hs: Vec<f64> = (0..ny)
         .map(|j| grid.node(0, j).1 - spec.surface_m)
         .collect();
+    let axis_x = 0.5 * (spec.bed_x_m.0 + spec.bed_x_m.1);
+    let xs_axis: Vec<f64> = xs.iter().map(|x| x - axis_x).collect();
+    let cone = shear_band_cone(run, &xs_axis, &hs);
+    if let Some(c) = &cone {
+        write_csv(
+            &staged.file("cone.csv"),
+            &c.rows,
+            &["depth_below_foot_m", "left_m", "right_m", "contrast"],
+        )
+        .map_err(err)?;
+    }
     for (k, f) in run.fields.iter().enumerate() {
         #[derive(Serialize)]
         struct Cell {
@@ -402,6 +417,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
             .fold(f64::NAN, f64::max),
         hexatic_order: hex,
         jammed,
+        shear_band_cone: cone,
         samples: run.state.flow.len(),
         frames,
         performance: run.performance,
@@ -572,6 +588,28 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     })
 }
 
+/// The shear-band cone of `run` ([`sandjumper_flow::cone`]): the shear-rate fields of the
+/// samples whose added mass is taken (the foot intruding at least the speed threshold), on
+/// the grid's columns `xs` (from the foot's axis) and rows `hs` (from the surface, up).
+fn shear_band_cone(
+    run: &Run,
+    xs: &[f64],
+    hs: &[f64],
+) -> Option<sandjumper_flow::cone::ShearBandCone> {
+    let samples: Vec<sandjumper_flow::cone::Sample<'_>> = run
+        .state
+        .flow
+        .iter()
+        .zip(&run.fields)
+        .filter(|(r, _)| r.added_mass_kg.is_finite() && r.depth_m > 0.0)
+        .map(|(r, f)| sandjumper_flow::cone::Sample {
+            shear_rate: &f[2],
+            foot_bottom_m: -r.depth_m,
+        })
+        .collect();
+    sandjumper_flow::cone::shear_band_cone(&samples, xs, hs, 0.5 * run.spec.foot_width_m)
+}
+
 #[cfg(test)]
 mod tests {
     use super::model_added_mass;
@@ -603,3 +641,4 @@ mod tests {
         );
     }
 }
+

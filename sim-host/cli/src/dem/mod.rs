@@ -6,3 +6,4 @@
 pub use sandjumper_dem::*;
 
 pub mod command;
+pub mod paper_figures;

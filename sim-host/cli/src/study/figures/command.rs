@@ -9,12 +9,16 @@ use super::{FiguresError, FiguresOptions, write_figures};
 use sandjumper_model::options::SimOptions;
 use sandjumper_output::CliError;
 
-/// `sandjumper figures`.
+/// `sandjumper figures`: the jump model's figures, or `figures dem` (Supplementary I).
 #[derive(Debug, Clone, Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct FiguresArgs {
+    /// Another set of figures.
+    #[command(subcommand)]
+    pub set: Option<FigureSet>,
     /// Output directory (created, or replaced if it holds an earlier sandjumper output).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
+    #[arg(long, value_name = "DIR", required = true)]
+    pub out: Option<PathBuf>,
     /// Coarse grids (0.5 Hz, phi by 0.01, tau by 0.125 s) instead of the full set (0.1 Hz, phi by
     /// 0.0025, tau by 10 ms).
     #[arg(long)]
@@ -24,8 +28,23 @@ pub struct FiguresArgs {
     pub threads: Option<u32>,
 }
 
+/// The other sets of figures.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum FigureSet {
+    /// Supplementary I and Extended Data Fig. 2: the DEM's added mass, grain momentum and
+    /// jammed cone for the three jumps' push-offs at full scale, PIV on its frames, and the
+    /// sensitivity rows (about 10 minutes on 2 cores).
+    Dem(crate::dem::paper_figures::DemFiguresArgs),
+}
+
 /// Run `figures`: simulate, write, print what was written and the headline numbers.
 pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
+    if let Some(FigureSet::Dem(d)) = &a.set {
+        return crate::dem::paper_figures::run(d);
+    }
+    let Some(out) = &a.out else {
+        return Err(CliError::input("figures: --out DIR is required"));
+    };
     let started = Instant::now();
     // One bar over all the figures' jumps (their count is known only as they run).
     let bar = crate::command::progress_counter("jumps simulated");
@@ -38,7 +57,7 @@ pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
         },
         rtol: SimOptions::default().rtol,
     };
-    let report = write_figures(&a.out, &opts).map_err(|e| match e {
+    let report = write_figures(out, &opts).map_err(|e| match e {
         FiguresError::Output(e) => CliError::input(e.to_string()),
         FiguresError::Internal(m) => CliError::internal(m),
     })?;
