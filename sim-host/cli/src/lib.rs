@@ -21,5 +21,6 @@ pub mod command;
 pub mod dem;
 pub mod flow;
 pub mod imaging;
+pub mod live;
 pub mod rig;
 pub mod study;

@@ -29,5 +29,8 @@ pub mod virtual_board;
 
 pub use link::{LinkError, LinkReport, RigLink};
 pub use rig_model::{CameraFrame, DacScaling, EncoderInjection, RigModel, RigModelConfig};
-pub use run::{HilError, HilOutcome, HilSpec, InjectedFault, Injection, TraceRow, run_jump};
+pub use run::{
+    HilError, HilOutcome, HilSpec, InjectedFault, Injection, PeriodView, TraceRow, run_jump,
+    run_jump_observed,
+};
 pub use sil::SilLink;

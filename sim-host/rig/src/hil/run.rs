@@ -300,6 +300,34 @@ pub fn run_jump(
     model_config: RigModelConfig,
     link: &mut dyn RigLink,
 ) -> Result<HilOutcome, HilError> {
+    run_jump_observed(params, spec, model_config, link, &mut |_| {})
+}
+
+/// One control period as a live view sees it: the plant's row, the commanded motor
+/// position, and the controller's answer.
+#[derive(Clone, Copy, Debug)]
+pub struct PeriodView {
+    /// The plant's row.
+    pub row: TraceRow,
+    /// The trajectory's motor position at this period, m (what the controller follows once
+    /// started; its start position before).
+    pub p_ref_m: f64,
+    /// The controller's state in its answer (`None`: no answer this period).
+    pub state: Option<RigState>,
+    /// The fault its answer reported.
+    pub fault: Option<sandjumper_core::fault::FaultCode>,
+    /// Whether the `Start` command went out at this period.
+    pub started: bool,
+}
+
+/// [`run_jump`], calling `observe` after every control period (a live view; pacing).
+pub fn run_jump_observed(
+    params: &Params,
+    spec: &HilSpec,
+    model_config: RigModelConfig,
+    link: &mut dyn RigLink,
+    observe: &mut dyn FnMut(&PeriodView),
+) -> Result<HilOutcome, HilError> {
     let plan = RunPlan::new(params, spec, model_config.tick_hz)?;
     let opts = SimOptions {
         rtol: spec.rtol,
@@ -318,7 +346,17 @@ pub fn run_jump(
     open_session(params, spec, &mut rig, link)?;
     let mut run = LockstepRun::new(&plan);
     loop {
-        run.period(&plan, &mut rig, link)?;
+        let answer = run.period(&plan, &mut rig, link)?;
+        if let Some(row) = run.trace.last() {
+            let t = row.t_s.clamp(0.0, plan.trajectory.end_s());
+            observe(&PeriodView {
+                row: *row,
+                p_ref_m: plan.trajectory.eval(t).position_m,
+                state: answer.map(|a| a.state),
+                fault: answer.and_then(|a| a.fault),
+                started: row.period == plan.start_period,
+            });
+        }
         if run.is_over(&plan, &rig)? {
             break;
         }
@@ -462,7 +500,7 @@ impl LockstepRun {
         plan: &RunPlan,
         rig: &mut RigModel,
         link: &mut dyn RigLink,
-    ) -> Result<(), HilError> {
+    ) -> Result<Option<ActuatorFrame>, HilError> {
         if self.period == plan.start_period {
             link.command(&Command::Start)?;
         }
@@ -494,7 +532,7 @@ impl LockstepRun {
             faulted: actuator.is_some_and(|a| a.fault.is_some()),
         });
         self.period += 1;
-        Ok(())
+        Ok(actuator)
     }
 
     /// Apply the injections due at this period.

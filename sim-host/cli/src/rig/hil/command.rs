@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::log;
 use super::rig_model::RigModelConfig;
-use super::run::{HilOutcome, HilSpec, run_jump};
+use super::run::{HilOutcome, HilSpec, PeriodView, run_jump_observed};
 use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
@@ -65,6 +65,9 @@ fn parse_repeats(s: &str) -> Result<u32, String> {
 /// `sandjumper hil`.
 #[derive(Debug, Clone, Args)]
 pub struct HilArgs {
+    /// The live view.
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
     /// Where the controller runs: `sil` (the core in this process), `pil` (the real firmware
     /// in QEMU mps2-an386, frames over semihosting FIFOs), `f407` (the F407 release ELF on the
     /// virtual board, the plant behind its pins: runs as `rig jump --link f407`), `serial:PATH`
@@ -192,9 +195,10 @@ fn one_run(
     params: &Params,
     spec: &HilSpec,
     model_config: RigModelConfig,
+    observe: &mut dyn FnMut(&PeriodView),
 ) -> Result<HilOutcome, CliError> {
     let mut link = open_link(&a.link, &model_config, &a.firmware)?;
-    run_jump(params, spec, model_config, link.as_mut()).map_err(|e| {
+    run_jump_observed(params, spec, model_config, link.as_mut(), observe).map_err(|e| {
         CliError::input(format!(
             "the run through the loop ({}) failed: {e}",
             link.name()
@@ -246,9 +250,18 @@ fn rig_model_config(a: &HilArgs) -> RigModelConfig {
 /// Run the jump `a` asks for through its link with `params` (resolved from `a.phi` and the
 /// overrides by [`resolve_params`]; `a.params` is not read here). Errors are the CLI's.
 pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
+    simulate_run_observed(a, params, &mut |_| {})
+}
+
+/// [`simulate_run`], calling `observe` after every control period.
+pub fn simulate_run_observed(
+    a: &HilArgs,
+    params: Params,
+    observe: &mut dyn FnMut(&PeriodView),
+) -> Result<HilRun, CliError> {
     let spec = spec_of(a);
     let model_config = rig_model_config(a);
-    let outcome = one_run(a, &params, &spec, model_config)?;
+    let outcome = one_run(a, &params, &spec, model_config, observe)?;
     let phi = params.sand.packing_fraction;
     let report = HilReport {
         link: outcome.link_name.clone(),
@@ -307,6 +320,11 @@ pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
 
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
+    if a.live.live.is_some() && (a.link == LinkArg::F407 || a.bench.is_some()) {
+        return Err(CliError::input(
+            "--live shows one jump through --link sil, pil or serial:PATH (for the virtual board use `rig jump --link f407 --live ADDR`; not with --bench)",
+        ));
+    }
     if a.link == LinkArg::F407 {
         return run_on_the_virtual_board(a);
     }
@@ -321,40 +339,91 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     }
     let camera = read_camera(a.camera.as_deref())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let run = simulate_run(a, params)?;
+    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    if let Some(v) = live.as_mut() {
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!(
+                "hil --link {:?}: {} at {} Hz, {}, phi {}",
+                a.link,
+                kind_name(spec.kind),
+                spec.freq_hz,
+                spec.model.as_str(),
+                params.sand.packing_fraction
+            ),
+            t_s: -spec.settle_s,
+        });
+    }
+    let result = match live.as_mut() {
+        Some(v) => simulate_run_observed(a, params, &mut |p| v.period(p)),
+        None => simulate_run(a, params),
+    };
+    let run = match (result, live.take()) {
+        (Ok(run), v) => {
+            live = v;
+            run
+        }
+        (Err(e), Some(v)) => {
+            eprintln!("error: {}", e.message);
+            v.finish(0.0, e.message.clone(), false);
+            return Err(e);
+        }
+        (Err(e), None) => return Err(e),
+    };
     if let Some(staged) = staged {
-        let log = run.acquisition_log();
-        log.write_file(&staged.file("acquisition.csv"))
-            .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
-        if a.mcap {
-            log.write_mcap_file(&staged.file("acquisition.mcap"), None)
-                .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
-        }
-        if a.camera_fps > 0 {
-            sandjumper_rig::hil::camera::write_frames(
-                &run.outcome.camera_frames,
-                &sandjumper_rig::hil::camera::heights_by_period(&run.outcome),
-                &camera,
-                1.0 / f64::from(run.model_config.tick_hz),
-                &staged.file("frames"),
-            )
-            .map_err(CliError::internal)?;
-        }
-        staged.write_text("params.toml", &run.params.to_toml())?;
-        staged.write_text("summary.json", &format!("{}\n", run.json))?;
-        save_figure(
-            &log::figure(&run.outcome, run.title.clone()),
-            &staged.file("hil.png"),
-            Some(&staged.file("hil.svg")),
-        )?;
-        let dir = staged.commit()?;
-        eprintln!("wrote {}", dir.display());
+        write_outputs(a, staged, &camera, &run)?;
     }
     if a.json {
         println!("{}", run.json);
     } else {
         print!("{}", run.human);
     }
+    if let Some(v) = live {
+        let t_end = run.outcome.trace.last().map_or(0.0, |r| r.t_s);
+        let faults = run.outcome.faults.len();
+        let line = format!(
+            "jump height {:.2} mm, {} fault{}",
+            1e3 * run.outcome.summary.jump_height_m,
+            faults,
+            if faults == 1 { "" } else { "s" }
+        );
+        v.finish(t_end, line, faults == 0);
+    }
+    Ok(())
+}
+
+/// `hil --out`: the acquisition log (and MCAP), frames, parameters, summary and figure.
+fn write_outputs(
+    a: &HilArgs,
+    staged: StagedDir,
+    camera: &CameraModel,
+    run: &HilRun,
+) -> Result<(), CliError> {
+    let log = run.acquisition_log();
+    log.write_file(&staged.file("acquisition.csv"))
+        .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+    if a.mcap {
+        log.write_mcap_file(&staged.file("acquisition.mcap"), None)
+            .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
+    }
+    if a.camera_fps > 0 {
+        sandjumper_rig::hil::camera::write_frames(
+            &run.outcome.camera_frames,
+            &sandjumper_rig::hil::camera::heights_by_period(&run.outcome),
+            camera,
+            1.0 / f64::from(run.model_config.tick_hz),
+            &staged.file("frames"),
+        )
+        .map_err(CliError::internal)?;
+    }
+    staged.write_text("params.toml", &run.params.to_toml())?;
+    staged.write_text("summary.json", &format!("{}\n", run.json))?;
+    save_figure(
+        &log::figure(&run.outcome, run.title.clone()),
+        &staged.file("hil.png"),
+        Some(&staged.file("hil.svg")),
+    )?;
+    let dir = staged.commit()?;
+    eprintln!("wrote {}", dir.display());
     Ok(())
 }
 
@@ -425,7 +494,7 @@ fn bench(
     let mut factors = Vec::new();
     let mut last = None;
     for _ in 0..n {
-        let o = one_run(a, params, spec, model_config)?;
+        let o = one_run(a, params, spec, model_config, &mut |_| {})?;
         factors.push((o.wall_time_s, o.realtime_factor));
         last = Some(o);
     }

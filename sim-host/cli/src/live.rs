@@ -1,0 +1,177 @@
+//! `--live ADDR`: the live view of a run (`sandjumper_live`), as the commands use it: the bus
+//! and its server started before the run (the URL printed first, on stderr), every control
+//! period put on the bus and, for a simulated link, paced at real time (or `--pace`), then
+//! the page kept up after the run until Ctrl-C or `--linger` passes.
+
+use std::time::{Duration, Instant};
+
+use sandjumper_live::{Event, LiveBus, LiveServer};
+use sandjumper_output::CliError;
+use sandjumper_rig::hil::PeriodView;
+
+/// The jump view's channels: commanded and measured motor position, rod height, foot
+/// position, the drive's force command and the spring force.
+pub const JUMP_CHANNELS: [&str; 6] = [
+    "p_cmd_mm",
+    "p_mm",
+    "rod_height_mm",
+    "foot_mm",
+    "drive_force_n",
+    "spring_force_n",
+];
+
+/// The options every `--live` command shares.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LiveArgs {
+    /// Serve a live view of the run at http://ADDR/ (e.g. 127.0.0.1:8080; port 0: any free
+    /// port), the same state at /state.json. The URL is printed first, on stderr.
+    #[arg(long, value_name = "ADDR")]
+    pub live: Option<String>,
+    /// With --live, run a simulated link at this multiple of real time (default 1; 0: as
+    /// fast as it can).
+    #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
+    pub pace: Option<f64>,
+    /// With --live, keep the page up this long after the run, s (default: until Ctrl-C).
+    #[arg(long, value_name = "S", requires = "live", value_parser = parse_linger)]
+    pub linger: Option<f64>,
+}
+
+fn parse_pace(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v == 0.0 || (0.01..=1000.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a pace (allowed: 0, as fast as possible, or 0.01..=1000 times real time)"
+        )),
+    }
+}
+
+fn parse_linger(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.0..=86_400.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a linger time (allowed: 0..=86400 s)")),
+    }
+}
+
+/// A live view for one command: its bus and server, and the run's pacing.
+pub struct LiveView {
+    bus: LiveBus,
+    server: LiveServer,
+    pace: f64,
+    linger: Option<f64>,
+    wall_start: Option<(Instant, f64)>,
+    last_state: Option<String>,
+    fault_sent: bool,
+}
+
+impl LiveView {
+    /// Start the view `a` asks for (`None` without `--live`); `channels` name the samples.
+    pub fn start(a: &LiveArgs, channels: &[&str]) -> Result<Option<Self>, CliError> {
+        let Some(addr) = &a.live else {
+            return Ok(None);
+        };
+        let (bus, feed) = sandjumper_live::channel(channels);
+        let server = sandjumper_live::serve(addr, feed).map_err(CliError::input)?;
+        eprintln!(
+            "live view: {} (state: {}state.json)",
+            server.url(),
+            server.url()
+        );
+        Ok(Some(Self {
+            bus,
+            server,
+            pace: a.pace.unwrap_or(1.0),
+            linger: a.linger,
+            wall_start: None,
+            last_state: None,
+            fault_sent: false,
+        }))
+    }
+
+    /// The bus, for events of the command's own.
+    pub fn bus(&mut self) -> &mut LiveBus {
+        &mut self.bus
+    }
+
+    /// One control period of a jump through the loop.
+    pub fn period(&mut self, v: &PeriodView) {
+        let r = &v.row;
+        let t = r.t_s;
+        if v.started {
+            self.bus.event(Event::Jump {
+                t_s: t,
+                phase: "start".into(),
+            });
+        }
+        if let Some(s) = v.state {
+            let name = format!("{s:?}");
+            if self.last_state.as_deref() != Some(&name) {
+                if name == "Done" {
+                    self.bus.event(Event::Jump {
+                        t_s: t,
+                        phase: "end".into(),
+                    });
+                }
+                self.bus.event(Event::State {
+                    t_s: t,
+                    state: name.clone(),
+                });
+                self.last_state = Some(name);
+            }
+        }
+        if let Some(f) = v.fault
+            && !self.fault_sent
+        {
+            self.fault_sent = true;
+            self.bus.event(Event::Fault {
+                t_s: t,
+                fault: format!("{f:?}"),
+            });
+        }
+        self.bus.sample(
+            t,
+            &[
+                1e3 * v.p_ref_m,
+                1e3 * r.p_m,
+                1e3 * r.rod_height_m,
+                -1e3 * r.depth_m,
+                r.drive_command_n,
+                r.spring_force_n,
+            ],
+        );
+        self.keep_pace(t);
+    }
+
+    /// Sleep so that rig time `t_s` is not ahead of the wall clock times the pace (checked
+    /// every period, slept in steps of at least 2 ms).
+    pub fn keep_pace(&mut self, t_s: f64) {
+        if self.pace <= 0.0 {
+            return;
+        }
+        let (w0, t0) = *self.wall_start.get_or_insert((Instant::now(), t_s));
+        let due = (t_s - t0) / self.pace;
+        let now = w0.elapsed().as_secs_f64();
+        if due - now > 0.002 {
+            std::thread::sleep(Duration::from_secs_f64(due - now));
+        }
+    }
+
+    /// The run is over: say how, send what is left, keep the page up until Ctrl-C or the
+    /// linger time; returns whether Ctrl-C ended it.
+    pub fn finish(mut self, t_s: f64, outcome: String, ok: bool) -> bool {
+        self.bus.event(Event::RunEnded { t_s, outcome, ok });
+        self.bus.flush_now();
+        // The page's state has the end before the command says so (the server reads the bus
+        // every 25 ms).
+        let asked = Instant::now();
+        while self.server.snapshot().ended.is_none() && asked.elapsed() < Duration::from_secs(2) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        match self.linger {
+            Some(s) => eprintln!(
+                "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
+            ),
+            None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
+        }
+        self.server.wait(self.linger.map(Duration::from_secs_f64))
+    }
+}

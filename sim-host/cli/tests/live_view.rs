@@ -1,0 +1,169 @@
+//! `--live ADDR`: the page, `state.json` and the event stream of a jump while it runs and
+//! after it ends, from a real `sandjumper hil` process over HTTP.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// A plain HTTP/1.1 GET: (status line, headers, body).
+fn get(addr: &str, path: &str) -> (String, String, String) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut raw = Vec::new();
+    let _ = s.read_to_end(&mut raw);
+    let text = String::from_utf8_lossy(&raw).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let (status, headers) = head.split_once("\r\n").unwrap_or((head, ""));
+    (status.to_string(), headers.to_lowercase(), body.to_string())
+}
+
+/// Start `sandjumper args`, returning the child and its stderr lines as they come.
+fn start(args: &[&str]) -> (Child, mpsc::Receiver<String>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = child.stderr.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    (child, rx)
+}
+
+fn wait_for(rx: &mpsc::Receiver<String>, what: &str) -> String {
+    let mut seen = String::new();
+    loop {
+        match rx.recv_timeout(Duration::from_secs(120)) {
+            Ok(l) if l.contains(what) => return l,
+            Ok(l) => seen += &format!("{l}\n"),
+            Err(_) => panic!("no `{what}` on stderr; it said:\n{seen}"),
+        }
+    }
+}
+
+#[test]
+fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
+    let started = Instant::now();
+    let (child, rx) = start(&[
+        "hil",
+        "--kind",
+        "stutter",
+        "--freq",
+        "10",
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "3",
+    ]);
+    // The URL comes first.
+    let first = rx.recv_timeout(Duration::from_secs(60)).unwrap();
+    assert!(first.starts_with("live view: http://127.0.0.1:"), "{first}");
+    let addr = first
+        .trim_start_matches("live view: http://")
+        .split('/')
+        .next()
+        .unwrap()
+        .to_string();
+    // The page: the chart library served by the binary itself, nothing from the internet.
+    let (status, _, page) = get(&addr, "/");
+    assert!(status.contains("200"), "{status}");
+    assert!(page.contains("src=\"/uPlot.js\"") && !page.contains("src=\"http"));
+    let (_, headers, js) = get(&addr, "/uPlot.js");
+    assert!(headers.contains("text/javascript") && js.contains("uPlot"));
+    wait_for(&rx, "the run has ended");
+    let elapsed = started.elapsed().as_secs_f64();
+    let (status, headers, body) = get(&addr, "/state.json");
+    assert!(status.contains("200") && headers.contains("application/json"));
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(st["title"].as_str().unwrap().contains("stutter"));
+    assert_eq!(st["channels"].as_array().unwrap().len(), 6);
+    let received = st["samples_received"].as_u64().unwrap();
+    assert!(received > 3_000, "{received} samples at 10 kHz");
+    assert_eq!(st["samples_dropped"].as_u64(), Some(0));
+    // About 1,000 points a second of rig time, not 10,000.
+    let points = st["t_s"].as_array().unwrap().len() as u64;
+    assert!(
+        points * 4 < received && points * 20 > received,
+        "{points} of {received}"
+    );
+    // Paced at real time: the run took at least the rig time it covered.
+    let t = st["t_s"].as_array().unwrap();
+    let span = t.last().unwrap().as_f64().unwrap() - t[0].as_f64().unwrap();
+    assert!(
+        span > 0.3 && elapsed > 0.95 * span,
+        "{elapsed} s for {span} s of rig time"
+    );
+    let kinds: Vec<String> = st["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            let k = e["kind"].as_str().unwrap().to_string();
+            match k.as_str() {
+                "state" => format!("state:{}", e["state"].as_str().unwrap()),
+                "jump" => format!("jump:{}", e["phase"].as_str().unwrap()),
+                _ => k,
+            }
+        })
+        .collect();
+    for want in [
+        "run_started",
+        "state:Armed",
+        "jump:start",
+        "state:Running",
+        "jump:end",
+        "state:Done",
+        "run_ended",
+    ] {
+        assert!(kinds.iter().any(|k| k == want), "{want} in {kinds:?}");
+    }
+    assert!(st["fault"].is_null());
+    assert!(st["ended"].as_str().unwrap().contains("jump height"));
+    // The stream answers as Server-Sent Events.
+    let mut s = TcpStream::connect(&addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut buf = [0u8; 512];
+    let n = s.read(&mut buf).unwrap();
+    let head = String::from_utf8_lossy(&buf[..n]).to_lowercase();
+    assert!(head.contains("text/event-stream"), "{head}");
+    drop(s);
+    // The linger ends the command with status 0, its summary on stdout.
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("height"));
+}
+
+#[test]
+fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
+    for (addr, want) in [
+        ("nowhere", "not an address"),
+        ("8.8.8.8:80", "cannot listen"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+            .args(["hil", "--kind", "single", "--freq", "10", "--live", addr])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{addr}: {err}");
+        assert!(err.contains(want) && err.contains(addr), "{addr}: {err}");
+    }
+    // --pace and --linger mean nothing without --live.
+    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(["hil", "--kind", "single", "--freq", "10", "--pace", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

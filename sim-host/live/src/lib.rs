@@ -1,0 +1,18 @@
+//! The live view of a jump or a campaign while it runs.
+//!
+//! - [`bus`]: what the control loop and the campaign write into. Samples are reduced for
+//!   display (a min/max envelope over 2 ms) and sent in batches of 50 ms of rig time through
+//!   a bounded queue that drops the oldest batch when full, counting what it drops; the
+//!   producer never waits for a lock. State transitions, faults, jump start and end and
+//!   campaign records go through a separate unbounded channel: nothing a busy sample stream
+//!   does can push them out. Full-rate data still goes only to the logs.
+//! - [`state`]: what the page shows, gathered from the bus (rolling window, events,
+//!   campaign table), as `state.json`.
+//! - [`server`]: the HTTP server (axum): the page with its chart library embedded (uPlot,
+//!   MIT), `state.json`, and Server-Sent Events of everything new.
+pub mod bus;
+pub mod server;
+pub mod state;
+
+pub use bus::{CampaignRecord, Event, LiveBus, LiveFeed, channel};
+pub use server::{LiveServer, serve};

@@ -1,0 +1,217 @@
+//! The HTTP server of the live view: `/` the page (chart library embedded: nothing is fetched
+//! from the internet), `/state.json` everything the page knows, `/events` Server-Sent Events
+//! of what is new. It runs on a thread of its own with its own runtime, so nothing it does
+//! (a slow browser, many tabs) reaches the run: the run only ever writes into the bus.
+
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use axum::Router;
+use axum::extract::State;
+use axum::http::header;
+use axum::response::sse::{Event as SseEvent, KeepAlive, Sse};
+use axum::response::{Html, IntoResponse};
+use axum::routing::get;
+use futures_util::stream::{self, Stream};
+use tokio::sync::broadcast;
+
+use super::bus::LiveFeed;
+use super::state::{LiveState, Update};
+
+const PAGE: &str = include_str!("assets/page.html");
+const UPLOT_JS: &str = include_str!("assets/uPlot.iife.min.js");
+const UPLOT_CSS: &str = include_str!("assets/uPlot.min.css");
+
+/// How often the bus is read, ms.
+const PUMP_MS: u64 = 25;
+
+#[derive(Clone)]
+struct Shared {
+    state: Arc<Mutex<LiveState>>,
+    updates: broadcast::Sender<String>,
+}
+
+/// A running live view.
+pub struct LiveServer {
+    /// The address it listens on (the port chosen when 0 was asked for).
+    pub addr: SocketAddr,
+    state: Arc<Mutex<LiveState>>,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl LiveServer {
+    /// The page's address.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr)
+    }
+
+    /// A copy of what the page shows now (after the bus's latest was read).
+    pub fn snapshot(&self) -> LiveState {
+        match self.state.lock() {
+            Ok(s) => s.clone(),
+            Err(p) => p.into_inner().clone(),
+        }
+    }
+
+    /// Wait until Ctrl-C (true) or `linger` passes (false; `None`: only Ctrl-C).
+    pub fn wait(&self, linger: Option<Duration>) -> bool {
+        let rt = match tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        {
+            Ok(rt) => rt,
+            Err(_) => return false,
+        };
+        rt.block_on(async {
+            match linger {
+                Some(d) => tokio::select! {
+                    r = tokio::signal::ctrl_c() => r.is_ok(),
+                    () = tokio::time::sleep(d) => false,
+                },
+                None => tokio::signal::ctrl_c().await.is_ok(),
+            }
+        })
+    }
+}
+
+impl Drop for LiveServer {
+    fn drop(&mut self) {
+        if let Some(s) = self.stop.take() {
+            let _ = s.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Serve `feed` at `addr` (port 0: any free port). Fails (a message saying what and where)
+/// if the address cannot be bound.
+pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
+    let sock: SocketAddr = addr.parse().map_err(|e| {
+        format!("--live {addr}: not an address HOST:PORT ({e}; e.g. 127.0.0.1:8080)")
+    })?;
+    let std_listener = std::net::TcpListener::bind(sock)
+        .map_err(|e| format!("--live {addr}: cannot listen there ({e})"))?;
+    std_listener
+        .set_nonblocking(true)
+        .map_err(|e| format!("--live {addr}: {e}"))?;
+    let local = std_listener
+        .local_addr()
+        .map_err(|e| format!("--live {addr}: {e}"))?;
+    let state = Arc::new(Mutex::new(LiveState::new(&feed)));
+    let (updates, _) = broadcast::channel(4096);
+    let shared = Shared {
+        state: state.clone(),
+        updates,
+    };
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let thread = std::thread::Builder::new()
+        .name("live-view".into())
+        .spawn(move || {
+            let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()
+            else {
+                return;
+            };
+            rt.block_on(async move {
+                let Ok(listener) = tokio::net::TcpListener::from_std(std_listener) else {
+                    return;
+                };
+                let app = Router::new()
+                    .route("/", get(page))
+                    .route("/uPlot.js", get(uplot_js))
+                    .route("/uPlot.css", get(uplot_css))
+                    .route("/state.json", get(state_json))
+                    .route("/events", get(events))
+                    .with_state(shared.clone());
+                let pump = {
+                    let shared = shared.clone();
+                    async move {
+                        let mut tick = tokio::time::interval(Duration::from_millis(PUMP_MS));
+                        loop {
+                            tick.tick().await;
+                            pump_once(&shared, &feed);
+                        }
+                    }
+                };
+                let server = axum::serve(listener, app).with_graceful_shutdown(async {
+                    let _ = stop_rx.await;
+                });
+                tokio::select! {
+                    _ = server => {},
+                    () = pump => {},
+                }
+            });
+        })
+        .map_err(|e| format!("cannot start the live view's thread: {e}"))?;
+    Ok(LiveServer {
+        addr: local,
+        state,
+        stop: Some(stop_tx),
+        thread: Some(thread),
+    })
+}
+
+/// Read the bus into the state and broadcast what is new.
+fn pump_once(shared: &Shared, feed: &LiveFeed) {
+    let updates: Vec<Update> = match shared.state.lock() {
+        Ok(mut s) => s.absorb(feed),
+        Err(p) => p.into_inner().absorb(feed),
+    };
+    for u in updates {
+        if let Ok(text) = serde_json::to_string(&u) {
+            // No subscriber is no error: the state keeps it for the next page load.
+            let _ = shared.updates.send(text);
+        }
+    }
+}
+
+async fn page() -> Html<&'static str> {
+    Html(PAGE)
+}
+
+async fn uplot_js() -> impl IntoResponse {
+    ([(header::CONTENT_TYPE, "text/javascript")], UPLOT_JS)
+}
+
+async fn uplot_css() -> impl IntoResponse {
+    ([(header::CONTENT_TYPE, "text/css")], UPLOT_CSS)
+}
+
+async fn state_json(State(shared): State<Shared>) -> impl IntoResponse {
+    let text = match shared.state.lock() {
+        Ok(s) => serde_json::to_string(&*s),
+        Err(p) => serde_json::to_string(&*p.into_inner()),
+    }
+    .unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"));
+    (
+        [
+            (header::CONTENT_TYPE, "application/json"),
+            (header::CACHE_CONTROL, "no-store"),
+        ],
+        text,
+    )
+}
+
+/// The stream of updates; a client too slow for the broadcast buffer is told to reload
+/// `state.json` (`resync`) rather than silently missing updates.
+async fn events(
+    State(shared): State<Shared>,
+) -> Sse<impl Stream<Item = Result<SseEvent, std::convert::Infallible>>> {
+    let rx = shared.updates.subscribe();
+    let s = stream::unfold(rx, |mut rx| async move {
+        let ev = match rx.recv().await {
+            Ok(text) => SseEvent::default().event("update").data(text),
+            Err(broadcast::error::RecvError::Lagged(n)) => {
+                SseEvent::default().event("resync").data(n.to_string())
+            }
+            Err(broadcast::error::RecvError::Closed) => return None,
+        };
+        Some((Ok(ev), rx))
+    });
+    Sse::new(s).keep_alive(KeepAlive::default())
+}
