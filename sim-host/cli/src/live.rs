@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use sandjumper_live::{Event, LiveBus, LiveServer};
 use sandjumper_output::CliError;
 use sandjumper_rig::hil::PeriodView;
+use sandjumper_rig::tool::session::ProgramView;
 
 /// The jump view's channels: commanded and measured motor position, rod height, foot
 /// position, the drive's force command and the spring force.
@@ -102,30 +103,8 @@ impl LiveView {
                 phase: "start".into(),
             });
         }
-        if let Some(s) = v.state {
-            let name = format!("{s:?}");
-            if self.last_state.as_deref() != Some(&name) {
-                if name == "Done" {
-                    self.bus.event(Event::Jump {
-                        t_s: t,
-                        phase: "end".into(),
-                    });
-                }
-                self.bus.event(Event::State {
-                    t_s: t,
-                    state: name.clone(),
-                });
-                self.last_state = Some(name);
-            }
-        }
-        if let Some(f) = v.fault
-            && !self.fault_sent
-        {
-            self.fault_sent = true;
-            self.bus.event(Event::Fault {
-                t_s: t,
-                fault: format!("{f:?}"),
-            });
+        if let Some(st) = v.state {
+            self.state_and_fault(t, format!("{st:?}"), v.fault.map(|f| format!("{f:?}")));
         }
         self.bus.sample(
             t,
@@ -139,6 +118,70 @@ impl LiveView {
             ],
         );
         self.keep_pace(t);
+    }
+
+    /// One step of a `rig` program: a lockstep period (samples: the commanded position when
+    /// the host knows it, the plant when simulated, else the encoder; the drive's command)
+    /// or a free-running board's status poll (its state and faults only: the board's samples
+    /// come with the log at the end).
+    pub fn program(&mut self, v: &ProgramView<'_>, p_cmd_m: Option<f64>, metres_per_count: f64) {
+        let t = v.t_s;
+        if v.started {
+            self.bus.event(Event::Jump {
+                t_s: t,
+                phase: "start".into(),
+            });
+        }
+        self.state_and_fault(
+            t,
+            format!("{:?}", v.state),
+            v.fault.map(|f| format!("{f:?}")),
+        );
+        let Some(a) = v.actuator else {
+            return;
+        };
+        let nan = f64::NAN;
+        let encoder_m = v.sensor.map_or(nan, |s| {
+            f64::from(s.encoder_count as i32) * metres_per_count
+        });
+        let (p, rod, foot, spring) = v.plant.map_or((encoder_m, nan, nan, nan), |pl| {
+            (pl.p_m, pl.rod_height_m, -pl.depth_m, pl.spring_force_n)
+        });
+        self.bus.sample(
+            t,
+            &[
+                1e3 * p_cmd_m.unwrap_or(nan),
+                1e3 * p,
+                1e3 * rod,
+                1e3 * foot,
+                f64::from(a.force_n),
+                spring,
+            ],
+        );
+        self.keep_pace(t);
+    }
+
+    /// Events for a state (on change) and the first fault.
+    fn state_and_fault(&mut self, t: f64, name: String, fault: Option<String>) {
+        if self.last_state.as_deref() != Some(&name) {
+            if name == "Done" {
+                self.bus.event(Event::Jump {
+                    t_s: t,
+                    phase: "end".into(),
+                });
+            }
+            self.bus.event(Event::State {
+                t_s: t,
+                state: name.clone(),
+            });
+            self.last_state = Some(name);
+        }
+        if let Some(f) = fault
+            && !self.fault_sent
+        {
+            self.fault_sent = true;
+            self.bus.event(Event::Fault { t_s: t, fault: f });
+        }
     }
 
     /// Sleep so that rig time `t_s` is not ahead of the wall clock times the pace (checked
@@ -173,5 +216,16 @@ impl LiveView {
             None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
         }
         self.server.wait(self.linger.map(Duration::from_secs_f64))
+    }
+}
+
+/// End `live` (if any) with how the command ended: the summary line or the error.
+pub fn finish(live: Option<LiveView>, result: &Result<(), CliError>) {
+    if let Some(v) = live {
+        let (outcome, ok) = match result {
+            Ok(()) => ("completed".to_string(), true),
+            Err(e) => (e.message.clone(), false),
+        };
+        v.finish(f64::NAN, outcome, ok);
     }
 }

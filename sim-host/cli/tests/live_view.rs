@@ -167,3 +167,135 @@ fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn a_resumed_campaign_shows_its_history_then_each_point_live_and_on_the_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("camp");
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/campaign-small.toml"
+    );
+    let first = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args([
+            "campaign",
+            "run",
+            file,
+            "--link",
+            "sil",
+            "--stop-after",
+            "3",
+        ])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(first.status.code(), Some(0));
+    // One line per point on the terminal, without --live.
+    let lines = String::from_utf8_lossy(&first.stdout)
+        .lines()
+        .filter(|l| l.starts_with("point "))
+        .count();
+    assert_eq!(lines, 3);
+    let (child, rx) = start(&[
+        "campaign",
+        "resume",
+        out.to_str().unwrap(),
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "3",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = url
+        .trim_start_matches("live view: http://")
+        .split('/')
+        .next()
+        .unwrap()
+        .to_string();
+    wait_for(&rx, "the run has ended");
+    let (_, _, body) = get(&addr, "/state.json");
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let c = &st["campaign"];
+    assert_eq!(c["points"].as_u64(), Some(8));
+    assert_eq!(c["done"].as_u64(), Some(8));
+    assert_eq!(c["failed"].as_u64(), Some(0));
+    assert_eq!(c["swept"].as_str(), Some("freq_hz"));
+    assert_eq!(c["exit_status"].as_i64(), Some(0));
+    let records = c["records"].as_array().unwrap();
+    let history: Vec<bool> = records
+        .iter()
+        .map(|r| r["history"].as_bool().unwrap())
+        .collect();
+    assert_eq!(
+        history,
+        [true, true, true, false, false, false, false, false]
+    );
+    for r in records {
+        let h = r["height_m"].as_f64().unwrap();
+        assert!(h > 0.01 && h < 0.2, "{r}");
+        assert_eq!(r["status"].as_str(), Some("ok"));
+    }
+    let done = child.wait_with_output().unwrap();
+    assert_eq!(done.status.code(), Some(0));
+    let lines = String::from_utf8_lossy(&done.stdout)
+        .lines()
+        .filter(|l| l.starts_with("point ") && l.contains("height"))
+        .count();
+    assert_eq!(lines, 5);
+}
+
+#[test]
+fn rig_jump_is_watched_live_with_the_commanded_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("jump");
+    let (child, rx) = start(&[
+        "rig",
+        "jump",
+        "--link",
+        "sil",
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--out",
+        out.to_str().unwrap(),
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "2",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = url
+        .trim_start_matches("live view: http://")
+        .split('/')
+        .next()
+        .unwrap()
+        .to_string();
+    wait_for(&rx, "the run has ended");
+    let (_, _, body) = get(&addr, "/state.json");
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(st["title"].as_str().unwrap().starts_with("rig jump on"));
+    assert!(st["samples_received"].as_u64().unwrap() > 2_000);
+    assert_eq!(st["samples_dropped"].as_u64(), Some(0));
+    // The commanded position is there (finite) and the measured one follows it.
+    let cols = st["columns"].as_array().unwrap();
+    let finite = |c: usize| {
+        cols[c]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
+            .count()
+    };
+    assert!(finite(0) > 100 && finite(1) > 100 && finite(4) > 100);
+    assert_eq!(st["ended"].as_str(), Some("completed"));
+    assert!(
+        st["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["kind"] == "jump")
+    );
+    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
+    assert!(out.join("summary.json").is_file());
+}

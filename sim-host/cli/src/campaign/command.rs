@@ -65,6 +65,9 @@ pub struct RunArgs {
     /// End this session after N points (the campaign stays resumable).
     #[arg(long, value_name = "N")]
     pub stop_after: Option<usize>,
+    /// The live view of the campaign.
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
 }
 
 /// `campaign resume`.
@@ -78,6 +81,9 @@ pub struct ResumeArgs {
     /// End this session after N points.
     #[arg(long, value_name = "N")]
     pub stop_after: Option<usize>,
+    /// The live view of the campaign (its history first).
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
 }
 
 /// `campaign status`.
@@ -151,7 +157,35 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
             (name, Target::Simulated(link))
         }
     };
-    start(&a.file, &a.out, &link_name, &mut target, a.stop_after)
+    let mut live = crate::live::LiveView::start(&a.live, &[])?;
+    let result = start(
+        &a.file,
+        &a.out,
+        &link_name,
+        &mut target,
+        a.stop_after,
+        live.as_mut(),
+    );
+    finish_live(live, &result);
+    result
+}
+
+/// Tell the live view how the campaign ended, and keep its page up.
+fn finish_live(live: Option<crate::live::LiveView>, result: &Result<(), CliError>) {
+    let Some(mut v) = live else {
+        return;
+    };
+    let (exit_status, message) = match result {
+        Ok(()) => (0, "the session ended".to_string()),
+        Err(e) => (i32::from(e.exit), e.message.clone()),
+    };
+    v.bus().event(sandjumper_live::Event::Campaign(
+        sandjumper_live::CampaignRecord::Stop {
+            exit_status,
+            message: message.clone(),
+        },
+    ));
+    v.finish(0.0, message, exit_status == 0);
 }
 
 /// Run the campaign file `file` on a board reached by `connect` (a fresh link per point),
@@ -162,7 +196,14 @@ pub fn run_on_board(
     connect: Box<Connect<'_>>,
     stop_after: Option<usize>,
 ) -> Result<(), CliError> {
-    start(file, out, "board", &mut Target::Board(connect), stop_after)
+    start(
+        file,
+        out,
+        "board",
+        &mut Target::Board(connect),
+        stop_after,
+        None,
+    )
 }
 
 /// Resume the campaign in `dir` on a board reached by `connect`.
@@ -179,6 +220,7 @@ pub fn resume_on_board(
         dir,
         journal,
         stop_after,
+        None,
     )
 }
 
@@ -205,6 +247,7 @@ fn start(
     link_name: &str,
     target: &mut Target<'_>,
     stop_after: Option<usize>,
+    live: Option<&mut crate::live::LiveView>,
 ) -> Result<(), CliError> {
     let file = CampaignFile::read(file_path).map_err(CliError::input)?;
     if matches!(target, Target::Board(_)) {
@@ -257,7 +300,7 @@ fn start(
     let jpath = work.join("journal.jsonl");
     let _lock = lock(&jpath)?;
     let journal = Journal::open(&jpath).map_err(CliError::internal)?;
-    drive(&file, target, &work, out, journal, stop_after)
+    drive(&file, target, &work, out, journal, stop_after, live)
 }
 
 /// A stopped campaign's file, work folder, journal (the point in progress recorded as
@@ -308,15 +351,97 @@ fn reopen(dir: &Path) -> Result<(CampaignFile, PathBuf, Journal, File, String), 
 }
 
 fn resume(a: &ResumeArgs) -> Result<(), CliError> {
-    let (file, work, journal, _lock, link_name) = reopen(&a.dir)?;
-    let mut target = match link_name.strip_prefix("serial:") {
-        Some(port) => Target::Board(board_connect(port.to_string())),
-        None => Target::Simulated(Link {
-            arg: link_arg(&link_name)?,
-            firmware: a.firmware.clone(),
-        }),
-    };
-    drive(&file, &mut target, &work, &a.dir, journal, a.stop_after)
+    let mut live = crate::live::LiveView::start(&a.live, &[])?;
+    let result = (|| {
+        let (file, work, journal, _lock, link_name) = reopen(&a.dir)?;
+        let mut target = match link_name.strip_prefix("serial:") {
+            Some(port) => Target::Board(board_connect(port.to_string())),
+            None => Target::Simulated(Link {
+                arg: link_arg(&link_name)?,
+                firmware: a.firmware.clone(),
+            }),
+        };
+        drive(
+            &file,
+            &mut target,
+            &work,
+            &a.dir,
+            journal,
+            a.stop_after,
+            live.as_mut(),
+        )
+    })();
+    finish_live(live, &result);
+    result
+}
+
+/// The parameter a campaign's points sweep (the first of frequency, delay, packing fraction
+/// that takes more than one value).
+fn swept(points: &[super::plan::Point]) -> Option<String> {
+    let varies =
+        |f: &dyn Fn(&super::plan::Point) -> f64| points.iter().any(|p| f(p) != f(&points[0]));
+    if points.is_empty() {
+        None
+    } else if varies(&|p| p.freq_hz) {
+        Some("freq_hz".into())
+    } else if varies(&|p| p.tau_s) {
+        Some("tau_s".into())
+    } else if varies(&|p| p.target_phi) {
+        Some("target_phi".into())
+    } else {
+        None
+    }
+}
+
+/// A result row as the live view's record.
+fn point_record(
+    row: &super::result_row::ResultRow,
+    history: bool,
+) -> sandjumper_live::CampaignRecord {
+    sandjumper_live::CampaignRecord::Point {
+        index: row.point,
+        params: vec![
+            ("freq_hz".into(), row.freq_hz),
+            ("tau_s".into(), row.tau_s),
+            ("target_phi".into(), row.target_phi),
+            ("achieved_phi".into(), row.achieved_phi),
+        ],
+        height_m: row_height(row).unwrap_or(f64::NAN),
+        status: if row.status == "done" {
+            "ok".into()
+        } else {
+            row.status.clone()
+        },
+        reason: (!row.faults.is_empty()).then(|| row.faults.clone()),
+        history,
+    }
+}
+
+/// The point's jump height: measured by the camera, else replayed, else the plant's.
+fn row_height(row: &super::result_row::ResultRow) -> Option<f64> {
+    row.measured_jump_height_m
+        .or(row.predicted_jump_height_m)
+        .or(row.plant_jump_height_m)
+}
+
+/// One line of the campaign's live table on the terminal.
+fn point_line(row: &super::result_row::ResultRow, total: usize) -> String {
+    format!(
+        "point {:>4}/{total}  {:<8} {:>6.2} Hz  tau {:>5.3} s  phi {:.4} -> {:.4}  {:<16} height {}{}",
+        row.point + 1,
+        row.kind,
+        row.freq_hz,
+        row.tau_s,
+        row.target_phi,
+        row.achieved_phi,
+        row.status,
+        row_height(row).map_or("-".to_string(), |h| format!("{:.2} mm", 1e3 * h)),
+        if row.faults.is_empty() {
+            String::new()
+        } else {
+            format!("  ({})", row.faults)
+        }
+    )
 }
 
 /// Bring `state` up to `journal` and rewrite `results.csv` and the Bluesky documents in
@@ -337,8 +462,32 @@ fn drive(
     out: &Path,
     mut journal: Journal,
     stop_after: Option<usize>,
+    mut live: Option<&mut crate::live::LiveView>,
 ) -> Result<(), CliError> {
     let mut state = State::from_records(&journal.records).map_err(CliError::internal)?;
+    if let Some(v) = live.as_deref_mut() {
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!("campaign {}", state.name),
+            t_s: 0.0,
+        });
+        v.bus().event(sandjumper_live::Event::Campaign(
+            sandjumper_live::CampaignRecord::Start {
+                plan: format!(
+                    "{}: {} points on {}",
+                    state.name,
+                    state.points.len(),
+                    state.link
+                ),
+                points: state.points.len(),
+                swept: swept(&state.points),
+                done_before: state.done(),
+            },
+        ));
+        for row in state.rows.values() {
+            v.bus()
+                .event(sandjumper_live::Event::Campaign(point_record(row, true)));
+        }
+    }
     journal
         .append(Event::SessionStarted {
             session: state.sessions + 1,
@@ -390,6 +539,16 @@ fn drive(
         }
         .map_err(CliError::input)?;
         let failed = row.status == "bed-not-prepared";
+        let line = point_line(&row, total);
+        if bar.is_hidden() {
+            println!("{line}");
+        } else {
+            bar.println(line);
+        }
+        if let Some(v) = live.as_deref_mut() {
+            v.bus()
+                .event(sandjumper_live::Event::Campaign(point_record(&row, false)));
+        }
         journal
             .append(Event::Done { row })
             .map_err(CliError::internal)?;

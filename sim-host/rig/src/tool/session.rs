@@ -33,11 +33,58 @@ pub trait Fixture {
     fn sense(&mut self, frame: u32) -> SensorFrame;
     /// Apply the controller's outputs and advance one control period.
     fn actuate(&mut self, out: &ActuatorFrame) -> Result<(), SimError>;
+    /// The plant as a live view shows it (`None`: a fixture with nothing more to show than
+    /// the frames).
+    fn plant(&self) -> Option<PlantView> {
+        None
+    }
+}
+
+/// What a live view shows of a simulated plant after a period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlantView {
+    /// Motor position relative to the rod, m.
+    pub p_m: f64,
+    /// Rod height above rest, m.
+    pub rod_height_m: f64,
+    /// Foot depth below the surface, m.
+    pub depth_m: f64,
+    /// Spring force, N.
+    pub spring_force_n: f64,
+}
+
+/// One step of a program as a live view sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct ProgramView<'a> {
+    /// Rig time: periods (lockstep) or the board's ticks (free running) since `Start`, s
+    /// (negative while armed before it).
+    pub t_s: f64,
+    /// The controller's state.
+    pub state: RigState,
+    /// Its latched fault.
+    pub fault: Option<sandjumper_core::fault::FaultCode>,
+    /// The controller's answer (lockstep).
+    pub actuator: Option<&'a ActuatorFrame>,
+    /// The sensor frame it answered (lockstep).
+    pub sensor: Option<&'a SensorFrame>,
+    /// The simulated plant (lockstep with a fixture that shows it).
+    pub plant: Option<PlantView>,
+    /// `Start` went out at this step.
+    pub started: bool,
 }
 
 impl Fixture for RigModel {
     fn sense(&mut self, frame: u32) -> SensorFrame {
         RigModel::sense(self, frame)
+    }
+    fn plant(&self) -> Option<PlantView> {
+        let s = self.state();
+        Some(PlantView {
+            p_m: s.p,
+            rod_height_m: self.rod_height_m(),
+            depth_m: s.depth_m,
+            spring_force_n: s.f_s,
+        })
     }
     fn actuate(&mut self, out: &ActuatorFrame) -> Result<(), SimError> {
         RigModel::actuate(self, f64::from(out.force_n), out.drive_enabled, out.trigger)
@@ -139,12 +186,22 @@ pub fn run_program(
     fixture: Option<&mut dyn Fixture>,
     program: &Program,
 ) -> Result<RunRecord, LinkError> {
+    run_program_observed(link, fixture, program, &mut |_| {})
+}
+
+/// [`run_program`], calling `observe` after every lockstep period or status poll.
+pub fn run_program_observed(
+    link: &mut dyn RigLink,
+    fixture: Option<&mut dyn Fixture>,
+    program: &Program,
+    observe: &mut dyn FnMut(&ProgramView<'_>),
+) -> Result<RunRecord, LinkError> {
     let wall = Instant::now();
     bring_to_idle(link)?;
     link.command(&Command::Configure(program.config))?;
     let mut record = match fixture {
-        Some(f) => lockstep(link, f, program)?,
-        None => free_running(link, program)?,
+        Some(f) => lockstep(link, f, program, observe)?,
+        None => free_running(link, program, observe)?,
     };
     record.report = link.finish()?;
     record.samples.extend(link.take_samples());
@@ -159,6 +216,7 @@ fn lockstep(
     link: &mut dyn RigLink,
     fixture: &mut dyn Fixture,
     program: &Program,
+    observe: &mut dyn FnMut(&ProgramView<'_>),
 ) -> Result<RunRecord, LinkError> {
     let hz = f64::from(program.tick_hz);
     let settle = ((program.settle_s * hz).round() as u64).max(1);
@@ -177,10 +235,11 @@ fn lockstep(
             )));
         }
         fixture.actuate(&a).map_err(sim)?;
-        Ok(a)
+        Ok((a, sensor))
     };
     // One Idle period: the encoder's first reading is not a movement.
     step(link, fixture)?;
+    let t = |period: u64| (period as f64 - settle as f64) / hz;
     link.command(&Command::Arm)?;
     let mut record = RunRecord::default();
     let mut stop_at: Option<u64> = None;
@@ -189,7 +248,16 @@ fn lockstep(
         if period == settle {
             link.command(&Command::Start)?;
         }
-        let a = step(link, fixture)?;
+        let (a, sensor) = step(link, fixture)?;
+        observe(&ProgramView {
+            t_s: t(period),
+            state: a.state,
+            fault: a.fault,
+            actuator: Some(&a),
+            sensor: Some(&sensor),
+            plant: fixture.plant(),
+            started: period == settle,
+        });
         period += 1;
         if stop_at.is_none() {
             if a.fault.is_some() {
@@ -213,13 +281,32 @@ fn lockstep(
     Ok(record)
 }
 
-fn free_running(link: &mut dyn RigLink, program: &Program) -> Result<RunRecord, LinkError> {
-    let wait = |link: &mut dyn RigLink, seconds: f64| -> Result<Status, LinkError> {
+fn free_running(
+    link: &mut dyn RigLink,
+    program: &Program,
+    observe: &mut dyn FnMut(&ProgramView<'_>),
+) -> Result<RunRecord, LinkError> {
+    let hz = f64::from(program.tick_hz);
+    // The board's own clock: ticks since the trajectory started (0 before it).
+    let mut seen = |s: &Status, started: bool| {
+        observe(&ProgramView {
+            t_s: f64::from(s.run_tick) / hz,
+            state: s.state,
+            fault: s.fault,
+            actuator: None,
+            sensor: None,
+            plant: None,
+            started,
+        });
+    };
+    let mut wait = |link: &mut dyn RigLink, seconds: f64| -> Result<Status, LinkError> {
         let until = Instant::now() + Duration::from_secs_f64(seconds.max(0.0));
         let mut status = query_status(link)?;
+        seen(&status, false);
         while Instant::now() < until {
             std::thread::sleep(POLL_INTERVAL);
             status = query_status(link)?;
+            seen(&status, false);
         }
         Ok(status)
     };

@@ -320,9 +320,9 @@ pub fn simulate_run_observed(
 
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
-    if a.live.live.is_some() && (a.link == LinkArg::F407 || a.bench.is_some()) {
+    if a.live.live.is_some() && a.bench.is_some() {
         return Err(CliError::input(
-            "--live shows one jump through --link sil, pil or serial:PATH (for the virtual board use `rig jump --link f407 --live ADDR`; not with --bench)",
+            "--live shows one jump; --bench repeats it for timing (allowed: one of them)",
         ));
     }
     if a.link == LinkArg::F407 {
@@ -562,6 +562,7 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         .ok_or_else(|| CliError::internal("no output directory"))?;
     let emulated = PathBuf::from(sandjumper_rig::firmware_image::EMULATED_ELF);
     let jump = crate::rig::tool::jump::JumpArgs {
+        live: a.live.clone(),
         target: crate::rig::tool::TargetArgs {
             controller: crate::rig::tool::ControllerArgs {
                 port: None,

@@ -24,7 +24,7 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, samples_log, start_index,
     write_run_files,
 };
-use super::session::{Fixture, Program, run_program};
+use super::session::{Fixture, Program, run_program_observed};
 use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_core::{Gains, JumpConfig, SampleRecord, SlowIntrusion, TrajectorySpec};
@@ -50,6 +50,9 @@ fn metres(
 /// `rig intrude`.
 #[derive(Debug, Clone, Args)]
 pub struct IntrudeArgs {
+    /// The live view of the run.
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
     /// The board (or a simulated controller).
     #[command(flatten)]
     pub target: TargetArgs,
@@ -311,10 +314,24 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         }),
     )?;
     let name = link.name();
-    let record = run_program(
+    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    if let Some(v) = live.as_mut() {
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!("rig {} on {name}", "intrusion"),
+            t_s: 0.0,
+        });
+    }
+    let p_cmd: Option<&dyn Fn(f64) -> f64> = None;
+    let mpc_live = model_config.metres_per_count;
+    let record = run_program_observed(
         link.as_mut(),
         fixture.as_mut().map(|f| f as &mut dyn Fixture),
         &program,
+        &mut |v| {
+            if let Some(l) = live.as_mut() {
+                l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
+            }
+        },
     )
     .map_err(|e| link_failed(&name, "the slow intrusion", e))?;
 
@@ -412,5 +429,7 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
                 .map_or("n/a".into(), |f| format!("{f:.2} N"))
         );
     }
-    conclude("intrusion", report.completed, &report.faults, &dir, a.json)
+    let result = conclude("intrusion", report.completed, &report.faults, &dir, a.json);
+    crate::live::finish(live, &result);
+    result
 }

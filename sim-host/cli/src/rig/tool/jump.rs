@@ -10,7 +10,7 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
     samples_log, write_run_files,
 };
-use super::session::{Fixture, Program, run_program};
+use super::session::{Fixture, Program, run_program_observed};
 use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use sandjumper_core::trajectory::JumpKind;
@@ -24,6 +24,9 @@ use sandjumper_rig::hil::virtual_board::VirtualLoad;
 /// `rig jump`.
 #[derive(Debug, Clone, Args)]
 pub struct JumpArgs {
+    /// The live view of the run.
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
     /// The board (or a simulated controller).
     #[command(flatten)]
     pub target: TargetArgs,
@@ -120,10 +123,25 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         }),
     )?;
     let name = link.name();
-    let record = run_program(
+    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    if let Some(v) = live.as_mut() {
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!("rig {} on {name}", "jump"),
+            t_s: 0.0,
+        });
+    }
+    let p_cmd: Option<&dyn Fn(f64) -> f64> =
+        Some(&|t: f64| traj.eval(t.clamp(0.0, traj.end_s())).position_m);
+    let mpc_live = model_config.metres_per_count;
+    let record = run_program_observed(
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
+        &mut |v| {
+            if let Some(l) = live.as_mut() {
+                l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
+            }
+        },
     )
     .map_err(|e| link_failed(&name, "the jump", e))?;
 
@@ -205,5 +223,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
                 ))
         );
     }
-    conclude("jump", report.completed, &report.faults, &dir, a.json)
+    let result = conclude("jump", report.completed, &report.faults, &dir, a.json);
+    crate::live::finish(live, &result);
+    result
 }

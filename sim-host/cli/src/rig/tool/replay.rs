@@ -24,7 +24,7 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
     samples_log, start_index, write_run_files,
 };
-use super::session::{Fixture, Program, bring_to_idle, query_status, run_program};
+use super::session::{Fixture, Program, bring_to_idle, query_status, run_program_observed};
 use super::{RigParamArgs, TargetArgs, conclude, link_failed};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_core::command::REPLAY_CHUNK;
@@ -73,6 +73,9 @@ fn parse_clip(s: &str) -> Result<Clip, String> {
 /// `rig replay`.
 #[derive(Debug, Clone, Args)]
 pub struct ReplayArgs {
+    /// The live view of the run.
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
     /// The acquisition log whose encoder record is replayed.
     #[arg(value_name = "LOG.csv")]
     pub log: PathBuf,
@@ -387,10 +390,24 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         tail_s: 0.2,
         max_run_s: duration + 5.0,
     };
-    let run = run_program(
+    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    if let Some(v) = live.as_mut() {
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!("rig {} on {name}", "replay"),
+            t_s: 0.0,
+        });
+    }
+    let p_cmd: Option<&dyn Fn(f64) -> f64> = None;
+    let mpc_live = model_config.metres_per_count;
+    let run = run_program_observed(
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
+        &mut |v| {
+            if let Some(l) = live.as_mut() {
+                l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
+            }
+        },
     )
     .map_err(|e| link_failed(&name, "the replay", e))?;
 
@@ -483,5 +500,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
             1e3 * report.reproduction_error_rms_m
         );
     }
-    conclude("replay", report.completed, &report.faults, &dir, a.json)
+    let result = conclude("replay", report.completed, &report.faults, &dir, a.json);
+    crate::live::finish(live, &result);
+    result
 }
