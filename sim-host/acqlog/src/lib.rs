@@ -56,7 +56,9 @@ pub mod writer;
 pub use binary::{BinaryLogWriter, ConvertReport, SampleLogBuilder, convert_binary};
 pub use columns::{Column, ColumnSet, LogRow};
 pub use error::{AcqLogError, AcqLogErrorKind};
-pub use mcap_file::{McapReport, ReadBack, read_messages, write_mcap};
+pub use mcap_file::{
+    McapCompression, McapReport, ReadBack, read_messages, write_mcap, write_mcap_compressed,
+};
 pub use metadata::{JumpConfig, LogMetadata};
 pub use reader::{ReadOptions, read_log};
 pub use summary::LogSummary;

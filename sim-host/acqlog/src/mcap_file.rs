@@ -25,10 +25,10 @@
 //!
 //! **Layout.** Chunked (about [`CHUNK_SIZE`] bytes per chunk) with message, chunk and metadata
 //! indexes and statistics in the summary, so a viewer opens and seeks a long log quickly.
-//! Chunks are *not compressed*: JSON shrinks well under zstd, but the crate's compression
-//! features build the zstd and lz4 C libraries, and an uncompressed chunk can be read up to the
-//! last complete message when a file is cut short (a recorder killed mid-write): see
-//! [`read_messages`].
+//! Chunks are compressed with zstd by default, as Foxglove's own writer does (the JSON messages
+//! shrink about tenfold); [`McapCompression::None`] writes plain chunks, whose complete messages
+//! can be read up to the cut when a file is cut short (a recorder killed mid-write): see
+//! [`read_messages`]. A cut compressed file yields the messages of its complete chunks.
 
 use super::columns::Column;
 use super::error::{AcqLogError, AcqLogErrorKind};
@@ -40,6 +40,28 @@ use serde::Serialize;
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
+
+/// How the chunks are compressed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum McapCompression {
+    /// zstd (the default; Foxglove's writer's).
+    #[default]
+    Zstd,
+    /// lz4 (faster, larger).
+    Lz4,
+    /// None: plain chunks, readable up to a cut.
+    None,
+}
+
+impl McapCompression {
+    fn mcap(self) -> Option<mcap::Compression> {
+        match self {
+            Self::Zstd => Some(mcap::Compression::Zstd),
+            Self::Lz4 => Some(mcap::Compression::Lz4),
+            Self::None => None,
+        }
+    }
+}
 
 /// Target uncompressed size of one chunk, bytes (about 0.1 s of a 10 kHz log).
 pub const CHUNK_SIZE: u64 = 256 * 1024;
@@ -226,8 +248,18 @@ pub fn write_mcap<W: Write + Seek>(
     conversion: Option<&ConvertReport>,
     out: W,
 ) -> Result<(W, McapReport), AcqLogError> {
+    write_mcap_compressed(log, conversion, out, McapCompression::default())
+}
+
+/// [`write_mcap`] with the chunks compressed as `compression` says.
+pub fn write_mcap_compressed<W: Write + Seek>(
+    log: &AcqLog,
+    conversion: Option<&ConvertReport>,
+    out: W,
+    compression: McapCompression,
+) -> Result<(W, McapReport), AcqLogError> {
     let options = mcap::WriteOptions::new()
-        .compression(None)
+        .compression(compression.mcap())
         .profile("")
         .library(concat!("sandjumper ", env!("CARGO_PKG_VERSION")))
         .chunk_size(Some(CHUNK_SIZE));
@@ -439,8 +471,19 @@ impl AcqLog {
         path: &std::path::Path,
         conversion: Option<&ConvertReport>,
     ) -> Result<McapReport, AcqLogError> {
+        self.write_mcap_file_compressed(path, conversion, McapCompression::default())
+    }
+
+    /// [`AcqLog::write_mcap_file`] with the chunks compressed as `compression` says.
+    pub fn write_mcap_file_compressed(
+        &self,
+        path: &std::path::Path,
+        conversion: Option<&ConvertReport>,
+        compression: McapCompression,
+    ) -> Result<McapReport, AcqLogError> {
         let file = std::fs::File::create(path).map_err(|e| AcqLogError::io(&e))?;
-        let (file, report) = write_mcap(self, conversion, std::io::BufWriter::new(file))?;
+        let (file, report) =
+            write_mcap_compressed(self, conversion, std::io::BufWriter::new(file), compression)?;
         file.into_inner()
             .map_err(|e| AcqLogError::io(e.error()))?
             .sync_all()

@@ -170,8 +170,15 @@ fn csv_to_mcap_every_value_equals_the_csv() {
         "{} chunks",
         summary.chunk_indexes.len()
     );
+    // Compressed with zstd by default, as Foxglove's writer does.
+    let (packed, plain): (u64, u64) = summary
+        .chunk_indexes
+        .iter()
+        .map(|c| (c.compressed_size, c.uncompressed_size))
+        .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    assert!(4 * packed < plain, "{packed} compressed of {plain} bytes");
     for chunk in &summary.chunk_indexes {
-        assert_eq!(chunk.compression, "");
+        assert_eq!(chunk.compression, "zstd");
         let indexes = summary.read_message_indexes(&bytes, chunk).unwrap();
         assert!(!indexes.is_empty());
     }
@@ -209,7 +216,9 @@ fn a_cut_file_yields_every_message_complete_before_the_cut() {
     let path = tmp.path().join("run.mcap");
     let mut log = rich_log();
     log.rows.truncate(6_000);
-    log.write_mcap_file(&path, None).unwrap();
+    // Plain chunks: their messages are records of their own, readable up to any cut.
+    log.write_mcap_file_compressed(&path, None, sandjumper_acqlog::McapCompression::None)
+        .unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let whole = read_messages(&bytes);
     assert!(whole.complete);
