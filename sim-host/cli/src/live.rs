@@ -32,6 +32,10 @@ pub struct LiveArgs {
     /// fast as it can).
     #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
     pub pace: Option<f64>,
+    /// With --live, the same streams on a Foxglove WebSocket server at HOST:PORT (typed JSON
+    /// channels for Foxglove or Lichtblick panels; builds with `--features foxglove`).
+    #[arg(long, value_name = "HOST:PORT", requires = "live")]
+    pub foxglove: Option<String>,
     /// With --live, keep the page up this long after the run, s (default: until Ctrl-C).
     #[arg(long, value_name = "S", requires = "live", value_parser = parse_linger)]
     pub linger: Option<f64>,
@@ -71,12 +75,17 @@ impl LiveView {
             return Ok(None);
         };
         let (bus, feed) = sandjumper_live::channel(channels);
-        let server = sandjumper_live::serve(addr, feed).map_err(CliError::input)?;
+        let server = sandjumper_live::serve_with_foxglove(addr, feed, a.foxglove.as_deref())
+            .map_err(CliError::input)?;
         eprintln!(
             "live view: {} (state: {}state.json)",
             server.url(),
             server.url()
         );
+        if let (Some(port), Some(fg)) = (server.foxglove_port, &a.foxglove) {
+            let host = fg.rsplit_once(':').map_or(fg.as_str(), |(h, _)| h);
+            eprintln!("foxglove: ws://{host}:{port} (Foxglove, or Lichtblick after 1.21)");
+        }
         Ok(Some(Self {
             bus,
             server,

@@ -160,6 +160,18 @@ fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
         assert_eq!(out.status.code(), Some(2), "{addr}: {err}");
         assert!(err.contains(want) && err.contains(addr), "{addr}: {err}");
     }
+    // A build without the Foxglove server says so (`cargo build --features foxglove` has one;
+    // sim-host/live/tests/foxglove.rs tests it).
+    if !sandjumper_live::FOXGLOVE {
+        let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+            .args(["hil", "--kind", "single", "--freq", "10", "--live", "127.0.0.1:0"])
+            .args(["--foxglove", "127.0.0.1:0"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("--features foxglove"), "{err}");
+    }
     // --pace and --linger mean nothing without --live.
     let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(["hil", "--kind", "single", "--freq", "10", "--pace", "2"])

@@ -11,8 +11,10 @@
 //! - [`server`]: the HTTP server (axum): the page with its chart library embedded (uPlot,
 //!   MIT), `state.json`, and Server-Sent Events of everything new.
 pub mod bus;
+#[cfg(feature = "foxglove")]
+pub mod foxglove_bridge;
 pub mod server;
 pub mod state;
 
 pub use bus::{CampaignRecord, Event, LiveBus, LiveFeed, channel};
-pub use server::{LiveServer, serve};
+pub use server::{FOXGLOVE, LiveServer, serve, serve_with_foxglove};

@@ -30,12 +30,16 @@ const PUMP_MS: u64 = 25;
 struct Shared {
     state: Arc<Mutex<LiveState>>,
     updates: broadcast::Sender<String>,
+    #[cfg(feature = "foxglove")]
+    foxglove: Option<Arc<super::foxglove_bridge::FoxgloveBridge>>,
 }
 
 /// A running live view.
 pub struct LiveServer {
     /// The address it listens on (the port chosen when 0 was asked for).
     pub addr: SocketAddr,
+    /// The Foxglove WebSocket server's port, if one runs.
+    pub foxglove_port: Option<u16>,
     state: Arc<Mutex<LiveState>>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
@@ -90,6 +94,19 @@ impl Drop for LiveServer {
 /// Serve `feed` at `addr` (port 0: any free port). Fails (a message saying what and where)
 /// if the address cannot be bound.
 pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
+    serve_with_foxglove(addr, feed, None)
+}
+
+/// Whether this build can serve the streams to Foxglove (`--features foxglove`).
+pub const FOXGLOVE: bool = cfg!(feature = "foxglove");
+
+/// [`serve`], and the same streams on a Foxglove WebSocket server at `foxglove` (HOST:PORT),
+/// when given (this build must have the `foxglove` feature).
+pub fn serve_with_foxglove(
+    addr: &str,
+    feed: LiveFeed,
+    foxglove: Option<&str>,
+) -> Result<LiveServer, String> {
     let sock: SocketAddr = addr.parse().map_err(|e| {
         format!("--live {addr}: not an address HOST:PORT ({e}; e.g. 127.0.0.1:8080)")
     })?;
@@ -103,9 +120,31 @@ pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
         .map_err(|e| format!("--live {addr}: {e}"))?;
     let state = Arc::new(Mutex::new(LiveState::new(&feed)));
     let (updates, _) = broadcast::channel(4096);
+    #[cfg(feature = "foxglove")]
+    let bridge = foxglove
+        .map(|a| super::foxglove_bridge::FoxgloveBridge::start(a, &feed.channels).map(Arc::new))
+        .transpose()?;
+    #[cfg(not(feature = "foxglove"))]
+    if let Some(a) = foxglove {
+        return Err(format!(
+            "--foxglove {a}: this build has no Foxglove server (build sandjumper-cli with `--features foxglove`)"
+        ));
+    }
+    let foxglove_port = {
+        #[cfg(feature = "foxglove")]
+        {
+            bridge.as_ref().map(|b| b.port)
+        }
+        #[cfg(not(feature = "foxglove"))]
+        {
+            None
+        }
+    };
     let shared = Shared {
         state: state.clone(),
         updates,
+        #[cfg(feature = "foxglove")]
+        foxglove: bridge,
     };
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let thread = std::thread::Builder::new()
@@ -150,6 +189,7 @@ pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
         .map_err(|e| format!("cannot start the live view's thread: {e}"))?;
     Ok(LiveServer {
         addr: local,
+        foxglove_port,
         state,
         stop: Some(stop_tx),
         thread: Some(thread),
@@ -162,6 +202,10 @@ fn pump_once(shared: &Shared, feed: &LiveFeed) {
         Ok(mut s) => s.absorb(feed),
         Err(p) => p.into_inner().absorb(feed),
     };
+    #[cfg(feature = "foxglove")]
+    if let Some(b) = &shared.foxglove {
+        b.publish(&updates);
+    }
     for u in updates {
         if let Ok(text) = serde_json::to_string(&u) {
             // No subscriber is no error: the state keeps it for the next page load.

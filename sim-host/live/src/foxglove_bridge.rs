@@ -1,0 +1,132 @@
+//! The live streams on a Foxglove WebSocket server (the official `foxglove` crate, built
+//! without its default features: no TLS, no C), for Foxglove's or Lichtblick's panels: Plot
+//! (`/sandjumper/samples`, x axis `t_s`), State Transitions (`/sandjumper/state`), fault
+//! status (`/sandjumper/fault`), and `/sandjumper/campaign`, `/sandjumper/events`.
+//! Messages are JSON with a JSON Schema per channel.
+
+use std::sync::Arc;
+
+use foxglove::{
+    ChannelBuilder, Context, RawChannel, Schema, WebSocketServer, WebSocketServerHandle,
+};
+use serde_json::json;
+
+use super::bus::Event;
+use super::state::Update;
+
+/// A running Foxglove server and its channels.
+pub struct FoxgloveBridge {
+    /// The port it listens on.
+    pub port: u16,
+    _server: WebSocketServerHandle,
+    /// The server and the channels hold it weakly: it lives as long as the bridge.
+    _context: Arc<Context>,
+    samples: Arc<RawChannel>,
+    state: Arc<RawChannel>,
+    fault: Arc<RawChannel>,
+    campaign: Arc<RawChannel>,
+    events: Arc<RawChannel>,
+    channels: Vec<String>,
+}
+
+fn schema(name: &str, properties: serde_json::Value) -> Schema {
+    let doc = json!({"type": "object", "properties": properties});
+    Schema::new(name, "jsonschema", doc.to_string().into_bytes())
+}
+
+impl FoxgloveBridge {
+    /// Start a server at `addr` (HOST:PORT; port 0: any) for samples named `channels`. Must be
+    /// called outside an async context.
+    pub fn start(addr: &str, channels: &[String]) -> Result<Self, String> {
+        let (host, port) = addr
+            .rsplit_once(':')
+            .and_then(|(h, p)| p.parse::<u16>().ok().map(|p| (h.to_string(), p)))
+            .ok_or_else(|| {
+                format!("--foxglove {addr}: not an address HOST:PORT (e.g. 127.0.0.1:8765)")
+            })?;
+        let ctx = Context::new();
+        let server = WebSocketServer::new()
+            .name("sandjumper")
+            .bind(host, port)
+            .context(&ctx)
+            .start_blocking()
+            .map_err(|e| format!("--foxglove {addr}: cannot start the server ({e})"))?;
+        let num = json!({"type": "number"});
+        let text = json!({"type": "string"});
+        let mut sample_props = serde_json::Map::new();
+        sample_props.insert("t_s".into(), num.clone());
+        for c in channels {
+            sample_props.insert(c.clone(), num.clone());
+        }
+        let build = |topic: &str, s: Schema| {
+            ChannelBuilder::new(topic)
+                .context(&ctx)
+                .message_encoding("json")
+                .schema(s)
+                .build_raw()
+                .map_err(|e| format!("--foxglove: cannot open {topic} ({e})"))
+        };
+        Ok(Self {
+            port: server.port(),
+            samples: build(
+                "/sandjumper/samples",
+                schema("sandjumper.Sample", serde_json::Value::Object(sample_props)),
+            )?,
+            state: build(
+                "/sandjumper/state",
+                schema("sandjumper.State", json!({"t_s": num, "state": text})),
+            )?,
+            fault: build(
+                "/sandjumper/fault",
+                schema("sandjumper.Fault", json!({"t_s": num, "fault": text})),
+            )?,
+            campaign: build(
+                "/sandjumper/campaign",
+                schema("sandjumper.CampaignRecord", json!({"record": text})),
+            )?,
+            events: build(
+                "/sandjumper/events",
+                schema("sandjumper.Event", json!({"kind": text})),
+            )?,
+            _server: server,
+            _context: ctx.clone(),
+            channels: channels.to_vec(),
+        })
+    }
+
+    /// Publish what the page just received.
+    pub fn publish(&self, updates: &[Update]) {
+        for u in updates {
+            match u {
+                Update::Batch { batch, .. } => {
+                    for (k, &t) in batch.t_s.iter().enumerate() {
+                        let mut m = serde_json::Map::new();
+                        m.insert("t_s".into(), json!(t));
+                        for (c, name) in self.channels.iter().enumerate() {
+                            let v = batch.columns.get(c).and_then(|col| col.get(k)).copied();
+                            m.insert(name.clone(), json!(v.filter(|x| x.is_finite())));
+                        }
+                        self.samples
+                            .log(serde_json::Value::Object(m).to_string().as_bytes());
+                    }
+                }
+                Update::Event { event } => {
+                    let text = serde_json::to_string(event).unwrap_or_default();
+                    self.events.log(text.as_bytes());
+                    match event {
+                        Event::State { t_s, state } => self
+                            .state
+                            .log(json!({"t_s": t_s, "state": state}).to_string().as_bytes()),
+                        Event::Fault { t_s, fault } => self
+                            .fault
+                            .log(json!({"t_s": t_s, "fault": fault}).to_string().as_bytes()),
+                        Event::Campaign(r) => self
+                            .campaign
+                            .log(serde_json::to_string(r).unwrap_or_default().as_bytes()),
+                        _ => {}
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! The Foxglove WebSocket server (`--features foxglove`): a client speaking the Foxglove
+//! protocol (`foxglove.sdk.v1`, what Foxglove and Lichtblick send) is told the server's name
+//! and our channels with their JSON schemas, and receives the samples and the state changes.
+#![cfg(feature = "foxglove")]
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::time::Duration;
+
+use sandjumper_live::{Event, channel, serve_with_foxglove};
+
+/// Read one WebSocket frame sent by the server (unmasked): (opcode, payload).
+fn frame(s: &mut TcpStream) -> (u8, Vec<u8>) {
+    let mut h = [0u8; 2];
+    s.read_exact(&mut h).unwrap();
+    let mut len = u64::from(h[1] & 0x7f);
+    if len == 126 {
+        let mut b = [0u8; 2];
+        s.read_exact(&mut b).unwrap();
+        len = u64::from(u16::from_be_bytes(b));
+    } else if len == 127 {
+        let mut b = [0u8; 8];
+        s.read_exact(&mut b).unwrap();
+        len = u64::from_be_bytes(b);
+    }
+    let mut p = vec![0u8; len as usize];
+    s.read_exact(&mut p).unwrap();
+    (h[0] & 0x0f, p)
+}
+
+/// A client frame (masked, as clients must): a JSON text message.
+fn send_text(s: &mut TcpStream, text: &str) {
+    let p = text.as_bytes();
+    let mut f = vec![0x81u8];
+    assert!(p.len() < 126);
+    f.push(0x80 | p.len() as u8);
+    let mask = [1u8, 2, 3, 4];
+    f.extend_from_slice(&mask);
+    f.extend(p.iter().enumerate().map(|(i, b)| b ^ mask[i % 4]));
+    s.write_all(&f).unwrap();
+}
+
+#[test]
+fn a_foxglove_client_sees_our_channels_and_receives_samples_and_states() {
+    let (mut bus, feed) = channel(&["p_mm", "force_n"]);
+    let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0")).unwrap();
+    let port = server.foxglove_port.unwrap();
+    let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(
+        s,
+        "GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n"
+    )
+    .unwrap();
+    // The 101 response, up to its blank line.
+    let mut head = Vec::new();
+    let mut b = [0u8; 1];
+    while !head.ends_with(b"\r\n\r\n") {
+        s.read_exact(&mut b).unwrap();
+        head.push(b[0]);
+    }
+    let head = String::from_utf8_lossy(&head).to_lowercase();
+    assert!(head.starts_with("http/1.1 101"), "{head}");
+    assert!(
+        head.contains("sec-websocket-protocol: foxglove.sdk.v1"),
+        "{head}"
+    );
+    // serverInfo, then the channels advertised.
+    let mut topics = std::collections::BTreeMap::new();
+    let mut info = None;
+    while topics.len() < 5 {
+        let (op, p) = frame(&mut s);
+        if op != 1 {
+            continue;
+        }
+        let m: serde_json::Value = serde_json::from_slice(&p).unwrap();
+        match m["op"].as_str() {
+            Some("serverInfo") => info = Some(m),
+            Some("advertise") => {
+                for c in m["channels"].as_array().unwrap() {
+                    topics.insert(c["topic"].as_str().unwrap().to_string(), c.clone());
+                }
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(info.unwrap()["name"].as_str(), Some("sandjumper"));
+    let samples = &topics["/sandjumper/samples"];
+    assert_eq!(samples["encoding"].as_str(), Some("json"));
+    assert_eq!(samples["schemaEncoding"].as_str(), Some("jsonschema"));
+    let schema: serde_json::Value =
+        serde_json::from_str(samples["schema"].as_str().unwrap()).unwrap();
+    assert!(schema["properties"]["force_n"].is_object());
+    for t in [
+        "/sandjumper/state",
+        "/sandjumper/fault",
+        "/sandjumper/campaign",
+        "/sandjumper/events",
+    ] {
+        assert!(topics.contains_key(t), "{t}");
+    }
+    // Subscribe to the samples and the states, then run.
+    let id = |t: &str| topics[t]["id"].as_u64().unwrap();
+    send_text(
+        &mut s,
+        &format!(
+            r#"{{"op":"subscribe","subscriptions":[{{"id":1,"channelId":{}}},{{"id":2,"channelId":{}}}]}}"#,
+            id("/sandjumper/samples"),
+            id("/sandjumper/state")
+        ),
+    );
+    std::thread::sleep(Duration::from_millis(200));
+    bus.event(Event::State {
+        t_s: 0.0,
+        state: "Running".into(),
+    });
+    for k in 0..2_000u32 {
+        bus.sample(f64::from(k) * 1e-4, &[1.0, 2.0]);
+    }
+    bus.flush_now();
+    // Binary message data frames: op 1, subscription id (u32 LE), log time (u64), payload.
+    let (mut got_sample, mut got_state) = (false, false);
+    while !(got_sample && got_state) {
+        let (op, p) = frame(&mut s);
+        if op != 2 || p.first() != Some(&1) {
+            continue;
+        }
+        let sub = u32::from_le_bytes(p[1..5].try_into().unwrap());
+        let m: serde_json::Value = serde_json::from_slice(&p[13..]).unwrap();
+        if sub == 1 {
+            assert_eq!(m["force_n"].as_f64(), Some(2.0));
+            got_sample = true;
+        } else if sub == 2 {
+            assert_eq!(m["state"].as_str(), Some("Running"));
+            got_state = true;
+        }
+    }
+}
