@@ -151,6 +151,22 @@ fn figures_dem_reproduces_the_supplement_at_a_reduced_scale() {
     assert!(s["piv_pairs_compared"].as_u64().unwrap() >= 5);
     let toml = std::fs::read_to_string(out_dir.join("figures_dem.toml")).unwrap();
     assert!(toml.contains("foot_width_m = 0.02") && toml.contains("sandjumper dem intrude"));
+    // The recorded commands and the runs' own records name the final folder, not the staging
+    // one renamed at the end.
+    assert!(!toml.contains(".partial"), "{toml}");
+    let run_summary = std::fs::read_to_string(out_dir.join("runs/stutter/summary.json")).unwrap();
+    assert!(!run_summary.contains(".partial"));
+    let csv = std::fs::read_to_string(out_dir.join("dem_runs.csv")).unwrap();
+    assert!(csv.contains("shear_band_left_deg") && csv.contains("window_depth_warning"));
+    // The bed is deep enough for the push-off and the cone under it (a small foot's bed is
+    // deeper than 1.6 widths).
+    let bed_h: f64 = toml
+        .lines()
+        .find_map(|l| l.strip_prefix("bed_height_m = "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(bed_h > 1.6 * 0.02 + 0.003, "{bed_h}");
     // Bad input: exit 2 with what and what is allowed; nothing written.
     let bad = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args([
@@ -166,4 +182,12 @@ fn figures_dem_reproduces_the_supplement_at_a_reduced_scale() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("0.005..=0.2"));
     assert!(!dir.path().join("bad").exists());
+    // A frequency `jump` does not take is refused up front, with status 2.
+    let bad = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(["figures", "dem", "--freq", "100", "--out"])
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("0.5..=40"));
 }

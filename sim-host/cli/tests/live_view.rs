@@ -82,6 +82,10 @@ fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
     assert!(page.contains("src=\"/uPlot.js\"") && !page.contains("src=\"http"));
     let (_, headers, js) = get(&addr, "/uPlot.js");
     assert!(headers.contains("text/javascript") && js.contains("uPlot"));
+    // A browser's event stream stays open through the run and the linger: it must not keep
+    // the command from ending.
+    let mut open_stream = TcpStream::connect(&addr).unwrap();
+    write!(open_stream, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
     wait_for(&rx, "the run has ended");
     let elapsed = started.elapsed().as_secs_f64();
     let (status, headers, body) = get(&addr, "/state.json");
@@ -140,8 +144,9 @@ fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
     let head = String::from_utf8_lossy(&buf[..n]).to_lowercase();
     assert!(head.contains("text/event-stream"), "{head}");
     drop(s);
-    // The linger ends the command with status 0, its summary on stdout.
+    // The linger ends the command with status 0, its summary on stdout, the stream still open.
     let out = child.wait_with_output().unwrap();
+    drop(open_stream);
     assert_eq!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stdout).contains("height"));
 }
@@ -164,7 +169,15 @@ fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
     // sim-host/live/tests/foxglove.rs tests it).
     if !sandjumper_live::FOXGLOVE {
         let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-            .args(["hil", "--kind", "single", "--freq", "10", "--live", "127.0.0.1:0"])
+            .args([
+                "hil",
+                "--kind",
+                "single",
+                "--freq",
+                "10",
+                "--live",
+                "127.0.0.1:0",
+            ])
             .args(["--foxglove", "127.0.0.1:0"])
             .output()
             .unwrap();

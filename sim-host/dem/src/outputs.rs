@@ -405,7 +405,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
         momentum_in_window_bottom_tenth_share: bottom_share,
         window_depth_warning: (bottom_share > WINDOW_BOTTOM_SHARE_LIMIT).then(|| {
             format!(
-                "{:.0} % of the column's momentum is in the window's bottom tenth: the motion reaches the window's bottom, so the added mass depends on its depth (make the bed deeper)",
+                "{:.1} % of the column's momentum is in the window's bottom tenth: the motion reaches the window's bottom, so the added mass depends on its depth (make the bed deeper)",
                 100.0 * bottom_share
             )
         }),

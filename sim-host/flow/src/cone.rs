@@ -11,6 +11,12 @@ use serde::Serialize;
 /// A row's band peaks must reach this multiple of the row's median to be placed.
 pub const MIN_BAND_CONTRAST: f64 = 1.5;
 
+/// Largest move of a band from one row to the next, grid spacings.
+pub const MAX_BAND_STEP: f64 = 2.0;
+
+/// Largest difference of the two sides' angles for the cone to have one angle, degrees.
+pub const MAX_SIDE_DIFFERENCE_DEG: f64 = 10.0;
+
 /// The bands' positions at one depth below the foot.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct BandRow {
@@ -27,8 +33,9 @@ pub struct BandRow {
 /// The cone its shear bands outline.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ShearBandCone {
-    /// Angle of the sides from the horizontal, degrees (mean of both sides; NaN: no side
-    /// narrows with depth, no cone).
+    /// Angle of the sides from the horizontal, degrees: the mean of both sides when both
+    /// narrow with depth and differ by at most [`MAX_SIDE_DIFFERENCE_DEG`] (NaN otherwise: no
+    /// cone to speak of; the sides are still reported).
     pub angle_deg: f64,
     /// Left side's angle, degrees (NaN: it does not narrow).
     pub left_deg: f64,
@@ -58,7 +65,8 @@ pub struct Sample<'a> {
 /// Rows from one grid spacing to `R tan 70` below the foot are fitted (the cone of the paper,
 /// 60 degrees, reaches `R tan 60`); the band is sought between `0.1 R` and `1.2 R` from the
 /// axis on each side, from the foot down to the first row whose peaks stand less than
-/// [`MIN_BAND_CONTRAST`] above the row's median. `None` when fewer than three rows show bands.
+/// [`MIN_BAND_CONTRAST`] above the row's median or move more than [`MAX_BAND_STEP`] grid
+/// spacings from the row above. `None` when fewer than three rows show bands.
 pub fn shear_band_cone(
     samples: &[Sample<'_>],
     xs: &[f64],
@@ -72,7 +80,10 @@ pub fn shear_band_cone(
     let spacing = (hs[1] - hs[0]).abs();
     let deepest = radius_m * 70f64.to_radians().tan();
     let bins = (deepest / spacing).ceil() as usize + 1;
+    // Per cell: the sum of the finite values and their count (an empty coarse-graining cell
+    // is NaN: it must neither poison the average nor be taken for a band).
     let mut sum = vec![0.0; bins * nx];
+    let mut cells = vec![0usize; bins * nx];
     let mut count = vec![0usize; bins];
     for s in samples {
         for (j, &h) in hs.iter().enumerate() {
@@ -86,11 +97,15 @@ pub fn shear_band_cone(
             }
             count[b] += 1;
             for i in 0..nx {
-                sum[b * nx + i] += s.shear_rate[j * nx + i];
+                let v = s.shear_rate[j * nx + i];
+                if v.is_finite() {
+                    sum[b * nx + i] += v;
+                    cells[b * nx + i] += 1;
+                }
             }
         }
     }
-    let mut rows = Vec::new();
+    let mut rows: Vec<BandRow> = Vec::new();
     let enough = samples.len().div_ceil(2);
     for b in 1..bins {
         // Rows seen in fewer than half the samples (deep under a shallow foot) are not
@@ -99,12 +114,18 @@ pub fn shear_band_cone(
         if count[b] < enough {
             break;
         }
-        let mean = |i: usize| sum[b * nx + i] / count[b] as f64;
+        let mean = |i: usize| match cells[b * nx + i] {
+            0 => f64::NAN,
+            n => sum[b * nx + i] / n as f64,
+        };
+        let finite = |i: &usize| mean(*i).is_finite();
         let right = (0..nx)
             .filter(|&i| xs[i] >= 0.1 * radius_m && xs[i] <= 1.2 * radius_m)
+            .filter(finite)
             .max_by(|&a, &c| mean(a).total_cmp(&mean(c)));
         let left = (0..nx)
             .filter(|&i| xs[i] <= -0.1 * radius_m && xs[i] >= -1.2 * radius_m)
+            .filter(finite)
             .max_by(|&a, &c| mean(a).total_cmp(&mean(c)));
         let (Some(l), Some(r)) = (left, right) else {
             continue;
@@ -112,13 +133,25 @@ pub fn shear_band_cone(
         let mut row: Vec<f64> = (0..nx)
             .filter(|&i| xs[i].abs() <= 1.5 * radius_m)
             .map(mean)
+            .filter(|v| v.is_finite())
             .collect();
+        if row.is_empty() {
+            break;
+        }
         row.sort_by(f64::total_cmp);
         let median = row[row.len() / 2];
         let contrast = 0.5 * (mean(l) + mean(r)) / median;
         // A row whose peaks do not stand out has no band to place (beyond the apex, or noise).
         if !(median > 0.0 && contrast >= MIN_BAND_CONTRAST) {
             break;
+        }
+        // A band follows a line: a jump of more than two grid spacings from the row above is
+        // another feature (or noise), where the band as a line has ended.
+        if let Some(prev) = rows.last() {
+            let (dl, dr) = ((-xs[l] - prev.left_m).abs(), (xs[r] - prev.right_m).abs());
+            if dl > MAX_BAND_STEP * spacing || dr > MAX_BAND_STEP * spacing {
+                break;
+            }
         }
         rows.push(BandRow {
             depth_below_foot_m: b as f64 * spacing,
@@ -158,12 +191,14 @@ pub fn shear_band_cone(
     let (ls, li) = fit(&|r: &BandRow| r.left_m);
     let (rs, ri) = fit(&|r: &BandRow| r.right_m);
     let (left_deg, right_deg) = (angle(ls), angle(rs));
-    let both = [left_deg, right_deg];
-    let good: Vec<f64> = both.iter().copied().filter(|a| a.is_finite()).collect();
-    let angle_deg = if good.is_empty() {
-        f64::NAN
+    // One angle only when both sides narrow and agree: a one-sided or lopsided fit is no cone.
+    let angle_deg = if left_deg.is_finite()
+        && right_deg.is_finite()
+        && (left_deg - right_deg).abs() <= MAX_SIDE_DIFFERENCE_DEG
+    {
+        0.5 * (left_deg + right_deg)
     } else {
-        good.iter().sum::<f64>() / good.len() as f64
+        f64::NAN
     };
     // Where each side reaches the axis; the apex is their mean.
     let apex = |s: f64, i: f64| if s < 0.0 { -i / s } else { f64::NAN };
@@ -224,6 +259,58 @@ mod tests {
             assert!((c.apex_depth_m - apex).abs() < 0.15 * apex, "{deg}: {c:?}");
             assert!(c.rows.iter().all(|r| r.contrast > 3.0));
         }
+    }
+
+    #[test]
+    fn an_empty_cell_neither_poisons_the_average_nor_becomes_the_band() {
+        let xs: Vec<f64> = (-60..=60).map(|i| i as f64 * 1e-3).collect();
+        let hs: Vec<f64> = (0..120).map(|j| -(j as f64) * 1e-3).collect();
+        let mut fields: Vec<(Vec<f64>, f64)> = [-0.004, -0.008, -0.012]
+            .iter()
+            .map(|&foot| (field(&xs, &hs, 0.03, 60.0, foot), foot))
+            .collect();
+        // One empty cell near the right band, 10 mm below the first sample's foot.
+        let (j, i) = (14, 80);
+        fields[0].0[j * xs.len() + i] = f64::NAN;
+        let samples: Vec<Sample<'_>> = fields
+            .iter()
+            .map(|(f, foot)| Sample {
+                shear_rate: f,
+                foot_bottom_m: *foot,
+            })
+            .collect();
+        let c = shear_band_cone(&samples, &xs, &hs, 0.03).unwrap();
+        assert!(c.rows.len() > 40, "{} rows", c.rows.len());
+        assert!((c.angle_deg - 60.0).abs() < 2.0, "{c:?}");
+    }
+
+    #[test]
+    fn one_sided_bands_give_no_cone_angle() {
+        let xs: Vec<f64> = (-60..=60).map(|i| i as f64 * 1e-3).collect();
+        let hs: Vec<f64> = (0..120).map(|j| -(j as f64) * 1e-3).collect();
+        // The left half's band stays at the foot's edge (vertical), the right narrows.
+        let mut f: Vec<f64> = field(&xs, &hs, 0.03, 60.0, -0.004);
+        let right_only = f.clone();
+        for (j, &h) in hs.iter().enumerate() {
+            for (i, &x) in xs.iter().enumerate() {
+                if x < 0.0 {
+                    let d = -0.004 - h;
+                    let band = if d > 0.0 && d < 0.04 {
+                        10.0 * (-((x.abs() - 0.03) / 0.002).powi(2)).exp()
+                    } else {
+                        0.0
+                    };
+                    f[j * xs.len() + i] = right_only[j * xs.len() + i].min(1.3) + band;
+                }
+            }
+        }
+        let s = [Sample {
+            shear_rate: &f,
+            foot_bottom_m: -0.004,
+        }];
+        let c = shear_band_cone(&s, &xs, &hs, 0.03).unwrap();
+        assert!(c.angle_deg.is_nan(), "{c:?}");
+        assert!((c.right_deg - 60.0).abs() < 3.0, "{c:?}");
     }
 
     #[test]

@@ -182,7 +182,8 @@ pub fn apply(p: &Preprocess, img: &Image, bg: Option<&Image>, max_value: f32) ->
         out = local_contrast(&out, p.local_contrast_sigma_px, max_value);
     }
     if p.clahe_tile_px > 0 {
-        // After a normalisation the values are in 0..=255.
+        // After a normalisation the values sit around 127.5 (one sd: 32 levels); CLAHE's bins
+        // take 0..=255 and clamp the rest.
         let max = if p.local_contrast_sigma_px > 0.0 {
             255.0
         } else {

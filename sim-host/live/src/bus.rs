@@ -126,7 +126,7 @@ pub struct LiveBus {
     channels: usize,
     queue: Arc<Queue>,
     events: mpsc::Sender<Event>,
-    /// The bin being filled: its start, and per channel (first, min, max, t of min, t of max).
+    /// The bin being filled: its start, and per channel (min, max, t of min, t of max).
     bin_start: f64,
     bin: Vec<(f64, f64, f64, f64)>,
     bin_samples: u64,
@@ -188,6 +188,17 @@ impl LiveBus {
     /// One full-rate sample at rig time `t_s` (values in channel order; extra values are
     /// ignored, missing ones are NaN).
     pub fn sample(&mut self, t_s: f64, values: &[f64]) {
+        if !t_s.is_finite() {
+            return;
+        }
+        // A batch boundary first: the bin and the batch close before this sample opens the
+        // next ones (rig time never goes back across batches).
+        if !self.batch_start.is_nan() && t_s >= self.batch_start + BATCH_S {
+            self.close_bin();
+            self.flush();
+            self.batch_start = t_s;
+            self.bin_start = f64::NAN;
+        }
         if !(t_s >= self.bin_start && t_s < self.bin_start + BIN_S) {
             self.close_bin();
             self.bin_start = t_s;
@@ -208,11 +219,6 @@ impl LiveBus {
             }
         }
         self.bin_samples += 1;
-        if t_s >= self.batch_start + BATCH_S {
-            self.close_bin();
-            self.flush();
-            self.batch_start = t_s;
-        }
     }
 
     /// Send what is gathered now (the run ended, or the view must catch up).
@@ -336,6 +342,9 @@ mod tests {
         assert!((900..=1100).contains(&points), "{points}");
         let samples: u64 = batches.iter().map(|b| b.samples).sum();
         assert_eq!(samples, 10_000);
+        // Rig time only goes forward, across batches too.
+        let t: Vec<f64> = batches.iter().flat_map(|b| b.t_s.iter().copied()).collect();
+        assert!(t.windows(2).all(|w| w[1] > w[0]), "time goes back");
         // 50 ms of rig time a batch.
         assert!((19..=21).contains(&batches.len()), "{}", batches.len());
         let max = batches

@@ -177,12 +177,14 @@ pub fn serve_with_foxglove(
                         }
                     }
                 };
-                let server = axum::serve(listener, app).with_graceful_shutdown(async {
-                    let _ = stop_rx.await;
-                });
+                // Not a graceful shutdown: an open event stream never ends by itself, and the
+                // command must end when the user says so. Leaving the runtime drops every
+                // connection.
+                let server = axum::serve(listener, app);
                 tokio::select! {
                     _ = server => {},
                     () = pump => {},
+                    _ = stop_rx => {},
                 }
             });
         })

@@ -59,6 +59,9 @@ pub struct LiveState {
     pub ended: Option<String>,
     /// The campaign, if this is one.
     pub campaign: Option<CampaignView>,
+    /// The number of the last update folded in: a page applies only the streamed updates
+    /// numbered above its snapshot's.
+    pub seq: u64,
 }
 
 /// What is new since the last [`LiveState::absorb`], for the stream.
@@ -67,6 +70,8 @@ pub struct LiveState {
 pub enum Update {
     /// Reduced samples.
     Batch {
+        /// Its number (see [`LiveState::seq`]).
+        seq: u64,
         /// The batch.
         batch: Batch,
         /// Samples and batches dropped so far.
@@ -76,6 +81,8 @@ pub enum Update {
     },
     /// An event.
     Event {
+        /// Its number.
+        seq: u64,
         /// The event.
         event: Event,
     },
@@ -111,7 +118,9 @@ impl LiveState {
                     );
                 }
             }
+            self.seq += 1;
             out.push(Update::Batch {
+                seq: self.seq,
                 batch: b,
                 samples_dropped: dropped,
                 batches_dropped: dropped_batches,
@@ -127,7 +136,11 @@ impl LiveState {
         }
         for e in feed.take_events() {
             self.apply(&e);
-            out.push(Update::Event { event: e });
+            self.seq += 1;
+            out.push(Update::Event {
+                seq: self.seq,
+                event: e,
+            });
         }
         out
     }

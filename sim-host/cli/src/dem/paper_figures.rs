@@ -36,7 +36,7 @@ pub struct DemFiguresArgs {
     /// Foot width, m (the robot's 76 mm; the bed is 4 widths wide and 1.6 deep).
     #[arg(long, value_name = "M", default_value = "0.076", value_parser = parse_number)]
     pub foot_width: f64,
-    /// Leave out the full model's row (its bed settles under gravity: about 8 of the 10
+    /// Leave out the full model's row (its bed settles under gravity: about 7 of the 10
     /// minutes at full scale).
     #[arg(long)]
     pub no_full_model: bool,
@@ -61,10 +61,23 @@ struct Row {
     max_force_n: f64,
     /// Depth reached, m.
     max_depth_m: f64,
-    /// Angle of the shear bands' cone, degrees (NaN: no cone: the bands do not narrow).
+    /// Angle of the shear bands' cone, degrees (NaN: no cone: a side does not narrow, or the
+    /// sides differ by more than 10 degrees).
     shear_band_cone_deg: f64,
+    /// The left side's angle, degrees (NaN: it does not narrow).
+    shear_band_left_deg: f64,
+    /// The right side's angle, degrees.
+    shear_band_right_deg: f64,
+    /// Depth below the foot where the fitted sides meet, m.
+    shear_band_apex_m: f64,
     /// Rows (2 mm each) below the foot with clear bands.
     shear_band_rows: usize,
+    /// Share of the column's momentum deeper than the 60 degree cone (median).
+    momentum_beyond_cone_depth_share: f64,
+    /// Share of the column's momentum in the coarse-graining window's bottom tenth.
+    momentum_in_window_bottom_tenth_share: f64,
+    /// The run's warning that its motion reaches the window's bottom, if it has one.
+    window_depth_warning: Option<String>,
     /// Grains.
     grains: u64,
     /// Wall time, s.
@@ -94,9 +107,9 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
             a.foot_width
         )));
     }
-    if !(0.5..=100.0).contains(&a.freq) || !(0.0..=1.0).contains(&a.tau) {
+    if !(0.5..=40.0).contains(&a.freq) || !(0.0..=1.0).contains(&a.tau) {
         return Err(CliError::input(format!(
-            "--freq {} Hz, --tau {} s (allowed: 0.5..=100 Hz, 0..=1 s)",
+            "--freq {} Hz, --tau {} s (allowed: 0.5..=40 Hz, as `jump` takes, and 0..=1 s)",
             a.freq, a.tau
         )));
     }
@@ -106,7 +119,6 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
     std::fs::create_dir_all(&runs)
         .map_err(|e| CliError::internal(format!("cannot create {}: {e}", runs.display())))?;
     let w = a.foot_width;
-    let (bed_w, bed_h) = (4.0 * w + 0.01, 1.6 * w + 0.003);
     let path = |n: &str| runs.join(n).display().to_string();
     let threads = a.threads.to_string();
     let (phi, freq, tau, fw) = (
@@ -115,17 +127,46 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         a.tau.to_string(),
         w.to_string(),
     );
-    let (bw, bh) = (format!("{bed_w:.4}"), format!("{bed_h:.4}"));
-    let mut plan: Vec<(String, Vec<String>)> = Vec::new();
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<String>>();
+    let total = if a.no_full_model { 10 } else { 12 };
+    let mut done_commands = Vec::new();
+    let mut wall = std::collections::BTreeMap::new();
+    let mut stage = 0usize;
+    let mut run_stage = |what: &str, cmd: &[String]| -> Result<(), CliError> {
+        stage += 1;
+        eprintln!(
+            "figures dem [{stage}/{total}] {what} ({:.0} s so far)",
+            started.elapsed().as_secs_f64()
+        );
+        let t0 = Instant::now();
+        run_quietly(cmd)?;
+        if let Some(out) = cmd.iter().position(|c| c == "--out") {
+            wall.insert(cmd[out + 1].clone(), t0.elapsed().as_secs_f64());
+        }
+        done_commands.push(format!("sandjumper {}", cmd.join(" ")));
+        Ok(())
+    };
+    // The jumps first: their depth sizes the bed.
+    let mut deepest: f64 = 0.0;
     for kind in ["single", "stutter", "delayed"] {
         let mut c = s(&["jump", "--kind", kind, "--freq", &freq, "--phi", &phi]);
         if kind == "delayed" {
             c.extend(s(&["--tau", &tau]));
         }
         c.extend(s(&["--out", &path(&format!("jump-{kind}"))]));
-        plan.push((format!("the {kind} jump"), c));
+        run_stage(&format!("the {kind} jump"), &c)?;
+        let j = read_json(&runs.join(format!("jump-{kind}")).join("summary.json"))?;
+        deepest = deepest.max(j["max_depth_m"].as_f64().unwrap_or(0.0));
     }
+    // Four foot widths by 1.6, as the supplement's bed; deeper if the push-off and the cone
+    // under it (R tan 60) would reach the bottom (a small foot's bed).
+    let cone = 0.5 * w * 60f64.to_radians().tan();
+    let (bed_w, bed_h) = (
+        4.0 * w + 0.01,
+        (1.6 * w + 0.003).max(deepest + cone + 0.005),
+    );
+    let (bw, bh) = (format!("{bed_w:.4}"), format!("{bed_h:.4}"));
+    let mut plan: Vec<(String, Vec<String>)> = Vec::new();
     let bed = |name: &str, model: &str, pack: Option<&str>| {
         let mut c = s(&[
             "dem", "bed", "--model", model, "--width", &bw, "--height", &bh,
@@ -190,25 +231,21 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
             intrude("stutter-full", "bed-full", "stutter", "full"),
         ));
     }
-    let total = plan.len();
-    let mut done_commands = Vec::new();
-    let mut wall = std::collections::BTreeMap::new();
-    for (k, (what, mut cmd)) in plan.into_iter().enumerate() {
+    for (what, mut cmd) in plan {
         if cmd.is_empty() {
             cmd = piv_command(&runs.join("stutter"), &path("piv-stutter"))?;
         }
-        eprintln!(
-            "figures dem [{}/{total}] {what} ({:.0} s so far)",
-            k + 1,
-            started.elapsed().as_secs_f64()
-        );
-        let t0 = Instant::now();
-        run_quietly(&cmd)?;
-        if let Some(out) = cmd.iter().position(|c| c == "--out") {
-            wall.insert(cmd[out + 1].clone(), t0.elapsed().as_secs_f64());
-        }
-        done_commands.push(format!("sandjumper {}", cmd.join(" ")));
+        run_stage(&what, &cmd)?;
     }
+    drop(run_stage);
+    // Every path the runs recorded names the staging folder, renamed to --out at the end:
+    // recorded as the final paths, so the commands can be run again.
+    let staging = staged.path().display().to_string();
+    let final_out = a.out.display().to_string();
+    for c in &mut done_commands {
+        *c = c.replace(&staging, &final_out);
+    }
+    rewrite_paths(&runs, &staging, &final_out)?;
     // The comparison.
     let mut rows = Vec::new();
     let mut names = vec![
@@ -246,7 +283,13 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
             "max_force_n",
             "max_depth_m",
             "shear_band_cone_deg",
+            "shear_band_left_deg",
+            "shear_band_right_deg",
+            "shear_band_apex_m",
             "shear_band_rows",
+            "momentum_beyond_cone_depth_share",
+            "momentum_in_window_bottom_tenth_share",
+            "window_depth_warning",
             "grains",
             "wall_s",
         ],
@@ -290,12 +333,24 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
     #[derive(Serialize)]
     struct Summary<'a> {
         runs: &'a [Row],
+        /// Each push-off's peak momentum over the stutter's (the paper's relative scaling).
+        momentum_peak_over_stutter: std::collections::BTreeMap<String, f64>,
         piv_over_dem_added_mass_median: f64,
         piv_pairs_compared: usize,
         wall_s: f64,
     }
     let summary = Summary {
         runs: &rows,
+        momentum_peak_over_stutter: {
+            let stutter = rows
+                .iter()
+                .find(|r| r.name == "stutter")
+                .map_or(f64::NAN, |r| r.grain_momentum_under_foot_kg_m_s);
+            rows.iter()
+                .take(3)
+                .map(|r| (r.name.clone(), r.grain_momentum_under_foot_kg_m_s / stutter))
+                .collect()
+        },
         piv_over_dem_added_mass_median: piv.ratio_median,
         piv_pairs_compared: piv.points.len(),
         wall_s: started.elapsed().as_secs_f64(),
@@ -334,12 +389,34 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Replace `from` by `to` in the JSON and TOML files of every run folder under `runs`.
+fn rewrite_paths(runs: &Path, from: &str, to: &str) -> Result<(), CliError> {
+    let io = |p: &Path, e: std::io::Error| CliError::internal(format!("{}: {e}", p.display()));
+    for dir in std::fs::read_dir(runs).map_err(|e| io(runs, e))? {
+        let dir = dir.map_err(|e| io(runs, e))?.path();
+        if !dir.is_dir() {
+            continue;
+        }
+        for f in std::fs::read_dir(&dir).map_err(|e| io(&dir, e))? {
+            let f = f.map_err(|e| io(&dir, e))?.path();
+            let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if ext == "json" || ext == "toml" {
+                let text = std::fs::read_to_string(&f).map_err(|e| io(&f, e))?;
+                if text.contains(from) {
+                    std::fs::write(&f, text.replace(from, to)).map_err(|e| io(&f, e))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Run one `sandjumper` command in this process; its errors keep their exit status.
 fn run_quietly(cmd: &[String]) -> Result<(), CliError> {
     let cli = <crate::cli::Cli as clap::Parser>::try_parse_from(
         std::iter::once("sandjumper".to_string()).chain(cmd.iter().cloned()),
     )
-    .map_err(|e| CliError::internal(format!("sandjumper {}: {e}", cmd.join(" "))))?;
+    .map_err(|e| CliError::input(format!("sandjumper {}: {e}", cmd.join(" "))))?;
     crate::cli::execute(cli).map_err(|e| CliError {
         message: format!("sandjumper {}: {}", cmd.join(" "), e.message),
         exit: e.exit,
@@ -385,14 +462,27 @@ fn read_row(dir: &Path, name: &str, what: &str, wall_s: f64) -> Result<Row, CliE
         max_force_n: f("max_force_n"),
         max_depth_m: f("max_depth_m"),
         shear_band_cone_deg: cone["angle_deg"].as_f64().unwrap_or(f64::NAN),
+        shear_band_left_deg: cone["left_deg"].as_f64().unwrap_or(f64::NAN),
+        shear_band_right_deg: cone["right_deg"].as_f64().unwrap_or(f64::NAN),
+        shear_band_apex_m: cone["apex_depth_m"].as_f64().unwrap_or(f64::NAN),
         shear_band_rows: cone["rows"].as_array().map_or(0, Vec::len),
+        momentum_beyond_cone_depth_share: f("momentum_beyond_cone_depth_share"),
+        momentum_in_window_bottom_tenth_share: f("momentum_in_window_bottom_tenth_share"),
+        window_depth_warning: s["window_depth_warning"].as_str().map(str::to_string),
         grains: s["grains"].as_u64().unwrap_or(0),
         wall_s,
     })
 }
 
 /// A CSV's rows as maps of column to number (text columns and empty cells: NaN).
-fn read_table(path: &Path) -> Result<Vec<std::collections::HashMap<String, f64>>, CliError> {
+type Table = Vec<std::collections::HashMap<String, f64>>;
+
+/// A row's value of `key` (NaN when the column is missing).
+fn val(row: &std::collections::HashMap<String, f64>, key: &str) -> f64 {
+    row.get(key).copied().unwrap_or(f64::NAN)
+}
+
+fn read_table(path: &Path) -> Result<Table, CliError> {
     let mut r = csv::Reader::from_path(path)
         .map_err(|e| CliError::internal(format!("{}: {e}", path.display())))?;
     let head: Vec<String> = r
@@ -434,20 +524,20 @@ fn compare_piv(dem: &Path, piv: &Path) -> Result<PivComparison, CliError> {
     let at = |t: f64, key: &str| {
         // Linear between the DEM's samples around t (a PIV pair sits between two frames).
         d.windows(2)
-            .find(|w| w[0]["t_s"] <= t && t <= w[1]["t_s"])
+            .find(|w| val(&w[0], "t_s") <= t && t <= val(&w[1], "t_s"))
             .map_or(f64::NAN, |w| {
-                let f = (t - w[0]["t_s"]) / (w[1]["t_s"] - w[0]["t_s"]);
-                w[0][key] + f * (w[1][key] - w[0][key])
+                let f = (t - val(&w[0], "t_s")) / (val(&w[1], "t_s") - val(&w[0], "t_s"));
+                val(&w[0], key) + f * (val(&w[1], key) - val(&w[0], key))
             })
     };
     let points: Vec<PivPoint> = p
         .iter()
-        .filter(|r| r["added_mass_kg"].is_finite())
+        .filter(|r| val(&r, "added_mass_kg").is_finite())
         .map(|r| PivPoint {
-            t_s: r["t_s"],
-            depth_m: at(r["t_s"], "depth_m"),
-            dem_added_mass_kg: at(r["t_s"], "added_mass_kg"),
-            piv_added_mass_kg: r["added_mass_kg"],
+            t_s: val(&r, "t_s"),
+            depth_m: at(val(&r, "t_s"), "depth_m"),
+            dem_added_mass_kg: at(val(&r, "t_s"), "added_mass_kg"),
+            piv_added_mass_kg: val(&r, "added_mass_kg"),
         })
         .filter(|q| q.dem_added_mass_kg.is_finite())
         .collect();
@@ -491,16 +581,16 @@ fn figures(
         for r in &t {
             series.push(SeriesRow {
                 jump: kind.to_string(),
-                t_s: r["t_s"],
-                depth_m: r["depth_m"],
-                momentum_under_foot_kg_m_s: r["momentum_under_foot_kg_m_s"],
-                added_mass_kg: r["added_mass_kg"],
+                t_s: val(&r, "t_s"),
+                depth_m: val(&r, "depth_m"),
+                momentum_under_foot_kg_m_s: val(&r, "momentum_under_foot_kg_m_s"),
+                added_mass_kg: val(&r, "added_mass_kg"),
             });
         }
         let am: Vec<(f64, f64)> = t
             .iter()
-            .filter(|r| r["added_mass_kg"].is_finite() && r["depth_m"] > 0.0)
-            .map(|r| (1e3 * r["depth_m"], r["added_mass_kg"]))
+            .filter(|r| val(&r, "added_mass_kg").is_finite() && val(&r, "depth_m") > 0.0)
+            .map(|r| (1e3 * val(&r, "depth_m"), val(&r, "added_mass_kg")))
             .collect();
         zmax = am.iter().map(|p| p.0 / 1e3).fold(zmax, f64::max);
         am_lines.push(Line {
@@ -514,13 +604,31 @@ fn figures(
             label: kind.to_string(),
             points: t
                 .iter()
-                .map(|r| (1e3 * r["t_s"], r["momentum_under_foot_kg_m_s"]))
+                .map(|r| (1e3 * val(&r, "t_s"), val(&r, "momentum_under_foot_kg_m_s")))
                 .collect(),
             color: palette(k),
             dashed: false,
             markers: true,
         });
     }
+    // The paper's relative scaling (Fig. 4a inset): each jump's momentum over the stutter's
+    // peak.
+    let stutter_peak = series
+        .iter()
+        .filter(|r| r.jump == "stutter")
+        .map(|r| r.momentum_under_foot_kg_m_s)
+        .fold(f64::NAN, f64::max);
+    let rel_lines: Vec<Line> = p_lines
+        .iter()
+        .map(|l| Line {
+            points: l
+                .points
+                .iter()
+                .map(|&(t, p)| (t, p / stutter_peak))
+                .collect(),
+            ..l.clone()
+        })
+        .collect();
     let eq6: Vec<(f64, f64)> = (0..=60)
         .filter_map(|i| {
             let z = zmax * f64::from(i) / 60.0;
@@ -558,14 +666,21 @@ fn figures(
                 y_from_zero: true,
             },
             LinePanel {
-                caption: "momentum under the foot (Fig. 4a inset)".into(),
+                caption: "momentum under the foot".into(),
                 x_desc: "time from the push-off's start (ms)".into(),
                 y_desc: "P (kg m/s)".into(),
                 lines: p_lines,
                 y_from_zero: false,
             },
+            LinePanel {
+                caption: "relative to the stutter's peak (Fig. 4a inset)".into(),
+                x_desc: "time from the push-off's start (ms)".into(),
+                y_desc: "P / P_max(stutter)".into(),
+                lines: rel_lines,
+                y_from_zero: false,
+            },
         ],
-        size: (1400, 600),
+        size: (2000, 600),
     };
     save_figure(
         &fig,

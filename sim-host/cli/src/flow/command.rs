@@ -93,7 +93,7 @@ pub struct PivArgs {
     /// Local contrast normalisation: each pixel against its neighbourhood's mean and spread
     /// (a Gaussian of this width, px, about a grain; 0: off). Gives dim, untextured grains
     /// contrast with no displacement bias.
-    #[arg(long, value_name = "PX", default_value = "4", value_parser = parse_number)]
+    #[arg(long, value_name = "PX", default_value = "4", value_parser = parse_sigma)]
     pub local_contrast: f64,
     /// CLAHE tile size, px (0: no CLAHE, the default). PIVlab's 64 px tiles are fixed in the
     /// frame while the grains move through them: about 0.07 px of bias on real grain images.
@@ -904,6 +904,15 @@ pub struct SyntheticArgs {
     pub out: PathBuf,
 }
 
+fn parse_sigma(s: &str) -> Result<f64, String> {
+    match parse_number(s) {
+        Ok(v) if (0.0..=512.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a width in px (allowed: 0, off, or up to 512)"
+        )),
+    }
+}
+
 fn parse_shift(s: &str) -> Result<(f64, f64), String> {
     let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
     match v.as_slice() {
@@ -929,6 +938,23 @@ fn write_shifted_image(
     }
     let frame = decode_file(path)
         .map_err(|e| CliError::input(format!("--image {}: {e}", path.display())))?;
+    // The shift wraps around the image's periodic extension: the last frame's shift must stay
+    // within a quarter of the image, where the truth is still the image moved.
+    let n = f64::from(a.frames - 1);
+    let (w, h) = (f64::from(frame.width()), f64::from(frame.height()));
+    if (shift.0 * n).abs() > 0.25 * w || (shift.1 * n).abs() > 0.25 * h {
+        return Err(CliError::input(format!(
+            "--shift {},{} over {} frames moves {} ({}x{} px) by ({}, {}) px (allowed: up to a quarter of its width and height)",
+            shift.0,
+            shift.1,
+            a.frames,
+            path.display(),
+            frame.width(),
+            frame.height(),
+            shift.0 * n,
+            shift.1 * n
+        )));
+    }
     let scale = 65535.0 / f64::from(frame.depth().max_value());
     let img = Image::from_frame(&frame);
     for n in 0..a.frames {
