@@ -237,7 +237,6 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         }
         run_stage(&what, &cmd)?;
     }
-    drop(run_stage);
     // Every path the runs recorded names the staging folder, renamed to --out at the end:
     // recorded as the final paths, so the commands can be run again.
     let staging = staged.path().display().to_string();
@@ -532,12 +531,12 @@ fn compare_piv(dem: &Path, piv: &Path) -> Result<PivComparison, CliError> {
     };
     let points: Vec<PivPoint> = p
         .iter()
-        .filter(|r| val(&r, "added_mass_kg").is_finite())
+        .filter(|r| val(r, "added_mass_kg").is_finite())
         .map(|r| PivPoint {
-            t_s: val(&r, "t_s"),
-            depth_m: at(val(&r, "t_s"), "depth_m"),
-            dem_added_mass_kg: at(val(&r, "t_s"), "added_mass_kg"),
-            piv_added_mass_kg: val(&r, "added_mass_kg"),
+            t_s: val(r, "t_s"),
+            depth_m: at(val(r, "t_s"), "depth_m"),
+            dem_added_mass_kg: at(val(r, "t_s"), "added_mass_kg"),
+            piv_added_mass_kg: val(r, "added_mass_kg"),
         })
         .filter(|q| q.dem_added_mass_kg.is_finite())
         .collect();
@@ -581,16 +580,16 @@ fn figures(
         for r in &t {
             series.push(SeriesRow {
                 jump: kind.to_string(),
-                t_s: val(&r, "t_s"),
-                depth_m: val(&r, "depth_m"),
-                momentum_under_foot_kg_m_s: val(&r, "momentum_under_foot_kg_m_s"),
-                added_mass_kg: val(&r, "added_mass_kg"),
+                t_s: val(r, "t_s"),
+                depth_m: val(r, "depth_m"),
+                momentum_under_foot_kg_m_s: val(r, "momentum_under_foot_kg_m_s"),
+                added_mass_kg: val(r, "added_mass_kg"),
             });
         }
         let am: Vec<(f64, f64)> = t
             .iter()
-            .filter(|r| val(&r, "added_mass_kg").is_finite() && val(&r, "depth_m") > 0.0)
-            .map(|r| (1e3 * val(&r, "depth_m"), val(&r, "added_mass_kg")))
+            .filter(|r| val(r, "added_mass_kg").is_finite() && val(r, "depth_m") > 0.0)
+            .map(|r| (1e3 * val(r, "depth_m"), val(r, "added_mass_kg")))
             .collect();
         zmax = am.iter().map(|p| p.0 / 1e3).fold(zmax, f64::max);
         am_lines.push(Line {
@@ -604,7 +603,7 @@ fn figures(
             label: kind.to_string(),
             points: t
                 .iter()
-                .map(|r| (1e3 * val(&r, "t_s"), val(&r, "momentum_under_foot_kg_m_s")))
+                .map(|r| (1e3 * val(r, "t_s"), val(r, "momentum_under_foot_kg_m_s")))
                 .collect(),
             color: palette(k),
             dashed: false,
