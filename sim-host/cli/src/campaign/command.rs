@@ -157,6 +157,7 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
             (name, Target::Simulated(link))
         }
     };
+    refuse_pace(&a.live)?;
     let mut live = crate::live::LiveView::start(&a.live, &[])?;
     let result = start(
         &a.file,
@@ -168,6 +169,16 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
     );
     finish_live(live, &result);
     result
+}
+
+/// A campaign's points are not paced (each arrives when it is done): `--pace` is refused.
+fn refuse_pace(live: &crate::live::LiveArgs) -> Result<(), CliError> {
+    match live.pace {
+        Some(p) => Err(CliError::input(format!(
+            "--pace {p}: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Tell the live view how the campaign ended, and keep its page up.
@@ -351,6 +362,7 @@ fn reopen(dir: &Path) -> Result<(CampaignFile, PathBuf, Journal, File, String), 
 }
 
 fn resume(a: &ResumeArgs) -> Result<(), CliError> {
+    refuse_pace(&a.live)?;
     let mut live = crate::live::LiveView::start(&a.live, &[])?;
     let result = (|| {
         let (file, work, journal, _lock, link_name) = reopen(&a.dir)?;
