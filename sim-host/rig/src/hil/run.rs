@@ -300,7 +300,7 @@ pub fn run_jump(
     model_config: RigModelConfig,
     link: &mut dyn RigLink,
 ) -> Result<HilOutcome, HilError> {
-    run_jump_observed(params, spec, model_config, link, &mut |_| {})
+    run_jump_observed(params, spec, model_config, link, None)
 }
 
 /// One control period as a live view sees it: the plant's row, the commanded motor
@@ -320,13 +320,14 @@ pub struct PeriodView {
     pub started: bool,
 }
 
-/// [`run_jump`], calling `observe` after every control period (a live view; pacing).
+/// [`run_jump`], calling `observe` after every control period (a live view; pacing). Without
+/// an observer nothing is built for it: the loop costs what [`run_jump`]'s always did.
 pub fn run_jump_observed(
     params: &Params,
     spec: &HilSpec,
     model_config: RigModelConfig,
     link: &mut dyn RigLink,
-    observe: &mut dyn FnMut(&PeriodView),
+    mut observe: Option<&mut dyn FnMut(&PeriodView)>,
 ) -> Result<HilOutcome, HilError> {
     let plan = RunPlan::new(params, spec, model_config.tick_hz)?;
     let opts = SimOptions {
@@ -347,7 +348,7 @@ pub fn run_jump_observed(
     let mut run = LockstepRun::new(&plan);
     loop {
         let answer = run.period(&plan, &mut rig, link)?;
-        if let Some(row) = run.trace.last() {
+        if let (Some(observe), Some(row)) = (observe.as_deref_mut(), run.trace.last()) {
             let t = row.t_s.clamp(0.0, plan.trajectory.end_s());
             observe(&PeriodView {
                 row: *row,

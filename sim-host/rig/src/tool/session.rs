@@ -186,7 +186,7 @@ pub fn run_program(
     fixture: Option<&mut dyn Fixture>,
     program: &Program,
 ) -> Result<RunRecord, LinkError> {
-    run_program_observed(link, fixture, program, &mut |_| {})
+    run_program_observed(link, fixture, program, None)
 }
 
 /// [`run_program`], calling `observe` after every lockstep period or status poll.
@@ -194,13 +194,19 @@ pub fn run_program_observed(
     link: &mut dyn RigLink,
     fixture: Option<&mut dyn Fixture>,
     program: &Program,
-    observe: &mut dyn FnMut(&ProgramView<'_>),
+    observe: Option<&mut dyn FnMut(&ProgramView<'_>)>,
 ) -> Result<RunRecord, LinkError> {
     let wall = Instant::now();
+    let mut nothing = |_: &ProgramView<'_>| {};
+    let watched = observe.is_some();
+    let observe: &mut dyn FnMut(&ProgramView<'_>) = match observe {
+        Some(o) => o,
+        None => &mut nothing,
+    };
     bring_to_idle(link)?;
     link.command(&Command::Configure(program.config))?;
     let mut record = match fixture {
-        Some(f) => lockstep(link, f, program, observe)?,
+        Some(f) => lockstep(link, f, program, watched, observe)?,
         None => free_running(link, program, observe)?,
     };
     record.report = link.finish()?;
@@ -216,6 +222,7 @@ fn lockstep(
     link: &mut dyn RigLink,
     fixture: &mut dyn Fixture,
     program: &Program,
+    watched: bool,
     observe: &mut dyn FnMut(&ProgramView<'_>),
 ) -> Result<RunRecord, LinkError> {
     let hz = f64::from(program.tick_hz);
@@ -249,15 +256,18 @@ fn lockstep(
             link.command(&Command::Start)?;
         }
         let (a, sensor) = step(link, fixture)?;
-        observe(&ProgramView {
-            t_s: t(period),
-            state: a.state,
-            fault: a.fault,
-            actuator: Some(&a),
-            sensor: Some(&sensor),
-            plant: fixture.plant(),
-            started: period == settle,
-        });
+        // Without a view nothing is built for one.
+        if watched {
+            observe(&ProgramView {
+                t_s: t(period),
+                state: a.state,
+                fault: a.fault,
+                actuator: Some(&a),
+                sensor: Some(&sensor),
+                plant: fixture.plant(),
+                started: period == settle,
+            });
+        }
         period += 1;
         if stop_at.is_none() {
             if a.fault.is_some() {

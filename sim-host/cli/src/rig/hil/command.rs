@@ -195,7 +195,7 @@ fn one_run(
     params: &Params,
     spec: &HilSpec,
     model_config: RigModelConfig,
-    observe: &mut dyn FnMut(&PeriodView),
+    observe: Option<&mut dyn FnMut(&PeriodView)>,
 ) -> Result<HilOutcome, CliError> {
     let mut link = open_link(&a.link, &model_config, &a.firmware)?;
     run_jump_observed(params, spec, model_config, link.as_mut(), observe).map_err(|e| {
@@ -250,14 +250,14 @@ fn rig_model_config(a: &HilArgs) -> RigModelConfig {
 /// Run the jump `a` asks for through its link with `params` (resolved from `a.phi` and the
 /// overrides by [`resolve_params`]; `a.params` is not read here). Errors are the CLI's.
 pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
-    simulate_run_observed(a, params, &mut |_| {})
+    simulate_run_observed(a, params, None)
 }
 
 /// [`simulate_run`], calling `observe` after every control period.
 pub fn simulate_run_observed(
     a: &HilArgs,
     params: Params,
-    observe: &mut dyn FnMut(&PeriodView),
+    observe: Option<&mut dyn FnMut(&PeriodView)>,
 ) -> Result<HilRun, CliError> {
     let spec = spec_of(a);
     let model_config = rig_model_config(a);
@@ -354,7 +354,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         });
     }
     let result = match live.as_mut() {
-        Some(v) => simulate_run_observed(a, params, &mut |p| v.period(p)),
+        Some(v) => simulate_run_observed(a, params, Some(&mut |p| v.period(p))),
         None => simulate_run(a, params),
     };
     let run = match (result, live.take()) {
@@ -494,7 +494,7 @@ fn bench(
     let mut factors = Vec::new();
     let mut last = None;
     for _ in 0..n {
-        let o = one_run(a, params, spec, model_config, &mut |_| {})?;
+        let o = one_run(a, params, spec, model_config, None)?;
         factors.push((o.wall_time_s, o.realtime_factor));
         last = Some(o);
     }

@@ -323,15 +323,19 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
     }
     let p_cmd: Option<&dyn Fn(f64) -> f64> = None;
     let mpc_live = model_config.metres_per_count;
+    let watching = live.is_some();
+    let mut watch = |v: &sandjumper_rig::tool::session::ProgramView<'_>| {
+        if let Some(l) = live.as_mut() {
+            l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
+        }
+    };
+    let observe: Option<&mut dyn FnMut(&sandjumper_rig::tool::session::ProgramView<'_>)> =
+        if watching { Some(&mut watch) } else { None };
     let record = run_program_observed(
         link.as_mut(),
         fixture.as_mut().map(|f| f as &mut dyn Fixture),
         &program,
-        &mut |v| {
-            if let Some(l) = live.as_mut() {
-                l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
-            }
-        },
+        observe,
     )
     .map_err(|e| link_failed(&name, "the slow intrusion", e))?;
 

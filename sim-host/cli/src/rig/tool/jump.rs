@@ -133,15 +133,19 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let p_cmd: Option<&dyn Fn(f64) -> f64> =
         Some(&|t: f64| traj.eval(t.clamp(0.0, traj.end_s())).position_m);
     let mpc_live = model_config.metres_per_count;
+    let watching = live.is_some();
+    let mut watch = |v: &sandjumper_rig::tool::session::ProgramView<'_>| {
+        if let Some(l) = live.as_mut() {
+            l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
+        }
+    };
+    let observe: Option<&mut dyn FnMut(&sandjumper_rig::tool::session::ProgramView<'_>)> =
+        if watching { Some(&mut watch) } else { None };
     let record = run_program_observed(
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
-        &mut |v| {
-            if let Some(l) = live.as_mut() {
-                l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
-            }
-        },
+        observe,
     )
     .map_err(|e| link_failed(&name, "the jump", e))?;
 
