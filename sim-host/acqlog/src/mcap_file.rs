@@ -41,11 +41,11 @@ use serde_json::json;
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
 
-/// How the chunks are compressed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How the chunks are compressed. Zstd and lz4 need the `compression` feature (on by default):
+/// without it they write plain chunks, and the default is plain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum McapCompression {
-    /// zstd (the default; Foxglove's writer's).
-    #[default]
+    /// zstd (the default with the `compression` feature; Foxglove's writer's).
     Zstd,
     /// lz4 (faster, larger).
     Lz4,
@@ -53,13 +53,29 @@ pub enum McapCompression {
     None,
 }
 
+impl Default for McapCompression {
+    fn default() -> Self {
+        if cfg!(feature = "compression") {
+            Self::Zstd
+        } else {
+            Self::None
+        }
+    }
+}
+
 impl McapCompression {
+    #[cfg(feature = "compression")]
     fn mcap(self) -> Option<mcap::Compression> {
         match self {
             Self::Zstd => Some(mcap::Compression::Zstd),
             Self::Lz4 => Some(mcap::Compression::Lz4),
             Self::None => None,
         }
+    }
+
+    #[cfg(not(feature = "compression"))]
+    fn mcap(self) -> Option<mcap::Compression> {
+        None
     }
 }
 
