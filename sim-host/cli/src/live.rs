@@ -5,7 +5,9 @@
 
 use std::time::{Duration, Instant};
 
-use sandjumper_live::{Event, LiveBus, LiveServer};
+#[cfg(feature = "live")]
+use sandjumper_live::LiveServer;
+use sandjumper_live::{Event, LiveBus};
 use sandjumper_output::CliError;
 use sandjumper_rig::hil::PeriodView;
 use sandjumper_rig::tool::session::ProgramView;
@@ -60,6 +62,7 @@ fn parse_linger(s: &str) -> Result<f64, String> {
 /// A live view for one command: its bus and server, and the run's pacing.
 pub struct LiveView {
     bus: LiveBus,
+    #[cfg(feature = "live")]
     server: LiveServer,
     pace: f64,
     linger: Option<f64>,
@@ -74,6 +77,21 @@ impl LiveView {
         let Some(addr) = &a.live else {
             return Ok(None);
         };
+        #[cfg(not(feature = "live"))]
+        {
+            let _ = channels;
+            Err(CliError::input(format!(
+                "--live {addr}: this build has no live view (built with --no-default-features; build sandjumper-cli with its default features)"
+            )))
+        }
+        #[cfg(feature = "live")]
+        {
+            Self::start_server(a, addr, channels).map(Some)
+        }
+    }
+
+    #[cfg(feature = "live")]
+    fn start_server(a: &LiveArgs, addr: &str, channels: &[&str]) -> Result<Self, CliError> {
         let (bus, feed) = sandjumper_live::channel(channels);
         let server = sandjumper_live::serve_with_foxglove(addr, feed, a.foxglove.as_deref())
             .map_err(CliError::input)?;
@@ -86,7 +104,7 @@ impl LiveView {
             let host = fg.rsplit_once(':').map_or(fg.as_str(), |(h, _)| h);
             eprintln!("foxglove: ws://{host}:{port} (Foxglove, or Lichtblick after 1.21)");
         }
-        Ok(Some(Self {
+        Ok(Self {
             bus,
             server,
             pace: a.pace.unwrap_or(1.0),
@@ -94,7 +112,7 @@ impl LiveView {
             wall_start: None,
             last_state: None,
             fault_sent: false,
-        }))
+        })
     }
 
     /// The bus, for events of the command's own.
@@ -212,6 +230,12 @@ impl LiveView {
     pub fn finish(mut self, t_s: f64, outcome: String, ok: bool) -> bool {
         self.bus.event(Event::RunEnded { t_s, outcome, ok });
         self.bus.flush_now();
+        self.wait_on_the_page()
+    }
+
+    /// Keep the page up until Ctrl-C or the linger; whether Ctrl-C ended it.
+    #[cfg(feature = "live")]
+    fn wait_on_the_page(&self) -> bool {
         // The page's state has the end before the command says so (the server reads the bus
         // every 25 ms).
         let asked = Instant::now();
@@ -225,6 +249,12 @@ impl LiveView {
             None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
         }
         self.server.wait(self.linger.map(Duration::from_secs_f64))
+    }
+
+    #[cfg(not(feature = "live"))]
+    fn wait_on_the_page(&self) -> bool {
+        let _ = self.linger; // no page to keep up
+        false
     }
 }
 

@@ -1,5 +1,7 @@
 //! `--live ADDR`: the page, `state.json` and the event stream of a jump while it runs and
-//! after it ends, from a real `sandjumper hil` process over HTTP.
+//! after it ends, from a real `sandjumper hil` process over HTTP (the `live` feature, on by
+//! default).
+#![cfg(feature = "live")]
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;

@@ -13,8 +13,10 @@
 pub mod bus;
 #[cfg(feature = "foxglove")]
 pub mod foxglove_bridge;
+#[cfg(feature = "server")]
 pub mod server;
 pub mod state;
 
 pub use bus::{CampaignRecord, Event, LiveBus, LiveFeed, channel};
+#[cfg(feature = "server")]
 pub use server::{FOXGLOVE, LiveServer, serve, serve_with_foxglove};
