@@ -5,10 +5,10 @@
 //! (`.ci/run` installs Debian's `chromium`).
 #![cfg(feature = "live")]
 
-use std::io::{BufRead, BufReader};
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
 use std::time::Duration;
 
 fn chromium() -> Option<PathBuf> {
@@ -35,20 +35,9 @@ fn chromium() -> Option<PathBuf> {
 /// Start `sandjumper args` with `--live 127.0.0.1:0 --linger 60`; returns the child and the
 /// page's address once the run has ended.
 fn run_live(args: &[&str]) -> (Child, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .args(["--live", "127.0.0.1:0", "--linger", "60"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let err = child.stderr.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(err).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
+    let mut all: Vec<&str> = args.to_vec();
+    all.extend(["--live", "127.0.0.1:0", "--linger", "60"]);
+    let (child, rx) = common::start_with_stderr_lines(&all, Stdio::null());
     let mut url = None;
     loop {
         let line = rx

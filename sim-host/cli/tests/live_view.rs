@@ -3,7 +3,9 @@
 //! default).
 #![cfg(feature = "live")]
 
-use std::io::{BufRead, BufReader, Read, Write};
+mod common;
+
+use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -28,20 +30,7 @@ fn get(addr: &str, path: &str) -> (String, String, String) {
 
 /// Start `sandjumper args`, returning the child and its stderr lines as they come.
 fn start(args: &[&str]) -> (Child, mpsc::Receiver<String>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let err = child.stderr.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(err).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    (child, rx)
+    common::start_with_stderr_lines(args, Stdio::piped())
 }
 
 fn wait_for(rx: &mpsc::Receiver<String>, what: &str) -> String {

@@ -90,3 +90,26 @@ pub fn workspace() -> PathBuf {
         .canonicalize()
         .expect("sim-host/cli sits in the workspace")
 }
+
+/// Start `sandjumper args` with stdout as `stdout` says, returning the child and its stderr
+/// lines as they come (read on a thread of their own).
+pub fn start_with_stderr_lines(
+    args: &[&str],
+    stdout: std::process::Stdio,
+) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {
+    use std::io::{BufRead, BufReader};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args)
+        .stdout(stdout)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the sandjumper binary starts");
+    let err = child.stderr.take().expect("stderr is piped");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    (child, rx)
+}
