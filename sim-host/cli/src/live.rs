@@ -26,8 +26,9 @@ pub const JUMP_CHANNELS: [&str; 6] = [
 /// The options every `--live` command shares.
 #[derive(Debug, Clone, clap::Args)]
 pub struct LiveArgs {
-    /// Serve a live view of the run at http://ADDR/ (e.g. 127.0.0.1:8080; port 0: any free
-    /// port), the same state at /state.json. The URL is printed first, on stderr.
+    /// Serve a live view of the run at http://ADDR/ (e.g. 127.0.0.1:8080, or 8080 for
+    /// 127.0.0.1:8080; port 0: any free port), the same state at /state.json. The URL is
+    /// printed first, on stderr.
     #[arg(long, value_name = "ADDR")]
     pub live: Option<String>,
     /// With --live, run a simulated link at this multiple of real time (default 1; 0: as

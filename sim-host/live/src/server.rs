@@ -91,7 +91,8 @@ impl Drop for LiveServer {
     }
 }
 
-/// Serve `feed` at `addr` (port 0: any free port). Fails (a message saying what and where)
+/// Serve `feed` at `addr` (HOST:PORT, or a bare PORT on 127.0.0.1; port 0: any free port).
+/// Fails (a message saying what and where)
 /// if the address cannot be bound.
 pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
     serve_with_foxglove(addr, feed, None)
@@ -107,7 +108,13 @@ pub fn serve_with_foxglove(
     feed: LiveFeed,
     foxglove: Option<&str>,
 ) -> Result<LiveServer, String> {
-    let sock: SocketAddr = addr.parse().map_err(|e| {
+    // A bare port binds the loopback interface (the page has no login).
+    let with_host = if addr.parse::<u16>().is_ok() {
+        format!("127.0.0.1:{addr}")
+    } else {
+        addr.to_string()
+    };
+    let sock: SocketAddr = with_host.parse().map_err(|e| {
         format!("--live {addr}: not an address HOST:PORT ({e}; e.g. 127.0.0.1:8080)")
     })?;
     let std_listener = std::net::TcpListener::bind(sock)

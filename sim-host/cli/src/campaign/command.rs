@@ -552,11 +552,8 @@ fn drive(
         .map_err(CliError::input)?;
         let failed = row.status == "bed-not-prepared";
         let line = point_line(&row, total);
-        if bar.is_hidden() {
-            println!("{line}");
-        } else {
-            bar.println(line);
-        }
+        // On stdout, above the progress bar when one is drawn.
+        bar.suspend(|| println!("{line}"));
         if let Some(v) = live.as_deref_mut() {
             v.bus()
                 .event(sandjumper_live::Event::Campaign(point_record(&row, false)));
