@@ -229,8 +229,9 @@ impl LiveView {
     /// The run is over: say how, send what is left, keep the page up until Ctrl-C or the
     /// linger time; returns whether Ctrl-C ended it.
     pub fn finish(mut self, t_s: f64, outcome: String, ok: bool) -> bool {
+        // The last samples first (waiting for the lock is free now), then the end.
+        self.bus.flush_and_wait();
         self.bus.event(Event::RunEnded { t_s, outcome, ok });
-        self.bus.flush_now();
         self.wait_on_the_page()
     }
 

@@ -127,6 +127,82 @@ fn text_of(dom: &str, id: &str) -> String {
     rest[start..end].to_string()
 }
 
+/// The page opened while a slowed sil jump runs: what it shows at the end came through the
+/// event stream (the snapshot it loaded first was taken early in the run).
+#[test]
+fn a_browser_receives_a_running_jump_through_the_stream() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let (mut child, rx) = common::start_with_stderr_lines(
+        &[
+            "hil",
+            "--kind",
+            "delayed",
+            "--tau",
+            "0.1",
+            "--freq",
+            "10",
+            "--live",
+            "127.0.0.1:0",
+            "--pace",
+            "0.25",
+            "--linger",
+            "3",
+        ],
+        Stdio::null(),
+    );
+    let first = rx.recv_timeout(Duration::from_secs(60)).unwrap();
+    let url = first
+        .strip_prefix("live view: ")
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+    // Chromium keeps the page until the server closes (after the linger), then dumps it.
+    let profile = tempfile::tempdir().unwrap();
+    let out = Command::new(&browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--virtual-time-budget=60000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg("--dump-dom")
+        .arg(&url)
+        .output()
+        .unwrap();
+    let _ = child.kill();
+    let _ = child.wait();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let status = text_of(&dom, "status");
+    assert!(status.contains("ENDED: jump height"), "{status}");
+    // The chart's points (the page sets them on every redraw): every 2 ms bin's two points
+    // of the whole run (10 samples a point), most of them streamed.
+    let samples: usize = status
+        .split(" samples")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
+    let points: usize = dom
+        .split("data-points=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
+    assert!(
+        samples > 5_000 && points >= samples / 10 - 5,
+        "{points} points on the chart; {status}"
+    );
+    assert!(dom.contains("title=\"Done from"), "the strip");
+}
+
 #[test]
 fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
     let Some(browser) = chromium() else {
@@ -136,6 +212,7 @@ fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
     let (mut jump, url) = run_live(&["hil", "--kind", "delayed", "--tau", "0.1", "--freq", "10"]);
     let dom = page(&browser, &url, &shots().join("jump.png"));
     let _ = jump.kill();
+    let _ = jump.wait();
     let status = text_of(&dom, "status");
     assert!(status.contains("ENDED: jump height"), "{status}");
     let samples: u64 = status
@@ -168,6 +245,7 @@ fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
     ]);
     let dom = page(&browser, &url, &shots().join("campaign.png"));
     let _ = camp.kill();
+    let _ = camp.wait();
     assert!(text_of(&dom, "c-done").contains("done 8 / 8"), "{dom}");
     assert!(text_of(&dom, "c-failed").contains("failed 0"));
     assert!(dom.matches("<td>").count() >= 8 * 5, "the table of points");
@@ -183,7 +261,11 @@ fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
     ]);
     let dom = page(&browser, &url, &shots().join("fault.png"));
     let _ = fault.kill();
+    let _ = fault.wait();
     let banner = text_of(&dom, "banner");
     assert!(banner.starts_with("FAULT: "), "{banner}");
-    assert!(dom.contains("Faulted"), "the strip shows the Faulted state");
+    assert!(
+        dom.contains("title=\"Faulted from"),
+        "the strip shows the Faulted state"
+    );
 }

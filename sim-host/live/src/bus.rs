@@ -228,6 +228,30 @@ impl LiveBus {
         self.retry_pending();
     }
 
+    /// Send what is gathered now and wait for the queue's lock if the view holds it: for the
+    /// run's end, when waiting costs the run nothing.
+    pub fn flush_and_wait(&mut self) {
+        self.flush_now();
+        if self.pending.is_empty() {
+            return;
+        }
+        let mut q = match self.queue.batches.lock() {
+            Ok(q) => q,
+            Err(p) => p.into_inner(),
+        };
+        while let Some(b) = self.pending.pop_front() {
+            if q.len() >= QUEUE_BATCHES
+                && let Some(old) = q.pop_front()
+            {
+                self.queue
+                    .dropped_samples
+                    .fetch_add(old.samples, Ordering::Relaxed);
+                self.queue.dropped_batches.fetch_add(1, Ordering::Relaxed);
+            }
+            q.push_back(b);
+        }
+    }
+
     /// Put the bin's envelope into the batch: two points, each channel's extremes in their
     /// order in time (both at the bin's quarter and three quarters).
     fn close_bin(&mut self) {
