@@ -68,23 +68,39 @@ fn page(browser: &Path, url: &str, shot: &Path) -> String {
     panic!("the page at {url} never showed the run's end");
 }
 
+/// Headless Chromium as these machines run it (no sandbox as root, nothing fetched from the
+/// network by the browser itself).
+const HEADLESS: [&str; 8] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+];
+
+/// The sample count on the page's status line.
+fn samples_in(status: &str) -> u64 {
+    status
+        .split(" samples")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0)
+}
+
 fn page_once(browser: &Path, url: &str, shot: &Path) -> String {
     let profile = tempfile::tempdir().unwrap();
-    let flags = [
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--window-size=1400,1000",
-        "--timeout=3000",
-    ];
+    let flags: Vec<&str> = HEADLESS
+        .iter()
+        .copied()
+        .chain(["--window-size=1400,1000", "--timeout=3000"])
+        .collect();
     let user = format!("--user-data-dir={}", profile.path().display());
     let out = Command::new(browser)
-        .args(flags)
+        .args(&flags)
         .arg(&user)
         .arg("--dump-dom")
         .arg(url)
@@ -104,7 +120,7 @@ fn page_once(browser: &Path, url: &str, shot: &Path) -> String {
     );
     std::fs::create_dir_all(shot.parent().unwrap()).unwrap();
     let _ = Command::new(browser)
-        .args(flags)
+        .args(&flags)
         .arg(&user)
         .arg(format!("--screenshot={}", shot.display()))
         .arg(url)
@@ -161,17 +177,8 @@ fn a_browser_receives_a_running_jump_through_the_stream() {
     // Chromium keeps the page until the server closes (after the linger), then dumps it.
     let profile = tempfile::tempdir().unwrap();
     let out = Command::new(&browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--virtual-time-budget=60000",
-        ])
+        .args(HEADLESS)
+        .arg("--virtual-time-budget=60000")
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .arg("--dump-dom")
         .arg(&url)
@@ -184,12 +191,7 @@ fn a_browser_receives_a_running_jump_through_the_stream() {
     assert!(status.contains("ENDED: jump height"), "{status}");
     // The chart's points (the page sets them on every redraw): every 2 ms bin's two points
     // of the whole run (10 samples a point), most of them streamed.
-    let samples: usize = status
-        .split(" samples")
-        .next()
-        .and_then(|s| s.rsplit(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or(0);
+    let samples = samples_in(&status) as usize;
     let points: usize = dom
         .split("data-points=\"")
         .nth(1)
@@ -215,12 +217,7 @@ fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
     let _ = jump.wait();
     let status = text_of(&dom, "status");
     assert!(status.contains("ENDED: jump height"), "{status}");
-    let samples: u64 = status
-        .split(" samples")
-        .next()
-        .and_then(|s| s.rsplit(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or(0);
+    let samples = samples_in(&status);
     assert!(samples > 5_000, "{status}");
     assert!(dom.contains("<canvas"), "the charts are drawn");
     assert!(
