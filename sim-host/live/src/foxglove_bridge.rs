@@ -110,7 +110,7 @@ impl FoxgloveBridge {
                             .log(serde_json::Value::Object(m).to_string().as_bytes());
                     }
                 }
-                Update::Event { event } => {
+                Update::Event { event, .. } => {
                     let text = serde_json::to_string(event).unwrap_or_default();
                     self.events.log(text.as_bytes());
                     match event {
