@@ -116,6 +116,11 @@ impl LiveView {
         })
     }
 
+    /// Do not pace this run (a real board keeps its own time).
+    pub fn unpaced(&mut self) {
+        self.pace = 0.0;
+    }
+
     /// The bus, for events of the command's own.
     pub fn bus(&mut self) -> &mut LiveBus {
         &mut self.bus

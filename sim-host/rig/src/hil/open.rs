@@ -28,6 +28,18 @@ pub enum LinkArg {
     Serial(String),
 }
 
+impl std::fmt::Display for LinkArg {
+    /// The link as the command line names it (`sil`, `pil`, `f407`, `serial:PATH`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Sil => write!(f, "sil"),
+            Self::Pil => write!(f, "pil"),
+            Self::F407 => write!(f, "f407"),
+            Self::Serial(p) => write!(f, "serial:{p}"),
+        }
+    }
+}
+
 /// Parse a link as named on the command line: `sil`, `pil` or `serial:PATH`.
 pub fn parse_link(s: &str) -> Result<LinkArg, String> {
     match s {

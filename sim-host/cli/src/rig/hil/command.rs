@@ -340,10 +340,14 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     let camera = read_camera(a.camera.as_deref())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    if let (Some(v), LinkArg::Serial(_)) = (live.as_mut(), &a.link) {
+        // A board runs at its own pace.
+        v.unpaced();
+    }
     if let Some(v) = live.as_mut() {
         v.bus().event(sandjumper_live::Event::RunStarted {
             title: format!(
-                "hil --link {:?}: {} at {} Hz, {}, phi {}",
+                "hil --link {}: {} at {} Hz, {}, phi {}",
                 a.link,
                 kind_name(spec.kind),
                 spec.freq_hz,
