@@ -24,8 +24,8 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, samples_log, start_index,
     write_run_files,
 };
-use super::session::{Fixture, Program, run_program_observed};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed};
+use super::session::{Fixture, Program};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_core::{Gains, JumpConfig, SampleRecord, SlowIntrusion, TrajectorySpec};
 use sandjumper_model::params::Params;
@@ -314,30 +314,16 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         }),
     )?;
     let name = link.name();
-    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
-    if let Some(v) = live.as_mut() {
-        v.bus().event(sandjumper_live::Event::RunStarted {
-            title: format!("rig {} on {name}", "intrusion"),
-            t_s: 0.0,
-        });
-    }
-    let p_cmd: Option<&dyn Fn(f64) -> f64> = None;
-    let mpc_live = model_config.metres_per_count;
-    let watching = live.is_some();
-    let mut watch = |v: &sandjumper_rig::tool::session::ProgramView<'_>| {
-        if let Some(l) = live.as_mut() {
-            l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
-        }
-    };
-    let observe: Option<&mut dyn FnMut(&sandjumper_rig::tool::session::ProgramView<'_>)> =
-        if watching { Some(&mut watch) } else { None };
-    let record = run_program_observed(
+    let (run_result, live) = run_program_live(
+        &a.live,
+        "intrusion",
         link.as_mut(),
         fixture.as_mut().map(|f| f as &mut dyn Fixture),
         &program,
-        observe,
-    )
-    .map_err(|e| link_failed(&name, "the slow intrusion", e))?;
+        None,
+        model_config.metres_per_count,
+    )?;
+    let record = run_result.map_err(|e| link_failed(&name, "the slow intrusion", e))?;
 
     let mpc = model_config.metres_per_count;
     let Some(start) = start_index(&record.samples) else {

@@ -10,8 +10,8 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
     samples_log, write_run_files,
 };
-use super::session::{Fixture, Program, run_program_observed};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed};
+use super::session::{Fixture, Program};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_model::trajectory::kind_name;
@@ -123,31 +123,16 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         }),
     )?;
     let name = link.name();
-    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
-    if let Some(v) = live.as_mut() {
-        v.bus().event(sandjumper_live::Event::RunStarted {
-            title: format!("rig {} on {name}", "jump"),
-            t_s: 0.0,
-        });
-    }
-    let p_cmd: Option<&dyn Fn(f64) -> f64> =
-        Some(&|t: f64| traj.eval(t.clamp(0.0, traj.end_s())).position_m);
-    let mpc_live = model_config.metres_per_count;
-    let watching = live.is_some();
-    let mut watch = |v: &sandjumper_rig::tool::session::ProgramView<'_>| {
-        if let Some(l) = live.as_mut() {
-            l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
-        }
-    };
-    let observe: Option<&mut dyn FnMut(&sandjumper_rig::tool::session::ProgramView<'_>)> =
-        if watching { Some(&mut watch) } else { None };
-    let record = run_program_observed(
+    let (run_result, live) = run_program_live(
+        &a.live,
+        "jump",
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
-        observe,
-    )
-    .map_err(|e| link_failed(&name, "the jump", e))?;
+        Some(&|t: f64| traj.eval(t.clamp(0.0, traj.end_s())).position_m),
+        model_config.metres_per_count,
+    )?;
+    let record = run_result.map_err(|e| link_failed(&name, "the jump", e))?;
 
     let mpc = model_config.metres_per_count;
     let phi = params.sand.packing_fraction;

@@ -24,8 +24,8 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
     samples_log, start_index, write_run_files,
 };
-use super::session::{Fixture, Program, bring_to_idle, query_status, run_program_observed};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed};
+use super::session::{Fixture, Program, bring_to_idle, query_status};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_core::command::REPLAY_CHUNK;
 use sandjumper_core::replay::{REPLAY_CAPACITY, replay_checksum};
@@ -390,30 +390,16 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         tail_s: 0.2,
         max_run_s: duration + 5.0,
     };
-    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
-    if let Some(v) = live.as_mut() {
-        v.bus().event(sandjumper_live::Event::RunStarted {
-            title: format!("rig {} on {name}", "replay"),
-            t_s: 0.0,
-        });
-    }
-    let p_cmd: Option<&dyn Fn(f64) -> f64> = None;
-    let mpc_live = model_config.metres_per_count;
-    let watching = live.is_some();
-    let mut watch = |v: &sandjumper_rig::tool::session::ProgramView<'_>| {
-        if let Some(l) = live.as_mut() {
-            l.program(v, p_cmd.map(|f| f(v.t_s)), mpc_live);
-        }
-    };
-    let observe: Option<&mut dyn FnMut(&sandjumper_rig::tool::session::ProgramView<'_>)> =
-        if watching { Some(&mut watch) } else { None };
-    let run = run_program_observed(
+    let (run_result, live) = run_program_live(
+        &a.live,
+        "replay",
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
-        observe,
-    )
-    .map_err(|e| link_failed(&name, "the replay", e))?;
+        None,
+        model_config.metres_per_count,
+    )?;
+    let run = run_result.map_err(|e| link_failed(&name, "the replay", e))?;
 
     let mpc = model_config.metres_per_count;
     let (mut worst, mut sum2, mut n) = (0.0f64, 0.0f64, 0usize);
