@@ -33,6 +33,15 @@ fn start(args: &[&str]) -> (Child, mpsc::Receiver<String>) {
     common::start_with_stderr_lines(args, Stdio::piped())
 }
 
+/// HOST:PORT of the `live view: http://HOST:PORT/ ...` line.
+fn addr_of(line: &str) -> String {
+    line.trim_start_matches("live view: http://")
+        .split('/')
+        .next()
+        .unwrap()
+        .to_string()
+}
+
 fn wait_for(rx: &mpsc::Receiver<String>, what: &str) -> String {
     let mut seen = String::new();
     loop {
@@ -61,12 +70,7 @@ fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
     // The URL comes first.
     let first = rx.recv_timeout(Duration::from_secs(60)).unwrap();
     assert!(first.starts_with("live view: http://127.0.0.1:"), "{first}");
-    let addr = first
-        .trim_start_matches("live view: http://")
-        .split('/')
-        .next()
-        .unwrap()
-        .to_string();
+    let addr = addr_of(&first);
     // The page: the chart library served by the binary itself, nothing from the internet.
     let (status, _, page) = get(&addr, "/");
     assert!(status.contains("200"), "{status}");
@@ -222,12 +226,7 @@ fn a_resumed_campaign_shows_its_history_then_each_point_live_and_on_the_terminal
         "3",
     ]);
     let url = wait_for(&rx, "live view: http://");
-    let addr = url
-        .trim_start_matches("live view: http://")
-        .split('/')
-        .next()
-        .unwrap()
-        .to_string();
+    let addr = addr_of(&url);
     wait_for(&rx, "the run has ended");
     let (_, _, body) = get(&addr, "/state.json");
     let st: serde_json::Value = serde_json::from_str(&body).unwrap();
@@ -281,12 +280,7 @@ fn rig_jump_is_watched_live_with_the_commanded_position() {
         "2",
     ]);
     let url = wait_for(&rx, "live view: http://");
-    let addr = url
-        .trim_start_matches("live view: http://")
-        .split('/')
-        .next()
-        .unwrap()
-        .to_string();
+    let addr = addr_of(&url);
     wait_for(&rx, "the run has ended");
     let (_, _, body) = get(&addr, "/state.json");
     let st: serde_json::Value = serde_json::from_str(&body).unwrap();

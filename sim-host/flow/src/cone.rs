@@ -237,6 +237,17 @@ mod tests {
         f
     }
 
+    /// The samples of `(field, foot bottom)` pairs.
+    fn samples_of(fields: &[(Vec<f64>, f64)]) -> Vec<Sample<'_>> {
+        fields
+            .iter()
+            .map(|(f, foot)| Sample {
+                shear_rate: f,
+                foot_bottom_m: *foot,
+            })
+            .collect()
+    }
+
     #[test]
     fn the_bands_of_a_60_and_a_45_degree_cone_give_their_angles() {
         let xs: Vec<f64> = (-60..=60).map(|i| i as f64 * 1e-3).collect();
@@ -246,13 +257,7 @@ mod tests {
                 .iter()
                 .map(|&foot| (field(&xs, &hs, 0.03, deg, foot), foot))
                 .collect();
-            let samples: Vec<Sample<'_>> = fields
-                .iter()
-                .map(|(f, foot)| Sample {
-                    shear_rate: f,
-                    foot_bottom_m: *foot,
-                })
-                .collect();
+            let samples = samples_of(&fields);
             let c = shear_band_cone(&samples, &xs, &hs, 0.03).unwrap();
             assert!((c.angle_deg - deg).abs() < 2.0, "{deg}: {c:?}");
             let apex = 0.03 * deg.to_radians().tan();
@@ -272,13 +277,7 @@ mod tests {
         // One empty cell near the right band, 10 mm below the first sample's foot.
         let (j, i) = (14, 80);
         fields[0].0[j * xs.len() + i] = f64::NAN;
-        let samples: Vec<Sample<'_>> = fields
-            .iter()
-            .map(|(f, foot)| Sample {
-                shear_rate: f,
-                foot_bottom_m: *foot,
-            })
-            .collect();
+        let samples = samples_of(&fields);
         let c = shear_band_cone(&samples, &xs, &hs, 0.03).unwrap();
         assert!(c.rows.len() > 40, "{} rows", c.rows.len());
         assert!((c.angle_deg - 60.0).abs() < 2.0, "{c:?}");
