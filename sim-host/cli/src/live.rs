@@ -68,7 +68,7 @@ pub struct LiveView {
     pace: f64,
     linger: Option<f64>,
     wall_start: Option<(Instant, f64)>,
-    last_state: Option<String>,
+    last_state: Option<sandjumper_core::RigState>,
     fault_sent: bool,
 }
 
@@ -137,7 +137,7 @@ impl LiveView {
             });
         }
         if let Some(st) = v.state {
-            self.state_and_fault(t, format!("{st:?}"), v.fault.map(|f| format!("{f:?}")));
+            self.state_and_fault(t, st, v.fault);
         }
         self.bus.sample(
             t,
@@ -165,11 +165,7 @@ impl LiveView {
                 phase: "start".into(),
             });
         }
-        self.state_and_fault(
-            t,
-            format!("{:?}", v.state),
-            v.fault.map(|f| format!("{f:?}")),
-        );
+        self.state_and_fault(t, v.state, v.fault);
         let Some(a) = v.actuator else {
             return;
         };
@@ -194,10 +190,16 @@ impl LiveView {
         self.keep_pace(t);
     }
 
-    /// Events for a state (on change) and the first fault.
-    fn state_and_fault(&mut self, t: f64, name: String, fault: Option<String>) {
-        if self.last_state.as_deref() != Some(&name) {
-            if name == "Done" {
+    /// Events for a state (on change) and the first fault; names are formatted only then,
+    /// not every control period.
+    fn state_and_fault(
+        &mut self,
+        t: f64,
+        state: sandjumper_core::RigState,
+        fault: Option<sandjumper_core::fault::FaultCode>,
+    ) {
+        if self.last_state != Some(state) {
+            if state == sandjumper_core::RigState::Done {
                 self.bus.event(Event::Jump {
                     t_s: t,
                     phase: "end".into(),
@@ -205,15 +207,18 @@ impl LiveView {
             }
             self.bus.event(Event::State {
                 t_s: t,
-                state: name.clone(),
+                state: format!("{state:?}"),
             });
-            self.last_state = Some(name);
+            self.last_state = Some(state);
         }
         if let Some(f) = fault
             && !self.fault_sent
         {
             self.fault_sent = true;
-            self.bus.event(Event::Fault { t_s: t, fault: f });
+            self.bus.event(Event::Fault {
+                t_s: t,
+                fault: format!("{f:?}"),
+            });
         }
     }
 
