@@ -22,5 +22,6 @@ pub mod dem;
 pub mod flow;
 pub mod imaging;
 pub mod live;
+pub mod optimize;
 pub mod rig;
 pub mod study;

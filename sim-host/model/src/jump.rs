@@ -281,6 +281,9 @@ impl<S: Stroke> Actuation<4> for Kinematic<S> {
     fn motor_position(&self, t: f64, _y: &Vector4<f64>) -> f64 {
         self.eval(t).position_m
     }
+    fn motor_velocity(&self, t: f64, _y: &Vector4<f64>) -> f64 {
+        self.eval(t).velocity_m_s
+    }
     fn motor_force(&self, robot: &Robot, t: f64, _y: &Vector4<f64>, f_s: f64) -> f64 {
         // F_m = m_m (x_r'' + p'' + g), the motor's own acceleration being x_r'' + p''. At a
         // step's end, p'' is the last stage's.
@@ -404,7 +407,18 @@ pub fn simulate_jump(
         });
     }
     let stroke = sine_stroke(params, spec.kind, spec.freq_hz, spec.tau_s)?;
-    let mut sim = kinematic_at_rest(params, spec.model, stroke, opts)?;
+    simulate_stroke(params, spec.model, stroke, opts)
+}
+
+/// Simulate one kinematic jump driven by any prescribed `stroke` (a sampled table, an
+/// optimiser's candidate), from rest at the stroke's start, by the same run-length rules.
+pub fn simulate_stroke<S: Stroke>(
+    params: &Params,
+    model: ModelName,
+    stroke: S,
+    opts: &SimOptions,
+) -> Result<JumpOutcome, SimError> {
+    let mut sim = kinematic_at_rest(params, model, stroke, opts)?;
     run_kinematic(&mut sim)?;
     let summary = sim.summary();
     let mut warnings = Vec::new();

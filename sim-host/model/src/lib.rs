@@ -6,7 +6,7 @@
 //! (ground modes and their guards), [`events`] (touchdown, lift-off, apex), [`integrate`]
 //! (Dormand-Prince 5(4), dense output, event location) with [`fastmath`] (its approximations),
 //! [`simulation`] (the hybrid run loop), [`trajectory`] (the core's trajectories as a
-//! prescribed `p(t)`), [`jump`] (one kinematic jump, the paper's method), [`plant`] (the
+//! prescribed `p(t)`), [`table_stroke`] (a stroke sampled at a fixed rate, as the rig replays it), [`jump`] (one kinematic jump, the paper's method), [`plant`] (the
 //! force-driven plant the rig links drive), [`options`] and [`record`] (what a run is asked
 //! and what it records), [`error`] (why a run could not run).
 
@@ -52,6 +52,7 @@ pub mod plant;
 pub mod record;
 pub mod robot;
 pub mod simulation;
+pub mod table_stroke;
 pub mod trajectory;
 
 pub use error::SimError;

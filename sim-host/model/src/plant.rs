@@ -143,6 +143,9 @@ impl Actuation<6> for Forced {
     fn motor_position(&self, _t: f64, y: &Vector6<f64>) -> f64 {
         y[4] - y[0]
     }
+    fn motor_velocity(&self, _t: f64, y: &Vector6<f64>) -> f64 {
+        y[5] - y[1]
+    }
     fn motor_force(&self, _robot: &Robot, t: f64, _y: &Vector6<f64>, _f_s: f64) -> f64 {
         self.force_n(t)
     }

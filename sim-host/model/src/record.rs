@@ -27,6 +27,11 @@ pub struct JumpSummary {
     /// Largest |F_m| the prescribed p(t) implies (`m_m (x_r'' + p'' + g)`), N, sampled at
     /// every step end and event.
     pub peak_motor_force_n: f64,
+    /// Largest |F_m p'| (the motor's mechanical power), W, sampled as the force is.
+    pub peak_motor_power_w: f64,
+    /// The motor's positive mechanical work `integral max(F_m p', 0) dt`, J (trapezoids
+    /// between the same samples).
+    pub motor_work_j: f64,
     /// Mode switches and apexes, in time order.
     pub events: Vec<Event>,
     /// Number of right-hand-side evaluations.

@@ -43,6 +43,8 @@ pub trait Actuation<const N: usize> {
     ) -> f64;
     /// Motor position relative to the rod, `p = x_m - x_r`, m.
     fn motor_position(&self, t: f64, y: &SVector<f64, N>) -> f64;
+    /// Motor velocity relative to the rod, `p' = v_m - v_r`, m/s.
+    fn motor_velocity(&self, t: f64, y: &SVector<f64, N>) -> f64;
     /// Motor force F_m, N, at spring force `f_s`.
     fn motor_force(&self, robot: &Robot, t: f64, y: &SVector<f64, N>, f_s: f64) -> f64;
 }
@@ -58,6 +60,10 @@ struct Metrics {
     final_liftoff_s: Option<f64>,
     peak_added_mass_kg: f64,
     peak_motor_force_n: f64,
+    peak_motor_power_w: f64,
+    motor_work_j: f64,
+    /// Time and motor power at the last observation (the work's trapezoid), s and W.
+    last_power: Option<(f64, f64)>,
     mode_switches: u64,
 }
 
@@ -374,9 +380,19 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         let f_s = self.spring_force(y);
         let m_a = self.contact.added_mass(&self.sand, y[2]);
         let f_m = self.actuation.motor_force(&self.robot, t, y, f_s);
+        let power = f_m * self.actuation.motor_velocity(t, y);
         let m = &mut self.metrics;
         m.peak_added_mass_kg = m.peak_added_mass_kg.max(m_a);
         m.peak_motor_force_n = m.peak_motor_force_n.max(f_m.abs());
+        m.peak_motor_power_w = m.peak_motor_power_w.max(power.abs());
+        // Positive work only: the drive spends energy to push and to brake alike, and does
+        // not recover it (trapezoids between observations, each side clipped at 0).
+        if let Some((t0, p0)) = m.last_power
+            && t > t0
+        {
+            m.motor_work_j += 0.5 * (t - t0) * (p0.max(0.0) + power.max(0.0));
+        }
+        m.last_power = Some((t, power));
     }
 
     /// [`observe`](Self::observe) the current state.
@@ -442,6 +458,8 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             apex_time_s: copy.best_time_s,
             final_apex_time_s: copy.final_time_s,
             peak_motor_force_n: copy.peak_motor_force_n,
+            peak_motor_power_w: copy.peak_motor_power_w,
+            motor_work_j: copy.motor_work_j,
             events: self.events.clone(),
             rhs_evaluations: self.dp.rhs_evaluations,
             steps_accepted: self.dp.accepted,

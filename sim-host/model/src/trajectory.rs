@@ -43,8 +43,8 @@ pub trait Stroke {
 }
 
 /// One smooth piece of a stroke: on `[start_s, end_s)`,
-/// `p(t) = amplitude_m cos(angular_freq_rad_s (t - phase_origin_s))`, a hold at `amplitude_m`
-/// when the angular frequency is 0.
+/// `p(t) = offset_m + amplitude_m cos(angular_freq_rad_s (t - phase_origin_s))`, a hold at
+/// `offset_m + amplitude_m` when the angular frequency is 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CosinePiece {
     /// Start of the piece (included), s.
@@ -57,6 +57,8 @@ pub struct CosinePiece {
     pub angular_freq_rad_s: f64,
     /// Time at which the cosine's phase is 0, s.
     pub phase_origin_s: f64,
+    /// Centre of the cosine, m (0 for the paper's one-cycle sines).
+    pub offset_m: f64,
 }
 
 impl CosinePiece {
@@ -68,6 +70,7 @@ impl CosinePiece {
             amplitude_m: position_m,
             angular_freq_rad_s: 0.0,
             phase_origin_s: 0.0,
+            offset_m: 0.0,
         }
     }
 
@@ -89,13 +92,13 @@ impl CosinePiece {
         let (a, w) = (self.amplitude_m, self.angular_freq_rad_s);
         if w == 0.0 {
             return Kinematics {
-                position_m: a,
+                position_m: self.offset_m + a,
                 velocity_m_s: 0.0,
                 accel_m_s2: 0.0,
             };
         }
         Kinematics {
-            position_m: a * cos,
+            position_m: self.offset_m + a * cos,
             velocity_m_s: -a * w * sin,
             accel_m_s2: -a * w * w * cos,
         }
@@ -135,6 +138,7 @@ impl Stroke for SineJump {
             amplitude_m: a,
             angular_freq_rad_s: w,
             phase_origin_s,
+            offset_m: 0.0,
         };
         Some(if t_s.is_nan() || t_s < 0.0 {
             CosinePiece::hold(f64::NEG_INFINITY, 0.0, a)

@@ -5,4 +5,5 @@
 
 pub mod firmware_image;
 pub mod hil;
+pub mod stroke_table;
 pub mod tool;

@@ -46,6 +46,10 @@ pub enum Command {
     Fit(FitArgs),
     /// Regenerate the simulations behind the paper's figures: PNG, SVG and CSV.
     Figures(FiguresArgs),
+    /// Search for the stroke that jumps highest (or best by another objective) within the
+    /// rig's limits; compare it with the best single, stutter and delayed stutter; re-run
+    /// both through the controller; write stroke.csv for jump, hil and rig replay --stroke.
+    Optimize(Box<crate::optimize::command::OptimizeArgs>),
     /// Run one jump through the control loop against the simulated rig: the core in-process
     /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
     Hil(HilArgs),

@@ -55,6 +55,7 @@ pub fn execute(cli: Cli) -> Result<(), CliError> {
         args::Command::Params(a) => params_command::run(&a),
         args::Command::Fit(a) => crate::study::fit::command::run(&a),
         args::Command::Figures(a) => crate::study::figures::command::run(&a),
+        args::Command::Optimize(a) => crate::optimize::command::run(&a),
         args::Command::Hil(a) => crate::rig::hil::command::run(&a),
         args::Command::Replay(a) => crate::study::replay::command::run(&a),
         args::Command::Log(a) => crate::acqlog::command::run(&a),

@@ -5,6 +5,7 @@ pub use sandjumper_output::error::*;
 
 pub mod args;
 pub mod resolve;
+pub mod stroke;
 
 /// Print an analysis's JSON (`json`) or its human summary on stdout.
 pub fn print_analysed(analysed: &Analysed, json: bool) {

@@ -4,9 +4,10 @@ use serde::Serialize;
 
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
 use crate::command::resolve::{ParamsFile, resolve_params};
+use crate::command::stroke::checked_stroke;
 use clap::Args;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_model::jump::{JumpOutcome, JumpSpec, simulate_jump};
+use sandjumper_model::jump::{JumpOutcome, JumpSpec, simulate_jump, simulate_stroke};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::ModelName;
 use sandjumper_model::record::JumpSummary;
@@ -22,11 +23,17 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, Args)]
 pub struct JumpArgs {
     /// Jump kind.
-    #[arg(long, value_enum)]
-    pub kind: KindArg,
+    #[arg(long, value_enum, required_unless_present = "stroke")]
+    pub kind: Option<KindArg>,
     /// Forcing frequency f of the one-cycle sine, Hz.
-    #[arg(long, value_name = "HZ", value_parser = parse_freq, allow_negative_numbers = true)]
-    pub freq: f64,
+    #[arg(long, value_name = "HZ", value_parser = parse_freq, allow_negative_numbers = true,
+          required_unless_present = "stroke")]
+    pub freq: Option<f64>,
+    /// Drive the jump with a stroke file instead of a one-cycle sine (`t_s,p_m` at a fixed
+    /// rate, e.g. `sandjumper optimize`'s stroke.csv), interpolated as the controller replays
+    /// it. Refused when it fails the rig's feasibility check.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["kind", "freq", "tau"])]
+    pub stroke: Option<PathBuf>,
     /// Delay of the delayed stutter between its halves, s (required with --kind delayed).
     #[arg(long, value_name = "S", value_parser = parse_tau, required_if_eq("kind", "delayed"), allow_negative_numbers = true)]
     pub tau: Option<f64>,
@@ -58,10 +65,13 @@ pub struct JumpReport<'a> {
     pub model: &'static str,
     /// Packing fraction used (from the resolved parameters).
     pub phi: f64,
-    /// Forcing frequency, Hz.
-    pub freq_hz: f64,
-    /// Delay, s.
-    pub tau_s: f64,
+    /// Forcing frequency, Hz (null for a stroke file).
+    pub freq_hz: Option<f64>,
+    /// Delay, s (null for a stroke file).
+    pub tau_s: Option<f64>,
+    /// The stroke file run instead of a sine.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stroke: Option<String>,
     /// Integrator relative tolerance.
     pub rtol: f64,
     /// Metrics.
@@ -178,11 +188,11 @@ pub fn simulate_run(
     params: sandjumper_model::params::Params,
     record_series: bool,
 ) -> Result<JumpRun, CliError> {
-    let kind: JumpKind = a.kind.into();
+    let kind: JumpKind = a.kind.unwrap_or(KindArg::Single).into();
     let model: ModelName = a.model.into();
     let spec = JumpSpec {
         kind,
-        freq_hz: a.freq,
+        freq_hz: a.freq.unwrap_or(0.0),
         tau_s: a.tau.unwrap_or(0.0),
         model,
     };
@@ -191,14 +201,26 @@ pub fn simulate_run(
         record_series,
         ..SimOptions::default()
     };
-    let outcome = simulate_jump(&params, &spec, &opts)
-        .map_err(|e| CliError::input(format!("simulation of the jump failed: {e}")))?;
+    let outcome = match &a.stroke {
+        None => simulate_jump(&params, &spec, &opts),
+        Some(path) => {
+            let table = checked_stroke(path, &params)?;
+            let stroke = table.kinematic_stroke().map_err(CliError::input)?;
+            simulate_stroke(&params, model, stroke, &opts)
+        }
+    }
+    .map_err(|e| CliError::input(format!("simulation of the jump failed: {e}")))?;
     let report = JumpReport {
-        kind: kind_name(kind),
+        kind: if a.stroke.is_some() {
+            "stroke"
+        } else {
+            kind_name(kind)
+        },
         model: model.as_str(),
         phi: params.sand.packing_fraction,
-        freq_hz: spec.freq_hz,
-        tau_s: spec.tau_s,
+        freq_hz: a.stroke.is_none().then_some(spec.freq_hz),
+        tau_s: a.stroke.is_none().then_some(spec.tau_s),
+        stroke: a.stroke.as_ref().map(|p| p.display().to_string()),
         rtol: opts.rtol,
         summary: &outcome.summary,
         final_jump_note: outcome.summary.final_height_note(),
@@ -219,7 +241,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
     // Bad parameters are refused before an output directory is touched.
     let params = resolve_params(a.phi, file.as_ref())?;
-    if a.kind != KindArg::Delayed && a.tau.is_some_and(|t| t != 0.0) {
+    if a.kind != Some(KindArg::Delayed) && a.tau.is_some_and(|t| t != 0.0) {
         eprintln!(
             "warning: --tau {} is ignored: only --kind delayed has a delay",
             a.tau.unwrap_or(0.0)
@@ -234,7 +256,10 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         json,
     } = simulate_run(a, params, staged.is_some())?;
     let phi = params.sand.packing_fraction;
-    let title = jump_title(&spec, phi);
+    let title = match &a.stroke {
+        Some(path) => format!("stroke {}, model {}, φ = {phi}", path.display(), spec.model),
+        None => jump_title(&spec, phi),
+    };
     if let Some(staged) = staged {
         write_jump_files(&staged, &title, &params, &json, &outcome)?;
         let dir = staged.commit()?;

@@ -19,6 +19,10 @@ use sandjumper_model::jump::{AIRBORNE_TAIL_S, GROUNDED_TAIL_S, sine_stroke};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::{ModelName, Params, RobotParams};
 use sandjumper_model::record::JumpSummary;
+use sandjumper_model::table_stroke::TableStroke;
+use sandjumper_model::trajectory::Stroke;
+
+use crate::stroke_table::StrokeTable;
 
 /// Default relative tolerance of the plant in the loop: 1e-6 of a few centimetres is a few
 /// hundredths of the encoder's 1 um count, while the period-by-period restarts of the
@@ -70,6 +74,9 @@ pub struct HilSpec {
     pub freq_hz: f64,
     /// Delay of the delayed stutter, s.
     pub tau_s: f64,
+    /// A stroke table to run instead of the sine (`kind`, `freq_hz` and `tau_s` are then
+    /// unused): uploaded into the controller's replay table and replayed.
+    pub stroke: Option<StrokeTable>,
     /// Ground model of the plant.
     pub model: ModelName,
     /// Controller gains.
@@ -101,6 +108,7 @@ impl HilSpec {
             kind,
             freq_hz,
             tau_s,
+            stroke: None,
             model,
             gains: Self::rig_gains(&RobotParams::MODEL),
             gain_lowering: None,
@@ -114,8 +122,16 @@ impl HilSpec {
     }
 
     /// The jump as an acquisition log's metadata records it, with stroke amplitude
-    /// `amplitude_m`.
+    /// `amplitude_m` (kind `stroke` and no sine parameters for a stroke table).
     pub fn log_jump(&self, amplitude_m: f64) -> sandjumper_acqlog::JumpConfig {
+        if self.stroke.is_some() {
+            return sandjumper_acqlog::JumpConfig {
+                kind: "stroke".to_string(),
+                amplitude_m: None,
+                freq_hz: None,
+                tau_s: None,
+            };
+        }
         sandjumper_acqlog::JumpConfig {
             kind: sandjumper_model::trajectory::kind_name(self.kind).to_string(),
             amplitude_m: Some(amplitude_m),
@@ -274,14 +290,70 @@ pub fn trajectory(params: &Params, spec: &HilSpec) -> Result<SineJump, SimError>
     sine_stroke(params, spec.kind, spec.freq_hz, spec.tau_s)
 }
 
+/// What the controller runs in a loop run: the sine, or the uploaded stroke table as the
+/// controller interpolates it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunTrajectory {
+    /// The one-cycle sine.
+    Sine(SineJump),
+    /// The replayed table.
+    Table(TableStroke),
+}
+
+impl RunTrajectory {
+    /// The trajectory of `spec` (the robot's stroke amplitude for the sine).
+    pub fn of(params: &Params, spec: &HilSpec) -> Result<Self, SimError> {
+        match &spec.stroke {
+            None => trajectory(params, spec).map(Self::Sine),
+            Some(t) => t
+                .kinematic_stroke()
+                .map(Self::Table)
+                .map_err(|e| SimError::InvalidInput {
+                    field: "stroke",
+                    value: format!("{} samples at {} Hz", t.samples_m.len(), t.rate_hz),
+                    allowed: e,
+                }),
+        }
+    }
+
+    /// `p`, m, at `t_s` from the trajectory's start.
+    pub fn position_m(&self, t_s: f64) -> f64 {
+        match self {
+            Self::Sine(s) => s.eval(t_s).position_m,
+            Self::Table(s) => s.eval(t_s).position_m,
+        }
+    }
+
+    /// End of the motion, s.
+    pub fn end_s(&self) -> f64 {
+        match self {
+            Self::Sine(s) => s.end_s(),
+            Self::Table(s) => Stroke::end_s(s),
+        }
+    }
+
+    /// Start of the push-off, s.
+    pub fn push_off_start_s(&self) -> f64 {
+        match self {
+            Self::Sine(s) => s.push_off_start_s(),
+            Self::Table(s) => Stroke::push_off_start_s(s),
+        }
+    }
+}
+
 /// The jump configuration the host sends with `Configure`.
 pub fn jump_config(params: &Params, spec: &HilSpec) -> JumpConfig {
     JumpConfig {
-        trajectory: TrajectorySpec::Sine {
-            kind: spec.kind,
-            amplitude_m: params.robot.stroke_amplitude_m,
-            freq_hz: spec.freq_hz,
-            tau_s: spec.tau_s,
+        trajectory: match &spec.stroke {
+            None => TrajectorySpec::Sine {
+                kind: spec.kind,
+                amplitude_m: params.robot.stroke_amplitude_m,
+                freq_hz: spec.freq_hz,
+                tau_s: spec.tau_s,
+            },
+            Some(t) => TrajectorySpec::Replay {
+                checksum: t.checksum(),
+            },
         },
         gains: spec.gains,
         gain_lowering: spec.gain_lowering,
@@ -337,14 +409,14 @@ pub fn run_jump_observed(
     let mut rig = RigModel::new(
         params,
         spec.model,
-        plan.trajectory.eval(0.0).position_m,
+        plan.trajectory.position_m(0.0),
         model_config,
         &opts,
     )?;
     rig.set_push_off_start(plan.time_from_start_s(plan.push_off_period));
     rig.bed = spec.bed;
     let wall = Instant::now();
-    open_session(params, spec, &mut rig, link)?;
+    open_session(params, spec, &mut rig, link, model_config.tick_hz)?;
     let mut run = LockstepRun::new(&plan);
     loop {
         let answer = run.period(&plan, &mut rig, link)?;
@@ -352,7 +424,7 @@ pub fn run_jump_observed(
             let t = row.t_s.clamp(0.0, plan.trajectory.end_s());
             observe(&PeriodView {
                 row: *row,
-                p_ref_m: plan.trajectory.eval(t).position_m,
+                p_ref_m: plan.trajectory.position_m(t),
                 state: answer.map(|a| a.state),
                 fault: answer.and_then(|a| a.fault),
                 started: row.period == plan.start_period,
@@ -369,7 +441,7 @@ pub fn run_jump_observed(
 /// When things happen in a run, in control periods (period 0 is the idle tick before Arm).
 struct RunPlan {
     /// The trajectory the controller runs.
-    trajectory: SineJump,
+    trajectory: RunTrajectory,
     /// Control period, s.
     period_s: f64,
     /// Control periods per second.
@@ -388,7 +460,7 @@ struct RunPlan {
 
 impl RunPlan {
     fn new(params: &Params, spec: &HilSpec, tick_hz: u32) -> Result<Self, HilError> {
-        let trajectory = trajectory(params, spec)?;
+        let trajectory = RunTrajectory::of(params, spec)?;
         if !(spec.settle_s.is_finite() && (0.0..=5.0).contains(&spec.settle_s)) {
             return Err(SimError::InvalidInput {
                 field: "settle_s",
@@ -447,7 +519,11 @@ fn open_session(
     spec: &HilSpec,
     rig: &mut RigModel,
     link: &mut dyn RigLink,
+    tick_hz: u32,
 ) -> Result<(), HilError> {
+    if let Some(table) = &spec.stroke {
+        table.upload(link, tick_hz)?;
+    }
     link.command(&Command::Configure(jump_config(params, spec)))?;
     let first = rig.sense(0);
     let idle = link.exchange(&first)?;

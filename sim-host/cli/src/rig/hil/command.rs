@@ -14,6 +14,7 @@ use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
 use crate::command::resolve::{ParamsFile, resolve_params};
+use crate::command::stroke::checked_stroke;
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_imaging::render::CameraModel;
 use sandjumper_model::params::{ModelName, Params};
@@ -75,11 +76,16 @@ pub struct HilArgs {
     #[arg(long, value_name = "LINK", default_value = "sil", value_parser = parse_link)]
     pub link: LinkArg,
     /// Jump kind.
-    #[arg(long, value_enum)]
-    pub kind: KindArg,
+    #[arg(long, value_enum, required_unless_present = "stroke")]
+    pub kind: Option<KindArg>,
     /// Forcing frequency f of the one-cycle sine, Hz.
-    #[arg(long, value_name = "HZ", value_parser = parse_freq)]
-    pub freq: f64,
+    #[arg(long, value_name = "HZ", value_parser = parse_freq, required_unless_present = "stroke")]
+    pub freq: Option<f64>,
+    /// Run a stroke file instead of a one-cycle sine (`t_s,p_m` at a fixed rate, e.g.
+    /// `sandjumper optimize`'s stroke.csv): uploaded into the controller's replay table and
+    /// replayed. Refused before anything runs when it fails the rig's feasibility check.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["kind", "freq", "tau"])]
+    pub stroke: Option<PathBuf>,
     /// Delay of the delayed stutter between its halves, s (required with --kind delayed).
     #[arg(long, value_name = "S", value_parser = parse_tau, required_if_eq("kind", "delayed"))]
     pub tau: Option<f64>,
@@ -146,10 +152,13 @@ pub struct HilReport<'a> {
     pub model: &'static str,
     /// Packing fraction.
     pub phi: f64,
-    /// Forcing frequency, Hz.
-    pub freq_hz: f64,
-    /// Delay, s.
-    pub tau_s: f64,
+    /// Forcing frequency, Hz (null for a stroke file).
+    pub freq_hz: Option<f64>,
+    /// Delay, s (null for a stroke file).
+    pub tau_s: Option<f64>,
+    /// The stroke file run instead of a sine.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stroke: Option<String>,
     /// Gain-lowering factor, if any.
     pub gain_lowering: Option<f32>,
     /// Jump metrics (times from the trajectory's start).
@@ -180,14 +189,25 @@ pub struct HilReport<'a> {
     pub exit_code: Option<i32>,
 }
 
-fn spec_of(a: &HilArgs) -> HilSpec {
-    let kind: JumpKind = a.kind.into();
+fn spec_of(a: &HilArgs, params: &Params) -> Result<HilSpec, CliError> {
+    let kind: JumpKind = a.kind.unwrap_or(KindArg::Single).into();
     let model: ModelName = a.model.into();
-    let mut spec = HilSpec::new(kind, a.freq, a.tau.unwrap_or(0.0), model);
+    let mut spec = HilSpec::new(kind, a.freq.unwrap_or(0.0), a.tau.unwrap_or(0.0), model);
     spec.gain_lowering = a.gain_lowering.map(HilSpec::gain_lowering_factor);
     spec.camera_fps = a.camera_fps;
     spec.rtol = a.rtol.unwrap_or(spec.rtol);
-    spec
+    if let Some(path) = &a.stroke {
+        spec.stroke = Some(checked_stroke(path, params)?);
+    }
+    Ok(spec)
+}
+
+/// What runs, in words: `stutter at 10 Hz` or `stroke FILE`.
+fn describe(a: &HilArgs, spec: &HilSpec) -> String {
+    match &a.stroke {
+        Some(path) => format!("stroke {}", path.display()),
+        None => format!("{} at {} Hz", kind_name(spec.kind), spec.freq_hz),
+    }
 }
 
 fn one_run(
@@ -259,17 +279,22 @@ pub fn simulate_run_observed(
     params: Params,
     observe: Option<&mut dyn FnMut(&PeriodView)>,
 ) -> Result<HilRun, CliError> {
-    let spec = spec_of(a);
+    let spec = spec_of(a, &params)?;
     let model_config = rig_model_config(a);
     let outcome = one_run(a, &params, &spec, model_config, observe)?;
     let phi = params.sand.packing_fraction;
     let report = HilReport {
         link: outcome.link_name.clone(),
-        kind: kind_name(spec.kind),
+        kind: if spec.stroke.is_some() {
+            "stroke"
+        } else {
+            kind_name(spec.kind)
+        },
         model: spec.model.as_str(),
         phi,
-        freq_hz: spec.freq_hz,
-        tau_s: spec.tau_s,
+        freq_hz: spec.stroke.is_none().then_some(spec.freq_hz),
+        tau_s: spec.stroke.is_none().then_some(spec.tau_s),
+        stroke: a.stroke.as_ref().map(|p| p.display().to_string()),
         gain_lowering: a.gain_lowering,
         summary: &outcome.summary,
         final_jump_note: outcome.summary.final_height_note(),
@@ -295,14 +320,18 @@ pub fn simulate_run_observed(
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
     let title = format!(
-        "{} through {}, f = {} Hz{}, model {}, φ = {phi}",
-        kind_name(spec.kind),
+        "{} through {}{}, model {}, φ = {phi}",
+        match &a.stroke {
+            Some(p) => format!("stroke {}", p.display()),
+            None => kind_name(spec.kind).to_string(),
+        },
         outcome.link_name,
-        spec.freq_hz,
-        if spec.kind == JumpKind::DelayedStutter {
-            format!(", τ = {} s", spec.tau_s)
-        } else {
+        if spec.stroke.is_some() {
             String::new()
+        } else if spec.kind == JumpKind::DelayedStutter {
+            format!(", f = {} Hz, τ = {} s", spec.freq_hz, spec.tau_s)
+        } else {
+            format!(", f = {} Hz", spec.freq_hz)
         },
         spec.model
     );
@@ -330,7 +359,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     }
     let file = ParamsFile::read_opt(a.params.as_deref())?;
     let params = resolve_params(a.phi, file.as_ref())?;
-    let spec = spec_of(a);
+    let spec = spec_of(a, &params)?;
     if spec.kind != JumpKind::DelayedStutter && a.gain_lowering.is_some() {
         eprintln!("warning: --gain-lowering only acts during a delayed stutter's delay");
     }
@@ -347,10 +376,9 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     if let Some(v) = live.as_mut() {
         v.bus().event(sandjumper_live::Event::RunStarted {
             title: format!(
-                "hil --link {}: {} at {} Hz, {}, phi {}",
+                "hil --link {}: {}, {}, phi {}",
                 a.link,
-                kind_name(spec.kind),
-                spec.freq_hz,
+                describe(a, &spec),
                 spec.model.as_str(),
                 params.sand.packing_fraction
             ),
@@ -506,10 +534,9 @@ fn bench(
     let Some(o) = last else { return Ok(()) };
     let (best, median) = (factors[0], factors[factors.len() / 2]);
     println!(
-        "hil bench: link {} kind {} f {} Hz tau {} s model {}: {} runs of {:.3} s simulated ({} ticks at {} Hz)",
+        "hil bench: link {} {} tau {} s model {}: {} runs of {:.3} s simulated ({} ticks at {} Hz)",
         o.link_name,
-        kind_name(spec.kind),
-        spec.freq_hz,
+        describe(a, spec),
         spec.tau_s,
         spec.model,
         n,
@@ -565,27 +592,57 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         .or_else(|| scratch.as_ref().map(|d| d.path().join("jump")))
         .ok_or_else(|| CliError::internal("no output directory"))?;
     let emulated = PathBuf::from(sandjumper_rig::firmware_image::EMULATED_ELF);
+    let target = crate::rig::tool::TargetArgs {
+        controller: crate::rig::tool::ControllerArgs {
+            port: None,
+            link: Some(crate::rig::tool::SimLink::F407),
+        },
+        // hil's default is the QEMU build's ELF: the virtual board takes the F407 build's.
+        firmware: (a.firmware != emulated).then(|| a.firmware.clone()),
+        virtual_board: None,
+        drive_calibration: None,
+    };
+    let rig = crate::rig::tool::RigParamArgs {
+        model: a.model,
+        phi: a.phi,
+        params: a.params.clone(),
+    };
+    if let Some(stroke) = &a.stroke {
+        // A stroke runs on the board as `rig replay --stroke` does, at the file's own rate.
+        let file = ParamsFile::read_opt(a.params.as_deref())?;
+        let params = resolve_params(a.phi, file.as_ref())?;
+        let table = checked_stroke(stroke, &params)?;
+        let replay = crate::rig::tool::replay::ReplayArgs {
+            live: a.live.clone(),
+            log: None,
+            stroke: Some(stroke.clone()),
+            target,
+            scale: 1.0,
+            time_stretch: 1.0,
+            clip: None,
+            table_rate: table.rate_hz,
+            allow_gaps: false,
+            rig,
+            out,
+            mcap: a.mcap,
+            json: a.json,
+        };
+        let result = crate::rig::tool::replay::run(&replay);
+        if scratch.is_some() {
+            eprintln!(
+                "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)"
+            );
+        }
+        return result;
+    }
     let jump = crate::rig::tool::jump::JumpArgs {
         live: a.live.clone(),
-        target: crate::rig::tool::TargetArgs {
-            controller: crate::rig::tool::ControllerArgs {
-                port: None,
-                link: Some(crate::rig::tool::SimLink::F407),
-            },
-            // hil's default is the QEMU build's ELF: the virtual board takes the F407 build's.
-            firmware: (a.firmware != emulated).then(|| a.firmware.clone()),
-            virtual_board: None,
-            drive_calibration: None,
-        },
-        kind: a.kind,
-        freq: a.freq,
+        target,
+        kind: a.kind.unwrap_or(KindArg::Single),
+        freq: a.freq.unwrap_or(0.0),
         tau: a.tau,
         camera_fps: a.camera_fps,
-        rig: crate::rig::tool::RigParamArgs {
-            model: a.model,
-            phi: a.phi,
-            params: a.params.clone(),
-        },
+        rig,
         camera: a.camera.clone(),
         out,
         mcap: a.mcap,

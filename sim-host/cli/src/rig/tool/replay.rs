@@ -1,13 +1,18 @@
-//! `sandjumper rig replay LOG`: run a recorded (or edited) motor trajectory on the rig.
+//! `sandjumper rig replay LOG` / `rig replay --stroke stroke.csv`: run a recorded (or edited)
+//! motor trajectory, or a stroke file (`sandjumper optimize`'s answer, a replay's own
+//! `table.csv`), on the rig.
 //!
-//! 1. Read the log (the acquisition-log format) and take `p(t)` from its encoder record.
+//! 1. Read the log (the acquisition-log format) and take `p(t)` from its encoder record; or
+//!    read the stroke file (`t_s,p_m` at a fixed rate).
 //! 2. Edit: `--clip START:END` (seconds from the log's first sample), `--time-stretch X`
 //!    (`t -> X t`: above 1 slower), `--scale X` (`p -> X p`, about mid-stroke `p = 0`, where the
 //!    one-cycle sines are centred).
 //! 3. Resample at `--table-rate` (linear interpolation) into the core's replay table.
-//! 4. Refuse, before anything is sent, a table that leaves the stroke (`|p| <= 25 mm`), whose
-//!    motor force would exceed the drive's peak force, or that does not fit the firmware's
-//!    buffer ([`REPLAY_CAPACITY`] samples). The force is the motor's on a standing rod,
+//!    A stroke file already at `--table-rate` is uploaded sample for sample.
+//! 4. Refuse, before anything is sent, a table that fails the rig's feasibility check
+//!    ([`StrokeTable::check`]): it leaves the stroke (`|p| <= 25 mm`), its motor force would
+//!    exceed the drive's peak force, or it does not fit the firmware's buffer
+//!    ([`REPLAY_CAPACITY`] samples). The force is the motor's on a standing rod,
 //!    `m_m (p'' + g)`, with `p''` the table's second difference (what the controller's
 //!    feedforward sees): the push-off, where the rod barely moves, is where the force peaks.
 //! 5. Upload in chunks (`ReplayBegin`, `ReplayChunk` x n, `ReplayCommit` with the CRC-32),
@@ -24,13 +29,12 @@ use super::output::{
     FaultEntry, fault_entries, firmware_name, max_tracking_error_m, motion_figure, robot_fixture,
     samples_log, start_index, write_run_files,
 };
-use super::session::{Fixture, Program, bring_to_idle, query_status};
+use super::session::{Fixture, Program, bring_to_idle};
 use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
-use sandjumper_core::command::REPLAY_CHUNK;
 use sandjumper_core::replay::{REPLAY_CAPACITY, replay_checksum};
 use sandjumper_core::trajectory::STROKE_M;
-use sandjumper_core::{Command, JumpConfig, TrajectorySpec};
+use sandjumper_core::{JumpConfig, TrajectorySpec};
 use sandjumper_model::params::Params;
 use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
@@ -38,6 +42,7 @@ use sandjumper_rig::hil::link::{LinkError, RigLink};
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::run::HilSpec;
 use sandjumper_rig::hil::virtual_board::VirtualLoad;
+use sandjumper_rig::stroke_table::{RigLimits, StrokeTable, TableRefusal};
 
 fn factor(
     what: &'static str,
@@ -77,8 +82,16 @@ pub struct ReplayArgs {
     #[command(flatten)]
     pub live: crate::live::LiveArgs,
     /// The acquisition log whose encoder record is replayed.
-    #[arg(value_name = "LOG.csv")]
-    pub log: PathBuf,
+    #[arg(
+        value_name = "LOG.csv",
+        required_unless_present = "stroke",
+        conflicts_with = "stroke"
+    )]
+    pub log: Option<PathBuf>,
+    /// Replay a stroke file instead of a log: `t_s,p_m` rows at a fixed rate (what
+    /// `sandjumper optimize` writes as stroke.csv; a replay's table.csv is one too).
+    #[arg(long, value_name = "FILE")]
+    pub stroke: Option<PathBuf>,
     /// The board (or a simulated controller).
     #[command(flatten)]
     pub target: TargetArgs,
@@ -129,34 +142,93 @@ pub struct ReplayPlan {
     pub max_abs_p_m: f64,
     /// Estimated peak motor force, N.
     pub peak_force_n: f64,
+    /// The checked table (f64 samples).
+    pub table: StrokeTable,
 }
 
-/// `(t, p)` of the log after clipping, stretching and scaling; t from 0.
-pub fn edited_record(log: &AcqLog, a: &ReplayArgs) -> Result<Vec<(f64, f64)>, CliError> {
-    let t0 = log.rows.first().map_or(0.0, |r| r.t_s);
-    let duration = log.duration_s();
+/// What is replayed: a log's encoder record or a stroke file.
+pub enum ReplaySource {
+    /// An acquisition log.
+    Log(Box<AcqLog>),
+    /// A stroke file.
+    Stroke(StrokeTable),
+}
+
+impl ReplaySource {
+    /// Read the source `a` names.
+    pub fn read(a: &ReplayArgs) -> Result<Self, CliError> {
+        match (&a.log, &a.stroke) {
+            (_, Some(path)) => StrokeTable::read_csv(path)
+                .map(Self::Stroke)
+                .map_err(CliError::input),
+            (Some(path), None) => read_log(path, a.allow_gaps).map(|l| Self::Log(Box::new(l))),
+            (None, None) => Err(CliError::input(
+                "rig replay needs a LOG.csv or --stroke FILE".to_string(),
+            )),
+        }
+    }
+
+    /// `(t, p)` from the first sample, s and m.
+    fn points(&self) -> Vec<(f64, f64)> {
+        match self {
+            Self::Log(log) => {
+                let t0 = log.rows.first().map_or(0.0, |r| r.t_s);
+                log.rows
+                    .iter()
+                    .zip(log.positions_m())
+                    .map(|(r, p)| (r.t_s - t0, p))
+                    .collect()
+            }
+            Self::Stroke(t) => t.points(),
+        }
+    }
+
+    /// Duration, s.
+    fn duration_s(&self) -> f64 {
+        match self {
+            Self::Log(log) => log.duration_s(),
+            Self::Stroke(t) => t.duration_s(),
+        }
+    }
+}
+
+/// The path of the replayed file.
+fn source_path(a: &ReplayArgs) -> &Path {
+    a.stroke
+        .as_deref()
+        .or(a.log.as_deref())
+        .unwrap_or(Path::new("-"))
+}
+
+/// `(t, p)` of the source after clipping, stretching and scaling; t from 0. Without edits a
+/// stroke file's own samples, unchanged.
+pub fn edited_record(source: &ReplaySource, a: &ReplayArgs) -> Result<Vec<(f64, f64)>, CliError> {
+    let duration = source.duration_s();
     let (from, to) = match a.clip {
         Some(c) if c.start_s >= duration => {
             return Err(CliError::input(format!(
-                "--clip {}:{} starts after the log's end ({duration} s)",
-                c.start_s, c.end_s
+                "--clip {}:{} starts after the end of {} ({duration} s)",
+                c.start_s,
+                c.end_s,
+                source_path(a).display()
             )));
         }
         Some(c) => (c.start_s, c.end_s.min(duration)),
         None => (0.0, duration),
     };
-    let pts: Vec<(f64, f64)> = log
-        .rows
-        .iter()
-        .zip(log.positions_m())
-        .map(|(r, p)| (r.t_s - t0, p))
+    let points = source.points();
+    if a.clip.is_none() && a.time_stretch == 1.0 && a.scale == 1.0 {
+        return Ok(points);
+    }
+    let pts: Vec<(f64, f64)> = points
+        .into_iter()
         .filter(|(t, _)| *t >= from - 1e-12 && *t <= to + 1e-12)
         .map(|(t, p)| ((t - from) * a.time_stretch, p * a.scale))
         .collect();
     if pts.len() < 2 {
         return Err(CliError::input(format!(
             "{}: fewer than 2 samples to replay{}",
-            a.log.display(),
+            source_path(a).display(),
             if a.clip.is_some() {
                 " inside --clip"
             } else {
@@ -167,8 +239,8 @@ pub fn edited_record(log: &AcqLog, a: &ReplayArgs) -> Result<Vec<(f64, f64)>, Cl
     Ok(pts)
 }
 
-/// Resample `record` at `rate_hz` and check stroke, force and buffer. `m_m` kg, `g` m/s^2,
-/// `peak_force_n` the drive's limit.
+/// Resample `record` at `rate_hz` and check stroke, force and buffer (the rig's feasibility
+/// check, [`StrokeTable::check`]). `m_m` kg, `g` m/s^2, `peak_force_n` the drive's limit.
 pub fn plan(
     record: &[(f64, f64)],
     rate_hz: u32,
@@ -177,107 +249,45 @@ pub fn plan(
     gravity: f64,
     peak_force_n: f64,
 ) -> Result<ReplayPlan, CliError> {
-    if !tick_hz.is_multiple_of(rate_hz) {
-        return Err(CliError::input(format!(
-            "--table-rate {rate_hz} Hz does not divide the {tick_hz} Hz control rate (allowed: \
-             e.g. 500, 1000, 2000, 5000)"
-        )));
-    }
-    let period_ticks = tick_hz / rate_hz;
-    let rate = f64::from(rate_hz);
-    let duration = record.last().map_or(0.0, |r| r.0);
-    let n = (duration * rate + 1e-9).floor() as usize + 1;
-    if n > REPLAY_CAPACITY {
-        return Err(CliError::input(format!(
-            "refused before anything moved: the trajectory lasts {duration:.4} s, which at \
-             {rate_hz} samples/s needs {n} samples; the firmware's replay buffer holds \
-             {REPLAY_CAPACITY} ({:.3} s). Shorten it with --clip, or lower --table-rate",
-            (REPLAY_CAPACITY - 1) as f64 / rate
-        )));
-    }
-    let mut samples = Vec::with_capacity(n);
-    let mut j = 0;
-    for k in 0..n {
-        let t = k as f64 / rate;
-        while j + 2 < record.len() && record[j + 1].0 <= t {
-            j += 1;
-        }
-        let (ta, pa) = record[j];
-        let (tb, pb) = record[(j + 1).min(record.len() - 1)];
-        let u = if tb > ta {
-            ((t - ta) / (tb - ta)).clamp(0.0, 1.0)
-        } else {
-            0.0
+    let limits = RigLimits {
+        motor_mass_kg,
+        gravity_m_s2: gravity,
+        peak_force_n,
+        stroke_m: STROKE_M,
+        capacity: REPLAY_CAPACITY,
+    };
+    let table = StrokeTable::resample(record, rate_hz);
+    let period_ticks = table
+        .period_ticks(tick_hz)
+        .map_err(|e| CliError::input(format!("--table-rate: {e}")))?;
+    let check = table.check(&limits).map_err(|e| {
+        let hint = match e {
+            TableRefusal::TooShort { .. } => "",
+            TableRefusal::TooLong { .. } => ". Shorten it with --clip, or lower --table-rate",
+            TableRefusal::Stroke { .. } => "; lower --scale",
+            TableRefusal::Force { .. } => {
+                "; slow it down with --time-stretch above 1 or lower --scale"
+            }
         };
-        samples.push(pa + u * (pb - pa));
-    }
-    let (worst_k, max_abs) = samples
-        .iter()
-        .enumerate()
-        .map(|(k, p)| (k, p.abs()))
-        .fold((0, 0.0), |m, x| if x.1 > m.1 { x } else { m });
-    if max_abs > STROKE_M {
-        return Err(CliError::input(format!(
-            "refused before anything moved: the trajectory reaches p = {:.3} mm at t = {:.4} s, \
-             outside the stroke (|p| <= {} mm); lower --scale",
-            1e3 * samples[worst_k],
-            worst_k as f64 / rate,
-            1e3 * STROKE_M
-        )));
-    }
-    let (mut peak, mut peak_k) = (0.0f64, 0);
-    for k in 1..n.saturating_sub(1) {
-        let a = (samples[k + 1] - 2.0 * samples[k] + samples[k - 1]) * rate * rate;
-        let f = (motor_mass_kg * (a + gravity)).abs();
-        if f > peak {
-            (peak, peak_k) = (f, k);
-        }
-    }
-    if peak > peak_force_n {
-        return Err(CliError::input(format!(
-            "refused before anything moved: at t = {:.4} s the trajectory needs about {peak:.0} N \
-             of motor force (m_m (p'' + g) on a standing rod), beyond the drive's {peak_force_n} N; \
-             slow it down with --time-stretch above 1 or lower --scale",
-            peak_k as f64 / rate
-        )));
-    }
-    let table: Vec<f32> = samples.iter().map(|&p| p as f32).collect();
+        CliError::input(format!("refused before anything moved: {e}{hint}"))
+    })?;
+    let samples = table.samples_f32();
     Ok(ReplayPlan {
-        checksum: replay_checksum(&table),
-        samples: table,
+        checksum: replay_checksum(&samples),
+        samples,
         period_ticks,
-        rate_hz: rate,
-        max_abs_p_m: max_abs,
-        peak_force_n: peak,
+        rate_hz: f64::from(rate_hz),
+        max_abs_p_m: check.max_abs_p_m,
+        peak_force_n: check.peak_force_n,
+        table,
     })
 }
 
 /// Upload `plan` in chunks and verify the controller's committed checksum.
 pub fn upload(link: &mut dyn RigLink, plan: &ReplayPlan) -> Result<(), LinkError> {
-    link.command(&Command::ReplayBegin {
-        len: plan.samples.len() as u32,
-        period_ticks: plan.period_ticks,
-    })?;
-    for (k, chunk) in plan.samples.chunks(REPLAY_CHUNK).enumerate() {
-        let samples = heapless::Vec::from_slice(chunk)
-            .map_err(|_| LinkError::Protocol("replay chunk larger than REPLAY_CHUNK".into()))?;
-        link.command(&Command::ReplayChunk {
-            offset: (k * REPLAY_CHUNK) as u32,
-            samples,
-        })?;
-    }
-    link.command(&Command::ReplayCommit {
-        checksum: plan.checksum,
-    })?;
-    let status = query_status(link)?;
-    if status.replay_checksum != Some(plan.checksum) {
-        return Err(LinkError::Protocol(format!(
-            "verification failed: the controller's committed table has checksum {:?}, the \
-             host's is {:#010x}",
-            status.replay_checksum, plan.checksum
-        )));
-    }
-    Ok(())
+    plan.table
+        .upload(link, plan.period_ticks * plan.table.rate_hz)
+        .map(|_| ())
 }
 
 /// `summary.json` of `rig replay`.
@@ -345,7 +355,7 @@ fn table_csv(plan: &ReplayPlan) -> String {
 /// Run `rig replay`.
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let params: Params = a.rig.resolve()?;
-    let source = read_log(&a.log, a.allow_gaps)?;
+    let source = ReplaySource::read(a)?;
     let record = edited_record(&source, a)?;
     let model_config = RigModelConfig::default();
     let plan = plan(
@@ -428,16 +438,23 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         model_config.tick_hz,
         mpc,
         firmware_name(&name),
-        format!("sandjumper rig replay {} ({name})", a.log.display()),
+        format!(
+            "sandjumper rig replay {} ({name})",
+            source_path(a).display()
+        ),
         |m| {
-            m.jump = source.meta.jump.clone();
+            let (jump, phi) = match &source {
+                ReplaySource::Log(log) => (log.meta.jump.clone(), log.meta.phi),
+                ReplaySource::Stroke(_) => (None, None),
+            };
+            m.jump = jump;
             m.phi = if a.target.is_simulated() {
                 Some(params.sand.packing_fraction)
             } else {
-                source.meta.phi
+                phi
             };
             m.extra
-                .push(("replay_of".into(), a.log.display().to_string()));
+                .push(("replay_of".into(), source_path(a).display().to_string()));
             m.extra.push(("replay_scale".into(), a.scale.to_string()));
             m.extra
                 .push(("replay_time_stretch".into(), a.time_stretch.to_string()));
@@ -447,7 +464,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     )?;
     let report = ReplayReport {
         link: name.clone(),
-        source_log: a.log.display().to_string(),
+        source_log: source_path(a).display().to_string(),
         scale: a.scale,
         time_stretch: a.time_stretch,
         clip_s: a.clip.map(|c| [c.start_s, c.end_s]),
@@ -469,7 +486,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
     staged.write_text("table.csv", &table_csv(&plan))?;
-    let title = format!("rig replay of {} through {name}", a.log.display());
+    let title = format!("rig replay of {} through {name}", source_path(a).display());
     let fig = motion_figure(&run.samples, model_config.tick_hz, mpc, title);
     let dir = write_run_files(staged, &log, &params, &json, &fig, "replay", a.mcap)?;
     if a.json {

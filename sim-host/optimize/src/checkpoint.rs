@@ -1,0 +1,194 @@
+//! The search's checkpoint: every evaluation so far, so a search killed at any moment resumes
+//! to the same answer.
+//!
+//! CMA-ES with a fixed seed draws the same candidates in the same order whenever it is told
+//! the same values; the optimiser's state (mean, step size, covariance, evolution paths) is a
+//! function of the seed and the values told. The checkpoint therefore records, after every
+//! generation, the value of each candidate evaluated, keyed by the exact bits of its point; a
+//! resumed search replays the generations from the seed, reading recorded values instead of
+//! simulating, and reaches the crash point in the optimiser state it had, then goes on.
+//!
+//! File: a header line (`sandjumper-optimize-checkpoint 1` and the search's settings as
+//! JSON), then one line per evaluation, `KEY VALUE` as 16 hex digits each (the 64-bit FNV-1a
+//! hash of the point's f64 bits, the fitness's f64 bits). Lines are appended and flushed
+//! after every generation; a line cut short by a crash is ignored.
+
+use std::collections::HashMap;
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+const MAGIC: &str = "sandjumper-optimize-checkpoint 1";
+
+/// The key of a point: FNV-1a over its coordinates' bits.
+pub fn point_key(x: &[f64]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for v in x {
+        for b in v.to_bits().to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// An open checkpoint: the values recorded so far and the file new ones go to.
+#[derive(Debug)]
+pub struct Checkpoint {
+    path: PathBuf,
+    file: File,
+    recorded: HashMap<u64, f64>,
+    /// Evaluations recorded when it was opened.
+    pub resumed_evaluations: usize,
+}
+
+impl Checkpoint {
+    /// Open `path` for a search with `settings` (JSON): a new file, or an existing one made
+    /// with the same settings (resumed). An existing file with other settings is an error
+    /// naming the difference's place.
+    pub fn open(path: &Path, settings: &str) -> Result<Self, String> {
+        let header = format!("{MAGIC} {settings}");
+        let mut recorded = HashMap::new();
+        if path.exists() {
+            let f = File::open(path)
+                .map_err(|e| format!("{}: cannot read the checkpoint: {e}", path.display()))?;
+            let mut lines = BufReader::new(f).lines();
+            let first = lines
+                .next()
+                .transpose()
+                .map_err(|e| format!("{}: cannot read the checkpoint: {e}", path.display()))?
+                .unwrap_or_default();
+            if !first.starts_with(MAGIC) {
+                return Err(format!(
+                    "{}: not a sandjumper optimize checkpoint (remove it, or choose another --out)",
+                    path.display()
+                ));
+            }
+            if first != header {
+                return Err(format!(
+                    "{}: this checkpoint was made by a search with other settings; resume it \
+                     with the same arguments, or remove it to start afresh\n  checkpoint: {}\n  \
+                     this run:   {}",
+                    path.display(),
+                    first.trim_start_matches(MAGIC).trim(),
+                    settings
+                ));
+            }
+            for line in lines {
+                let Ok(line) = line else { break };
+                if line.len() != 33 {
+                    break;
+                }
+                let mut it = line.split(' ');
+                let (Some(k), Some(v), None) = (it.next(), it.next(), it.next()) else {
+                    break;
+                };
+                let (Ok(k), Ok(v)) = (u64::from_str_radix(k, 16), u64::from_str_radix(v, 16))
+                else {
+                    break;
+                };
+                recorded.insert(k, f64::from_bits(v));
+            }
+            // Rewrite the file without any cut line, then append.
+            let mut f = File::create(path)
+                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))?;
+            let mut text = format!("{header}\n");
+            let mut keys: Vec<_> = recorded.iter().collect();
+            keys.sort_by_key(|(k, _)| **k);
+            for (k, v) in keys {
+                text.push_str(&format!("{k:016x} {:016x}\n", v.to_bits()));
+            }
+            f.write_all(text.as_bytes())
+                .and_then(|()| f.sync_all())
+                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))?;
+        } else {
+            let mut f = File::create(path)
+                .map_err(|e| format!("{}: cannot create the checkpoint: {e}", path.display()))?;
+            f.write_all(format!("{header}\n").as_bytes())
+                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))?;
+        }
+        let file = OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(|e| format!("{}: cannot open the checkpoint: {e}", path.display()))?;
+        let resumed_evaluations = recorded.len();
+        Ok(Self {
+            path: path.to_path_buf(),
+            file,
+            recorded,
+            resumed_evaluations,
+        })
+    }
+
+    /// The recorded value of the point with key `key`.
+    pub fn recorded(&self, key: u64) -> Option<f64> {
+        self.recorded.get(&key).copied()
+    }
+
+    /// Append new evaluations and flush them to the system.
+    pub fn append(&mut self, entries: &[(u64, f64)]) -> Result<(), String> {
+        let mut text = String::with_capacity(34 * entries.len());
+        for &(k, v) in entries {
+            if self.recorded.insert(k, v).is_none() {
+                text.push_str(&format!("{k:016x} {:016x}\n", v.to_bits()));
+            }
+        }
+        self.file
+            .write_all(text.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| {
+                format!(
+                    "{}: cannot append to the checkpoint: {e}",
+                    self.path.display()
+                )
+            })
+    }
+
+    /// Evaluations recorded.
+    pub fn len(&self) -> usize {
+        self.recorded.len()
+    }
+
+    /// Whether none is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.recorded.is_empty()
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn records_resume_and_refuse_other_settings() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.ckpt");
+        let mut c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
+        let k = point_key(&[0.1, 0.2]);
+        assert_ne!(k, point_key(&[0.2, 0.1]));
+        c.append(&[(k, -0.0123), (7, 1e3)]).unwrap();
+        drop(c);
+        // A line cut short by a crash is ignored.
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(b"00000000000000ab 3ff0").unwrap();
+        drop(f);
+        let c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
+        assert_eq!(c.resumed_evaluations, 2);
+        assert_eq!(c.recorded(k), Some(-0.0123));
+        assert_eq!(c.recorded(0xab), None);
+        drop(c);
+        let e = Checkpoint::open(&path, "{\"seed\":2}").unwrap_err();
+        assert!(e.contains("other settings"), "{e}");
+        std::fs::write(&path, "hello\n").unwrap();
+        assert!(
+            Checkpoint::open(&path, "{}")
+                .unwrap_err()
+                .contains("not a sandjumper")
+        );
+    }
+}

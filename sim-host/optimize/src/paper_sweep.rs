@@ -1,0 +1,187 @@
+//! The baseline: the best single, stutter and delayed stutter at the same ground, limits and
+//! objective, found by a sweep over amplitude, frequency and delay. Every point is evaluated
+//! as a member of the search's family ([`MoveChain`]), by the same [`Problem::evaluate`], so
+//! the comparison is like for like.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use sandjumper_core::trajectory::JumpKind;
+use sandjumper_model::trajectory::kind_name;
+
+use crate::evaluate::{Evaluation, Problem};
+use crate::family::MoveChain;
+
+/// The sweep's grid.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PaperGrid {
+    /// Amplitudes, m.
+    pub amplitudes_m: Vec<f64>,
+    /// Forcing frequencies, Hz.
+    pub freqs_hz: Vec<f64>,
+    /// Delays of the delayed stutter, s.
+    pub taus_s: Vec<f64>,
+}
+
+impl PaperGrid {
+    /// Amplitudes from half the stroke to the stroke in 5 steps (the robot's 18.75 mm among
+    /// them when the stroke is 25 mm), 1 to 25 Hz every `df` Hz, delays 0 to `max_tau` every
+    /// `dtau` s.
+    pub fn standard(stroke_m: f64, df: f64, max_tau_s: f64, dtau: f64) -> Self {
+        let steps = |lo: f64, hi: f64, d: f64| -> Vec<f64> {
+            let n = ((hi - lo) / d + 1e-9).floor() as usize;
+            (0..=n).map(|i| lo + i as f64 * d).collect()
+        };
+        Self {
+            amplitudes_m: (0..5)
+                .map(|i| stroke_m * (0.5 + 0.125 * i as f64))
+                .collect(),
+            freqs_hz: steps(1.0, 25.0, df),
+            taus_s: steps(0.0, max_tau_s, dtau),
+        }
+    }
+
+    /// Points of the grid.
+    pub fn len(&self) -> usize {
+        self.amplitudes_m.len() * self.freqs_hz.len() * (2 + self.taus_s.len())
+    }
+
+    /// Whether the grid is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// One of the paper's strokes.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PaperStroke {
+    /// `single`, `stutter` or `delayed`.
+    pub kind: &'static str,
+    /// Amplitude, m.
+    pub amplitude_m: f64,
+    /// Frequency, Hz.
+    pub freq_hz: f64,
+    /// Delay, s (0 but for the delayed stutter).
+    pub tau_s: f64,
+}
+
+impl PaperStroke {
+    /// As a member of the family with `moves` moves.
+    pub fn chain(&self, moves: usize) -> MoveChain {
+        match self.kind {
+            "single" => MoveChain::single(self.amplitude_m, self.freq_hz, moves),
+            "stutter" => MoveChain::stutter(self.amplitude_m, self.freq_hz, moves),
+            _ => MoveChain::delayed_stutter(self.amplitude_m, self.freq_hz, self.tau_s, moves),
+        }
+    }
+
+    /// In words: `delayed stutter, A 18.75 mm, 9.1 Hz, tau 0.12 s`.
+    pub fn describe(&self) -> String {
+        let base = format!(
+            "{}, A {:.2} mm, {:.2} Hz",
+            self.kind,
+            1e3 * self.amplitude_m,
+            self.freq_hz
+        );
+        if self.kind == "delayed" {
+            format!("{base}, tau {:.3} s", self.tau_s)
+        } else {
+            base
+        }
+    }
+}
+
+/// A swept point and its evaluation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweptPoint {
+    /// The stroke.
+    pub stroke: PaperStroke,
+    /// Its evaluation.
+    pub evaluation: Evaluation,
+}
+
+/// The sweep's outcome.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaperSweep {
+    /// Every point, in grid order.
+    pub points: Vec<SweptPoint>,
+    /// The best feasible point of each kind (single, stutter, delayed), if any is feasible.
+    pub best_by_kind: Vec<SweptPoint>,
+}
+
+impl PaperSweep {
+    /// The best feasible point of all kinds.
+    pub fn best(&self) -> Option<&SweptPoint> {
+        self.best_by_kind
+            .iter()
+            .max_by(|a, b| a.evaluation.value.total_cmp(&b.evaluation.value))
+    }
+}
+
+/// Sweep `grid` under `problem` (in parallel on the current rayon pool), `moves` moves per
+/// chain, calling `progress(done)` as points finish.
+pub fn sweep(
+    problem: &Problem,
+    grid: &PaperGrid,
+    moves: usize,
+    progress: &(dyn Fn(usize) + Sync),
+) -> PaperSweep {
+    let mut strokes = Vec::with_capacity(grid.len());
+    for kind in [
+        JumpKind::Single,
+        JumpKind::Stutter,
+        JumpKind::DelayedStutter,
+    ] {
+        for &amplitude_m in &grid.amplitudes_m {
+            for &freq_hz in &grid.freqs_hz {
+                let taus: &[f64] = if kind == JumpKind::DelayedStutter {
+                    &grid.taus_s
+                } else {
+                    &[0.0]
+                };
+                for &tau_s in taus {
+                    strokes.push(PaperStroke {
+                        kind: kind_name(kind),
+                        amplitude_m,
+                        freq_hz,
+                        tau_s,
+                    });
+                }
+            }
+        }
+    }
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let points: Vec<SweptPoint> = strokes
+        .par_iter()
+        .map(|s| {
+            let evaluation = problem.evaluate(&s.chain(moves));
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n.is_multiple_of(256) {
+                progress(n);
+            }
+            SweptPoint {
+                stroke: *s,
+                evaluation,
+            }
+        })
+        .collect();
+    progress(points.len());
+    let best_by_kind = ["single", "stutter", "delayed"]
+        .iter()
+        .filter_map(|k| {
+            points
+                .iter()
+                .filter(|p| p.stroke.kind == *k && p.evaluation.feasible())
+                // First best in grid order on ties: deterministic.
+                .fold(None::<&SweptPoint>, |best, p| match best {
+                    Some(b) if b.evaluation.value >= p.evaluation.value => Some(b),
+                    _ => Some(p),
+                })
+                .cloned()
+        })
+        .collect();
+    PaperSweep {
+        points,
+        best_by_kind,
+    }
+}

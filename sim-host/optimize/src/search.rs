@@ -1,0 +1,273 @@
+//! The search: CMA-ES (the `cmaes` crate) over the family's encoding, from several starts
+//! (the best paper stroke of each kind, then random points), candidates evaluated in parallel
+//! (rayon), every evaluation recorded in the [`Checkpoint`].
+//!
+//! Determinism: each start's CMA-ES has its own seed (`seed + start`), draws the same
+//! candidates when told the same values, and is told values that depend on the candidate
+//! alone (the kinematic jump is deterministic), whatever the number of threads. The starts
+//! run one after another. So a fixed seed gives the same answer, and a resumed search the
+//! same answer as one never interrupted.
+
+use std::sync::Mutex;
+
+use cmaes::{CMAESOptions, DVector};
+use serde::Serialize;
+
+use crate::checkpoint::{Checkpoint, point_key};
+use crate::evaluate::{Evaluation, Problem};
+use crate::family::{Encoding, MoveChain};
+
+/// How the search runs.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SearchSettings {
+    /// Base seed.
+    pub seed: u64,
+    /// Evaluations in all, shared evenly by the starts.
+    pub evaluations: usize,
+    /// Candidates per generation.
+    pub population: usize,
+    /// Random starts after the paper strokes' starts.
+    pub random_starts: usize,
+    /// Initial step size from a paper stroke, in the encoding's unit coordinates.
+    pub sigma_paper: f64,
+    /// Initial step size from a random start.
+    pub sigma_random: f64,
+    /// Best distinct feasible candidates kept per start for the controller's re-ranking.
+    pub elites_per_start: usize,
+}
+
+/// Where a search started.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Start {
+    /// What the start is (`best delayed stutter`, `random 2`).
+    pub label: String,
+    /// Coordinates in the encoding's space.
+    #[serde(skip)]
+    pub x: Vec<f64>,
+    /// Initial step size.
+    pub sigma: f64,
+}
+
+/// One generation, for the convergence record.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HistoryRow {
+    /// Start index.
+    pub start: usize,
+    /// Generation within the start.
+    pub generation: usize,
+    /// Evaluations so far, all starts.
+    pub evaluations: usize,
+    /// Best objective value of this generation (NaN when none was feasible).
+    pub generation_best: f64,
+    /// Best objective value so far, all starts.
+    pub best_so_far: f64,
+    /// The step size after the generation.
+    pub sigma: f64,
+}
+
+/// The best candidate of one start.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StartBest {
+    /// The start.
+    pub start: Start,
+    /// Its best chain.
+    pub chain: MoveChain,
+    /// Its evaluation.
+    pub evaluation: Evaluation,
+    /// Why the start's CMA-ES stopped.
+    pub stopped_because: String,
+}
+
+/// Progress after a generation.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Evaluations so far.
+    pub evaluations: usize,
+    /// Of this many.
+    pub budget: usize,
+    /// Best value so far.
+    pub best: f64,
+}
+
+/// A good candidate kept for re-ranking through the controller.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Elite {
+    /// Index of its start.
+    pub start: usize,
+    /// The candidate.
+    pub chain: MoveChain,
+    /// Its fitness (minus the objective's value).
+    pub fitness: f64,
+}
+
+/// What a search found.
+#[derive(Clone, Debug)]
+pub struct SearchOutcome {
+    /// Each start's best, best first.
+    pub by_start: Vec<StartBest>,
+    /// Each start's best feasible candidates (at most `elites_per_start`, best first, start
+    /// by start; a candidate is distinct when its point is), for the controller's re-ranking.
+    pub elites: Vec<Elite>,
+    /// One row per generation.
+    pub history: Vec<HistoryRow>,
+    /// Evaluations done (simulated or read from the checkpoint).
+    pub evaluations: usize,
+    /// Of which read from the checkpoint.
+    pub replayed: usize,
+    /// Candidates outside the limits (their fitness was the penalty).
+    pub infeasible: usize,
+}
+
+/// Run the search from `starts`.
+pub fn search(
+    problem: &Problem,
+    encoding: &Encoding,
+    starts: &[Start],
+    settings: &SearchSettings,
+    checkpoint: Option<&mut Checkpoint>,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<SearchOutcome, String> {
+    if starts.is_empty() {
+        return Err("no start for the search".into());
+    }
+    let per_start = (settings.evaluations / starts.len()).max(settings.population);
+    let budget = per_start * starts.len();
+    let mut history = Vec::new();
+    let mut by_start = Vec::new();
+    let (mut evaluations, mut replayed, mut infeasible) = (0usize, 0usize, 0usize);
+    let mut best_so_far = f64::NEG_INFINITY;
+    let checkpoint = Mutex::new(checkpoint);
+    let mut elites = Vec::new();
+    for (i, start) in starts.iter().enumerate() {
+        // Values computed this generation, to append to the checkpoint.
+        let fresh: Mutex<Vec<(u64, f64)>> = Mutex::new(Vec::new());
+        // Every feasible candidate of this generation: (fitness, key, point).
+        let seen: Mutex<Vec<(f64, u64, Vec<f64>)>> = Mutex::new(Vec::new());
+        // This start's best feasible candidates so far, best first.
+        let mut pool: Vec<(f64, u64, Vec<f64>)> = Vec::new();
+        let counts = Mutex::new((0usize, 0usize, 0usize));
+        let objective = |x: &DVector<f64>| -> f64 {
+            let key = point_key(x.as_slice());
+            let recorded = checkpoint
+                .lock()
+                .ok()
+                .and_then(|c| c.as_ref().and_then(|c| c.recorded(key)));
+            let (value, from_checkpoint) = match recorded {
+                Some(v) => (v, true),
+                None => (
+                    problem.evaluate(&encoding.decode(x.as_slice())).fitness(),
+                    false,
+                ),
+            };
+            if let Ok(mut c) = counts.lock() {
+                c.0 += 1;
+                c.1 += usize::from(from_checkpoint);
+                c.2 += usize::from(value >= crate::evaluate::INFEASIBLE_FITNESS);
+            }
+            if !from_checkpoint && let Ok(mut f) = fresh.lock() {
+                f.push((key, value));
+            }
+            if value < crate::evaluate::INFEASIBLE_FITNESS
+                && let Ok(mut s) = seen.lock()
+            {
+                s.push((value, key, x.as_slice().to_vec()));
+            }
+            value
+        };
+        let mut cmaes = CMAESOptions::new(start.x.clone(), start.sigma)
+            .population_size(settings.population)
+            .seed(settings.seed.wrapping_add(i as u64))
+            .max_function_evals(per_start)
+            .tol_fun(1e-12)
+            .build(&objective)
+            .map_err(|e| format!("cannot set up CMA-ES: {e:?}"))?;
+        let mut generation = 0;
+        let termination = loop {
+            let done = cmaes.next_parallel();
+            generation += 1;
+            let new: Vec<(u64, f64)> = fresh
+                .lock()
+                .map(|mut f| std::mem::take(&mut *f))
+                .unwrap_or_default();
+            let (n, r, bad) = counts
+                .lock()
+                .map(|mut c| std::mem::take(&mut *c))
+                .unwrap_or_default();
+            evaluations += n;
+            replayed += r;
+            infeasible += bad;
+            // Merge in a fixed order (fitness, then key): the threads' order does not matter.
+            let mut generation_seen = seen
+                .lock()
+                .map(|mut s| std::mem::take(&mut *s))
+                .unwrap_or_default();
+            pool.append(&mut generation_seen);
+            pool.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            pool.dedup_by_key(|e| e.1);
+            pool.truncate(settings.elites_per_start);
+            let gen_best = cmaes
+                .current_best_individual()
+                .map_or(f64::NAN, |b| b.value);
+            let gen_value = if gen_best < crate::evaluate::INFEASIBLE_FITNESS {
+                -gen_best
+            } else {
+                f64::NAN
+            };
+            if gen_value > best_so_far {
+                best_so_far = gen_value;
+            }
+            history.push(HistoryRow {
+                start: i,
+                generation,
+                evaluations,
+                generation_best: gen_value,
+                best_so_far,
+                sigma: cmaes.sigma(),
+            });
+            progress(Progress {
+                evaluations,
+                budget,
+                best: best_so_far,
+            });
+            if !new.is_empty()
+                && let Ok(mut c) = checkpoint.lock()
+                && let Some(c) = c.as_deref_mut()
+            {
+                c.append(&new)?;
+            }
+            if let Some(t) = done {
+                break t;
+            }
+        };
+        elites.extend(pool.into_iter().map(|(fitness, _, x)| Elite {
+            start: i,
+            chain: encoding.decode(&x),
+            fitness,
+        }));
+        let best = termination
+            .overall_best
+            .ok_or_else(|| format!("start {}: CMA-ES stopped with no candidate", start.label))?;
+        let chain = encoding.decode(best.point.as_slice());
+        let evaluation = problem.evaluate(&chain);
+        by_start.push(StartBest {
+            start: start.clone(),
+            chain,
+            evaluation,
+            stopped_because: termination
+                .reasons
+                .iter()
+                .map(|r| format!("{r:?}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    by_start.sort_by(|a, b| a.evaluation.fitness().total_cmp(&b.evaluation.fitness()));
+    Ok(SearchOutcome {
+        by_start,
+        elites,
+        history,
+        evaluations,
+        replayed,
+        infeasible,
+    })
+}

@@ -1,0 +1,120 @@
+//! The best strokes re-run force-driven through the real controller: the stroke table is
+//! uploaded into the controller's replay table and replayed in lockstep against the
+//! force-driven plant (`hil --stroke`), in this process (`sil`) or as the firmware under QEMU
+//! (`pil`, when its ELF and QEMU are there). A stroke the controller cannot follow shows here:
+//! a lower height, tracking faults, a saturated drive.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_rig::hil::open::{LinkArg, open_link};
+use sandjumper_rig::hil::rig_model::RigModelConfig;
+use sandjumper_rig::hil::run::{HilSpec, run_jump};
+use sandjumper_rig::stroke_table::StrokeTable;
+
+use crate::evaluate::Objective;
+
+/// One stroke run through one link.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LinkRun {
+    /// `sil` or `pil`.
+    pub link: String,
+    /// Why it did not run (the link is not available here), if so.
+    pub skipped: Option<String>,
+    /// Highest rod apex, m.
+    pub jump_height_m: Option<f64>,
+    /// Highest apex after the push-off begins, m.
+    pub final_jump_height_m: Option<f64>,
+    /// Faults the controller latched, by name.
+    pub faults: Vec<String>,
+    /// Largest |p_cmd - p| until the drive first saturated, m.
+    pub tracking_error_max_m: Option<f64>,
+    /// Periods the drive command sat at the peak force.
+    pub saturated_periods: Option<usize>,
+    /// Largest |F_m p'| of the force-driven plant, W.
+    pub peak_power_w: Option<f64>,
+    /// Positive work of the motor, J.
+    pub work_j: Option<f64>,
+}
+
+impl LinkRun {
+    /// The objective's value of this run (None: skipped, or the controller latched a fault:
+    /// a stroke that ends in the safe state is worth nothing).
+    pub fn value(&self, objective: Objective, min_height_m: f64) -> Option<f64> {
+        if self.skipped.is_some() || !self.faults.is_empty() {
+            return None;
+        }
+        let h = self.jump_height_m?;
+        if objective.is_ratio() && h < min_height_m {
+            return None;
+        }
+        let v = match objective {
+            Objective::Height => h,
+            Objective::FinalHeight => self.final_jump_height_m?,
+            Objective::HeightPerPeakPower => h / self.peak_power_w?,
+            Objective::HeightPerEnergy => h / self.work_j?,
+        };
+        v.is_finite().then_some(v)
+    }
+
+    fn skipped(link: &LinkArg, why: String) -> Self {
+        Self {
+            link: link.to_string(),
+            skipped: Some(why),
+            jump_height_m: None,
+            final_jump_height_m: None,
+            faults: Vec::new(),
+            tracking_error_max_m: None,
+            saturated_periods: None,
+            peak_power_w: None,
+            work_j: None,
+        }
+    }
+}
+
+/// Run `table` through `link` on `model` with `params` (the rig's gains, as `hil` runs).
+/// `firmware` is the emulated board's ELF for `pil`. A link that cannot open is reported as
+/// skipped, with the reason; a run that fails is an error.
+pub fn run_through(
+    link: &LinkArg,
+    params: &Params,
+    model: ModelName,
+    table: &StrokeTable,
+    firmware: &Path,
+) -> Result<LinkRun, String> {
+    let model_config = RigModelConfig::default();
+    let mut l = match open_link(link, &model_config, firmware) {
+        Ok(l) => l,
+        Err(e) => return Ok(LinkRun::skipped(link, e.message)),
+    };
+    let mut spec = HilSpec::new(
+        sandjumper_core::trajectory::JumpKind::Single,
+        0.0,
+        0.0,
+        model,
+    );
+    spec.gains = HilSpec::rig_gains(&params.robot);
+    spec.camera_fps = 0;
+    spec.stroke = Some(table.clone());
+    let o = run_jump(params, &spec, model_config, l.as_mut())
+        .map_err(|e| format!("the run through {link} failed: {e}"))?;
+    let peak = params.drive.peak_force_n * (1.0 - 1e-6);
+    Ok(LinkRun {
+        link: link.to_string(),
+        skipped: None,
+        jump_height_m: Some(o.summary.jump_height_m),
+        final_jump_height_m: Some(o.summary.final_jump_height_m),
+        faults: o.faults.iter().map(|f| f.code.name().to_string()).collect(),
+        tracking_error_max_m: Some(o.tracking_error_until_saturation().0),
+        saturated_periods: Some(
+            o.trace
+                .iter()
+                .filter(|r| r.drive_command_n.abs() >= peak)
+                .count(),
+        ),
+        peak_power_w: Some(o.summary.peak_motor_power_w),
+        work_j: Some(o.summary.motor_work_j),
+    })
+}
