@@ -132,7 +132,7 @@ pub struct OptimizeArgs {
           value_parser = ranged("--max-hold", 0.0, 5.0, "s"))]
     pub max_hold: f64,
     /// Evaluations of the search in all (shared by its starts).
-    #[arg(long, value_name = "N", default_value = "24000",
+    #[arg(long, value_name = "N", default_value = "96000",
           value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
     pub evaluations: u64,
     /// Candidates per CMA-ES generation.
@@ -140,7 +140,7 @@ pub struct OptimizeArgs {
           value_parser = clap::value_parser!(u32).range(4..=1000))]
     pub population: u32,
     /// Random starts after the three paper strokes' starts.
-    #[arg(long, value_name = "N", default_value = "3",
+    #[arg(long, value_name = "N", default_value = "5",
           value_parser = clap::value_parser!(u32).range(0..=100))]
     pub random_starts: u32,
     /// Seed of the search (the same seed, the same answer).
@@ -710,7 +710,9 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
     };
     let answer = result(answer_i)?;
     let paper_answer = result(paper_i)?;
-    let kinematic_result = if answer_i == 0 {
+    // The kinematic model's best, when the controller made another stroke the answer and it
+    // is not the paper's best shown already.
+    let kinematic_result = if answer_i == 0 || pool[0].chain == pool[paper_i].chain {
         None
     } else {
         Some(result(0)?)
@@ -960,8 +962,13 @@ fn human(r: &OptimizeReport, dir: &Path) -> String {
         r.value_ratio
     );
     let kinematic = r.kinematic_optimum.iter();
-    for s in [&r.answer, &r.paper_answer].into_iter().chain(kinematic) {
-        t += &format!("  {}\n", s.label);
+    let heads = ["answer", "the paper's best", "the kinematic model's best"];
+    for (s, head) in [&r.answer, &r.paper_answer]
+        .into_iter()
+        .chain(kinematic)
+        .zip(heads)
+    {
+        t += &format!("  {head}: {}\n", s.label);
         if let Some(c) = &s.chain {
             t += &format!("    stroke: {}\n", chain_text(c));
         }
