@@ -40,6 +40,8 @@ fn small(out: &Path, extra: &[&str]) -> Vec<String> {
         "3",
         "--paper-candidates",
         "2",
+        "--refine",
+        "48",
         "--verify",
         "sil",
     ]
@@ -157,18 +159,21 @@ fn a_small_search_writes_its_answer_and_jump_hil_and_rig_run_it() {
 fn a_seed_fixes_the_answer_whatever_the_threads() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
-    run(&small(
-        &a,
-        &["--threads", "1", "--seed", "7", "--verify", "none"],
-    ));
-    run(&small(
-        &b,
-        &["--threads", "2", "--seed", "7", "--verify", "none"],
-    ));
+    run(&small(&a, &["--threads", "1", "--seed", "7"]));
+    run(&small(&b, &["--threads", "2", "--seed", "7"]));
     assert_eq!(read(&a.join("stroke.csv")), read(&b.join("stroke.csv")));
     assert_eq!(read(&a.join("history.csv")), read(&b.join("history.csv")));
+    assert_eq!(
+        read(&a.join("candidates.csv")),
+        read(&b.join("candidates.csv"))
+    );
     let j = json(&a.join("summary.json"));
-    assert_eq!(j["height_basis"], "kinematic");
+    assert_eq!(j["height_basis"], "sil");
+    assert_eq!(j["refine_runs"], 48);
+    // Without a link the answer is the kinematic model's.
+    let c = dir.path().join("c");
+    run(&small(&c, &["--seed", "7", "--verify", "none"]));
+    assert_eq!(json(&c.join("summary.json"))["height_basis"], "kinematic");
 }
 
 fn kill_when_checkpoint_has(args: &[String], ckpt: &Path, lines: usize) -> bool {
@@ -198,20 +203,27 @@ fn kill_when_checkpoint_has(args: &[String], ckpt: &Path, lines: usize) -> bool 
 fn a_search_killed_mid_way_resumes_to_the_same_answer() {
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole");
-    let args = |out: &PathBuf| small(out, &["--evaluations", "2400", "--verify", "none"]);
-    run(&args(&whole));
+    let args = |out: &PathBuf| small(out, &["--evaluations", "2400", "--refine", "96"]);
+    let j: serde_json::Value =
+        serde_json::from_str(&run(&[args(&whole), vec!["--json".to_string()]].concat())).unwrap();
+    let searched = j["evaluations"].as_u64().unwrap() as usize;
     let out = dir.path().join("resumed");
     let ckpt = dir.path().join("resumed.checkpoint");
-    // Killed twice, at different points of the search.
+    // Killed three times: twice in the kinematic search, once in the refinement through sil
+    // (its values follow the search's in the checkpoint).
     let mut kills = 0;
-    for lines in [200, 1200] {
+    for lines in [200, 1200, searched + 40] {
         kills += usize::from(kill_when_checkpoint_has(&args(&out), &ckpt, lines));
     }
-    assert!(kills > 0, "the search finished before it could be killed");
+    assert!(
+        kills >= 2,
+        "the search finished before it could be killed ({kills} kills)"
+    );
     assert!(ckpt.is_file());
     let stdout = run(&[args(&out), vec!["--json".to_string()]].concat());
     let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert!(j["evaluations_resumed"].as_u64().unwrap() >= 199, "{j}");
+    assert_eq!(j["refine_runs"], 96);
     assert_eq!(
         read(&whole.join("stroke.csv")),
         read(&out.join("stroke.csv"))

@@ -5,7 +5,7 @@
 //! check, the kinematic jump, the objective), [`paper_sweep`] (the best single, stutter and
 //! delayed stutter at the same limits: the baseline), [`search`] (CMA-ES from several starts,
 //! in parallel) with its [`checkpoint`] (resumable after a crash), [`verify`] (the best
-//! strokes through the real controller), [`figure`] (the stroke and the jump beside the
+//! strokes through the real controller), [`refine`] (the best refined through sil), [`figure`] (the stroke and the jump beside the
 //! paper's best).
 
 pub mod checkpoint;
@@ -13,5 +13,6 @@ pub mod evaluate;
 pub mod family;
 pub mod figure;
 pub mod paper_sweep;
+pub mod refine;
 pub mod search;
 pub mod verify;

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use crate::checkpoint::{Checkpoint, point_key};
 use crate::evaluate::{Evaluation, Problem};
-use crate::family::{Encoding, MoveChain};
+use crate::family::{Encoding, MoveChain, reflect};
 
 /// How the search runs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -118,6 +118,32 @@ pub struct SearchOutcome {
     pub infeasible: usize,
 }
 
+/// Two candidates closer than this in every unit coordinate (after reflection into
+/// `[0, 1]`) count as one for the re-ranking: the controller's runs should see different
+/// strokes, not one converged stroke sixteen times.
+pub const ELITE_SEPARATION: f64 = 0.02;
+
+/// The best `n` of `pool` (fitness, key, point), each at least [`ELITE_SEPARATION`] from every
+/// better one kept, best first; ties broken by key so the threads' order does not matter.
+fn diverse_best(mut pool: Vec<(f64, u64, Vec<f64>)>, n: usize) -> Vec<(f64, u64, Vec<f64>)> {
+    pool.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut kept: Vec<(f64, u64, Vec<f64>)> = Vec::with_capacity(n);
+    for c in pool {
+        if kept.len() == n {
+            break;
+        }
+        let far = kept.iter().all(|k| {
+            k.2.iter()
+                .zip(&c.2)
+                .any(|(a, b)| (reflect(*a) - reflect(*b)).abs() >= ELITE_SEPARATION)
+        });
+        if far {
+            kept.push(c);
+        }
+    }
+    kept
+}
+
 /// Run the search from `starts`.
 pub fn search(
     problem: &Problem,
@@ -139,106 +165,42 @@ pub fn search(
     let checkpoint = Mutex::new(checkpoint);
     let mut elites = Vec::new();
     for (i, start) in starts.iter().enumerate() {
-        // Values computed this generation, to append to the checkpoint.
-        let fresh: Mutex<Vec<(u64, f64)>> = Mutex::new(Vec::new());
-        // Every feasible candidate of this generation: (fitness, key, point).
-        let seen: Mutex<Vec<(f64, u64, Vec<f64>)>> = Mutex::new(Vec::new());
-        // This start's best feasible candidates so far, best first.
-        let mut pool: Vec<(f64, u64, Vec<f64>)> = Vec::new();
-        let counts = Mutex::new((0usize, 0usize, 0usize));
-        let objective = |x: &DVector<f64>| -> f64 {
-            let key = point_key(x.as_slice());
-            let recorded = checkpoint
-                .lock()
-                .ok()
-                .and_then(|c| c.as_ref().and_then(|c| c.recorded(key)));
-            let (value, from_checkpoint) = match recorded {
-                Some(v) => (v, true),
-                None => (
-                    problem.evaluate(&encoding.decode(x.as_slice())).fitness(),
-                    false,
-                ),
-            };
-            if let Ok(mut c) = counts.lock() {
-                c.0 += 1;
-                c.1 += usize::from(from_checkpoint);
-                c.2 += usize::from(value >= crate::evaluate::INFEASIBLE_FITNESS);
-            }
-            if !from_checkpoint && let Ok(mut f) = fresh.lock() {
-                f.push((key, value));
-            }
-            if value < crate::evaluate::INFEASIBLE_FITNESS
-                && let Ok(mut s) = seen.lock()
-            {
-                s.push((value, key, x.as_slice().to_vec()));
-            }
-            value
-        };
-        let mut cmaes = CMAESOptions::new(start.x.clone(), start.sigma)
-            .population_size(settings.population)
-            .seed(settings.seed.wrapping_add(i as u64))
-            .max_function_evals(per_start)
-            .tol_fun(1e-12)
-            .build(&objective)
-            .map_err(|e| format!("cannot set up CMA-ES: {e:?}"))?;
-        let mut generation = 0;
-        let termination = loop {
-            let done = cmaes.next_parallel();
-            generation += 1;
-            let new: Vec<(u64, f64)> = fresh
-                .lock()
-                .map(|mut f| std::mem::take(&mut *f))
-                .unwrap_or_default();
-            let (n, r, bad) = counts
-                .lock()
-                .map(|mut c| std::mem::take(&mut *c))
-                .unwrap_or_default();
-            evaluations += n;
-            replayed += r;
-            infeasible += bad;
-            // Merge in a fixed order (fitness, then key): the threads' order does not matter.
-            let mut generation_seen = seen
-                .lock()
-                .map(|mut s| std::mem::take(&mut *s))
-                .unwrap_or_default();
-            pool.append(&mut generation_seen);
-            pool.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            pool.dedup_by_key(|e| e.1);
-            pool.truncate(settings.elites_per_start);
-            let gen_best = cmaes
-                .current_best_individual()
-                .map_or(f64::NAN, |b| b.value);
-            let gen_value = if gen_best < crate::evaluate::INFEASIBLE_FITNESS {
-                -gen_best
-            } else {
-                f64::NAN
-            };
-            if gen_value > best_so_far {
-                best_so_far = gen_value;
-            }
-            history.push(HistoryRow {
-                start: i,
-                generation,
-                evaluations,
-                generation_best: gen_value,
-                best_so_far,
-                sigma: cmaes.sigma(),
-            });
-            progress(Progress {
-                evaluations,
-                budget,
-                best: best_so_far,
-            });
-            if !new.is_empty()
-                && let Ok(mut c) = checkpoint.lock()
-                && let Some(c) = c.as_deref_mut()
-            {
-                c.append(&new)?;
-            }
-            if let Some(t) = done {
-                break t;
-            }
-        };
+        let fitness = |x: &[f64]| problem.evaluate(&encoding.decode(x)).fitness();
+        let run = cma_run(
+            &CmaSpec {
+                x0: &start.x,
+                sigma: start.sigma,
+                seed: settings.seed.wrapping_add(i as u64),
+                population: settings.population,
+                budget: per_start,
+                elites: settings.elites_per_start,
+                salt: 0,
+            },
+            &fitness,
+            &checkpoint,
+            &mut |g: &Generation| {
+                evaluations += g.evaluations;
+                replayed += g.replayed;
+                infeasible += g.infeasible;
+                if g.best_value > best_so_far {
+                    best_so_far = g.best_value;
+                }
+                history.push(HistoryRow {
+                    start: i,
+                    generation: g.generation,
+                    evaluations,
+                    generation_best: g.best_value,
+                    best_so_far,
+                    sigma: g.sigma,
+                });
+                progress(Progress {
+                    evaluations,
+                    budget,
+                    best: best_so_far,
+                });
+            },
+        )?;
+        let (termination, pool) = (run.termination, run.pool);
         elites.extend(pool.into_iter().map(|(fitness, _, x)| Elite {
             start: i,
             chain: encoding.decode(&x),
@@ -270,4 +232,142 @@ pub fn search(
         replayed,
         infeasible,
     })
+}
+
+/// One CMA-ES run's settings.
+pub(crate) struct CmaSpec<'a> {
+    /// Initial mean, in the encoding's coordinates.
+    pub x0: &'a [f64],
+    /// Initial step size.
+    pub sigma: f64,
+    /// Seed of its sampler.
+    pub seed: u64,
+    /// Candidates per generation.
+    pub population: usize,
+    /// Evaluations at most.
+    pub budget: usize,
+    /// Best distinct feasible candidates to keep.
+    pub elites: usize,
+    /// Mixed into the checkpoint's keys, so runs of different objectives do not share values.
+    pub salt: u64,
+}
+
+/// What one generation did.
+pub(crate) struct Generation {
+    /// Its number, from 1.
+    pub generation: usize,
+    /// Candidates evaluated.
+    pub evaluations: usize,
+    /// Of which read from the checkpoint.
+    pub replayed: usize,
+    /// Of which outside the limits.
+    pub infeasible: usize,
+    /// The generation's best objective value (NaN when none was feasible).
+    pub best_value: f64,
+    /// The step size after it.
+    pub sigma: f64,
+}
+
+/// What one CMA-ES run found.
+pub(crate) struct CmaRun {
+    /// Why it stopped, and its best point.
+    pub termination: cmaes::TerminationData,
+    /// Its best distinct feasible candidates (fitness, key, point), best first.
+    pub pool: Vec<(f64, u64, Vec<f64>)>,
+}
+
+/// Run CMA-ES on `fitness` (minimised; feasible below
+/// [`INFEASIBLE_FITNESS`](crate::evaluate::INFEASIBLE_FITNESS)), candidates in parallel on the
+/// current rayon pool, values read from and appended to the checkpoint, `on_generation` told
+/// after each generation.
+pub(crate) fn cma_run(
+    spec: &CmaSpec<'_>,
+    fitness: &(dyn Fn(&[f64]) -> f64 + Sync),
+    checkpoint: &Mutex<Option<&mut Checkpoint>>,
+    on_generation: &mut dyn FnMut(&Generation),
+) -> Result<CmaRun, String> {
+    use crate::evaluate::INFEASIBLE_FITNESS;
+    // Values computed this generation, to append to the checkpoint.
+    let fresh: Mutex<Vec<(u64, f64)>> = Mutex::new(Vec::new());
+    // Every feasible candidate of this generation: (fitness, key, point).
+    let seen: Mutex<Vec<(f64, u64, Vec<f64>)>> = Mutex::new(Vec::new());
+    let counts = Mutex::new((0usize, 0usize, 0usize));
+    let objective = |x: &DVector<f64>| -> f64 {
+        let key = point_key(x.as_slice()) ^ spec.salt;
+        let recorded = checkpoint
+            .lock()
+            .ok()
+            .and_then(|c| c.as_ref().and_then(|c| c.recorded(key)));
+        let (value, from_checkpoint) = match recorded {
+            Some(v) => (v, true),
+            None => (fitness(x.as_slice()), false),
+        };
+        if let Ok(mut c) = counts.lock() {
+            c.0 += 1;
+            c.1 += usize::from(from_checkpoint);
+            c.2 += usize::from(value >= INFEASIBLE_FITNESS);
+        }
+        if !from_checkpoint && let Ok(mut f) = fresh.lock() {
+            f.push((key, value));
+        }
+        if value < INFEASIBLE_FITNESS
+            && let Ok(mut s) = seen.lock()
+        {
+            s.push((value, key, x.as_slice().to_vec()));
+        }
+        value
+    };
+    let mut cmaes = CMAESOptions::new(spec.x0.to_vec(), spec.sigma)
+        .population_size(spec.population)
+        .seed(spec.seed)
+        .max_function_evals(spec.budget)
+        .tol_fun(1e-12)
+        .build(&objective)
+        .map_err(|e| format!("cannot set up CMA-ES: {e:?}"))?;
+    let mut pool: Vec<(f64, u64, Vec<f64>)> = Vec::new();
+    let mut generation = 0;
+    let termination = loop {
+        let done = cmaes.next_parallel();
+        generation += 1;
+        let new: Vec<(u64, f64)> = fresh
+            .lock()
+            .map(|mut f| std::mem::take(&mut *f))
+            .unwrap_or_default();
+        let (evaluations, replayed, infeasible) = counts
+            .lock()
+            .map(|mut c| std::mem::take(&mut *c))
+            .unwrap_or_default();
+        // Merged in a fixed order (fitness, then key): the threads' order does not matter.
+        let mut generation_seen = seen
+            .lock()
+            .map(|mut s| std::mem::take(&mut *s))
+            .unwrap_or_default();
+        pool.append(&mut generation_seen);
+        pool = diverse_best(pool, spec.elites);
+        let best = cmaes
+            .current_best_individual()
+            .map_or(f64::NAN, |b| b.value);
+        on_generation(&Generation {
+            generation,
+            evaluations,
+            replayed,
+            infeasible,
+            best_value: if best < INFEASIBLE_FITNESS {
+                -best
+            } else {
+                f64::NAN
+            },
+            sigma: cmaes.sigma(),
+        });
+        if !new.is_empty()
+            && let Ok(mut c) = checkpoint.lock()
+            && let Some(c) = c.as_deref_mut()
+        {
+            c.append(&new)?;
+        }
+        if let Some(t) = done {
+            break t;
+        }
+    };
+    Ok(CmaRun { termination, pool })
 }

@@ -19,6 +19,7 @@ use sandjumper_optimize::evaluate::{Evaluation, Objective, Problem, SearchLimits
 use sandjumper_optimize::family::{Encoding, MoveChain};
 use sandjumper_optimize::figure::{Shown, search_figure};
 use sandjumper_optimize::paper_sweep::{PaperGrid, SweptPoint, sweep};
+use sandjumper_optimize::refine::{RefineSettings, refine};
 use sandjumper_optimize::search::{SearchSettings, Start, search};
 use sandjumper_optimize::verify::{LinkRun, run_through};
 use sandjumper_output::CliError;
@@ -163,6 +164,11 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "N", default_value = "16",
           value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub elites: u32,
+    /// Runs through sil refining the best re-ranked stroke (CMA-ES on the controller's
+    /// value; 0: none).
+    #[arg(long, value_name = "N", default_value = "600",
+          value_parser = clap::value_parser!(u32).range(0..=100_000))]
+    pub refine: u32,
     /// Paper strokes of each kind re-ranked through the controller (the sweep's best).
     #[arg(long, value_name = "N", default_value = "8",
           value_parser = clap::value_parser!(u32).range(1..=1000))]
@@ -241,6 +247,8 @@ pub struct OptimizeReport {
     pub paper_best_by_kind: Vec<KindBest>,
     /// Candidates re-ranked through the controller.
     pub candidates_ranked: usize,
+    /// Runs through sil of the refinement.
+    pub refine_runs: usize,
     /// Points of the paper sweep.
     pub paper_sweep_points: usize,
     /// Feasible points of the sweep.
@@ -469,7 +477,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
         .threads
         .map(|t| t as usize)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let pool = rayon::ThreadPoolBuilder::new()
+    let rayon_pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::internal(format!("cannot start {threads} threads: {e}")))?;
@@ -500,7 +508,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
     );
     let bar = crate::command::progress_bar(grid.len() as u64, "paper strokes");
     let sweep_started = Instant::now();
-    let paper = pool.install(|| {
+    let paper = rayon_pool.install(|| {
         sweep(&problem, &grid, encoding.moves, &|n| {
             bar.set_position(n as u64)
         })
@@ -547,7 +555,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
     }
     let bar = crate::command::progress_bar(settings.evaluations as u64, "evaluations");
     let search_started = Instant::now();
-    let outcome = pool
+    let outcome = rayon_pool
         .install(|| {
             search(
                 &problem,
@@ -621,6 +629,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
                 .map(|p| Candidate::paper(p, encoding.moves)),
         );
     }
+    let mut refine_runs = 0;
     let ranked: Vec<Option<LinkRun>> = match &rank_link {
         None => vec![None; pool.len()],
         Some(link) => {
@@ -630,54 +639,79 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
             ));
             let bar =
                 crate::command::progress_bar(pool.len() as u64, "runs through the controller");
-            let runs = pool
-                .iter()
-                .map(|c| {
-                    let r = run_through(
-                        link,
-                        &problem.params,
-                        model,
-                        &problem.table(&c.chain),
-                        &a.firmware,
-                    );
-                    bar.inc(1);
-                    r.map(Some)
+            let runs = rayon_pool
+                .install(|| {
+                    use rayon::prelude::*;
+                    pool.par_iter()
+                        .map(|c| {
+                            let r = run_through(
+                                link,
+                                &problem.params,
+                                model,
+                                &problem.table(&c.chain),
+                                &a.firmware,
+                            );
+                            bar.inc(1);
+                            r.map(Some)
+                        })
+                        .collect::<Result<Vec<_>, _>>()
                 })
-                .collect::<Result<Vec<_>, _>>()
                 .map_err(CliError::internal)?;
             bar.finish_and_clear();
             runs
         }
     };
+    let mut ranked = ranked;
+    // The best stroke through the controller, refined there.
+    if rank_link == Some(LinkArg::Sil) && a.refine > 0 {
+        let from = best_index(&pool, &ranked, &problem, false);
+        say(format!(
+            "  refining {} through sil ({} runs)",
+            pool[from].label, a.refine
+        ));
+        let bar = crate::command::progress_bar(u64::from(a.refine), "runs through sil");
+        let refined = rayon_pool
+            .install(|| {
+                refine(
+                    &problem,
+                    &encoding,
+                    &pool[from].chain,
+                    &RefineSettings {
+                        evaluations: a.refine as usize,
+                        population: 12,
+                        sigma: 0.02,
+                        seed: settings.seed,
+                    },
+                    Some(&mut checkpoint),
+                    &a.firmware,
+                    &|n, _, _| bar.set_position(n as u64),
+                )
+            })
+            .map_err(CliError::internal)?;
+        bar.finish_and_clear();
+        let run = run_through(
+            &LinkArg::Sil,
+            &problem.params,
+            model,
+            &problem.table(&refined.chain),
+            &a.firmware,
+        )
+        .map_err(CliError::internal)?;
+        refine_runs = refined.evaluations;
+        pool.push(Candidate {
+            label: format!("refined through sil from {}", pool[from].label),
+            kinematic: problem.evaluate(&refined.chain),
+            chain: refined.chain,
+            paper: None,
+        });
+        ranked.push(Some(run));
+    }
     let controller_value = |i: usize| {
         ranked[i]
             .as_ref()
             .and_then(|r| r.value(problem.objective, a.min_height))
     };
-    let best_of = |paper_only: bool| -> usize {
-        let by_controller = (0..pool.len())
-            .filter(|&i| !paper_only || pool[i].paper.is_some())
-            .filter_map(|i| controller_value(i).map(|v| (i, v)))
-            .fold(None::<(usize, f64)>, |best, (i, v)| match best {
-                Some((_, bv)) if bv >= v => best,
-                _ => Some((i, v)),
-            });
-        match by_controller {
-            Some((i, _)) => i,
-            // Nothing ran through a controller (or every run faulted): the kinematic ranking.
-            None => (0..pool.len())
-                .filter(|&i| !paper_only || pool[i].paper.is_some())
-                .fold(0, |best, i| {
-                    if pool[i].kinematic.value > pool[best].kinematic.value
-                        || (paper_only && pool[best].paper.is_none())
-                    {
-                        i
-                    } else {
-                        best
-                    }
-                }),
-        }
-    };
+    let best_of = |paper_only: bool| best_index(&pool, &ranked, &problem, paper_only);
     let basis = if rank_link.is_some() && (0..pool.len()).any(|i| controller_value(i).is_some()) {
         rank_link
             .as_ref()
@@ -883,6 +917,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
             })
             .collect(),
         candidates_ranked: pool.len(),
+        refine_runs,
         paper_sweep_points: paper.points.len(),
         paper_sweep_feasible: feasible,
         evaluations: outcome.evaluations,
@@ -908,6 +943,40 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
         print!("{}", human(&report, &dir));
     }
     Ok(())
+}
+
+/// The best of `pool` by its value through the controller (`ranked`, one run per candidate),
+/// among the paper's strokes only with `paper_only`; by the kinematic value when no run gave
+/// one (no link, or every run faulted).
+fn best_index(
+    pool: &[Candidate],
+    ranked: &[Option<LinkRun>],
+    problem: &Problem,
+    paper_only: bool,
+) -> usize {
+    let eligible = |i: &usize| !paper_only || pool[*i].paper.is_some();
+    let by_controller = (0..pool.len())
+        .filter(eligible)
+        .filter_map(|i| {
+            ranked[i]
+                .as_ref()
+                .and_then(|r| r.value(problem.objective, problem.limits.min_height_m))
+                .map(|v| (i, v))
+        })
+        .fold(None::<(usize, f64)>, |best, (i, v)| match best {
+            Some((_, bv)) if bv >= v => best,
+            _ => Some((i, v)),
+        });
+    match by_controller {
+        Some((i, _)) => i,
+        None => (0..pool.len())
+            .filter(eligible)
+            .fold(None::<usize>, |best, i| match best {
+                Some(b) if pool[b].kinematic.value >= pool[i].kinematic.value => Some(b),
+                _ => Some(i),
+            })
+            .unwrap_or(0),
+    }
 }
 
 /// A stroke considered for the answer.
