@@ -61,7 +61,8 @@ pub struct SearchLimits {
     pub table_rate_hz: u32,
     /// Longest stroke (start to the end of the last move), s.
     pub max_duration_s: f64,
-    /// Least jump height for the ratio objectives, m.
+    /// Least jump height for the ratio objectives, m (they also need the foot to leave the
+    /// ground).
     pub min_height_m: f64,
 }
 
@@ -217,6 +218,12 @@ impl Problem {
                 s.peak_motor_force_n
             ));
             e.excess = s.peak_motor_force_n / peak - 1.0;
+            return e;
+        }
+        if self.objective.is_ratio() && s.liftoff_time_s.is_none() {
+            // A rod raised by a retracting motor is not a jump.
+            e.violation = Some("the foot never leaves the ground".into());
+            e.excess = 1.0;
             return e;
         }
         if self.objective.is_ratio() && s.jump_height_m < l.min_height_m {

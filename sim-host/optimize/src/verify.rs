@@ -33,6 +33,8 @@ pub struct LinkRun {
     pub tracking_error_max_m: Option<f64>,
     /// Periods the drive command sat at the peak force.
     pub saturated_periods: Option<usize>,
+    /// The foot left the ground.
+    pub lifted_off: bool,
     /// Largest |F_m p'| of the force-driven plant, W.
     pub peak_power_w: Option<f64>,
     /// Positive work of the motor, J.
@@ -47,7 +49,7 @@ impl LinkRun {
             return None;
         }
         let h = self.jump_height_m?;
-        if objective.is_ratio() && h < min_height_m {
+        if objective.is_ratio() && (h < min_height_m || !self.lifted_off) {
             return None;
         }
         let v = match objective {
@@ -68,6 +70,7 @@ impl LinkRun {
             faults: Vec::new(),
             tracking_error_max_m: None,
             saturated_periods: None,
+            lifted_off: false,
             peak_power_w: None,
             work_j: None,
         }
@@ -114,6 +117,7 @@ pub fn run_through(
                 .filter(|r| r.drive_command_n.abs() >= peak)
                 .count(),
         ),
+        lifted_off: o.summary.liftoff_time_s.is_some(),
         peak_power_w: Some(o.summary.peak_motor_power_w),
         work_j: Some(o.summary.motor_work_j),
     })

@@ -119,8 +119,9 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "HZ", default_value = "1000",
           value_parser = clap::value_parser!(u32).range(10..=10_000))]
     pub table_rate: u32,
-    /// Least jump height of a stroke for the ratio objectives, m.
-    #[arg(long, value_name = "M", default_value = "0.005",
+    /// Least jump height of a stroke for the ratio objectives, m (they also need the foot to
+    /// leave the ground: a rod raised by a retracting motor is not a jump).
+    #[arg(long, value_name = "M", default_value = "0.02",
           value_parser = ranged("--min-height", 0.0, 1.0, "m"))]
     pub min_height: f64,
     /// Moves per stroke (the family: rest-to-rest cosine moves with holds; the paper's
