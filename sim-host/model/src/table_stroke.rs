@@ -75,10 +75,10 @@ impl Stroke for TableStroke {
             return hold(s[0]);
         }
         let x = t_s * self.rate_hz;
-        let i = x.floor() as usize;
-        if i + 1 >= s.len() {
+        if x >= (s.len() - 1) as f64 {
             return hold(s[s.len() - 1]);
         }
+        let i = x.floor() as usize;
         let u = x - i as f64;
         let (p1, p2) = (s[i], s[i + 1]);
         let p0 = if i > 0 { s[i - 1] } else { p1 };

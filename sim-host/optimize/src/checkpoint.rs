@@ -89,9 +89,11 @@ impl Checkpoint {
                 };
                 recorded.insert(k, f64::from_bits(v));
             }
-            // Rewrite the file without any cut line, then append.
-            let mut f = File::create(path)
-                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))?;
+            // Rewrite the file without any cut line (into a temporary file renamed over it, so
+            // a crash now loses nothing), then append.
+            let tmp = path.with_extension("checkpoint-rewrite");
+            let mut f = File::create(&tmp)
+                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", tmp.display()))?;
             let mut text = format!("{header}\n");
             let mut keys: Vec<_> = recorded.iter().collect();
             keys.sort_by_key(|(k, _)| **k);
@@ -100,6 +102,7 @@ impl Checkpoint {
             }
             f.write_all(text.as_bytes())
                 .and_then(|()| f.sync_all())
+                .and_then(|()| std::fs::rename(&tmp, path))
                 .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))?;
         } else {
             let mut f = File::create(path)

@@ -77,7 +77,11 @@ pub fn refine(
             &problem.table(&chain),
             firmware,
         ) {
-            Ok(run) => match run.value(problem.objective, problem.limits.min_height_m) {
+            Ok(run) => match run.value(
+                problem.objective,
+                problem.limits.min_height_m,
+                problem.released_energy_j(&chain),
+            ) {
                 Some(v) => -v,
                 // Faulted (or below the least height): the safe state is worth nothing.
                 None => INFEASIBLE_FITNESS + 0.5,

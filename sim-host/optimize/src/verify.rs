@@ -42,10 +42,15 @@ pub struct LinkRun {
 }
 
 impl LinkRun {
-    /// The objective's value of this run (None: skipped, or the controller latched a fault:
-    /// a stroke that ends in the safe state is worth nothing).
-    pub fn value(&self, objective: Objective, min_height_m: f64) -> Option<f64> {
-        if self.skipped.is_some() || !self.faults.is_empty() {
+    /// The objective's value of this run (None: skipped, the controller latched a fault, or
+    /// the drive saturated: a stroke the controller cannot follow is worth nothing).
+    /// `released_j` is the potential energy the stroke releases by ending lower than it
+    /// starts (charged to the energy objective).
+    pub fn value(&self, objective: Objective, min_height_m: f64, released_j: f64) -> Option<f64> {
+        if self.skipped.is_some()
+            || !self.faults.is_empty()
+            || self.saturated_periods.is_some_and(|n| n > 0)
+        {
             return None;
         }
         let h = self.jump_height_m?;
@@ -56,7 +61,7 @@ impl LinkRun {
             Objective::Height => h,
             Objective::FinalHeight => self.final_jump_height_m?,
             Objective::HeightPerPeakPower => h / self.peak_power_w?,
-            Objective::HeightPerEnergy => h / self.work_j?,
+            Objective::HeightPerEnergy => h / (self.work_j? + released_j),
         };
         v.is_finite().then_some(v)
     }

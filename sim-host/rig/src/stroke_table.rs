@@ -7,8 +7,14 @@
 //! - at most [`REPLAY_CAPACITY`] samples at the table rate;
 //! - `|p| <= STROKE_M` (25 mm) at every sample;
 //! - the motor force on a standing rod, `m_m (p'' + g)` with `p''` the table's second
-//!   difference (what the controller's feedforward sees), within the drive's peak force at
-//!   every inner sample. The push-off, where the rod barely moves, is where the force peaks.
+//!   difference, within the drive's peak force at every sample; the first and last samples
+//!   count with the holds around them (the controller holds `p[0]` before and `p[n-1]`
+//!   after), so a table that starts or ends moving is refused. The push-off, where the rod
+//!   barely moves, is where the force peaks. It is an estimate: the controller's feedforward
+//!   is its Catmull-Rom `p''`, which at a step in acceleration (a cosine leaving a hold)
+//!   reaches about 1.5 times the second difference for a millisecond, a saturation the
+//!   position loop absorbs (a 10 Hz single jump replays within 1 mm); `sandjumper optimize`
+//!   counts a stroke that saturates the drive through the controller as worth nothing.
 
 use std::fmt::{self, Write as _};
 use std::path::Path;
@@ -78,7 +84,7 @@ pub struct StrokeTable {
 pub struct TableCheck {
     /// Largest |p|, m.
     pub max_abs_p_m: f64,
-    /// Largest |m_m (p'' + g)|, N.
+    /// Largest |m_m (p'' + g)| with `p''` the table's second difference, N.
     pub peak_force_n: f64,
     /// Time of the peak force, s.
     pub peak_force_at_s: f64,
@@ -252,6 +258,14 @@ impl StrokeTable {
         for k in 1..n - 1 {
             let a = (s[k + 1] - 2.0 * s[k] + s[k - 1]) * rate * rate;
             let f = (limits.motor_mass_kg * (a + limits.gravity_m_s2)).abs();
+            if f > peak {
+                (peak, peak_k) = (f, k);
+            }
+        }
+        // Held before the start and after the end: a table that starts or ends moving asks
+        // for its speed at once; the second difference with the held neighbour measures it.
+        for (k, a) in [(0, s[1] - s[0]), (n - 1, s[n - 2] - s[n - 1])] {
+            let f = (limits.motor_mass_kg * (a * rate * rate + limits.gravity_m_s2)).abs();
             if f > peak {
                 (peak, peak_k) = (f, k);
             }
@@ -477,6 +491,35 @@ mod tests {
             .check(&l)
             .is_ok()
         );
+    }
+
+    #[test]
+    fn a_table_that_starts_or_ends_moving_is_refused() {
+        let l = limits();
+        // Held before and after: a jump from -20 to +20 mm in one sample, or a ramp that stops
+        // dead at its last sample, asks for its speed at once.
+        let jump = StrokeTable {
+            samples_m: vec![-0.02, 0.02],
+            rate_hz: 1000,
+        };
+        assert!(matches!(jump.check(&l), Err(TableRefusal::Force { .. })));
+        let ramp = StrokeTable {
+            samples_m: (0..40).map(|k| -0.02 + 0.001 * k as f64).collect(),
+            rate_hz: 1000,
+        };
+        let e = ramp.check(&l).unwrap_err();
+        assert!(
+            matches!(e, TableRefusal::Force { at_s, .. } if at_s == 0.0 || (at_s - 0.039).abs() < 1e-12),
+            "{e}"
+        );
+        // The same ramp eased in and out at the drive's pace passes.
+        let eased = StrokeTable {
+            samples_m: (0..400)
+                .map(|k| -0.02 + 0.02 * (1.0 - (core::f64::consts::PI * k as f64 / 399.0).cos()))
+                .collect(),
+            rate_hz: 1000,
+        };
+        eased.check(&l).unwrap();
     }
 
     #[test]

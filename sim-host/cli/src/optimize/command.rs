@@ -308,7 +308,9 @@ fn setup(
         )));
     }
     let moves = a.moves as usize;
-    let max_move = (a.max_duration / moves as f64).min(0.5);
+    // The longest move: the slowest half period of the sweep (1 Hz), whatever --moves and
+    // --max-duration (the duration limit is checked on every candidate).
+    let max_move = 0.5;
     let encoding = Encoding {
         moves,
         stroke_m: a.max_stroke,
@@ -708,9 +710,13 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
         ranked.push(Some(run));
     }
     let controller_value = |i: usize| {
-        ranked[i]
-            .as_ref()
-            .and_then(|r| r.value(problem.objective, a.min_height))
+        ranked[i].as_ref().and_then(|r| {
+            r.value(
+                problem.objective,
+                a.min_height,
+                problem.released_energy_j(&pool[i].chain),
+            )
+        })
     };
     let best_of = |paper_only: bool| best_index(&pool, &ranked, &problem, paper_only);
     let basis = if rank_link.is_some() && (0..pool.len()).any(|i| controller_value(i).is_some()) {
@@ -961,7 +967,13 @@ fn best_index(
         .filter_map(|i| {
             ranked[i]
                 .as_ref()
-                .and_then(|r| r.value(problem.objective, problem.limits.min_height_m))
+                .and_then(|r| {
+                    r.value(
+                        problem.objective,
+                        problem.limits.min_height_m,
+                        problem.released_energy_j(&pool[i].chain),
+                    )
+                })
                 .map(|v| (i, v))
         })
         .fold(None::<(usize, f64)>, |best, (i, v)| match best {

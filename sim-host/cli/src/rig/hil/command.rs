@@ -620,7 +620,7 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
             scale: 1.0,
             time_stretch: 1.0,
             clip: None,
-            table_rate: table.rate_hz,
+            table_rate: Some(table.rate_hz),
             allow_gaps: false,
             rig,
             out,

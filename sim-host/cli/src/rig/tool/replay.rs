@@ -104,10 +104,10 @@ pub struct ReplayArgs {
     /// Replay only START:END, seconds from the log's first sample (before stretching).
     #[arg(long, value_name = "START:END", value_parser = parse_clip)]
     pub clip: Option<Clip>,
-    /// Samples per second of the uploaded table (divides the 10 kHz control rate).
-    #[arg(long, value_name = "HZ", default_value = "1000",
-          value_parser = clap::value_parser!(u32).range(10..=10_000))]
-    pub table_rate: u32,
+    /// Samples per second of the uploaded table (divides the 10 kHz control rate; default
+    /// 1000 for a log, the file's own rate for --stroke).
+    #[arg(long, value_name = "HZ", value_parser = clap::value_parser!(u32).range(10..=10_000))]
+    pub table_rate: Option<u32>,
     /// Accept a log with gaps (interpolated).
     #[arg(long)]
     pub allow_gaps: bool,
@@ -358,20 +358,26 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let source = ReplaySource::read(a)?;
     let record = edited_record(&source, a)?;
     let model_config = RigModelConfig::default();
+    let rate = match (&source, a.table_rate) {
+        (_, Some(r)) => r,
+        (ReplaySource::Stroke(t), None) => t.rate_hz,
+        (ReplaySource::Log(_), None) => 1000,
+    };
     let plan = plan(
         &record,
-        a.table_rate,
+        rate,
         model_config.tick_hz,
         params.robot.motor_mass_kg,
         params.robot.gravity_m_s2,
         params.drive.peak_force_n,
-    )?;
+    )
+    .map_err(|e| CliError::input(format!("{}: {}", source_path(a).display(), e.message)))?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
         a.target.host_plays_the_rig(),
         &params,
         a.rig.model(),
-        f64::from(plan.samples[0]),
+        plan.table.samples_m[0],
         model_config,
     )?;
     let mut link = a.target.open_with_load(
@@ -379,7 +385,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         Some(VirtualLoad::Robot {
             params: params.clone(),
             model: a.rig.model(),
-            p0_m: f64::from(plan.samples[0]),
+            p0_m: plan.table.samples_m[0],
         }),
     )?;
     let name = link.name();
@@ -480,7 +486,10 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         tracking_error_max_m: max_tracking_error_m(&run.samples, mpc),
         reproduction_error_max_m: worst,
         reproduction_error_rms_m: if n > 0 { (sum2 / n as f64).sqrt() } else { 0.0 },
-        simulated_jump_height_m: robot.as_ref().map(|r| r.plant().summary().jump_height_m),
+        simulated_jump_height_m: robot
+            .as_ref()
+            .map(|r| r.plant().summary().jump_height_m)
+            .or(run.report.simulated_jump_height_m),
         wall_time_s: run.wall_time_s,
     };
     let json = serde_json::to_string_pretty(&report)
