@@ -69,7 +69,7 @@ fn run(args: &[String]) -> String {
 fn a_small_search_writes_its_answer_and_jump_hil_and_rig_run_it() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("opt");
-    let stdout = run(&small(&out, &["--json"]));
+    let stdout = run(&small(&out, &["--json", "--verify", "sil,pil,f407"]));
     let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     for f in [
         "stroke.csv",
@@ -117,6 +117,34 @@ fn a_small_search_writes_its_answer_and_jump_hil_and_rig_run_it() {
         .fold(f64::MIN, f64::max);
     assert_eq!(j["best_value"].as_f64().unwrap(), best, "{j}");
     assert!(values.iter().filter(|v| v.is_finite()).count() >= 2);
+
+    // The answer and the paper's best ran through every link: the core (sil), the emulated
+    // firmware under QEMU (pil) and the F407 release binary on the virtual board (f407),
+    // each where it is built (.ci/run builds them; skipped with a message elsewhere).
+    for stroke in ["answer", "paper_answer"] {
+        let links = j[stroke]["links"].as_array().unwrap();
+        assert_eq!(links.len(), 3, "{stroke}: {links:?}");
+        let sil = links[0]["jump_height_m"].as_f64().unwrap();
+        assert_eq!(links[0]["link"], "sil");
+        for l in &links[1..] {
+            if let Some(why) = l["skipped"].as_str() {
+                assert!(
+                    std::env::var_os("CI").is_none(),
+                    "{stroke} through {}: skipped under CI: {why}",
+                    l["link"]
+                );
+                eprintln!("skipped {} ({why})", l["link"]);
+                continue;
+            }
+            let h = l["jump_height_m"].as_f64().unwrap();
+            assert!(
+                (h - sil).abs() <= 0.03 * sil,
+                "{stroke}: {} {h} m against sil {sil} m",
+                l["link"]
+            );
+            assert!(l["faults"].as_array().unwrap().is_empty(), "{l}");
+        }
+    }
 
     // The stroke passes the rig's own check, and is what jump, hil and rig replay run.
     let params = sandjumper_model::params::Params::preset(0.57).unwrap();

@@ -28,7 +28,7 @@ use sandjumper_output::folder::write_csv;
 use sandjumper_output::plot::save_figure;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
-use sandjumper_rig::stroke_table::RigLimits;
+use sandjumper_rig::stroke_table::{RigLimits, StrokeTable};
 
 /// The objective on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -80,10 +80,10 @@ fn parse_links(s: &str) -> Result<VerifyLinks, String> {
         .map(|l| match l.trim() {
             "sil" => Ok(LinkArg::Sil),
             "pil" => Ok(LinkArg::Pil),
+            "f407" => Ok(LinkArg::F407),
             other => Err(format!(
-                "link `{other}` not allowed in --verify (allowed: sil, pil, a comma-separated \
-                 list of them, or none; the F407 board: `sandjumper hil --link f407 --stroke \
-                 DIR/stroke.csv`)"
+                "link `{other}` not allowed in --verify (allowed: sil, pil, f407, a \
+                 comma-separated list of them, or none)"
             )),
         })
         .collect::<Result<Vec<_>, _>>()
@@ -157,9 +157,11 @@ pub struct OptimizeArgs {
           value_parser = ranged("--sweep-tau-step", 0.0, 1.0, "s"))]
     pub sweep_tau_step: f64,
     /// Re-run the best strokes (and the paper's best) force-driven through these links:
-    /// `sil`, `pil` (skipped, with the reason, where the emulated firmware or QEMU is
-    /// missing), a comma-separated list, or `none`.
-    #[arg(long, value_name = "LINKS", default_value = "sil,pil", value_parser = parse_links)]
+    /// `sil` (candidates are re-ranked through it), `pil` (the emulated firmware under QEMU),
+    /// `f407` (the F407 release binary on the virtual board, as `rig replay --stroke --link
+    /// f407` runs it), a comma-separated list, or `none`. A link that is not available here is
+    /// skipped with the reason.
+    #[arg(long, value_name = "LINKS", default_value = "sil,pil,f407", value_parser = parse_links)]
     pub verify: VerifyLinks,
     /// Candidates of each start re-ranked through the controller (its best distinct ones).
     #[arg(long, value_name = "N", default_value = "16",
@@ -735,10 +737,12 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::internal(format!("the stroke table's jump failed: {e}")))?;
         let mut links: Vec<LinkRun> = ranked[i].iter().cloned().collect();
         for link in a.verify.0.iter().filter(|l| Some(*l) != rank_link.as_ref()) {
-            links.push(
+            links.push(if *link == LinkArg::F407 {
+                run_on_the_virtual_board(a, &table)
+            } else {
                 run_through(link, &problem.params, model, &table, &a.firmware)
-                    .map_err(CliError::internal)?,
-            );
+                    .map_err(CliError::internal)?
+            });
         }
         Ok(ResultStroke {
             label: c.label.clone(),
@@ -950,6 +954,86 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
         print!("{}", human(&report, &dir));
     }
     Ok(())
+}
+
+/// `table` through the F407 release binary on the virtual board: `rig replay --stroke
+/// --link f407` run as its own process (the board runs free on its own tick, not in
+/// lockstep), its summary read back. Skipped, with the reason, when the board or the binary
+/// is not there.
+fn run_on_the_virtual_board(a: &OptimizeArgs, table: &StrokeTable) -> LinkRun {
+    let skipped = |why: String| LinkRun {
+        link: "f407".into(),
+        skipped: Some(why),
+        jump_height_m: None,
+        final_jump_height_m: None,
+        faults: Vec::new(),
+        tracking_error_max_m: None,
+        saturated_periods: None,
+        lifted_off: false,
+        peak_power_w: None,
+        work_j: None,
+    };
+    let scratch = match tempfile::tempdir() {
+        Ok(d) => d,
+        Err(e) => return skipped(format!("no scratch directory: {e}")),
+    };
+    let stroke = scratch.path().join("stroke.csv");
+    if let Err(e) = std::fs::write(&stroke, table.to_csv()) {
+        return skipped(format!("cannot write {}: {e}", stroke.display()));
+    }
+    let out = scratch.path().join("f407");
+    let exe = match std::env::current_exe() {
+        Ok(p) => p,
+        Err(e) => return skipped(format!("cannot find this program: {e}")),
+    };
+    let mut cmd = std::process::Command::new(exe);
+    cmd.args(["rig", "replay", "--link", "f407", "--json", "--stroke"])
+        .arg(&stroke)
+        .arg("--out")
+        .arg(&out)
+        .args(["--model", ModelName::from(a.model).as_str()])
+        .args(["--phi", &a.phi.to_string()]);
+    if let Some(p) = &a.source.params {
+        cmd.arg("--params").arg(p);
+    }
+    let output = match cmd.output() {
+        Ok(o) => o,
+        Err(e) => return skipped(format!("cannot run rig replay: {e}")),
+    };
+    let summary: Option<serde_json::Value> = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    let Some(s) = summary else {
+        let err = String::from_utf8_lossy(&output.stderr);
+        return skipped(
+            err.lines()
+                .find(|l| l.starts_with("error"))
+                .unwrap_or("rig replay --link f407 wrote no summary")
+                .trim_start_matches("error: ")
+                .to_string(),
+        );
+    };
+    LinkRun {
+        link: "f407".into(),
+        skipped: None,
+        jump_height_m: s["simulated_jump_height_m"].as_f64(),
+        final_jump_height_m: None,
+        faults: s["faults"]
+            .as_array()
+            .map(|f| {
+                f.iter()
+                    .filter_map(|x| x["name"].as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default(),
+        tracking_error_max_m: s["tracking_error_max_m"].as_f64(),
+        saturated_periods: None,
+        lifted_off: s["simulated_jump_height_m"]
+            .as_f64()
+            .is_some_and(|h| h > 0.0),
+        peak_power_w: None,
+        work_j: None,
+    }
 }
 
 /// The best of `pool` by its value through the controller (`ranked`, one run per candidate),
