@@ -61,6 +61,9 @@ pub struct SweepArgs {
     /// (0 < FACTOR <= 1; 0.05 damps the spring's ringing ~10x), as the paper's rig did.
     #[arg(long, value_name = "FACTOR", requires = "link", value_parser = crate::command::args::parse_gain_lowering)]
     pub gain_lowering: Option<f64>,
+    /// Run on a Slurm cluster as a job array.
+    #[command(flatten)]
+    pub slurm: super::slurm::SlurmArgs,
 }
 
 /// The loop a sweep's jumps run through instead of the imposed stroke.
@@ -192,6 +195,15 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         },
     };
     let (params_by_phi, params_text) = resolve_sweep_params(&spec, file.as_ref())?;
+    if a.slurm.slurm.is_some() {
+        if a.shard.is_some() {
+            return Err(CliError::input(
+                "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
+            ));
+        }
+        let argv: Vec<String> = std::env::args().collect();
+        return super::slurm::submit(&argv, &a.out, &a.slurm);
+    }
     let shard = a.shard.unwrap_or(ShardSpec::WHOLE);
     let combos = spec.combinations();
     let total = combos.len();
