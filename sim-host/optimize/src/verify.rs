@@ -42,15 +42,15 @@ pub struct LinkRun {
 }
 
 impl LinkRun {
-    /// The objective's value of this run (None: skipped, the controller latched a fault, or
-    /// the drive saturated: a stroke the controller cannot follow is worth nothing).
-    /// `released_j` is the potential energy the stroke releases by ending lower than it
-    /// starts (charged to the energy objective).
+    /// The objective's value of this run (None: skipped, or the controller latched a fault:
+    /// a stroke it cannot follow within its tracking bound and stroke limit is worth
+    /// nothing). A drive that saturates for a few periods (the Catmull-Rom feedforward at an
+    /// acceleration step) is reported in `saturated_periods`, not disqualified: the paper's
+    /// own fast strokes do it and track within a millimetre. `released_j` is the potential
+    /// energy the stroke releases by ending lower than it starts (charged to the energy
+    /// objective).
     pub fn value(&self, objective: Objective, min_height_m: f64, released_j: f64) -> Option<f64> {
-        if self.skipped.is_some()
-            || !self.faults.is_empty()
-            || self.saturated_periods.is_some_and(|n| n > 0)
-        {
+        if self.skipped.is_some() || !self.faults.is_empty() {
             return None;
         }
         let h = self.jump_height_m?;

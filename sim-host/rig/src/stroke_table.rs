@@ -14,7 +14,7 @@
 //!   is its Catmull-Rom `p''`, which at a step in acceleration (a cosine leaving a hold)
 //!   reaches about 1.5 times the second difference for a millisecond, a saturation the
 //!   position loop absorbs (a 10 Hz single jump replays within 1 mm); `sandjumper optimize`
-//!   counts a stroke that saturates the drive through the controller as worth nothing.
+//!   reports how many periods the drive saturated through the controller.
 
 use std::fmt::{self, Write as _};
 use std::path::Path;

@@ -134,7 +134,7 @@ pub struct OptimizeArgs {
           value_parser = ranged("--max-hold", 0.0, 5.0, "s"))]
     pub max_hold: f64,
     /// Evaluations of the search in all (shared by its starts).
-    #[arg(long, value_name = "N", default_value = "96000",
+    #[arg(long, value_name = "N", default_value = "192000",
           value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
     pub evaluations: u64,
     /// Candidates per CMA-ES generation.
@@ -142,7 +142,7 @@ pub struct OptimizeArgs {
           value_parser = clap::value_parser!(u32).range(4..=1000))]
     pub population: u32,
     /// Random starts after the three paper strokes' starts.
-    #[arg(long, value_name = "N", default_value = "5",
+    #[arg(long, value_name = "N", default_value = "9",
           value_parser = clap::value_parser!(u32).range(0..=100))]
     pub random_starts: u32,
     /// Seed of the search (the same seed, the same answer).
