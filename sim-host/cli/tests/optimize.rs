@@ -279,6 +279,17 @@ fn a_search_killed_mid_way_resumes_to_the_same_answer() {
         read(&out.join("history.csv"))
     );
     assert!(!ckpt.exists());
+    // The killed runs' half-written folders are gone with the resumed run.
+    let partials: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            e.file_name()
+                .to_string_lossy()
+                .starts_with(".resumed.partial-")
+        })
+        .collect();
+    assert!(partials.is_empty(), "{partials:?}");
     // A checkpoint made with other settings is refused, not silently reused.
     std::fs::write(&ckpt, "sandjumper-optimize-checkpoint 1 {\"seed\":99}\n").unwrap();
     refused(

@@ -387,6 +387,27 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     out.with_file_name(name)
 }
 
+/// A resumed search's killed runs left their half-written output folders
+/// (`.DIR.partial-*` beside DIR): remove them.
+fn remove_stale_partials(out: &Path) {
+    let (Some(parent), Some(name)) = (out.parent(), out.file_name()) else {
+        return;
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let prefix = format!(".{}.partial-", name.to_string_lossy());
+    if let Ok(entries) = std::fs::read_dir(parent) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&prefix) && e.path().is_dir() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+}
+
 /// The settings a checkpoint must agree on, as JSON.
 fn checkpoint_settings(
     problem: &Problem,
@@ -486,6 +507,9 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
         .num_threads(threads)
         .build()
         .map_err(|e| CliError::internal(format!("cannot start {threads} threads: {e}")))?;
+    if checkpoint_path(&a.out).exists() {
+        remove_stale_partials(&a.out);
+    }
     let staged = StagedDir::create(&a.out)?;
     let started = Instant::now();
     let quiet = a.json;
