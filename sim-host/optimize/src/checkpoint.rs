@@ -32,6 +32,29 @@ pub fn point_key(x: &[f64]) -> u64 {
     h
 }
 
+/// The top-level settings that differ between two settings objects (JSON), in words.
+fn differing(recorded: &str, now: &str) -> String {
+    let parse = |t: &str| serde_json::from_str::<serde_json::Value>(t).ok();
+    match (parse(recorded), parse(now)) {
+        (Some(serde_json::Value::Object(a)), Some(serde_json::Value::Object(b))) => {
+            let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            let diff: Vec<String> = keys
+                .into_iter()
+                .filter(|k| a.get(*k) != b.get(*k))
+                .map(|k| format!("`{k}`"))
+                .collect();
+            if diff.is_empty() {
+                "settings differ".into()
+            } else {
+                format!("it differs in {}", diff.join(", "))
+            }
+        }
+        _ => "unreadable settings".into(),
+    }
+}
+
 /// An open checkpoint: the values recorded so far and the file new ones go to.
 #[derive(Debug)]
 pub struct Checkpoint {
@@ -66,12 +89,10 @@ impl Checkpoint {
             }
             if first != header {
                 return Err(format!(
-                    "{}: this checkpoint was made by a search with other settings; resume it \
-                     with the same arguments, or remove it to start afresh\n  checkpoint: {}\n  \
-                     this run:   {}",
+                    "{}: this checkpoint was made by a search with other settings ({}); resume \
+                     it with the same arguments, or remove it to start afresh",
                     path.display(),
-                    first.trim_start_matches(MAGIC).trim(),
-                    settings
+                    differing(first.trim_start_matches(MAGIC).trim(), settings)
                 ));
             }
             for line in lines {
@@ -186,7 +207,7 @@ mod tests {
         assert_eq!(c.recorded(0xab), None);
         drop(c);
         let e = Checkpoint::open(&path, "{\"seed\":2}").unwrap_err();
-        assert!(e.contains("other settings"), "{e}");
+        assert!(e.contains("other settings") && e.contains("`seed`"), "{e}");
         std::fs::write(&path, "hello\n").unwrap();
         assert!(
             Checkpoint::open(&path, "{}")
