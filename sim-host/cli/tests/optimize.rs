@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use sandjumper_rig::stroke_table::{RigLimits, StrokeTable};
 
 mod common;
-use common::{ok, read, refused};
+use common::{ok, read, refused, succeeded, workspace};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -69,7 +69,18 @@ fn run(args: &[String]) -> String {
 fn a_small_search_writes_its_answer_and_jump_hil_and_rig_run_it() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("opt");
-    let stdout = run(&small(&out, &["--json", "--verify", "sil,pil,f407"]));
+    // From the workspace (where the firmware builds and the virtual board live).
+    let firmware = workspace().join(sandjumper_rig::firmware_image::EMULATED_ELF);
+    let firmware = firmware.to_str().unwrap();
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(small(
+            &out,
+            &["--json", "--verify", "sil,pil,f407", "--firmware", firmware],
+        ))
+        .current_dir(workspace())
+        .output()
+        .unwrap();
+    let stdout = succeeded(&output);
     let j: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     for f in [
         "stroke.csv",
