@@ -40,7 +40,10 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
     /// Restitution and contact time within 1 % at t_c/40 and 0.1 % at t_c/200, for disk
     /// pairs of any sizes, disk-wall, any impact speed, and light damping (up to 0.05 of
-    /// critical, e >= 0.85). Heavier damping has a first-order error this test states below.
+    /// critical, e >= 0.85), plus, for the restitution, the dashpot's first-order separation
+    /// error that the heavy-damping test below measures (under 4 % at t_c/40 and 1 % at
+    /// t_c/200 for zeta 0.3, so 0.15 zeta and 0.04 zeta here: at zeta 0.047, t_c/200, the
+    /// error reaches 0.15 %).
     #[test]
     fn binary_collisions_match_the_analytic_spring_dashpot(
         d1 in 0.5e-3f64..3e-3,
@@ -49,9 +52,10 @@ proptest! {
         speed in 0.01f64..5.0,
         zeta in 0.0f64..0.05,
     ) {
-        for (steps, tol) in [(40.0, 1e-2), (200.0, 1e-3)] {
+        for (steps, tol, damping_tol) in [(40.0, 1e-2, 0.15), (200.0, 1e-3, 0.04)] {
             let r = collision(d1, d2, wall, speed, zeta, steps).run(false).unwrap();
-            prop_assert!(r.restitution_error.abs() < tol, "e {} vs {} at t_c/{steps}", r.restitution, r.restitution_analytic);
+            let e_tol = tol + damping_tol * zeta;
+            prop_assert!(r.restitution_error.abs() < e_tol, "e {} vs {} at t_c/{steps}", r.restitution, r.restitution_analytic);
             prop_assert!(r.contact_time_error.abs() < tol, "t_c {} vs {} at t_c/{steps}", r.contact_time_s, r.contact_time_analytic_s);
         }
     }
