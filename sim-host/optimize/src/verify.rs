@@ -66,7 +66,8 @@ impl LinkRun {
         v.is_finite().then_some(v)
     }
 
-    fn skipped(link: &LinkArg, why: String) -> Self {
+    /// A run through `link` that did not happen, and why.
+    pub fn skipped(link: &LinkArg, why: String) -> Self {
         Self {
             link: link.to_string(),
             skipped: Some(why),

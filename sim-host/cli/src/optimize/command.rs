@@ -985,18 +985,7 @@ pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
 /// lockstep), its summary read back. Skipped, with the reason, when the board or the binary
 /// is not there.
 fn run_on_the_virtual_board(a: &OptimizeArgs, table: &StrokeTable) -> LinkRun {
-    let skipped = |why: String| LinkRun {
-        link: "f407".into(),
-        skipped: Some(why),
-        jump_height_m: None,
-        final_jump_height_m: None,
-        faults: Vec::new(),
-        tracking_error_max_m: None,
-        saturated_periods: None,
-        lifted_off: false,
-        peak_power_w: None,
-        work_j: None,
-    };
+    let skipped = |why: String| LinkRun::skipped(&LinkArg::F407, why);
     let scratch = match tempfile::tempdir() {
         Ok(d) => d,
         Err(e) => return skipped(format!("no scratch directory: {e}")),
