@@ -21,6 +21,7 @@ pub mod command;
 pub mod dem;
 pub mod flow;
 pub mod imaging;
+pub mod interrupt;
 pub mod live;
 pub mod optimize;
 pub mod rig;

@@ -155,8 +155,8 @@ impl LiveView {
 
     /// One step of a `rig` program: a lockstep period (samples: the commanded position when
     /// the host knows it, the plant when simulated, else the encoder; the drive's command)
-    /// or a free-running board's status poll (its state and faults only: the board's samples
-    /// come with the log at the end).
+    /// or a free-running board's status poll (its state and faults, and the samples it
+    /// streamed since the previous poll: commanded position, encoder, drive force).
     pub fn program(&mut self, v: &ProgramView<'_>, p_cmd_m: Option<f64>, metres_per_count: f64) {
         let t = v.t_s;
         if v.started {
@@ -166,10 +166,23 @@ impl LiveView {
             });
         }
         self.state_and_fault(t, v.state, v.fault);
+        let nan = f64::NAN;
+        for (ts, r) in v.board_samples {
+            self.bus.sample(
+                *ts,
+                &[
+                    1e3 * f64::from(r.commanded_position_m),
+                    1e3 * r.encoder_count as f64 * metres_per_count,
+                    nan,
+                    nan,
+                    f64::from(r.force_n),
+                    nan,
+                ],
+            );
+        }
         let Some(a) = v.actuator else {
             return;
         };
-        let nan = f64::NAN;
         let encoder_m = v.sensor.map_or(nan, |s| {
             f64::from(s.encoder_count as i32) * metres_per_count
         });
@@ -243,6 +256,13 @@ impl LiveView {
         self.bus.flush_and_wait();
         self.bus.event(Event::RunEnded { t_s, outcome, ok });
         self.wait_on_the_page()
+    }
+
+    /// The run is over and the command ends now (the user stopped it): say how and send what
+    /// is left, without keeping the page up.
+    pub fn end_now(mut self, t_s: f64, outcome: String, ok: bool) {
+        self.bus.flush_and_wait();
+        self.bus.event(Event::RunEnded { t_s, outcome, ok });
     }
 
     /// Keep the page up until Ctrl-C or the linger; whether Ctrl-C ended it.

@@ -309,3 +309,281 @@ fn rig_jump_is_watched_live_with_the_commanded_position() {
     assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
     assert!(out.join("summary.json").is_file());
 }
+
+/// A board running free (the F407 binary on the virtual board) streams its samples; the
+/// view shows them while the run goes on, on the board's own time.
+#[test]
+fn a_free_running_board_is_watched_live_with_its_samples() {
+    if common::virtual_board().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("jump");
+    let (child, rx) = start(&[
+        "rig",
+        "jump",
+        "--link",
+        "f407",
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--out",
+        out.to_str().unwrap(),
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "2",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = addr_of(&url);
+    // While it runs: samples arrive before the run ends.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let mut during = 0;
+    loop {
+        let (_, _, body) = get(&addr, "/state.json");
+        let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+        let n = st["samples_received"].as_u64().unwrap_or(0);
+        if st["ended"].is_null() && n > 0 {
+            during = n;
+            break;
+        }
+        if !st["ended"].is_null() || Instant::now() > deadline {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(during > 0, "no sample reached the view while the board ran");
+    wait_for(&rx, "the run has ended");
+    let (_, _, body) = get(&addr, "/state.json");
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(
+        st["samples_received"].as_u64().unwrap() > 2_000,
+        "{body:.300}"
+    );
+    let cols = st["columns"].as_array().unwrap();
+    let finite = |c: usize| {
+        cols[c]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
+            .count()
+    };
+    // Commanded and measured position and the drive's force: the board's own samples.
+    assert!(finite(0) > 100 && finite(1) > 100 && finite(4) > 100);
+    assert_eq!(st["ended"].as_str(), Some("completed"));
+    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
+    assert!(out.join("summary.json").is_file());
+}
+
+/// Send SIGINT (Ctrl-C) to `child`.
+fn interrupt(child: &Child) {
+    let ok = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok, "kill -INT {}", child.id());
+}
+
+#[test]
+fn ctrl_c_ends_a_kept_page_with_exit_status_0() {
+    // No --linger: the page stays up until Ctrl-C.
+    let (child, rx) = start(&[
+        "hil",
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--pace",
+        "0",
+        "--live",
+        "127.0.0.1:0",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = addr_of(&url);
+    wait_for(&rx, "stays up until Ctrl-C");
+    let (status, _, body) = get(&addr, "/state.json");
+    assert!(status.contains("200"), "{status}");
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(
+        st["ended"]
+            .as_str()
+            .is_some_and(|e| e.starts_with("jump height")),
+        "{body:.300}"
+    );
+    interrupt(&child);
+    let done = child.wait_with_output().unwrap();
+    assert_eq!(done.status.code(), Some(0));
+}
+
+#[test]
+fn rig_status_is_watched_live_until_ctrl_c() {
+    let (child, rx) = start(&[
+        "rig",
+        "status",
+        "--link",
+        "sil",
+        "--watch",
+        "--live",
+        "127.0.0.1:0",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = addr_of(&url);
+    // The polls reach the page: its title and the controller's state.
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let (_, _, body) = get(&addr, "/state.json");
+        let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+        let idle = st["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["kind"] == "state" && e["state"] == "Idle");
+        if idle {
+            assert_eq!(st["title"].as_str(), Some("rig status on sil"));
+            assert!(st["ended"].is_null());
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no state on the page: {body:.400}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    interrupt(&child);
+    let done = child.wait_with_output().unwrap();
+    assert_eq!(done.status.code(), Some(0));
+    let out = String::from_utf8_lossy(&done.stdout);
+    assert!(out.contains("state Idle"), "{out}");
+}
+
+#[test]
+fn rig_intrude_and_replay_are_watched_live() {
+    let dir = tempfile::tempdir().unwrap();
+    let jump = dir.path().join("jump");
+    common::ok(&[
+        "rig",
+        "jump",
+        "--link",
+        "sil",
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--out",
+        jump.to_str().unwrap(),
+    ]);
+    let log = jump.join("acquisition.csv");
+    let intrude = dir.path().join("intrude");
+    let replay = dir.path().join("replay");
+    let runs: [(&str, Vec<&str>); 2] = [
+        (
+            "rig intrusion on",
+            vec![
+                "rig",
+                "intrude",
+                "--link",
+                "sil",
+                "--model",
+                "eq1",
+                "--out",
+                intrude.to_str().unwrap(),
+            ],
+        ),
+        (
+            "rig replay on",
+            vec![
+                "rig",
+                "replay",
+                log.to_str().unwrap(),
+                "--link",
+                "sil",
+                "--out",
+                replay.to_str().unwrap(),
+            ],
+        ),
+    ];
+    for (title, args) in runs {
+        let mut args = args.clone();
+        args.extend(["--live", "127.0.0.1:0", "--pace", "0", "--linger", "1"]);
+        let (child, rx) = start(&args);
+        let url = wait_for(&rx, "live view: http://");
+        let addr = addr_of(&url);
+        wait_for(&rx, "the run has ended");
+        let (_, _, body) = get(&addr, "/state.json");
+        let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+        assert!(
+            st["title"].as_str().unwrap().starts_with(title),
+            "{body:.300}"
+        );
+        assert!(st["samples_received"].as_u64().unwrap() > 1_000, "{title}");
+        assert_eq!(st["samples_dropped"].as_u64(), Some(0));
+        assert_eq!(st["ended"].as_str(), Some("completed"), "{title}");
+        let cols = st["columns"].as_array().unwrap();
+        let finite = cols[4]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
+            .count();
+        assert!(finite > 100, "{title}: the drive's force");
+        assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
+    }
+    assert!(intrude.join("summary.json").is_file());
+    assert!(replay.join("summary.json").is_file());
+}
+
+#[test]
+fn a_failed_campaign_point_shows_its_reason_live() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = common::read(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/campaign-small.toml"
+    )));
+    // One bed measurement per point: 0.57 is what fluidizing gives, 0.61 needs compaction
+    // doses and more measurements, so that point fails.
+    let file = dir.path().join("campaign.toml");
+    let text = small
+        .replace("kinds = [\"single\", \"delayed\"]", "kinds = [\"single\"]")
+        .replace("frequencies_hz = [10.0, 14.0]", "frequencies_hz = [10.0]")
+        .replace("phis = [0.58, 0.61]", "phis = [0.57, 0.61]")
+        .replace("max_attempts = 12", "max_attempts = 1");
+    assert!(text.contains("phis = [0.57, 0.61]") && text.contains("max_attempts = 1 "));
+    std::fs::write(&file, text).unwrap();
+    let out = dir.path().join("camp");
+    let (child, rx) = start(&[
+        "campaign",
+        "run",
+        file.to_str().unwrap(),
+        "--link",
+        "sil",
+        "--out",
+        out.to_str().unwrap(),
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "1",
+    ]);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = addr_of(&url);
+    wait_for(&rx, "the run has ended");
+    let (_, _, body) = get(&addr, "/state.json");
+    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let c = &st["campaign"];
+    assert_eq!(c["points"].as_u64(), Some(2), "{c}");
+    assert_eq!(c["failed"].as_u64(), Some(1), "{c}");
+    let records = c["records"].as_array().unwrap();
+    let failed: Vec<&serde_json::Value> = records
+        .iter()
+        .filter(|r| r["status"].as_str() != Some("ok"))
+        .collect();
+    assert_eq!(failed.len(), 1, "{c}");
+    let reason = failed[0]["reason"].as_str().unwrap_or("");
+    assert!(
+        reason.contains("0.64") || reason.contains("phi"),
+        "{reason}"
+    );
+    let _ = child.wait_with_output().unwrap();
+}

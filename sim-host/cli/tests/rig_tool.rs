@@ -18,7 +18,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{ok, sandjumper, succeeded, workspace};
+use common::{ok, sandjumper, succeeded, virtual_board, workspace};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -714,25 +714,6 @@ fn the_drive_calibration_is_sent_saved_and_sent_again_from_its_file() {
     );
     let o = sandjumper(&["rig", "acknowledge-reset", "--link", "sil"]);
     succeeded(&o);
-}
-
-/// The virtual board's program and the F407 ELF (built by `sim-host/virtual-f407/build.sh`
-/// and the firmware build), or `None` with a message; under CI both must be there.
-fn virtual_board() -> Option<()> {
-    let root = workspace();
-    let program = root.join(sandjumper_rig::hil::virtual_board::VIRTUAL_BOARD_BIN);
-    let elf = root.join(sandjumper_rig::firmware_image::F407_ELF);
-    if program.is_file() && elf.is_file() {
-        return Some(());
-    }
-    let msg = format!(
-        "skipped: --link f407 needs {} and {} (sim-host/virtual-f407/build.sh; the F407 firmware build)",
-        program.display(),
-        elf.display()
-    );
-    assert!(std::env::var_os("CI").is_none(), "{msg}");
-    eprintln!("{msg}");
-    None
 }
 
 #[test]

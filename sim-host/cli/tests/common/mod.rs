@@ -113,3 +113,22 @@ pub fn start_with_stderr_lines(
     });
     (child, rx)
 }
+
+/// The virtual board's program and the F407 ELF (built by `sim-host/virtual-f407/build.sh`
+/// and the firmware build), or `None` with a message; under CI both must be there.
+pub fn virtual_board() -> Option<()> {
+    let root = workspace();
+    let program = root.join(sandjumper_rig::hil::virtual_board::VIRTUAL_BOARD_BIN);
+    let elf = root.join(sandjumper_rig::firmware_image::F407_ELF);
+    if program.is_file() && elf.is_file() {
+        return Some(());
+    }
+    let msg = format!(
+        "skipped: --link f407 needs {} and {} (sim-host/virtual-f407/build.sh; the F407 firmware build)",
+        program.display(),
+        elf.display()
+    );
+    assert!(std::env::var_os("CI").is_none(), "{msg}");
+    eprintln!("{msg}");
+    None
+}

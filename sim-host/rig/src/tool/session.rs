@@ -71,6 +71,10 @@ pub struct ProgramView<'a> {
     pub plant: Option<PlantView>,
     /// `Start` went out at this step.
     pub started: bool,
+    /// Free running: the sample records the board streamed since the previous poll, with
+    /// their rig time (s since `Start`, from the poll's `tick` and `run_tick`). Empty in
+    /// lockstep (the actuator and sensor frames carry the period).
+    pub board_samples: &'a [(f64, SampleRecord)],
 }
 
 impl Fixture for RigModel {
@@ -266,6 +270,7 @@ fn lockstep(
                 sensor: Some(&sensor),
                 plant: fixture.plant(),
                 started: period == settle,
+                board_samples: &[],
             });
         }
         period += 1;
@@ -297,8 +302,20 @@ fn free_running(
     observe: &mut dyn FnMut(&ProgramView<'_>),
 ) -> Result<RunRecord, LinkError> {
     let hz = f64::from(program.tick_hz);
-    // The board's own clock: ticks since the trajectory started (0 before it).
-    let mut seen = |s: &Status, started: bool| {
+    // The samples the board streamed, taken at every poll so that a view sees them while the
+    // run goes on; the record keeps them all.
+    let mut streamed: Vec<SampleRecord> = Vec::new();
+    let mut timed: Vec<(f64, SampleRecord)> = Vec::new();
+    // The board's own clock: ticks since the trajectory started (0 before it); a sample's
+    // time is the poll's run time moved by the ticks between the sample and the poll.
+    let mut seen = |link: &mut dyn RigLink, s: &Status, started: bool| {
+        let fresh = link.take_samples();
+        timed.clear();
+        timed.extend(fresh.iter().map(|r| {
+            let ticks = f64::from(r.tick.wrapping_sub(s.tick) as i32);
+            ((f64::from(s.run_tick) + ticks) / hz, *r)
+        }));
+        streamed.extend(fresh);
         observe(&ProgramView {
             t_s: f64::from(s.run_tick) / hz,
             state: s.state,
@@ -307,21 +324,26 @@ fn free_running(
             sensor: None,
             plant: None,
             started,
+            board_samples: &timed,
         });
     };
-    let mut wait = |link: &mut dyn RigLink, seconds: f64| -> Result<Status, LinkError> {
+    // `first_after_start`: this wait's first poll is the first after `Start`.
+    let mut wait = |link: &mut dyn RigLink,
+                    seconds: f64,
+                    first_after_start: bool|
+     -> Result<Status, LinkError> {
         let until = Instant::now() + Duration::from_secs_f64(seconds.max(0.0));
         let mut status = query_status(link)?;
-        seen(&status, false);
+        seen(link, &status, first_after_start);
         while Instant::now() < until {
             std::thread::sleep(POLL_INTERVAL);
             status = query_status(link)?;
-            seen(&status, false);
+            seen(link, &status, false);
         }
         Ok(status)
     };
     link.command(&Command::Arm)?;
-    wait(link, program.settle_s)?;
+    wait(link, program.settle_s, false)?;
     let start = query_status(link)?;
     if let (RigState::Faulted, Some(fault)) = (start.state, start.fault) {
         return Err(LinkError::Protocol(format!(
@@ -332,14 +354,15 @@ fn free_running(
     link.command(&Command::Start)?;
     let deadline = Instant::now() + Duration::from_secs_f64(program.max_run_s);
     let mut record = RunRecord::default();
+    let mut first = true;
     let last = loop {
-        let s = wait(link, 0.0)?;
+        let s = wait(link, 0.0, std::mem::take(&mut first))?;
         if s.state == RigState::Faulted {
             break s;
         }
         if s.state == RigState::Done {
             record.completed = true;
-            break wait(link, program.tail_s)?;
+            break wait(link, program.tail_s, false)?;
         }
         if Instant::now() > deadline {
             let _ = link.command(&Command::Abort);
@@ -354,5 +377,6 @@ fn free_running(
         link.command(&Command::Abort)?;
     }
     record.periods = u64::from(last.tick.wrapping_sub(start.tick));
+    record.samples = streamed;
     Ok(record)
 }

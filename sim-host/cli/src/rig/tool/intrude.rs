@@ -25,7 +25,7 @@ use super::output::{
     write_run_files,
 };
 use super::session::{Fixture, Program};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live, start_live};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_core::{Gains, JumpConfig, SampleRecord, SlowIntrusion, TrajectorySpec};
 use sandjumper_model::params::Params;
@@ -304,6 +304,7 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         tail_s: 0.05,
         max_run_s: program_def.end_s() + 5.0,
     };
+    let view = start_live(&a.live)?;
     let staged = StagedDir::create(&a.out)?;
     let mut link = a.target.open_with_load(
         &model_config,
@@ -315,14 +316,14 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
     )?;
     let name = link.name();
     let (run_result, live) = run_program_live(
-        &a.live,
+        view,
         "intrusion",
         link.as_mut(),
         fixture.as_mut().map(|f| f as &mut dyn Fixture),
         &program,
         None,
         model_config.metres_per_count,
-    )?;
+    );
     let record = run_result.map_err(|e| link_failed(&name, "the slow intrusion", e))?;
 
     let mpc = model_config.metres_per_count;

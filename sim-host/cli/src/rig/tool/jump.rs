@@ -11,7 +11,7 @@ use super::output::{
     samples_log, write_run_files,
 };
 use super::session::{Fixture, Program};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live, start_live};
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_model::trajectory::kind_name;
@@ -106,6 +106,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let model_config = RigModelConfig::default();
     let program = Program::jump(&params, &spec, &traj, model_config.tick_hz);
     let camera = crate::rig::hil::command::read_camera(a.camera.as_deref())?;
+    let view = start_live(&a.live)?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
         a.target.host_plays_the_rig(),
@@ -124,14 +125,14 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     )?;
     let name = link.name();
     let (run_result, live) = run_program_live(
-        &a.live,
+        view,
         "jump",
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
         Some(&|t: f64| traj.eval(t.clamp(0.0, traj.end_s())).position_m),
         model_config.metres_per_count,
-    )?;
+    );
     let record = run_result.map_err(|e| link_failed(&name, "the jump", e))?;
 
     let mpc = model_config.metres_per_count;

@@ -266,29 +266,31 @@ pub fn conclude(
     Ok(())
 }
 
+/// The live view `live` asks for, started before anything else of the command (its URL
+/// printed first; a bad address refused before a board or a virtual board is opened).
+pub fn start_live(live: &crate::live::LiveArgs) -> Result<Option<crate::live::LiveView>, CliError> {
+    crate::live::LiveView::start(live, &crate::live::JUMP_CHANNELS)
+}
+
 /// Run `program` through `link` (`fixture`: the rig the host plays in lockstep, if it does)
-/// with the live view `live` asks for: started first (its URL printed), titled
-/// `rig WHAT on LINK`, every step put on it; `p_cmd` gives the commanded motor position at a
-/// rig time, when the host knows it. Returns the run and the view, to be finished once the
-/// command's outputs are written ([`crate::live::finish`]).
+/// with the live view `view` ([`start_live`]), titled `rig WHAT on LINK`, every step put on
+/// it; `p_cmd` gives the commanded motor position at a rig time, when the host knows it.
+/// Returns the run and the view, to be finished once the command's outputs are written
+/// ([`crate::live::finish`]).
 pub fn run_program_live(
-    live: &crate::live::LiveArgs,
+    mut view: Option<crate::live::LiveView>,
     what: &str,
     link: &mut dyn RigLink,
     fixture: Option<&mut dyn session::Fixture>,
     program: &session::Program,
     p_cmd: Option<&dyn Fn(f64) -> f64>,
     metres_per_count: f64,
-) -> Result<
-    (
-        Result<session::RunRecord, sandjumper_rig::hil::link::LinkError>,
-        Option<crate::live::LiveView>,
-    ),
-    CliError,
-> {
-    let mut view = crate::live::LiveView::start(live, &crate::live::JUMP_CHANNELS)?;
+) -> (
+    Result<session::RunRecord, sandjumper_rig::hil::link::LinkError>,
+    Option<crate::live::LiveView>,
+) {
     let Some(v) = view.as_mut() else {
-        return Ok((session::run_program(link, fixture, program), None));
+        return (session::run_program(link, fixture, program), None);
     };
     v.bus().event(sandjumper_live::Event::RunStarted {
         title: format!("rig {what} on {}", link.name()),
@@ -298,5 +300,5 @@ pub fn run_program_live(
         v.program(step, p_cmd.map(|f| f(step.t_s)), metres_per_count);
     };
     let run = session::run_program_observed(link, fixture, program, Some(&mut watch));
-    Ok((run, view))
+    (run, view)
 }

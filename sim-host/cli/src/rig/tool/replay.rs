@@ -30,7 +30,7 @@ use super::output::{
     samples_log, start_index, write_run_files,
 };
 use super::session::{Fixture, Program, bring_to_idle};
-use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live};
+use super::{RigParamArgs, TargetArgs, conclude, link_failed, run_program_live, start_live};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_core::replay::{REPLAY_CAPACITY, replay_checksum};
 use sandjumper_core::trajectory::STROKE_M;
@@ -372,6 +372,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         params.drive.peak_force_n,
     )
     .map_err(|e| CliError::input(format!("{}: {}", source_path(a).display(), e.message)))?;
+    let view = start_live(&a.live)?;
     let staged = StagedDir::create(&a.out)?;
     let mut robot = robot_fixture(
         a.target.host_plays_the_rig(),
@@ -407,14 +408,14 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         max_run_s: duration + 5.0,
     };
     let (run_result, live) = run_program_live(
-        &a.live,
+        view,
         "replay",
         link.as_mut(),
         robot.as_mut().map(|r| r as &mut dyn Fixture),
         &program,
         None,
         model_config.metres_per_count,
-    )?;
+    );
     let run = run_result.map_err(|e| link_failed(&name, "the replay", e))?;
 
     let mpc = model_config.metres_per_count;

@@ -15,10 +15,32 @@ pub struct StatusArgs {
     /// The board (or a simulated controller).
     #[command(flatten)]
     pub target: TargetArgs,
-    /// Print one JSON object instead of text.
+    /// Print one JSON object instead of text (watching: one line of JSON per change).
     #[arg(long)]
     pub json: bool,
+    /// Keep polling the status (every 250 ms) and print a line whenever the state, phase or
+    /// fault changes, until Ctrl-C (exit 0). `--live ADDR` watches on a page as well.
+    #[arg(long)]
+    pub watch: bool,
+    /// Watch for this long, s, then stop (exit 0); implies --watch.
+    #[arg(long, value_name = "S", value_parser = parse_watch_for)]
+    pub watch_for: Option<f64>,
+    /// The live view of the polled states and faults (implies --watch).
+    #[command(flatten)]
+    pub live: crate::live::LiveArgs,
 }
+
+fn parse_watch_for(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 30.0 * 86_400.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a watch time (allowed: more than 0 s, up to 30 days)"
+        )),
+    }
+}
+
+/// How often a watched status is polled.
+pub const WATCH_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// The JSON of `rig status --json`.
 #[derive(Debug, Serialize)]
@@ -126,6 +148,9 @@ fn bed_line(s: &Status) -> String {
 
 /// Run `rig status`.
 pub fn run(a: &StatusArgs) -> Result<(), CliError> {
+    if a.watch || a.watch_for.is_some() || a.live.live.is_some() {
+        return watch(a);
+    }
     let mut link = a.target.open(&RigModelConfig::default())?;
     let name = link.name();
     let status = query_status(link.as_mut()).map_err(|e| link_failed(&name, "status query", e))?;
@@ -145,4 +170,120 @@ pub fn run(a: &StatusArgs) -> Result<(), CliError> {
         print!("controller on {name}\n{}", describe(&status));
     }
     Ok(())
+}
+
+/// The JSON line of one change while watching.
+#[derive(Debug, Serialize)]
+struct WatchLine<'a> {
+    /// The board's time: its tick since start-up over the control rate, s.
+    t_s: f64,
+    state: String,
+    phase: String,
+    fault: Option<&'a str>,
+    fault_code: Option<u8>,
+}
+
+/// `rig status --watch`: poll until Ctrl-C or `--watch-for`, a line per change, the live view
+/// fed with every poll.
+fn watch(a: &StatusArgs) -> Result<(), CliError> {
+    let mut view = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    crate::interrupt::catch();
+    let config = RigModelConfig::default();
+    let mut link = a.target.open(&config)?;
+    let name = link.name();
+    let hz = f64::from(config.tick_hz);
+    if let Some(v) = view.as_mut() {
+        v.unpaced();
+        v.bus().event(sandjumper_live::Event::RunStarted {
+            title: format!("rig status on {name}"),
+            t_s: 0.0,
+        });
+    }
+    let began = std::time::Instant::now();
+    let mut last: Option<(
+        sandjumper_core::RigState,
+        sandjumper_core::Phase,
+        Option<u8>,
+    )> = None;
+    let mut polls = 0u64;
+    let result = loop {
+        let status = match query_status(link.as_mut()) {
+            Ok(s) => s,
+            Err(e) => break Err(link_failed(&name, "status query", e)),
+        };
+        polls += 1;
+        let t = f64::from(status.tick) / hz;
+        if let Some(v) = view.as_mut() {
+            v.program(
+                &super::session::ProgramView {
+                    t_s: t,
+                    state: status.state,
+                    fault: status.fault,
+                    actuator: None,
+                    sensor: None,
+                    plant: None,
+                    started: false,
+                    board_samples: &[],
+                },
+                None,
+                config.metres_per_count,
+            );
+        }
+        let key = (status.state, status.phase, status.fault.map(|f| f.code()));
+        if last != Some(key) {
+            last = Some(key);
+            if a.json {
+                let line = WatchLine {
+                    t_s: t,
+                    state: format!("{:?}", status.state),
+                    phase: format!("{:?}", status.phase),
+                    fault: status.fault.map(|f| f.name()),
+                    fault_code: status.fault.map(|f| f.code()),
+                };
+                let json = serde_json::to_string(&line).map_err(|e| {
+                    CliError::internal(format!("cannot encode the status as JSON: {e}"))
+                })?;
+                println!("{json}");
+            } else {
+                println!(
+                    "t {t:10.3} s  state {:?} (phase {:?})  fault {}",
+                    status.state,
+                    status.phase,
+                    status.fault.map_or("none".to_string(), |f| format!(
+                        "{} {}",
+                        f.code(),
+                        f.name()
+                    ))
+                );
+            }
+        }
+        let done = crate::interrupt::interrupted()
+            || a.watch_for
+                .is_some_and(|s| began.elapsed().as_secs_f64() >= s);
+        if done {
+            break Ok(());
+        }
+        std::thread::sleep(WATCH_INTERVAL);
+    };
+    let closed = link
+        .finish()
+        .map_err(|e| link_failed(&name, "closing the session", e));
+    let result = result.and(closed.map(|_| ()));
+    eprintln!(
+        "watched {name} for {:.1} s ({polls} polls)",
+        began.elapsed().as_secs_f64()
+    );
+    if let Some(v) = view {
+        let (outcome, ok) = match &result {
+            Ok(()) => ("stopped watching".to_string(), true),
+            Err(e) => (e.message.clone(), false),
+        };
+        // Ctrl-C has ended the watch: the page closes with the command.
+        if crate::interrupt::interrupted() {
+            v.end_now(f64::NAN, outcome, ok);
+        } else {
+            v.finish(f64::NAN, outcome, ok);
+        }
+    }
+    result
 }
