@@ -259,15 +259,28 @@ fn a_resumed_campaign_shows_its_history_then_each_point_live_and_on_the_terminal
     assert_eq!(lines, 5);
 }
 
-#[test]
-fn rig_jump_is_watched_live_with_the_commanded_position() {
+/// The count of finite values in column `c` of a `state.json`.
+fn finite_in(st: &serde_json::Value, c: usize) -> usize {
+    st["columns"][c]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|v| v.as_f64().is_some_and(f64::is_finite))
+        .count()
+}
+
+/// `rig jump --link LINK --live` of a single 10 Hz jump: its page's state once the run has
+/// ended, checked as every link must show it (commanded and measured position and the
+/// drive's force; completed; exit 0; outputs written). `while_running` sees the page's
+/// address before the end.
+fn watched_rig_jump(link: &str, while_running: impl FnOnce(&str)) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("jump");
     let (child, rx) = start(&[
         "rig",
         "jump",
         "--link",
-        "sil",
+        link,
         "--kind",
         "single",
         "--freq",
@@ -281,24 +294,27 @@ fn rig_jump_is_watched_live_with_the_commanded_position() {
     ]);
     let url = wait_for(&rx, "live view: http://");
     let addr = addr_of(&url);
+    while_running(&addr);
     wait_for(&rx, "the run has ended");
     let (_, _, body) = get(&addr, "/state.json");
     let st: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert!(st["title"].as_str().unwrap().starts_with("rig jump on"));
-    assert!(st["samples_received"].as_u64().unwrap() > 2_000);
+    assert!(
+        st["samples_received"].as_u64().unwrap() > 2_000,
+        "{body:.300}"
+    );
     assert_eq!(st["samples_dropped"].as_u64(), Some(0));
     // The commanded position is there (finite) and the measured one follows it.
-    let cols = st["columns"].as_array().unwrap();
-    let finite = |c: usize| {
-        cols[c]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
-            .count()
-    };
-    assert!(finite(0) > 100 && finite(1) > 100 && finite(4) > 100);
+    assert!(finite_in(&st, 0) > 100 && finite_in(&st, 1) > 100 && finite_in(&st, 4) > 100);
     assert_eq!(st["ended"].as_str(), Some("completed"));
+    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
+    assert!(out.join("summary.json").is_file());
+    st
+}
+
+#[test]
+fn rig_jump_is_watched_live_with_the_commanded_position() {
+    let st = watched_rig_jump("sil", |_| {});
     assert!(
         st["events"]
             .as_array()
@@ -306,8 +322,6 @@ fn rig_jump_is_watched_live_with_the_commanded_position() {
             .iter()
             .any(|e| e["kind"] == "jump")
     );
-    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
-    assert!(out.join("summary.json").is_file());
 }
 
 /// A board running free (the F407 binary on the virtual board) streams its samples; the
@@ -317,64 +331,23 @@ fn a_free_running_board_is_watched_live_with_its_samples() {
     if common::virtual_board().is_none() {
         return;
     }
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("jump");
-    let (child, rx) = start(&[
-        "rig",
-        "jump",
-        "--link",
-        "f407",
-        "--kind",
-        "single",
-        "--freq",
-        "10",
-        "--out",
-        out.to_str().unwrap(),
-        "--live",
-        "127.0.0.1:0",
-        "--linger",
-        "2",
-    ]);
-    let url = wait_for(&rx, "live view: http://");
-    let addr = addr_of(&url);
-    // While it runs: samples arrive before the run ends.
-    let deadline = Instant::now() + Duration::from_secs(120);
-    let mut during = 0;
-    loop {
-        let (_, _, body) = get(&addr, "/state.json");
-        let st: serde_json::Value = serde_json::from_str(&body).unwrap();
-        let n = st["samples_received"].as_u64().unwrap_or(0);
-        if st["ended"].is_null() && n > 0 {
-            during = n;
-            break;
+    watched_rig_jump("f407", |addr| {
+        // While it runs: samples arrive before the run ends.
+        let deadline = Instant::now() + Duration::from_secs(120);
+        loop {
+            let (_, _, body) = get(addr, "/state.json");
+            let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+            let n = st["samples_received"].as_u64().unwrap_or(0);
+            if st["ended"].is_null() && n > 0 {
+                return;
+            }
+            assert!(
+                st["ended"].is_null() && Instant::now() < deadline,
+                "no sample reached the view while the board ran"
+            );
+            std::thread::sleep(Duration::from_millis(100));
         }
-        if !st["ended"].is_null() || Instant::now() > deadline {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    assert!(during > 0, "no sample reached the view while the board ran");
-    wait_for(&rx, "the run has ended");
-    let (_, _, body) = get(&addr, "/state.json");
-    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
-    assert!(
-        st["samples_received"].as_u64().unwrap() > 2_000,
-        "{body:.300}"
-    );
-    let cols = st["columns"].as_array().unwrap();
-    let finite = |c: usize| {
-        cols[c]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
-            .count()
-    };
-    // Commanded and measured position and the drive's force: the board's own samples.
-    assert!(finite(0) > 100 && finite(1) > 100 && finite(4) > 100);
-    assert_eq!(st["ended"].as_str(), Some("completed"));
-    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
-    assert!(out.join("summary.json").is_file());
+    });
 }
 
 /// Send SIGINT (Ctrl-C) to `child`.
@@ -521,14 +494,7 @@ fn rig_intrude_and_replay_are_watched_live() {
         assert!(st["samples_received"].as_u64().unwrap() > 1_000, "{title}");
         assert_eq!(st["samples_dropped"].as_u64(), Some(0));
         assert_eq!(st["ended"].as_str(), Some("completed"), "{title}");
-        let cols = st["columns"].as_array().unwrap();
-        let finite = cols[4]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|v| v.as_f64().is_some_and(f64::is_finite))
-            .count();
-        assert!(finite > 100, "{title}: the drive's force");
+        assert!(finite_in(&st, 4) > 100, "{title}: the drive's force");
         assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
     }
     assert!(intrude.join("summary.json").is_file());
