@@ -23,6 +23,11 @@ pub mod flow;
 pub mod imaging;
 pub mod interrupt;
 pub mod live;
+#[cfg(feature = "optimize")]
+pub mod optimize;
+/// `sandjumper optimize` in a build without the optimiser: refused, saying how to build it.
+#[cfg(not(feature = "optimize"))]
+#[path = "optimize/unavailable.rs"]
 pub mod optimize;
 pub mod rig;
 pub mod study;

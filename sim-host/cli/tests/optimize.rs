@@ -2,6 +2,7 @@
 //! its answer is what `jump`, `hil` and `rig replay` run from stroke.csv, that a seed fixes the
 //! answer whatever the threads, that a search killed mid-way resumes to the same answer, and
 //! the refusals of bad limits and bad stroke files.
+#![cfg(feature = "optimize")]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
