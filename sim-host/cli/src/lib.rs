@@ -30,4 +30,5 @@ pub mod optimize;
 #[path = "optimize/unavailable.rs"]
 pub mod optimize;
 pub mod rig;
+pub mod slurm;
 pub mod study;

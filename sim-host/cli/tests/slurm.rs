@@ -1,8 +1,10 @@
-//! `sweep --slurm` on a real single-node Slurm cluster: Debian's `slurm-wlm` and `munge`,
-//! their daemons configured and started by this test in a temporary directory (no mock of
-//! `sbatch`). A small sweep goes through a 3-task job array and its merged result must equal
-//! the same sweep run here, byte for byte; a task cancelled before it runs must be reported
-//! and nothing merged.
+//! `sweep --slurm` and `dem lammps --slurm` on a real single-node Slurm cluster: Debian's
+//! `slurm-wlm` and `munge`, their daemons configured and started by this test in a temporary
+//! directory (no mock of `sbatch`). A small sweep goes through a 3-task job array and its
+//! merged result must equal the same sweep run here, byte for byte; a task cancelled before
+//! it runs must be reported and nothing merged. A small 3-D DEM run goes through a job of two
+//! MPI tasks (when LAMMPS is here: `dem_lammps.rs` says where it looks), and a job the
+//! scheduler rejects is refused with exit status 2.
 //!
 //! Needs root (the daemons run as root here) and `munged`, `slurmctld`, `slurmd`, `sbatch`,
 //! `squeue`, `scontrol`, `scancel`, `sinfo` on PATH: skipped with a message otherwise, failing
@@ -305,4 +307,61 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
         "{rest}"
     );
     assert!(!failed.exists(), "nothing merged");
+
+    // A job Slurm rejects (no such partition): refused, exit 2, nothing written.
+    let rejected = work.path().join("rejected");
+    let out = cluster
+        .command(exe)
+        .args(sweep_args(&rejected))
+        .args(["--slurm", "2", "--slurm-partition", "no-such-partition"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("Slurm refused the job"), "{stderr}");
+    assert!(!rejected.exists());
+
+    // The 3-D DEM as one job of two MPI tasks.
+    let Some(lmp) = common::lammps() else {
+        return;
+    };
+    let dem = work.path().join("dem");
+    let out = cluster
+        .command(exe)
+        .args([
+            "dem",
+            "lammps",
+            "--preset",
+            "small",
+            "--bed-width",
+            "0.04",
+            "--bed-depth",
+            "0.02",
+            "--speed",
+            "0.2",
+            "--depth",
+            "0.005",
+            "--ranks",
+            "2",
+            "--lmp",
+        ])
+        .arg(&lmp)
+        .arg("--out")
+        .arg(&dem)
+        .arg("--slurm")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let log = read_or_empty(&work.path().join("dem.slurm/logs/job.out"));
+    assert!(out.status.success(), "{stderr}\n{log}\n{}", cluster.logs());
+    assert!(stderr.contains("submitted Slurm job"), "{stderr}");
+    assert!(read(&work.path().join("dem.slurm/job.sbatch")).contains("#SBATCH --ntasks=2"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&dem.join("summary.json"))).unwrap();
+    assert_eq!(summary["frames"].as_u64(), Some(13), "{summary}");
+    assert!(read(&dem.join("lammps/log.intrude")).contains("on 2 procs"));
+}
+
+fn read_or_empty(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_default()
 }

@@ -132,22 +132,34 @@ fn err(e: impl std::fmt::Display) -> CliError {
     CliError::internal(e.to_string())
 }
 
-/// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m` at the episode
-/// depth `depth_m`, kg. `C` is an area calibrated for the paper's 38 mm foot; it scales with
-/// `R^2` like the cone, so a small foot is not compared with the big foot's `pi C s`.
-pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
+/// The model's sand (eq. 4, preset at `phi`) under a foot of radius `r_m`: its
+/// stiffnesses scale with the foot's area, as the model's do for any foot, and so does eq.
+/// 6's `C` (an area calibrated for the paper's 38 mm foot, so a small foot is not compared
+/// with the big foot's `pi C s`).
+fn model_sand(phi: f64, r_m: f64) -> Result<sandjumper_model::ground::Sand, String> {
     let mut params = sandjumper_model::params::Params::preset(phi).map_err(|e| e.to_string())?;
     let reference = params.sand.reference_foot_radius_m;
     params.sand.added_mass_c_m2 *= (r_m / reference).powi(2);
     params.robot.foot_radius_m = r_m;
-    let sand = sandjumper_model::ground::Sand::new(
+    Ok(sandjumper_model::ground::Sand::new(
         &params,
         sandjumper_model::ground::GroundLaw::resolve(
             sandjumper_model::params::ModelName::Eq4,
             &params.model,
         ),
-    );
-    Ok(sand.added_mass(depth_m))
+    ))
+}
+
+/// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m` at the episode
+/// depth `depth_m`, kg (see [`model_sand`] for the scaling of `C`).
+pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
+    Ok(model_sand(phi, r_m)?.added_mass(depth_m))
+}
+
+/// The model's penetration force `F_p(z)` (eq. 4's cone law, preset at `phi`) for a foot of
+/// radius `r_m` at depth `depth_m`, N.
+pub fn model_penetration_force(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
+    Ok(model_sand(phi, r_m)?.penetration_force(depth_m))
 }
 
 /// Median DEM/eq. 6 added-mass ratio over the samples that have the paper's added mass

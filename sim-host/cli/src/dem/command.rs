@@ -35,6 +35,13 @@ pub enum DemCommand {
     Intrude(Box<IntrudeArgs>),
     /// One head-on collision with the paper's contact law: restitution and contact time.
     Collide(CollideArgs),
+    /// The intrusion in 3-D, run by LAMMPS (here, or on Slurm with --slurm): a poured bed,
+    /// the disc foot on its trajectory, dumps at the camera's rate read back into the
+    /// column's momentum, the added mass against eq. 6, the force against F_p(z), the cone.
+    Lammps(Box<super::lammps_command::LammpsArgs>),
+    /// Read a finished `dem lammps` run's dumps back again (another speed rule, or a run
+    /// made elsewhere).
+    LammpsRead(Box<super::lammps_command::LammpsReadArgs>),
 }
 
 /// The DEM's model as named on the command line ([`Model`]).
@@ -74,7 +81,7 @@ impl From<IntegratorChoice> for Integrator {
 }
 
 /// A share in 0..=1.
-fn parse_share(s: &str) -> Result<f64, String> {
+pub(crate) fn parse_share(s: &str) -> Result<f64, String> {
     let v = parse_number(s)?;
     if (0.0..=1.0).contains(&v) {
         Ok(v)
@@ -358,6 +365,8 @@ pub fn run(a: &DemArgs) -> Result<(), CliError> {
         DemCommand::Collide(c) => run_collide(c),
         DemCommand::Bed(b) => with_threads(b.threads, b.pin_threads, || run_bed(b)),
         DemCommand::Intrude(i) => with_threads(i.threads, i.pin_threads, || run_intrude(i)),
+        DemCommand::Lammps(l) => super::lammps_command::run(l),
+        DemCommand::LammpsRead(r) => super::lammps_command::run_read(r),
     }
 }
 

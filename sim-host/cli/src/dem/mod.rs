@@ -6,4 +6,5 @@
 pub use sandjumper_dem::*;
 
 pub mod command;
+pub mod lammps_command;
 pub mod paper_figures;

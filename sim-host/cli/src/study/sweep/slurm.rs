@@ -13,11 +13,13 @@
 //!    `sandjumper merge` does.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::Duration;
 
 use clap::Args;
 
+use crate::slurm::{
+    fresh_job_dir, log_tail, passed_on, program_and_cwd, quote, sbatch, tool, unsuccessful,
+    wait_for,
+};
 use sandjumper_output::CliError;
 
 /// The Slurm options of `sweep`.
@@ -27,159 +29,51 @@ pub struct SlurmArgs {
     /// merge the shards into --out.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub slurm: Option<u32>,
-    /// Partition to submit to (default: the cluster's default).
-    #[arg(long, value_name = "NAME", requires = "slurm")]
-    pub slurm_partition: Option<String>,
-    /// Time limit of each task (Slurm's format, e.g. 30, 1:00:00, 2-00:00:00).
-    #[arg(
-        long,
-        value_name = "TIME",
-        default_value = "1:00:00",
-        requires = "slurm"
-    )]
-    pub slurm_time: String,
     /// CPUs of each task (its sweep's threads).
     #[arg(long, value_name = "N", default_value = "1", requires = "slurm",
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub slurm_cpus: u32,
-    /// Submit and return the job id without waiting (merge the shards later with the
-    /// printed `sandjumper merge` command).
-    #[arg(long, requires = "slurm")]
-    pub slurm_no_wait: bool,
-}
-
-/// The job's directory beside `out`: `DIR.slurm`.
-pub fn job_dir(out: &Path) -> PathBuf {
-    let mut name = out
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
-    name.push(".slurm");
-    out.with_file_name(name)
-}
-
-/// `s` quoted for a POSIX shell.
-fn quote(s: &str) -> String {
-    format!("'{}'", s.replace('\'', r"'\''"))
+    /// Partition, time limit of each task, waiting (merge the shards later with the printed
+    /// `sandjumper merge` command).
+    #[command(flatten)]
+    pub queue: crate::slurm::QueueArgs,
 }
 
 /// The sweep's own arguments (after `sweep`) without the ones each task sets itself:
 /// `--out`, `--shard`, `--threads` and every `--slurm*`.
 fn task_arguments(argv: &[String]) -> Vec<String> {
-    let with_value = [
-        "--out",
-        "--shard",
-        "--threads",
-        "--slurm",
-        "--slurm-partition",
-        "--slurm-time",
-        "--slurm-cpus",
-    ];
-    let mut out = Vec::new();
-    let mut it = argv.iter().skip_while(|a| a.as_str() != "sweep").skip(1);
-    while let Some(a) = it.next() {
-        let name = a.split('=').next().unwrap_or(a);
-        if a == "--slurm-no-wait" {
-            continue;
-        }
-        if with_value.contains(&name) {
-            if !a.contains('=') {
-                it.next();
-            }
-            continue;
-        }
-        out.push(a.clone());
-    }
-    out
-}
-
-fn tool(name: &str) -> Result<(), CliError> {
-    match Command::new(name).arg("--version").output() {
-        Ok(o) if o.status.success() => Ok(()),
-        _ => Err(CliError::input(format!(
-            "--slurm needs Slurm's `{name}` on PATH (not found or not working here); run the \
-             sweep on a cluster's login node, or without --slurm"
-        ))),
-    }
-}
-
-fn run_tool(cmd: &mut Command, what: &str) -> Result<String, CliError> {
-    let o = cmd
-        .output()
-        .map_err(|e| CliError::internal(format!("cannot run {what}: {e}")))?;
-    if !o.status.success() {
-        return Err(CliError::internal(format!(
-            "{what} failed ({}): {}",
-            o.status,
-            String::from_utf8_lossy(&o.stderr).trim()
-        )));
-    }
-    Ok(String::from_utf8_lossy(&o.stdout).into_owned())
-}
-
-/// One task's final state and exit code, from `scontrol show job ID_I` (the record whose
-/// `ArrayTaskId` is the task: Slurm may answer with the array's other records); None when
-/// Slurm has none (a task cancelled before it started, or one forgotten after `MinJobAge`).
-fn task_state(job: &str, task: u32) -> Option<(String, String)> {
-    let o = Command::new("scontrol")
-        .args(["show", "job", "-o", &format!("{job}_{task}")])
-        .output()
-        .ok()?;
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    let want = task.to_string();
-    text.lines().find_map(|line| {
-        let field = |k: &str| {
-            line.split_whitespace()
-                .find_map(|w| w.strip_prefix(k))
-                .map(str::to_string)
-        };
-        (field("ArrayTaskId=")? == want).then_some(())?;
-        Some((field("JobState=")?, field("ExitCode=").unwrap_or_default()))
-    })
-}
-
-/// The last `n` lines of a task's log.
-fn log_tail(path: &Path, n: usize) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    lines[lines.len().saturating_sub(n)..].join("\n    ")
+    passed_on(
+        argv,
+        &["sweep"],
+        &[
+            "--out",
+            "--shard",
+            "--threads",
+            "--slurm",
+            "--slurm-partition",
+            "--slurm-time",
+            "--slurm-cpus",
+        ],
+        &["--slurm-no-wait"],
+    )
 }
 
 /// Submit the sweep `argv` asks for as a job array, and (unless told not to) wait for it and
 /// merge its shards into `out`.
 pub fn submit(argv: &[String], out: &Path, s: &SlurmArgs) -> Result<(), CliError> {
     let tasks = s.slurm.unwrap_or(1);
-    tool("sbatch")?;
-    let dir = job_dir(out);
-    if dir.exists() {
-        if !dir.join("job.sbatch").is_file() {
-            return Err(CliError::input(format!(
-                "{} exists and is not a sandjumper Slurm job directory: remove it or choose \
-                 another --out",
-                dir.display()
-            )));
-        }
-        std::fs::remove_dir_all(&dir)
-            .map_err(|e| CliError::internal(format!("cannot clear {}: {e}", dir.display())))?;
-    }
-    std::fs::create_dir_all(dir.join("logs"))
-        .map_err(|e| CliError::input(format!("cannot create {}: {e}", dir.display())))?;
-    let dir = std::fs::canonicalize(&dir)
-        .map_err(|e| CliError::internal(format!("{}: {e}", dir.display())))?;
-    let exe = std::env::current_exe()
-        .map_err(|e| CliError::internal(format!("cannot find this program: {e}")))?;
-    let cwd = std::env::current_dir()
-        .map_err(|e| CliError::internal(format!("no working directory: {e}")))?;
-    let mut script = String::from("#!/bin/bash\n");
-    script += &format!("#SBATCH --job-name=sandjumper-sweep\n#SBATCH --array=1-{tasks}\n");
-    script += &format!("#SBATCH --cpus-per-task={}\n", s.slurm_cpus);
-    script += &format!("#SBATCH --time={}\n", s.slurm_time);
-    script += &format!("#SBATCH --output={}/logs/task-%a.out\n", dir.display());
-    script += &format!("#SBATCH --chdir={}\n", cwd.display());
-    if let Some(p) = &s.slurm_partition {
-        script += &format!("#SBATCH --partition={p}\n");
-    }
-    script += "set -euo pipefail\n";
+    tool("sbatch", "--slurm")?;
+    let dir = fresh_job_dir(out)?;
+    let (exe, cwd) = program_and_cwd()?;
+    let mut script = s.queue.script_head(
+        "sweep",
+        &[
+            format!("--array=1-{tasks}"),
+            format!("--cpus-per-task={}", s.slurm_cpus),
+        ],
+        &dir.join("logs").join("task-%a.out"),
+        &cwd,
+    );
     script += &format!(
         "exec {} sweep {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
          \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
@@ -191,17 +85,7 @@ pub fn submit(argv: &[String], out: &Path, s: &SlurmArgs) -> Result<(), CliError
             .join(" "),
         quote(&dir.to_string_lossy())
     );
-    let sbatch = dir.join("job.sbatch");
-    std::fs::write(&sbatch, &script)
-        .map_err(|e| CliError::internal(format!("cannot write {}: {e}", sbatch.display())))?;
-    let job = run_tool(
-        Command::new("sbatch").arg("--parsable").arg(&sbatch),
-        "sbatch",
-    )?;
-    let job = job.trim().split(';').next().unwrap_or("").to_string();
-    if job.is_empty() {
-        return Err(CliError::internal("sbatch printed no job id"));
-    }
+    let job = sbatch(&dir, &script)?;
     eprintln!(
         "submitted Slurm job {job} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
         s.slurm_cpus,
@@ -210,7 +94,7 @@ pub fn submit(argv: &[String], out: &Path, s: &SlurmArgs) -> Result<(), CliError
     let shards: Vec<PathBuf> = (1..=tasks)
         .map(|i| dir.join(format!("shard-{i}")))
         .collect();
-    if s.slurm_no_wait {
+    if s.queue.slurm_no_wait {
         println!("{job}");
         eprintln!(
             "when it is done: sandjumper merge {}/shard-* --out {}",
@@ -219,31 +103,11 @@ pub fn submit(argv: &[String], out: &Path, s: &SlurmArgs) -> Result<(), CliError
         );
         return Ok(());
     }
-    // Wait until no task is pending, running or completing.
-    loop {
-        let queued = run_tool(
-            Command::new("squeue").args(["-h", "-j", &job, "-o", "%i %T"]),
-            "squeue",
-        )?;
-        if queued.trim().is_empty() {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(500));
-    }
+    wait_for(&job)?;
     let mut failed = Vec::new();
     for (i, shard) in (1..=tasks).zip(&shards) {
-        let state = task_state(&job, i);
         let complete = shard.join("sweep.toml").is_file();
-        let ok_state = state
-            .as_ref()
-            .is_none_or(|(st, code)| st == "COMPLETED" && code == "0:0");
-        if !complete || !ok_state {
-            let (st, code) = state.unwrap_or_else(|| {
-                (
-                    "no record (cancelled before it started, or forgotten by Slurm)".into(),
-                    "none".into(),
-                )
-            });
+        if let Some((st, code)) = unsuccessful(&job, Some(i), complete) {
             let log = dir.join("logs").join(format!("task-{i}.out"));
             failed.push(format!(
                 "task {i}: {st}, exit code {code}, shard {}; log {}:\n    {}",
@@ -302,7 +166,5 @@ mod tests {
             task_arguments(&argv),
             ["--kind", "single", "--freq", "8:12:1", "--phi", "0.57"]
         );
-        assert_eq!(quote("a'b"), r"'a'\''b'");
-        assert_eq!(job_dir(Path::new("/t/run")), Path::new("/t/run.slurm"));
     }
 }

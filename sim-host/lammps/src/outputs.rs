@@ -1,0 +1,493 @@
+//! One run, start to end, and its folder.
+//!
+//! [`run`] writes the LAMMPS run into `OUT/lammps/` (the inputs, the data files, the logs,
+//! `force.txt`, `dumps/`, and `run.toml`, the manifest the read-back checks against), runs
+//! the two stages, and [`analyse`] reads the dumps back into `flow.csv`, `force_depth.csv`,
+//! `cone.csv`, `summary.json` and `lammps.png`/`.svg`. [`analyse`] alone reads a finished run
+//! again (with another speed rule, or a run made elsewhere).
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use sandjumper_dem::intruder::Trajectory;
+use sandjumper_output::{CliError, write_csv};
+
+use crate::analysis::{self, ConeCells, FlowRow, Geometry};
+use crate::bed::{self, Atom, Settled};
+use crate::dump::{self, RunCheck};
+use crate::foot::foot_atoms;
+use crate::lammps::Lammps;
+use crate::script::{self, Piece};
+use crate::spec::LammpsSpec;
+
+/// What a run's `run.toml` records: everything the read-back checks against.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Identifies the run (a hash of its spec and trajectory), in its inputs' first lines.
+    pub run_id: String,
+    /// The LAMMPS that ran it.
+    pub lammps_version: String,
+    /// MPI ranks.
+    pub ranks: u32,
+    /// Where the trajectory came from.
+    pub trajectory: String,
+    /// The model's packing fraction for eq. 6 and F_p (the target, within the presets'
+    /// 0.57-0.62), 1.
+    pub model_phi: f64,
+    /// The foot and the bed.
+    pub geometry: Geometry,
+    /// The settled bed.
+    pub settled: Settled,
+    /// Whether the settle ended on its rms speed (false: on its longest time).
+    pub settled_by_speed: bool,
+    /// Grains removed because the foot's start overlapped them.
+    pub grains_removed_under_foot: u64,
+    /// The foot's spheres.
+    pub foot_spheres: u64,
+    /// Steps of the settle and of the intrusion.
+    pub settle_steps: u64,
+    /// Steps of the intrusion.
+    pub intrusion_steps: u64,
+    /// Wall time of the settle and of the intrusion, s.
+    pub settle_wall_s: f64,
+    /// Wall time of the intrusion, s.
+    pub intrusion_wall_s: f64,
+    /// The foot's path.
+    pub pieces: Vec<Piece>,
+    /// The run.
+    pub spec: LammpsSpec,
+}
+
+impl Manifest {
+    /// The dump steps this run wrote.
+    pub fn frame_steps(&self) -> Vec<u64> {
+        let de = self.spec.dump_every();
+        (0..=self.intrusion_steps / de).map(|k| k * de).collect()
+    }
+}
+
+/// `summary.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// The LAMMPS that ran it.
+    pub lammps_version: String,
+    /// Grains in the settled bed, and the foot's spheres.
+    pub grains: u64,
+    /// The foot's spheres.
+    pub foot_spheres: u64,
+    /// Grains removed where the foot started.
+    pub grains_removed_under_foot: u64,
+    /// The target packing fraction, 1.
+    pub target_packing_fraction: f64,
+    /// The settled bed's (its bulk), 1.
+    pub settled_packing_fraction: f64,
+    /// Whether the settle ended on its rms speed.
+    pub settled_by_speed: bool,
+    /// Time step, s.
+    pub time_step_s: f64,
+    /// Frames read.
+    pub frames: u64,
+    /// Their rate, frames/s.
+    pub fps: f64,
+    /// Deepest the foot went, m.
+    pub max_depth_m: f64,
+    /// The paper's added mass over eq. 6's at the same depth: the median over the frames
+    /// with the paper's added mass.
+    pub added_mass_vs_eq6_median: f64,
+    /// The column's peak momentum, kg m/s.
+    pub grain_momentum_under_foot_kg_m_s: f64,
+    /// The paper's added mass at the deepest frame that has one, kg.
+    pub final_added_mass_kg: f64,
+    /// Force on the foot over the model's `F_p`: the median over the windows deeper than one
+    /// grain while the foot goes down.
+    pub force_vs_penetration_force_median: f64,
+    /// Largest force on the foot, N.
+    pub peak_force_n: f64,
+    /// Hertz overlap of a contact carrying the peak force shared by the foot's area at one
+    /// grain per d^2, over d: how soft the softened grains are at the run's peak, 1.
+    pub peak_overlap_ratio: f64,
+    /// The cone's angle to the horizontal, degrees (null: none found, see `cone_note`).
+    pub cone_angle_deg: Option<f64>,
+    /// How the cone was found, or why not.
+    pub cone_note: String,
+    /// The speed rule: frames with the foot at least this share of its fastest, 1.
+    pub min_speed_ratio: f64,
+    /// Core-seconds the two stages took (wall time x ranks), s.
+    pub core_seconds: f64,
+    /// Grain-steps per core-second of the intrusion (the cost to scale by).
+    pub grain_steps_per_core_second: f64,
+    /// The run's id.
+    pub run_id: String,
+}
+
+/// Progress of a run: a stage starts (with its steps), and LAMMPS reaches a step.
+pub trait Progress {
+    /// A stage (`settle`, `intrusion`, `read`) of `steps` steps (frames for `read`) starts.
+    fn stage(&mut self, name: &str, steps: u64);
+    /// The stage reached `step`.
+    fn step(&mut self, step: u64);
+}
+
+fn fnv(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+fn io(e: impl std::fmt::Display) -> CliError {
+    CliError::internal(e.to_string())
+}
+
+/// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
+/// then [`analyse`] it with the speed rule `min_speed_ratio`.
+pub fn run(
+    spec: &LammpsSpec,
+    trajectory: &Trajectory,
+    lammps: &Lammps,
+    ranks: u32,
+    min_speed_ratio: f64,
+    out: &Path,
+    progress: &mut dyn Progress,
+) -> Result<Summary, CliError> {
+    spec.check().map_err(CliError::input)?;
+    trajectory
+        .check_starts_at_surface()
+        .map_err(CliError::input)?;
+    let pieces = script::pieces(spec, trajectory);
+    let spec_text = toml::to_string(spec).map_err(io)?;
+    let run_id = fnv(&format!("{spec_text}{pieces:?}"));
+    let dir = out.join("lammps");
+    std::fs::create_dir_all(dir.join("dumps")).map_err(io)?;
+    let g = spec.gravity_m_s2;
+
+    // 1. Pour and settle.
+    let (bed_box, loose) = bed::loose_start(spec);
+    std::fs::write(
+        dir.join("pour.data"),
+        bed::data_file(&format!("sandjumper pour (run {run_id})"), &bed_box, &loose),
+    )
+    .map_err(io)?;
+    let fall_s = (2.0 * bed_box.top_m / g).sqrt();
+    if fall_s >= spec.max_settle_s {
+        return Err(CliError::input(format!(
+            "the grains take {fall_s:.2} s to fall from the loose start; the longest settle is \
+             {} s (allowed: longer than the fall)",
+            spec.max_settle_s
+        )));
+    }
+    std::fs::write(
+        dir.join("in.settle"),
+        script::settle_script(spec, &run_id, fall_s).map_err(CliError::input)?,
+    )
+    .map_err(io)?;
+    let dt = spec.time_step_s();
+    let settle_max = (spec.max_settle_s / dt).ceil() as u64;
+    progress.stage("settle", settle_max);
+    let settle = lammps
+        .run(&dir, "in.settle", "log.settle", ranks, &mut |s| {
+            progress.step(s)
+        })
+        .map_err(CliError::internal)?;
+    let (_, mut grains) = bed::read_data(&dir.join("settled.data")).map_err(CliError::internal)?;
+    let settled = bed::settled(spec, &bed_box, &grains).map_err(CliError::internal)?;
+
+    // 2. The foot at the trajectory's start; grains it overlaps removed.
+    let axis = (0.5 * bed_box.width_m, 0.5 * bed_box.width_m);
+    let sphere = spec.min_grain_diameter_m();
+    let bottom = settled.surface_m - trajectory.depth(0.0);
+    let first_id = grains.iter().map(|a| a.id).max().unwrap_or(0) + 1;
+    let foot = foot_atoms(
+        spec.foot_radius_m(),
+        sphere,
+        axis,
+        bottom,
+        spec.grain_density_kg_m3,
+        first_id,
+    );
+    let before = grains.len();
+    grains.retain(|a| !overlaps_foot(a, &foot));
+    let removed = (before - grains.len()) as u64;
+    let top = grains
+        .iter()
+        .map(|a| a.x[2] + a.diameter_m)
+        .fold(bottom + 2.0 * sphere, f64::max);
+    let mut atoms: Vec<Atom> = grains;
+    let foot_spheres = foot.len() as u64;
+    atoms.extend(foot);
+    let intrude_box = bed::BedBox {
+        width_m: bed_box.width_m,
+        top_m: top + 0.01,
+    };
+    std::fs::write(
+        dir.join("intrude.data"),
+        bed::data_file(
+            &format!("sandjumper intrusion (run {run_id})"),
+            &intrude_box,
+            &atoms,
+        ),
+    )
+    .map_err(io)?;
+    std::fs::write(
+        dir.join("in.intrude"),
+        script::intrude_script(spec, &run_id, &pieces, axis, sphere),
+    )
+    .map_err(io)?;
+    let intrusion_steps: u64 = pieces.iter().map(|p| p.steps).sum();
+    let mut manifest = Manifest {
+        run_id,
+        lammps_version: lammps.version.clone(),
+        ranks,
+        trajectory: match trajectory {
+            Trajectory::Constant {
+                speed_m_s,
+                start_depth_m,
+                end_depth_m,
+            } => {
+                format!("constant {speed_m_s} m/s from depth {start_depth_m} m to {end_depth_m} m")
+            }
+            Trajectory::Table { source, .. } => source.clone(),
+        },
+        model_phi: spec.packing_fraction.clamp(0.57, 0.62),
+        geometry: Geometry {
+            axis_m: axis,
+            foot_radius_m: spec.foot_radius_m(),
+            foot_sphere_radius_m: 0.5 * sphere,
+            surface_m: settled.surface_m,
+            grain_density_kg_m3: spec.grain_density_kg_m3,
+            grain_diameter_m: spec.grain_diameter_m,
+            time_step_s: dt,
+        },
+        settled,
+        settled_by_speed: settle.halted,
+        grains_removed_under_foot: removed,
+        foot_spheres,
+        settle_steps: settle.last_step,
+        intrusion_steps,
+        settle_wall_s: settle.wall_s,
+        intrusion_wall_s: 0.0,
+        pieces,
+        spec: spec.clone(),
+    };
+
+    // 3. The intrusion.
+    progress.stage("intrusion", intrusion_steps);
+    let intrusion = lammps
+        .run(&dir, "in.intrude", "log.intrude", ranks, &mut |s| {
+            progress.step(s)
+        })
+        .map_err(CliError::internal)?;
+    manifest.intrusion_wall_s = intrusion.wall_s;
+    std::fs::write(
+        dir.join("run.toml"),
+        toml::to_string(&manifest).map_err(io)?,
+    )
+    .map_err(io)?;
+    analyse(&dir, out, min_speed_ratio, progress)
+}
+
+fn overlaps_foot(a: &Atom, foot: &[Atom]) -> bool {
+    let Some(f) = foot.first() else {
+        return false;
+    };
+    // Only grains reaching the foot's layer can overlap it.
+    if a.x[2] + 0.5 * a.diameter_m <= f.x[2] - 0.5 * f.diameter_m {
+        return false;
+    }
+    foot.iter().any(|f| {
+        let d2: f64 = (0..3).map(|c| (a.x[c] - f.x[c]).powi(2)).sum();
+        d2.sqrt() < 0.5 * (a.diameter_m + f.diameter_m)
+    })
+}
+
+/// Read the run in `dir` (its `run.toml`, `intrude.data`, `force.txt` and `dumps/`) back
+/// into `out`. A dump or force file cut short, or of another run, is refused (exit 2)
+/// naming the file.
+pub fn analyse(
+    dir: &Path,
+    out: &Path,
+    min_speed_ratio: f64,
+    progress: &mut dyn Progress,
+) -> Result<Summary, CliError> {
+    if !(min_speed_ratio > 0.0 && min_speed_ratio < 1.0) {
+        return Err(CliError::input(format!(
+            "the speed rule is {min_speed_ratio} of the fastest (allowed: between 0 and 1)"
+        )));
+    }
+    let manifest_path = dir.join("run.toml");
+    let text = std::fs::read_to_string(&manifest_path).map_err(|e| {
+        CliError::input(format!(
+            "{}: {e} (a LAMMPS run of `sandjumper dem lammps` has it in its lammps/ folder)",
+            manifest_path.display()
+        ))
+    })?;
+    let m: Manifest = toml::from_str(&text)
+        .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
+    let data = dir.join("intrude.data");
+    let (bed_box, atoms) = bed::read_data(&data).map_err(CliError::input)?;
+    let first = std::fs::read_to_string(&data)
+        .map_err(|e| CliError::input(format!("{}: {e}", data.display())))?;
+    if !first.lines().next().unwrap_or("").contains(&m.run_id) {
+        return Err(CliError::input(format!(
+            "{}: not the data file of run {} (its run.toml)",
+            data.display(),
+            m.run_id
+        )));
+    }
+    let check = RunCheck {
+        width_m: bed_box.width_m,
+        radius_by_id: atoms.iter().map(|a| (a.id, 0.5 * a.diameter_m)).collect(),
+    };
+    let g = m.geometry;
+    let phi = m.model_phi;
+    let r = g.foot_radius_m;
+    let eq6 = |d: f64| sandjumper_dem::outputs::model_added_mass(phi, r, d);
+    let fp = |d: f64| {
+        if d > 0.0 {
+            sandjumper_dem::outputs::model_penetration_force(phi, r, d)
+        } else {
+            Ok(0.0)
+        }
+    };
+    let steps = m.frame_steps();
+    progress.stage("read", steps.len() as u64);
+    let dumps = dir.join("dumps");
+    let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
+    for (k, &s) in steps.iter().enumerate() {
+        let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
+        rows.push(analysis::frame_row(&f, &g).map_err(CliError::input)?);
+        progress.step(k as u64 + 1);
+    }
+    analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(CliError::internal)?;
+    // The cone over the frames with the paper's added mass (read again: one frame in
+    // memory at a time, whatever the bed's size).
+    let mut cells = ConeCells::new(&g);
+    for (row, &s) in rows.iter().zip(&steps) {
+        if row.added_mass_kg.is_finite() {
+            let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
+            cells.add(&f, &g, row);
+        }
+    }
+    let cone = cells.cone();
+    let force = analysis::read_force(&dir.join("force.txt"), &g, &fp).map_err(CliError::input)?;
+    let windows = m.intrusion_steps / m.spec.force_every();
+    if (force.len() as u64) < windows {
+        return Err(CliError::input(format!(
+            "{}: {} force windows where the run has {windows} (the file is cut short, or not \
+             of this run)",
+            dir.join("force.txt").display(),
+            force.len()
+        )));
+    }
+    let summary = summarise(&m, &rows, &force, &cone, min_speed_ratio);
+    write_outputs(out, &m, &rows, &force, &cone, &summary)?;
+    Ok(summary)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn summarise(
+    m: &Manifest,
+    rows: &[FlowRow],
+    force: &[analysis::ForceRow],
+    cone: &analysis::Cone,
+    min_speed_ratio: f64,
+) -> Summary {
+    let d = m.spec.grain_diameter_m;
+    let with_mass: Vec<&FlowRow> = rows
+        .iter()
+        .filter(|r| r.added_mass_kg.is_finite())
+        .collect();
+    // Windows deeper than a grain while the foot goes down (depth still growing).
+    let mut ratios = Vec::new();
+    let mut deepest = f64::NEG_INFINITY;
+    for f in force {
+        if f.depth_m > deepest && f.depth_m > d && f.model_penetration_force_n > 0.0 {
+            ratios.push(f.force_n / f.model_penetration_force_n);
+        }
+        deepest = deepest.max(f.depth_m);
+    }
+    let peak = force.iter().map(|f| f.force_n).fold(0.0, f64::max);
+    // Hertz: F = 4/3 E* sqrt(R*) delta^(3/2), two grains of diameter d: R* = d/4,
+    // E* = E / (2 (1 - nu^2)); the peak shared at one contact per d^2 of the foot.
+    let s = &m.spec;
+    let e_star = s.youngs_modulus_pa / (2.0 * (1.0 - s.poisson_ratio * s.poisson_ratio));
+    let per_contact = peak * d * d / (core::f64::consts::PI * s.foot_radius_m().powi(2));
+    let overlap = (per_contact / (4.0 / 3.0 * e_star * (0.25 * d).sqrt())).powf(2.0 / 3.0);
+    let core_seconds = (m.settle_wall_s + m.intrusion_wall_s) * f64::from(m.ranks);
+    let grain_steps = m.settled.grains as f64 * m.intrusion_steps as f64;
+    Summary {
+        lammps_version: m.lammps_version.clone(),
+        grains: m.settled.grains - m.grains_removed_under_foot,
+        foot_spheres: m.foot_spheres,
+        grains_removed_under_foot: m.grains_removed_under_foot,
+        target_packing_fraction: s.packing_fraction,
+        settled_packing_fraction: m.settled.packing_fraction,
+        settled_by_speed: m.settled_by_speed,
+        time_step_s: m.geometry.time_step_s,
+        frames: rows.len() as u64,
+        fps: s.actual_fps(),
+        max_depth_m: rows
+            .iter()
+            .map(|r| r.depth_m)
+            .fold(f64::NEG_INFINITY, f64::max),
+        added_mass_vs_eq6_median: median(
+            with_mass
+                .iter()
+                .filter(|r| r.eq6_added_mass_kg > 0.0)
+                .map(|r| r.added_mass_kg / r.eq6_added_mass_kg)
+                .collect(),
+        ),
+        grain_momentum_under_foot_kg_m_s: rows
+            .iter()
+            .map(|r| r.momentum_under_foot_kg_m_s)
+            .fold(f64::NEG_INFINITY, f64::max),
+        final_added_mass_kg: with_mass
+            .iter()
+            .max_by(|a, b| a.depth_m.total_cmp(&b.depth_m))
+            .map_or(f64::NAN, |r| r.added_mass_kg),
+        force_vs_penetration_force_median: median(ratios),
+        peak_force_n: peak,
+        peak_overlap_ratio: overlap / d,
+        cone_angle_deg: cone.angle_deg,
+        cone_note: cone.note.clone(),
+        min_speed_ratio,
+        core_seconds,
+        grain_steps_per_core_second: grain_steps / (m.intrusion_wall_s * f64::from(m.ranks)),
+        run_id: m.run_id.clone(),
+    }
+}
+
+fn write_outputs(
+    out: &Path,
+    m: &Manifest,
+    rows: &[FlowRow],
+    force: &[analysis::ForceRow],
+    cone: &analysis::Cone,
+    summary: &Summary,
+) -> Result<(), CliError> {
+    write_csv(&out.join("flow.csv"), rows, &[]).map_err(CliError::internal)?;
+    write_csv(&out.join("force_depth.csv"), force, &[]).map_err(CliError::internal)?;
+    write_csv(&out.join("cone.csv"), &cone.rows, &[]).map_err(CliError::internal)?;
+    std::fs::write(
+        out.join("lammps.toml"),
+        toml::to_string(&m.spec).map_err(io)?,
+    )
+    .map_err(io)?;
+    let json = serde_json::to_string_pretty(summary).map_err(io)?;
+    std::fs::write(out.join("summary.json"), json + "\n").map_err(io)?;
+    let title = format!(
+        "3-D DEM (LAMMPS): {:.0} mm foot in {:.1} mm grains, bed phi {:.3}",
+        1e3 * m.spec.foot_diameter_m,
+        1e3 * m.spec.grain_diameter_m,
+        m.settled.packing_fraction
+    );
+    crate::figure::draw(out, &title, rows, force, cone, m.spec.foot_radius_m())
+        .map_err(CliError::internal)
+}

@@ -1,0 +1,221 @@
+//! The two LAMMPS inputs of a run.
+//!
+//! 1. `in.settle`: the loose grains ([`crate::bed::loose_start`]) fall under gravity onto a
+//!    frictional floor with the pouring friction and settle until their rms speed is below
+//!    the spec's (`fix halt`), or the longest settle passes; `write_data settled.data`.
+//! 2. `in.intrude`: the settled grains with the grain friction, and the foot
+//!    ([`crate::foot`]) moved by `fix move linear` one piece at a time along the prescribed
+//!    trajectory (pieces on the force windows' step grid, so the foot is exactly where the
+//!    trajectory says at every window's end); the contact force on the foot (the mean over
+//!    each window) and the foot's lowest centre go to `force.txt`; the grains within the
+//!    dump radius of the axis, and the foot, go to `dumps/frame.STEP.txt` at the camera's
+//!    rate.
+
+use std::fmt::Write as _;
+
+use sandjumper_dem::intruder::Trajectory;
+
+use crate::spec::LammpsSpec;
+
+/// One piece of the foot's path: `steps` steps at vertical velocity `vz_m_s` (up positive).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Piece {
+    /// Steps.
+    pub steps: u64,
+    /// Vertical velocity, m/s (up positive: an intrusion is negative).
+    pub vz_m_s: f64,
+}
+
+/// The trajectory as pieces on the force windows' grid: each window's depth change over its
+/// duration, neighbouring equal velocities merged. Returns the pieces and the total steps.
+pub fn pieces(spec: &LammpsSpec, trajectory: &Trajectory) -> Vec<Piece> {
+    let dt = spec.time_step_s();
+    let fe = spec.force_every();
+    let window = fe as f64 * dt;
+    let windows = (trajectory.duration_s() / window).ceil().max(1.0) as u64;
+    let mut out: Vec<Piece> = Vec::new();
+    for k in 0..windows {
+        let (t0, t1) = (k as f64 * window, (k + 1) as f64 * window);
+        let vz = -(trajectory.depth(t1) - trajectory.depth(t0)) / window;
+        match out.last_mut() {
+            Some(p) if (p.vz_m_s - vz).abs() <= 1e-12 * vz.abs().max(1e-9) => p.steps += fe,
+            _ => out.push(Piece {
+                steps: fe,
+                vz_m_s: vz,
+            }),
+        }
+    }
+    out
+}
+
+/// The contact model's coefficients with friction `mu` (pair and wall alike).
+fn contact(spec: &LammpsSpec, mu: f64) -> String {
+    format!(
+        "hertz/material {:e} {} {} tangential mindlin NULL 1.0 {} damping coeff_restitution",
+        spec.youngs_modulus_pa, spec.restitution, spec.poisson_ratio, mu
+    )
+}
+
+/// The lines every stage starts with.
+fn header(spec: &LammpsSpec, what: &str, run_id: &str, data: &str, mu: f64) -> String {
+    let skin = 0.2 * spec.grain_diameter_m;
+    let c = contact(spec, mu);
+    format!(
+        "# sandjumper dem lammps: {what} (run {run_id})\n\
+         units si\n\
+         atom_style sphere\n\
+         atom_modify map array\n\
+         boundary p p fm\n\
+         newton off\n\
+         comm_modify vel yes\n\
+         read_data {data}\n\
+         group grains type 1\n\
+         pair_style granular\n\
+         pair_coeff * * {c}\n\
+         fix floor grains wall/gran granular {c} zplane 0.0 NULL\n\
+         neighbor {skin:e} bin\n\
+         timestep {:e}\n",
+        spec.time_step_s()
+    )
+}
+
+/// `in.settle`: pour and settle.
+pub fn settle_script(spec: &LammpsSpec, run_id: &str, fall_s: f64) -> Result<String, String> {
+    let mut s = header(
+        spec,
+        "pour and settle",
+        run_id,
+        "pour.data",
+        spec.pour_friction()?,
+    );
+    let dt = spec.time_step_s();
+    let fall = (fall_s / dt).ceil() as u64;
+    let rest = ((spec.max_settle_s - fall_s).max(0.0) / dt).ceil() as u64;
+    let check = ((0.005 / dt).round() as u64).max(1);
+    let _ = write!(
+        s,
+        "neigh_modify delay 0 every 1 check yes\n\
+         fix gravity grains gravity {} vector 0 0 -1\n\
+         fix integrate grains nve/sphere\n\
+         variable rms_speed equal sqrt(2*ke/mass(grains))\n\
+         thermo_style custom step time atoms ke v_rms_speed\n\
+         thermo {check}\n\
+         thermo_modify lost error norm no\n\
+         # the fall: no grain can be at rest before the highest has reached the bed\n\
+         run {fall}\n\
+         fix halt grains halt {check} v_rms_speed < {:e} error continue\n\
+         run {rest}\n\
+         unfix halt\n\
+         write_data settled.data\n",
+        spec.gravity_m_s2, spec.settled_rms_speed_m_s
+    );
+    Ok(s)
+}
+
+/// `in.intrude`: the foot on its `pieces`, the force and the dumps. The foot's axis is at
+/// (`cx`, `cy`); `foot_sphere_m` is its spheres' diameter.
+pub fn intrude_script(
+    spec: &LammpsSpec,
+    run_id: &str,
+    pieces: &[Piece],
+    centre: (f64, f64),
+    foot_sphere_m: f64,
+) -> String {
+    let mut s = header(spec, "intrusion", run_id, "intrude.data", spec.friction);
+    let fe = spec.force_every();
+    let de = spec.dump_every();
+    let total: u64 = pieces.iter().map(|p| p.steps).sum();
+    let reach = spec.dump_radius_factor * spec.foot_radius_m();
+    let _ = write!(
+        s,
+        "group foot type 2\n\
+         neigh_modify delay 0 every 1 check yes exclude type 2 2\n\
+         fix gravity grains gravity {g} vector 0 0 -1\n\
+         fix integrate grains nve/sphere\n\
+         compute foot_fz foot reduce sum fz\n\
+         compute foot_zmin foot reduce min z\n\
+         variable t equal time\n\
+         fix force all ave/time 1 {fe} {fe} v_t c_foot_fz c_foot_zmin file force.txt format \" %.9g\"\n\
+         region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
+         dump frames all custom {de} dumps/frame.*.txt id type x y z vx vy vz radius\n\
+         dump_modify frames region near sort id format float %.9g\n\
+         thermo_style custom step time atoms c_foot_fz c_foot_zmin\n\
+         thermo {de}\n\
+         thermo_modify lost error norm no\n\
+         # the foot: {n} piece(s), {total} steps; its spheres are {fd:e} m across\n",
+        g = spec.gravity_m_s2,
+        cx = centre.0,
+        cy = centre.1,
+        n = pieces.len(),
+        fd = foot_sphere_m,
+    );
+    for p in pieces {
+        let _ = write!(
+            s,
+            "fix move foot move linear 0 0 {:e}\nrun {}\nunfix move\n",
+            p.vz_m_s, p.steps
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::{LammpsSpec, Preset};
+
+    #[test]
+    fn a_table_becomes_pieces_that_end_where_it_does() {
+        let spec = LammpsSpec::preset(Preset::Small);
+        let t = Trajectory::Table {
+            t_s: vec![0.0, 0.004, 0.010],
+            depth_m: vec![0.0, 0.002, 0.0026],
+            source: "test".into(),
+        };
+        let p = pieces(&spec, &t);
+        let dt = spec.time_step_s();
+        let total: u64 = p.iter().map(|p| p.steps).sum();
+        assert_eq!(total % spec.force_every(), 0);
+        assert!(total as f64 * dt >= 0.010 - 1e-12);
+        // The integrated path equals the table at every window end.
+        let mut z = 0.0;
+        let mut steps = 0;
+        for piece in &p {
+            z += piece.vz_m_s * piece.steps as f64 * dt;
+            steps += piece.steps;
+            let t_end = steps as f64 * dt;
+            assert!((-z - t.depth(t_end)).abs() < 1e-12, "{t_end}");
+        }
+        // A constant speed is one piece.
+        let c = Trajectory::Constant {
+            speed_m_s: 0.1,
+            start_depth_m: 0.0,
+            end_depth_m: 0.02,
+        };
+        let p = pieces(&spec, &c);
+        assert_eq!(p.len(), 1);
+        assert!((p[0].vz_m_s + 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_scripts_name_the_contacts_the_rates_and_the_run() {
+        let spec = LammpsSpec::preset(Preset::Small);
+        let s = settle_script(&spec, "abc", 0.1).unwrap();
+        assert!(s.contains("(run abc)"));
+        // The pour's friction sets the packing; the intrusion has the grains'.
+        let pour = spec.pour_friction().unwrap();
+        assert!(s.contains(&format!(
+            "tangential mindlin NULL 1.0 {pour} damping coeff_restitution"
+        )));
+        assert!(s.contains("write_data settled.data"));
+        let p = [Piece {
+            steps: spec.force_every() * 3,
+            vz_m_s: -0.1,
+        }];
+        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018);
+        assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
+        assert!(i.contains("exclude type 2 2"));
+        assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));
+        assert!(i.contains("fix move foot move linear 0 0 -1e-1\nrun"));
+    }
+}
