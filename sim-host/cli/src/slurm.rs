@@ -137,8 +137,8 @@ pub fn log_tail(path: &Path, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n    ")
 }
 
-/// Make `DIR.slurm` (with `logs/`) for `out`, replacing an earlier job directory of ours;
-/// its canonical path.
+/// Make `DIR.slurm` (with `logs/`) for `out`, replacing an earlier job directory of ours
+/// unless its job (`job.id`) is still queued or running; its canonical path.
 pub fn fresh_job_dir(out: &Path) -> Result<PathBuf, CliError> {
     let dir = job_dir(out);
     if dir.exists() {
@@ -149,12 +149,43 @@ pub fn fresh_job_dir(out: &Path) -> Result<PathBuf, CliError> {
                 dir.display()
             )));
         }
+        if let Ok(id) = std::fs::read_to_string(dir.join("job.id")) {
+            let id = id.trim();
+            let queued = Command::new("squeue")
+                .args(["-h", "-j", id, "-o", "%i"])
+                .output()
+                .map(|o| !String::from_utf8_lossy(&o.stdout).trim().is_empty())
+                .unwrap_or(false);
+            if queued {
+                return Err(CliError::input(format!(
+                    "{}: its job {id} is still queued or running (allowed: a job directory whose \
+                     job has ended; wait for it, or `scancel {id}`)",
+                    dir.display()
+                )));
+            }
+        }
         std::fs::remove_dir_all(&dir)
             .map_err(|e| CliError::internal(format!("cannot clear {}: {e}", dir.display())))?;
     }
     std::fs::create_dir_all(dir.join("logs"))
         .map_err(|e| CliError::input(format!("cannot create {}: {e}", dir.display())))?;
     std::fs::canonicalize(&dir).map_err(|e| CliError::internal(format!("{}: {e}", dir.display())))
+}
+
+/// This program's arguments as text (exit 2 naming one that is not UTF-8: a job script
+/// could not pass it on faithfully).
+pub fn arguments() -> Result<Vec<String>, CliError> {
+    std::env::args_os()
+        .map(|a| {
+            a.into_string().map_err(|a| {
+                CliError::input(format!(
+                    "the argument {} is not UTF-8 text (allowed with --slurm: UTF-8 arguments, \
+                     which the job script passes on)",
+                    a.to_string_lossy()
+                ))
+            })
+        })
+        .collect()
 }
 
 /// This program and the working directory, for a job script.
@@ -166,40 +197,59 @@ pub fn program_and_cwd() -> Result<(PathBuf, PathBuf), CliError> {
     Ok((exe, cwd))
 }
 
-/// Write `script` to `dir/job.sbatch` and submit it; the job id.
+/// Write `script` to `dir/job.sbatch` and submit it; the job id (also in `dir/job.id`). A
+/// job Slurm rejects is refused (exit 2) and its directory removed.
 pub fn sbatch(dir: &Path, script: &str) -> Result<String, CliError> {
     let sbatch = dir.join("job.sbatch");
     std::fs::write(&sbatch, script)
         .map_err(|e| CliError::internal(format!("cannot write {}: {e}", sbatch.display())))?;
-    let job = run_tool(
+    let job = match run_tool(
         Command::new("sbatch").arg("--parsable").arg(&sbatch),
         "sbatch",
-    )
-    .map_err(|e| {
-        CliError::input(format!(
-            "Slurm refused the job {}: {}",
-            sbatch.display(),
-            e.message
-        ))
-    })?;
+    ) {
+        Ok(j) => j,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(dir);
+            return Err(CliError::input(format!(
+                "Slurm refused the job: {} (nothing submitted)",
+                e.message
+            )));
+        }
+    };
     let job = job.trim().split(';').next().unwrap_or("").to_string();
     if job.is_empty() {
         return Err(CliError::internal("sbatch printed no job id"));
     }
+    let _ = std::fs::write(dir.join("job.id"), format!("{job}\n"));
     Ok(job)
 }
 
-/// Wait until nothing of `job` is pending, running or completing.
+/// Wait until nothing of `job` is pending, running or completing: `squeue` every 0.5 s at
+/// first, then less often (up to every 30 s: a long job does not load the controller); a
+/// failing `squeue` is retried, five failures in a row end the wait.
 pub fn wait_for(job: &str) -> Result<(), CliError> {
+    let mut every = Duration::from_millis(500);
+    let mut failures = 0;
     loop {
-        let queued = run_tool(
+        match run_tool(
             Command::new("squeue").args(["-h", "-j", job, "-o", "%i %T"]),
             "squeue",
-        )?;
-        if queued.trim().is_empty() {
-            return Ok(());
+        ) {
+            Ok(q) if q.trim().is_empty() => return Ok(()),
+            Ok(_) => failures = 0,
+            Err(e) => {
+                failures += 1;
+                if failures >= 5 {
+                    return Err(CliError::internal(format!(
+                        "{} (five times in a row; the job {job} may still run: see `squeue -j \
+                         {job}`)",
+                        e.message
+                    )));
+                }
+            }
         }
-        std::thread::sleep(Duration::from_millis(500));
+        std::thread::sleep(every);
+        every = (every * 3 / 2).min(Duration::from_secs(30));
     }
 }
 
@@ -232,8 +282,16 @@ impl QueueArgs {
             script += &format!("#SBATCH {l}\n");
         }
         script += &format!("#SBATCH --time={}\n", self.slurm_time);
-        script += &format!("#SBATCH --output={}\n", log.display());
-        script += &format!("#SBATCH --chdir={}\n", cwd.display());
+        // Quoted (Slurm reads quotes in directives); a `%` of the path itself doubled (Slurm
+        // expands `%a`, `%j`... in --output), the file name's own patterns kept.
+        let dir = log.parent().map_or(String::new(), |d| {
+            format!("{}/", d.display()).replace('%', "%%")
+        });
+        let file = log
+            .file_name()
+            .map_or(String::new(), |f| f.to_string_lossy().into_owned());
+        script += &format!("#SBATCH --output=\"{dir}{file}\"\n");
+        script += &format!("#SBATCH --chdir=\"{}\"\n", cwd.display());
         if let Some(p) = &self.slurm_partition {
             script += &format!("#SBATCH --partition={p}\n");
         }
@@ -267,7 +325,7 @@ pub fn submit_job(
     tool("sbatch", "--slurm")?;
     let dir = fresh_job_dir(out)?;
     let (exe, cwd) = program_and_cwd()?;
-    let argv: Vec<String> = std::env::args().collect();
+    let argv = arguments()?;
     let args = passed_on(
         &argv,
         command,

@@ -320,11 +320,29 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("Slurm refused the job"), "{stderr}");
     assert!(!rejected.exists());
+    assert!(
+        !work.path().join("rejected.slurm").exists(),
+        "nothing left of it"
+    );
 
-    // The 3-D DEM as one job of two MPI tasks.
+    // The 3-D DEM as one job of two MPI tasks: a jump's push-off (a table trajectory) into
+    // a small bed.
     let Some(lmp) = common::lammps() else {
         return;
     };
+    let jump = work.path().join("jump");
+    let out = Command::new(exe)
+        .args([
+            "jump", "--kind", "stutter", "--freq", "10", "--model", "eq4", "--phi", "0.57", "--out",
+        ])
+        .arg(&jump)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let dem = work.path().join("dem");
     let out = cluster
         .command(exe)
@@ -336,19 +354,19 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
             "--bed-width",
             "0.04",
             "--bed-depth",
-            "0.02",
-            "--speed",
-            "0.2",
-            "--depth",
-            "0.005",
+            "0.03",
+            "--episode",
+            "push-off",
             "--ranks",
             "2",
             "--lmp",
         ])
         .arg(&lmp)
+        .arg("--trajectory")
+        .arg(jump.join("trajectory.csv"))
         .arg("--out")
         .arg(&dem)
-        .arg("--slurm")
+        .args(["--slurm", "--json"])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -356,9 +374,32 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     assert!(out.status.success(), "{stderr}\n{log}\n{}", cluster.logs());
     assert!(stderr.contains("submitted Slurm job"), "{stderr}");
     assert!(read(&work.path().join("dem.slurm/job.sbatch")).contains("#SBATCH --ntasks=2"));
-    let summary: serde_json::Value =
-        serde_json::from_str(&read(&dem.join("summary.json"))).unwrap();
-    assert_eq!(summary["frames"].as_u64(), Some(13), "{summary}");
+    // --json prints the job's summary once it is done.
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        summary,
+        serde_json::from_str::<serde_json::Value>(&read(&dem.join("summary.json"))).unwrap()
+    );
+    // The stutter's push-off (its table, from the surface): its length at 500 frames/s and
+    // its deepest sample.
+    let push_off =
+        sandjumper_dem::intruder::Trajectory::push_off_from_csv(&jump.join("trajectory.csv"))
+            .unwrap();
+    let sandjumper_dem::intruder::Trajectory::Table { depth_m, .. } = &push_off else {
+        panic!("a table")
+    };
+    let deepest = depth_m.iter().copied().fold(f64::MIN, f64::max);
+    let frames = summary["frames"].as_u64().unwrap() as f64;
+    let expected = (push_off.duration_s() * 500.0).ceil() + 1.0;
+    assert!(
+        (frames - expected).abs() <= 1.0,
+        "{frames} frames, {expected} expected"
+    );
+    let depth = summary["max_depth_m"].as_f64().unwrap();
+    assert!(
+        (depth - deepest).abs() < 1e-6,
+        "{depth} m, the table {deepest} m"
+    );
     assert!(read(&dem.join("lammps/log.intrude")).contains("on 2 procs"));
 }
 

@@ -63,6 +63,11 @@ pub struct Summary {
     /// frame over the samples where the added mass is taken (`null`: fewer than three rows
     /// show bands); its rows are in `cone.csv`.
     pub shear_band_cone: Option<sandjumper_flow::cone::ShearBandCone>,
+    /// The jammed cone as the region moving down with the foot: the down speed over the
+    /// foot's, averaged the same way, its edge where it falls below one half (the middle of
+    /// the bands' velocity step); `null`: fewer than three rows narrower than the foot. Its
+    /// rows are in `comoving_cone.csv`.
+    pub comoving_cone: Option<sandjumper_flow::cone::ShearBandCone>,
     /// Samples.
     pub samples: usize,
     /// Side-wall frames written.
@@ -254,13 +259,16 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     let axis_x = 0.5 * (spec.bed_x_m.0 + spec.bed_x_m.1);
     let xs_axis: Vec<f64> = xs.iter().map(|x| x - axis_x).collect();
     let cone = shear_band_cone(run, &xs_axis, &hs);
-    if let Some(c) = &cone {
-        write_csv(
-            &staged.file("cone.csv"),
-            &c.rows,
-            &["depth_below_foot_m", "left_m", "right_m", "contrast"],
-        )
-        .map_err(err)?;
+    let comoving_cone = comoving_cone(run, &xs_axis, &hs);
+    for (c, name) in [(&cone, "cone.csv"), (&comoving_cone, "comoving_cone.csv")] {
+        if let Some(c) = c {
+            write_csv(
+                &staged.file(name),
+                &c.rows,
+                &["depth_below_foot_m", "left_m", "right_m", "contrast"],
+            )
+            .map_err(err)?;
+        }
     }
     for (k, f) in run.fields.iter().enumerate() {
         #[derive(Serialize)]
@@ -430,6 +438,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
         hexatic_order: hex,
         jammed,
         shear_band_cone: cone,
+        comoving_cone,
         samples: run.state.flow.len(),
         frames,
         performance: run.performance,
@@ -620,6 +629,28 @@ fn shear_band_cone(
         })
         .collect();
     sandjumper_flow::cone::shear_band_cone(&samples, xs, hs, 0.5 * run.spec.foot_width_m)
+}
+
+/// The co-moving cone of `run` ([`sandjumper_flow::cone::comoving_cone`]) from the vertical
+/// velocity fields of the same samples as [`shear_band_cone`].
+fn comoving_cone(
+    run: &Run,
+    xs: &[f64],
+    hs: &[f64],
+) -> Option<sandjumper_flow::cone::ShearBandCone> {
+    let samples: Vec<sandjumper_flow::cone::MotionSample<'_>> = run
+        .state
+        .flow
+        .iter()
+        .zip(&run.fields)
+        .filter(|(r, _)| r.added_mass_kg.is_finite() && r.depth_m > 0.0)
+        .map(|(r, f)| sandjumper_flow::cone::MotionSample {
+            v_up_m_s: &f[1],
+            foot_bottom_m: -r.depth_m,
+            foot_speed_m_s: r.foot_speed_m_s,
+        })
+        .collect();
+    sandjumper_flow::cone::comoving_cone(&samples, xs, hs, 0.5 * run.spec.foot_width_m)
 }
 
 #[cfg(test)]

@@ -73,37 +73,21 @@ pub fn shear_band_cone(
     hs: &[f64],
     radius_m: f64,
 ) -> Option<ShearBandCone> {
-    let (nx, ny) = (xs.len(), hs.len());
-    if samples.is_empty() || ny < 2 || nx < 3 || radius_m <= 0.0 {
+    let nx = xs.len();
+    let FootFrame {
+        sum,
+        cells,
+        count,
+        bins,
+        spacing,
+    } = FootFrame::average(
+        samples.iter().map(|s| (s.shear_rate, s.foot_bottom_m, 1.0)),
+        nx,
+        hs,
+        radius_m,
+    )?;
+    if samples.is_empty() {
         return None;
-    }
-    let spacing = (hs[1] - hs[0]).abs();
-    let deepest = radius_m * 70f64.to_radians().tan();
-    let bins = (deepest / spacing).ceil() as usize + 1;
-    // Per cell: the sum of the finite values and their count (an empty coarse-graining cell
-    // is NaN: it must neither poison the average nor be taken for a band).
-    let mut sum = vec![0.0; bins * nx];
-    let mut cells = vec![0usize; bins * nx];
-    let mut count = vec![0usize; bins];
-    for s in samples {
-        for (j, &h) in hs.iter().enumerate() {
-            let d = s.foot_bottom_m - h;
-            if d < 0.0 {
-                continue;
-            }
-            let b = (d / spacing).round() as usize;
-            if b >= bins {
-                continue;
-            }
-            count[b] += 1;
-            for i in 0..nx {
-                let v = s.shear_rate[j * nx + i];
-                if v.is_finite() {
-                    sum[b * nx + i] += v;
-                    cells[b * nx + i] += 1;
-                }
-            }
-        }
     }
     let mut rows: Vec<BandRow> = Vec::new();
     let enough = samples.len().div_ceil(2);
@@ -160,6 +144,70 @@ pub fn shear_band_cone(
             contrast,
         });
     }
+    cone_from_rows(rows, samples.len())
+}
+
+/// Fields averaged in the foot's frame: rows binned by their depth below the foot's bottom
+/// (one grid spacing a bin, down to `R tan 70`), per bin and column the sum of the finite
+/// values (an empty coarse-graining cell is NaN: it must neither poison the average nor be
+/// taken for a feature) and their count, and per bin the samples that reached it.
+struct FootFrame {
+    sum: Vec<f64>,
+    cells: Vec<usize>,
+    count: Vec<usize>,
+    bins: usize,
+    spacing: f64,
+}
+
+impl FootFrame {
+    /// Average `fields` (`(field, foot bottom, scale)`: each value times `scale`) on a grid
+    /// of `nx` columns and rows at heights `hs`; None for a grid too small or no radius.
+    fn average<'a>(
+        fields: impl Iterator<Item = (&'a [f64], f64, f64)>,
+        nx: usize,
+        hs: &[f64],
+        radius_m: f64,
+    ) -> Option<Self> {
+        if hs.len() < 2 || nx < 3 || radius_m <= 0.0 {
+            return None;
+        }
+        let spacing = (hs[1] - hs[0]).abs();
+        let bins = (radius_m * 70f64.to_radians().tan() / spacing).ceil() as usize + 1;
+        let mut f = Self {
+            sum: vec![0.0; bins * nx],
+            cells: vec![0; bins * nx],
+            count: vec![0; bins],
+            bins,
+            spacing,
+        };
+        for (field, foot_bottom_m, scale) in fields {
+            for (j, &h) in hs.iter().enumerate() {
+                let d = foot_bottom_m - h;
+                if d < 0.0 {
+                    continue;
+                }
+                let b = (d / spacing).round() as usize;
+                if b >= bins {
+                    continue;
+                }
+                f.count[b] += 1;
+                for i in 0..nx {
+                    let v = field[j * nx + i];
+                    if v.is_finite() {
+                        f.sum[b * nx + i] += scale * v;
+                        f.cells[b * nx + i] += 1;
+                    }
+                }
+            }
+        }
+        Some(f)
+    }
+}
+
+/// The cone through `rows` (at least three; `None` otherwise): each side's least-squares line
+/// of distance from the axis against depth, its angle from the horizontal, one angle when
+/// both sides narrow and agree, the apex where they reach the axis.
+fn cone_from_rows(rows: Vec<BandRow>, samples: usize) -> Option<ShearBandCone> {
     if rows.len() < 3 {
         return None;
     }
@@ -208,14 +256,167 @@ pub fn shear_band_cone(
         right_deg,
         spread_deg: 0.5 * (left_deg - right_deg).abs(),
         apex_depth_m: 0.5 * (apex(ls, li) + apex(rs, ri)),
-        samples: samples.len(),
+        samples,
         rows,
     })
+}
+
+/// One sample's vertical velocity on the grid (`ny` rows of `nx`, row-major, up positive),
+/// with the foot's bottom height and down speed.
+pub struct MotionSample<'a> {
+    /// Vertical velocity per node, m/s (up positive; NaN: an empty cell).
+    pub v_up_m_s: &'a [f64],
+    /// Height of the foot's bottom, m (the rows' axis).
+    pub foot_bottom_m: f64,
+    /// The foot's down speed, m/s (positive).
+    pub foot_speed_m_s: f64,
+}
+
+/// The jammed cone as the region that moves down with the foot: the grains' down speed over
+/// the foot's, averaged over `samples` in the foot's frame (as [`shear_band_cone`] averages
+/// the shear rate); in each row below the foot the cone's edge on each side is where that
+/// ratio, going out from the axis, first falls below one half (interpolated between grid
+/// columns): the middle of the velocity step a shear band makes. Rows are taken from one grid
+/// spacing below the foot down to the first whose axis (the columns within 0.1 R of it)
+/// moves slower than half the foot, and
+/// the sides' lines are fitted through the rows whose edges lie inside the foot's radius (the
+/// slanted part; above it the region is as wide as the foot). `contrast` in its rows is the
+/// axis's ratio. `None` when fewer than three rows have edges inside the radius.
+pub fn comoving_cone(
+    samples: &[MotionSample<'_>],
+    xs: &[f64],
+    hs: &[f64],
+    radius_m: f64,
+) -> Option<ShearBandCone> {
+    let nx = xs.len();
+    let moving: Vec<&MotionSample<'_>> =
+        samples.iter().filter(|s| s.foot_speed_m_s > 0.0).collect();
+    if moving.is_empty() {
+        return None;
+    }
+    let FootFrame {
+        sum,
+        cells,
+        count,
+        bins,
+        spacing,
+    } = FootFrame::average(
+        moving
+            .iter()
+            .map(|s| (s.v_up_m_s, s.foot_bottom_m, -1.0 / s.foot_speed_m_s)),
+        nx,
+        hs,
+        radius_m,
+    )?;
+    let axis = (0..nx).min_by(|&a, &b| xs[a].abs().total_cmp(&xs[b].abs()))?;
+    let enough = moving.len().div_ceil(2);
+    let mut rows = Vec::new();
+    for b in 1..bins {
+        if count[b] < enough {
+            break;
+        }
+        let mean = |i: usize| match cells[b * nx + i] {
+            0 => f64::NAN,
+            n => sum[b * nx + i] / n as f64,
+        };
+        // The axis's ratio: the mean of the columns within 0.1 R of it (one column alone may
+        // be empty, or hold a grain or two).
+        let near: Vec<f64> = (0..nx)
+            .filter(|&i| xs[i].abs() <= (0.1 * radius_m).max(xs[axis].abs()))
+            .map(mean)
+            .filter(|m| m.is_finite())
+            .collect();
+        let on_axis = near.iter().sum::<f64>() / near.len() as f64;
+        if on_axis.is_nan() || on_axis < 0.5 {
+            break;
+        }
+        // Out from the axis on one side (`step` +1: right, -1: left): where the ratio first
+        // falls below a half, interpolated; None if it never does within 1.5 R.
+        let edge = |step: isize| {
+            let mut prev = (xs[axis].abs(), on_axis);
+            let mut i = axis as isize + step;
+            while i >= 0 && (i as usize) < nx && xs[i as usize].abs() <= 1.5 * radius_m {
+                let m = mean(i as usize);
+                if m.is_finite() {
+                    let x = xs[i as usize].abs();
+                    if m < 0.5 {
+                        return Some(prev.0 + (prev.1 - 0.5) / (prev.1 - m) * (x - prev.0));
+                    }
+                    prev = (x, m);
+                }
+                i += step;
+            }
+            None
+        };
+        let (Some(left), Some(right)) = (edge(-1), edge(1)) else {
+            continue;
+        };
+        if left < radius_m && right < radius_m {
+            rows.push(BandRow {
+                depth_below_foot_m: b as f64 * spacing,
+                left_m: left,
+                right_m: right,
+                contrast: on_axis,
+            });
+        }
+    }
+    cone_from_rows(rows, samples.len())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_region_moving_with_the_foot_gives_its_cone() {
+        // Grains inside a 60 degree cone under a 10 mm foot move down with it, the rest stand
+        // still, with a smooth step one grid spacing wide; two samples at different depths.
+        let xs: Vec<f64> = (-40..=40).map(|i| i as f64 * 0.0005).collect();
+        let hs: Vec<f64> = (0..120).map(|j| -0.06 + j as f64 * 0.0005).collect();
+        let (r, t) = (0.01, 60f64.to_radians().tan());
+        let field = |foot: f64, v: f64| -> Vec<f64> {
+            let mut f = Vec::new();
+            for &h in &hs {
+                let d = foot - h;
+                for &x in &xs {
+                    let side = r - d / t;
+                    let inside = 0.5 - 0.5 * ((x.abs() - side) / 0.0005).tanh();
+                    f.push(if d > 0.0 { -v * inside } else { f64::NAN });
+                }
+            }
+            f
+        };
+        let (a, b) = (field(-0.005, 0.2), field(-0.008, 0.1));
+        let samples = [
+            MotionSample {
+                v_up_m_s: &a,
+                foot_bottom_m: -0.005,
+                foot_speed_m_s: 0.2,
+            },
+            MotionSample {
+                v_up_m_s: &b,
+                foot_bottom_m: -0.008,
+                foot_speed_m_s: 0.1,
+            },
+        ];
+        let c = comoving_cone(&samples, &xs, &hs, r).unwrap();
+        assert!((c.angle_deg - 60.0).abs() < 2.0, "{c:?}");
+        assert!((c.apex_depth_m - r * t).abs() < 0.001, "{}", c.apex_depth_m);
+        // A region as wide as the foot all the way down is no cone.
+        let flat: Vec<f64> = hs
+            .iter()
+            .flat_map(|&h| {
+                xs.iter()
+                    .map(move |&x| if h < -0.005 && x.abs() < r { -0.2 } else { 0.0 })
+            })
+            .collect();
+        let s = [MotionSample {
+            v_up_m_s: &flat,
+            foot_bottom_m: -0.005,
+            foot_speed_m_s: 0.2,
+        }];
+        assert!(comoving_cone(&s, &xs, &hs, r).is_none_or(|c| c.angle_deg.is_nan()));
+    }
 
     /// A field with bands along a cone of `deg` under a foot of radius `r` at `foot` height,
     /// plus a deterministic ripple.

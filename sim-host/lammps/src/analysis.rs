@@ -9,16 +9,16 @@
 //!   of its fastest (the paper's exclusion of `v -> 0`), against eq. 6 at the same depth
 //!   with `C` scaled by `(R / 38 mm)^2`;
 //! - the contact force on the foot against the model's `F_p(z)` for this foot;
-//! - the jammed cone: the region under the foot that moves down with it. Over the frames
-//!   with the paper's added mass, the grains' down speed over the foot's is averaged in
-//!   cells of height (below the foot) and radius; at each height the cone's edge is the
-//!   first radius where that mean falls below one half; a line through the edges inside the
-//!   foot's radius gives the cone's angle to the horizontal, `atan(dh / -dr)` (the paper:
-//!   about 60 degrees).
+//! - the jammed cone: the region under the foot that moves down with it, measured as the
+//!   2-D DEM's is ([`sandjumper_flow::cone::comoving_cone`]) on the side view of the grains
+//!   ([`SideView`]): over the frames with the paper's added mass, the down speed over the
+//!   foot's averaged in the foot's frame; on each side the edge where it falls below one
+//!   half; the sides' lines give the cone's angle to the horizontal (the paper: about 60
+//!   degrees).
 
 use serde::{Deserialize, Serialize};
 
-use crate::bed::{FOOT, GRAIN};
+use crate::bed::GRAIN;
 use crate::dump::Frame;
 
 /// Where the foot and the bed are.
@@ -66,7 +66,7 @@ pub struct FlowRow {
 /// One row of `force_depth.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ForceRow {
-    /// Window's end, s.
+    /// The window's mean time (its middle), s.
     pub t_s: f64,
     /// Depth of the foot's bottom, m.
     pub depth_m: f64,
@@ -195,168 +195,85 @@ pub fn read_force(
     Ok(rows)
 }
 
-/// The cone's measure at one height below the foot: one row of `cone.csv`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ConeRow {
-    /// Height below the foot's bottom (the bin's middle), m.
-    pub below_foot_m: f64,
-    /// The mean down speed over the foot's on the axis (the first radius bin), 1.
-    pub axis_speed_ratio: f64,
-    /// The cone's edge: the first radius whose mean speed ratio is below 1/2 (NaN: none
-    /// within 1.5 R), m.
-    pub edge_radius_m: f64,
-}
+/// The jammed cone: [`sandjumper_flow::cone::comoving_cone`], the same measure as the 2-D
+/// DEM's, on the side view of the 3-D grains ([`SideView`]).
+pub type Cone = sandjumper_flow::cone::ShearBandCone;
 
-/// The jammed cone.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Cone {
-    /// Angle of its side to the horizontal, degrees (None: not found, see `note`).
-    pub angle_deg: Option<f64>,
-    /// Apex below the foot's bottom, m.
-    pub apex_below_foot_m: Option<f64>,
-    /// Frames averaged.
-    pub frames: u64,
-    /// Why there is no angle, or how it was fitted.
-    pub note: String,
-    /// Its edge at each height.
-    pub rows: Vec<ConeRow>,
-}
-
-/// Cells of (height below the foot, radius) accumulating grains' down speed over the foot's.
+/// The grains' vertical velocity seen from the side, frame by frame: every grain below the
+/// surface within 1.5 R of the axis, at `x' = sign(dx) sqrt(dx^2 + dy^2)` (its distance
+/// from the axis, on the side of the axis it lies: the whole bed folded onto the plane
+/// through the axis, each half on its side), averaged in cells half a grain wide and high.
+/// The frames with the paper's added mass go to the cone measure.
 #[derive(Clone, Debug)]
-pub struct ConeCells {
-    dh: f64,
-    dr: f64,
-    heights: usize,
-    radii: usize,
-    sum: Vec<f64>,
-    count: Vec<u64>,
-    frames: u64,
-    foot_radius_m: f64,
+pub struct SideView {
+    xs: Vec<f64>,
+    hs: Vec<f64>,
+    fields: Vec<(Vec<f64>, f64, f64)>,
 }
 
-impl ConeCells {
-    /// Cells one grain high and half a grain wide, down to 2.5 R, out to 1.5 R.
+impl SideView {
+    /// Cells half a grain wide out to 1.5 R each side, half a grain high from the floor to
+    /// the surface.
     pub fn new(g: &Geometry) -> Self {
-        let (dh, dr) = (g.grain_diameter_m, 0.5 * g.grain_diameter_m);
-        let heights = (2.5 * g.foot_radius_m / dh).ceil() as usize;
-        let radii = (1.5 * g.foot_radius_m / dr).ceil() as usize;
+        let c = 0.5 * g.grain_diameter_m;
+        let half = (1.5 * g.foot_radius_m / c).ceil() as i64;
+        let xs = (-half..=half).map(|i| i as f64 * c).collect();
+        let rows = (g.surface_m / c).ceil() as usize + 1;
+        let hs = (0..rows).map(|j| j as f64 * c).collect();
         Self {
-            dh,
-            dr,
-            heights,
-            radii,
-            sum: vec![0.0; heights * radii],
-            count: vec![0; heights * radii],
-            frames: 0,
-            foot_radius_m: g.foot_radius_m,
+            xs,
+            hs,
+            fields: Vec::new(),
         }
     }
 
-    /// Add one frame whose row has the paper's added mass.
+    /// Add a frame whose row has the paper's added mass.
     pub fn add(&mut self, frame: &Frame, g: &Geometry, row: &FlowRow) {
-        let bottom = g.surface_m - row.depth_m;
-        let v = row.foot_speed_m_s;
-        if v <= 0.0 {
-            return;
-        }
-        self.frames += 1;
-        for a in frame
-            .atoms
-            .iter()
-            .filter(|a| a.kind != FOOT && a.x[2] < bottom)
-        {
-            let h = ((bottom - a.x[2]) / self.dh) as usize;
+        let (nx, ny) = (self.xs.len(), self.hs.len());
+        let c = 0.5 * g.grain_diameter_m;
+        let half = (nx / 2) as f64;
+        let mut sum = vec![0.0; nx * ny];
+        let mut n = vec![0u32; nx * ny];
+        for a in frame.atoms.iter().filter(|a| a.kind == GRAIN) {
             let (dx, dy) = (a.x[0] - g.axis_m.0, a.x[1] - g.axis_m.1);
-            let r = ((dx * dx + dy * dy).sqrt() / self.dr) as usize;
-            if h < self.heights && r < self.radii {
-                let k = h * self.radii + r;
-                self.sum[k] += -a.v[2] / v;
-                self.count[k] += 1;
+            let x = dx.signum() * (dx * dx + dy * dy).sqrt();
+            let i = (x / c + half).round();
+            let j = (a.x[2] / c).round();
+            if i < 0.0 || j < 0.0 || i as usize >= nx || j as usize >= ny {
+                continue;
             }
+            let k = j as usize * nx + i as usize;
+            sum[k] += a.v[2];
+            n[k] += 1;
         }
+        let field = sum
+            .iter()
+            .zip(&n)
+            .map(|(s, &n)| if n > 0 { s / f64::from(n) } else { f64::NAN })
+            .collect();
+        self.fields
+            .push((field, g.surface_m - row.depth_m, row.foot_speed_m_s));
     }
 
-    /// The cone from the cells.
-    pub fn cone(&self) -> Cone {
-        let mut rows = Vec::new();
-        for h in 0..self.heights {
-            let mean = |r: usize| {
-                let k = h * self.radii + r;
-                (self.count[k] > 0).then(|| self.sum[k] / self.count[k] as f64)
-            };
-            let axis = mean(0).unwrap_or(f64::NAN);
-            let edge = (0..self.radii)
-                .find(|&r| mean(r).is_some_and(|m| m < 0.5))
-                .map_or(f64::NAN, |r| r as f64 * self.dr);
-            rows.push(ConeRow {
-                below_foot_m: (h as f64 + 0.5) * self.dh,
-                axis_speed_ratio: axis,
-                edge_radius_m: edge,
-            });
-        }
-        let side: Vec<(f64, f64)> = rows
+    /// The cone of the frames added.
+    pub fn cone(&self, g: &Geometry) -> Option<Cone> {
+        let samples: Vec<sandjumper_flow::cone::MotionSample<'_>> = self
+            .fields
             .iter()
-            .filter(|r| r.edge_radius_m > 0.0 && r.edge_radius_m < 0.95 * self.foot_radius_m)
-            .map(|r| (r.below_foot_m, r.edge_radius_m))
+            .map(|(f, bottom, v)| sandjumper_flow::cone::MotionSample {
+                v_up_m_s: f,
+                foot_bottom_m: *bottom,
+                foot_speed_m_s: *v,
+            })
             .collect();
-        let (angle, apex, note) = if self.frames == 0 {
-            (
-                None,
-                None,
-                "no frame with the paper's added mass".to_string(),
-            )
-        } else if side.len() < 3 {
-            (
-                None,
-                None,
-                format!(
-                    "the co-moving region's edge lies inside the foot's radius at {} height(s) \
-                     (a cone needs at least 3)",
-                    side.len()
-                ),
-            )
-        } else {
-            let n = side.len() as f64;
-            let (mh, mr) = (
-                side.iter().map(|p| p.0).sum::<f64>() / n,
-                side.iter().map(|p| p.1).sum::<f64>() / n,
-            );
-            let sxx: f64 = side.iter().map(|p| (p.0 - mh).powi(2)).sum();
-            let sxy: f64 = side.iter().map(|p| (p.0 - mh) * (p.1 - mr)).sum();
-            let slope = sxy / sxx;
-            if slope >= 0.0 {
-                (
-                    None,
-                    None,
-                    "the co-moving region does not narrow with depth".to_string(),
-                )
-            } else {
-                let a = mr - slope * mh;
-                (
-                    Some((1.0 / -slope).atan().to_degrees()),
-                    Some(a / -slope),
-                    format!(
-                        "a line through the edge at {} heights, over {} frames",
-                        side.len(),
-                        self.frames
-                    ),
-                )
-            }
-        };
-        Cone {
-            angle_deg: angle,
-            apex_below_foot_m: apex,
-            frames: self.frames,
-            note,
-            rows,
-        }
+        sandjumper_flow::cone::comoving_cone(&samples, &self.xs, &self.hs, g.foot_radius_m)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bed::FOOT;
     use crate::dump::DumpAtom;
 
     fn geometry() -> Geometry {
@@ -420,15 +337,14 @@ mod tests {
             .count() as f64;
         assert!((row.momentum_under_foot_kg_m_s - moving * m * 0.2).abs() < 1e-12);
         assert_eq!(row.momentum_ring_kg_m_s, 0.0);
-        let mut cells = ConeCells::new(&g);
-        cells.add(&frame, &g, &row);
-        let cone = cells.cone();
-        let angle = cone.angle_deg.unwrap();
-        assert!((angle - 60.0).abs() < 4.0, "{angle} {}", cone.note);
-        let apex = cone.apex_below_foot_m.unwrap();
+        let mut view = SideView::new(&g);
+        view.add(&frame, &g, &row);
+        let cone = view.cone(&g).unwrap();
+        assert!((cone.angle_deg - 60.0).abs() < 4.0, "{cone:?}");
         assert!(
-            (apex - 0.01 * 60f64.to_radians().tan()).abs() < 0.002,
-            "{apex}"
+            (cone.apex_depth_m - 0.01 * 60f64.to_radians().tan()).abs() < 0.002,
+            "{}",
+            cone.apex_depth_m
         );
     }
 

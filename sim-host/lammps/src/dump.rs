@@ -163,7 +163,7 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
                 "{name}:{no}: atom {id} is not in this run (a dump of another run)"
             ));
         };
-        if (f[8] - r).abs() > 1e-6 * r {
+        if f[8].is_nan() || (f[8] - r).abs() > 1e-6 * r {
             return Err(format!(
                 "{name}:{no}: atom {id} has radius {:e} m where this run's has {r:e} m (a dump \
                  of another run)",

@@ -24,7 +24,8 @@ pub fn draw(
     title: &str,
     flow: &[FlowRow],
     force: &[ForceRow],
-    cone: &Cone,
+    cone: Option<&Cone>,
+    cone_note: &str,
     foot_radius_m: f64,
 ) -> Result<(), String> {
     let mm = 1e3;
@@ -108,22 +109,32 @@ pub fn draw(
         ],
         y_from_zero: false,
     };
-    let mut cone_lines = vec![line(
-        "edge: down speed half the foot's",
-        cone.rows
-            .iter()
-            .filter(|r| r.edge_radius_m.is_finite())
-            .map(|r| (mm * r.edge_radius_m, -mm * r.below_foot_m))
-            .collect(),
-        0,
-        false,
-        true,
-    )];
-    if let (Some(angle), Some(apex)) = (cone.angle_deg, cone.apex_below_foot_m) {
-        let r0 = apex / angle.to_radians().tan();
+    let rows = cone.map_or(&[][..], |c| &c.rows[..]);
+    let mut cone_lines = vec![
+        line(
+            "edges: down speed half the foot's",
+            rows.iter()
+                .map(|r| (-mm * r.left_m, -mm * r.depth_below_foot_m))
+                .collect(),
+            0,
+            false,
+            true,
+        ),
+        line(
+            "",
+            rows.iter()
+                .map(|r| (mm * r.right_m, -mm * r.depth_below_foot_m))
+                .collect(),
+            0,
+            false,
+            true,
+        ),
+    ];
+    if let Some(c) = cone.filter(|c| c.angle_deg.is_finite() && c.apex_depth_m.is_finite()) {
+        let r0 = c.apex_depth_m / c.angle_deg.to_radians().tan();
         cone_lines.push(line(
-            &format!("fitted side, {angle:.0} deg"),
-            vec![(mm * r0, 0.0), (0.0, -mm * apex)],
+            &format!("fitted sides, {:.0} deg", c.angle_deg),
+            vec![(-mm * r0, 0.0), (0.0, -mm * c.apex_depth_m), (mm * r0, 0.0)],
             1,
             true,
             false,
@@ -131,17 +142,17 @@ pub fn draw(
     }
     cone_lines.push(line(
         "foot",
-        vec![(0.0, 0.0), (mm * foot_radius_m, 0.0)],
+        vec![(-mm * foot_radius_m, 0.0), (mm * foot_radius_m, 0.0)],
         3,
         false,
         false,
     ));
     let cone_panel = LinePanel {
-        caption: match cone.angle_deg {
+        caption: match cone.map(|c| c.angle_deg).filter(|a| a.is_finite()) {
             Some(a) => format!("jammed cone: {a:.0} deg to the horizontal (paper ~60)"),
-            None => format!("jammed cone: none ({})", cone.note),
+            None => format!("jammed cone: none ({cone_note})"),
         },
-        x_desc: "radius (mm)".into(),
+        x_desc: "distance from the axis (mm)".into(),
         y_desc: "height below the foot (mm)".into(),
         lines: cone_lines,
         y_from_zero: false,

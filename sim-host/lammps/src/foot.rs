@@ -1,7 +1,7 @@
 //! The flat disc foot as LAMMPS sees it: LAMMPS has no finite-disc wall, so the foot is a
 //! rigid layer of spheres (diameter `d_f`, the smallest grain's) on a triangular lattice of
-//! spacing `d_f / 2`, centres within `R - d_f / 2` of the axis, so its rim is at `R` and its
-//! bottom (`d_f / 2` below the centres) is flat to 3 % of `d_f`. No grain fits between its
+//! spacing `d_f / 2`, centres within `R - d_f / 2` of the axis, so its rim is at `R`; its
+//! bottom (`d_f / 2` below the centres) has hollows 9 % of `d_f` deep between three spheres. No grain fits between its
 //! spheres; their pairs are excluded from the contacts, and `fix move` carries the layer on
 //! the prescribed trajectory.
 

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use sandjumper_dem::intruder::Trajectory;
 use sandjumper_output::{CliError, write_csv};
 
-use crate::analysis::{self, ConeCells, FlowRow, Geometry};
+use crate::analysis::{self, FlowRow, Geometry, SideView};
 use crate::bed::{self, Atom, Settled};
 use crate::dump::{self, RunCheck};
 use crate::foot::foot_atoms;
@@ -32,9 +32,11 @@ pub struct Manifest {
     pub ranks: u32,
     /// Where the trajectory came from.
     pub trajectory: String,
-    /// The model's packing fraction for eq. 6 and F_p (the target, within the presets'
-    /// 0.57-0.62), 1.
+    /// The model's packing fraction for eq. 6 and F_p: the settled bed's, within the
+    /// presets' 0.57-0.62, 1.
     pub model_phi: f64,
+    /// Height of the foot's bottom when the intrusion starts, m.
+    pub foot_start_bottom_m: f64,
     /// The foot and the bed.
     pub geometry: Geometry,
     /// The settled bed.
@@ -107,8 +109,17 @@ pub struct Summary {
     /// Hertz overlap of a contact carrying the peak force shared by the foot's area at one
     /// grain per d^2, over d: how soft the softened grains are at the run's peak, 1.
     pub peak_overlap_ratio: f64,
-    /// The cone's angle to the horizontal, degrees (null: none found, see `cone_note`).
+    /// The jammed cone's angle to the horizontal, degrees: the mean of its sides when both
+    /// narrow and agree within 10 degrees (null: none, see `cone_note`).
     pub cone_angle_deg: Option<f64>,
+    /// Its left side's angle, degrees (null: it does not narrow).
+    pub cone_left_deg: Option<f64>,
+    /// Its right side's angle, degrees.
+    pub cone_right_deg: Option<f64>,
+    /// Where its sides meet below the foot, m.
+    pub cone_apex_below_foot_m: Option<f64>,
+    /// Rows (half a grain each) the sides were fitted through.
+    pub cone_rows: usize,
     /// How the cone was found, or why not.
     pub cone_note: String,
     /// The speed rule: frames with the foot at least this share of its fastest, 1.
@@ -142,6 +153,17 @@ fn io(e: impl std::fmt::Display) -> CliError {
     CliError::internal(e.to_string())
 }
 
+/// Check `spec` and `trajectory` before anything runs: the values, a start at or above the
+/// surface, the foot kept above the floor (exit 2 with what and what is allowed).
+pub fn check_inputs(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<(), CliError> {
+    spec.check().map_err(CliError::input)?;
+    trajectory
+        .check_starts_at_surface()
+        .map_err(CliError::input)?;
+    spec.check_depth(max_depth(trajectory))
+        .map_err(CliError::input)
+}
+
 /// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
 /// then [`analyse`] it with the speed rule `min_speed_ratio`.
 pub fn run(
@@ -153,10 +175,7 @@ pub fn run(
     out: &Path,
     progress: &mut dyn Progress,
 ) -> Result<Summary, CliError> {
-    spec.check().map_err(CliError::input)?;
-    trajectory
-        .check_starts_at_surface()
-        .map_err(CliError::input)?;
+    check_inputs(spec, trajectory)?;
     let pieces = script::pieces(spec, trajectory);
     let spec_text = toml::to_string(spec).map_err(io)?;
     let run_id = fnv(&format!("{spec_text}{pieces:?}"));
@@ -200,12 +219,14 @@ pub fn run(
     let sphere = spec.min_grain_diameter_m();
     let bottom = settled.surface_m - trajectory.depth(0.0);
     let first_id = grains.iter().map(|a| a.id).max().unwrap_or(0) + 1;
+    // The foot's spheres a thousand times denser than a grain: in the contacts' damping
+    // (effective mass) the foot is then a rigid plate, as `fix move` makes it in motion.
     let foot = foot_atoms(
         spec.foot_radius_m(),
         sphere,
         axis,
         bottom,
-        spec.grain_density_kg_m3,
+        1e3 * spec.grain_density_kg_m3,
         first_id,
     );
     let before = grains.len();
@@ -251,7 +272,8 @@ pub fn run(
             }
             Trajectory::Table { source, .. } => source.clone(),
         },
-        model_phi: spec.packing_fraction.clamp(0.57, 0.62),
+        model_phi: settled.packing_fraction.clamp(0.57, 0.62),
+        foot_start_bottom_m: bottom,
         geometry: Geometry {
             axis_m: axis,
             foot_radius_m: spec.foot_radius_m(),
@@ -287,6 +309,18 @@ pub fn run(
     )
     .map_err(io)?;
     analyse(&dir, out, min_speed_ratio, progress)
+}
+
+/// The deepest the trajectory goes, m (its table's deepest sample, or its end).
+fn max_depth(t: &Trajectory) -> f64 {
+    match t {
+        Trajectory::Constant {
+            start_depth_m,
+            end_depth_m,
+            ..
+        } => start_depth_m.max(*end_depth_m),
+        Trajectory::Table { depth_m, .. } => depth_m.iter().copied().fold(f64::MIN, f64::max),
+    }
 }
 
 fn overlaps_foot(a: &Atom, foot: &[Atom]) -> bool {
@@ -326,6 +360,9 @@ pub fn analyse(
     })?;
     let m: Manifest = toml::from_str(&text)
         .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
+    m.spec
+        .check()
+        .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
     let data = dir.join("intrude.data");
     let (bed_box, atoms) = bed::read_data(&data).map_err(CliError::input)?;
     let first = std::fs::read_to_string(&data)
@@ -356,36 +393,75 @@ pub fn analyse(
     progress.stage("read", steps.len() as u64);
     let dumps = dir.join("dumps");
     let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
+    let dt = m.geometry.time_step_s;
     for (k, &s) in steps.iter().enumerate() {
         let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
-        rows.push(analysis::frame_row(&f, &g).map_err(CliError::input)?);
+        let row = analysis::frame_row(&f, &g).map_err(CliError::input)?;
+        // The foot where this run's pieces put it: a frame of the same bed on another
+        // trajectory (or at another step) is not this run's.
+        let expected = script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s);
+        let got = g.surface_m - row.depth_m;
+        if (got - expected).abs() > FOOT_TOLERANCE_M {
+            return Err(CliError::input(format!(
+                "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at step \
+                 {s} (a dump of another run)",
+                dump::frame_path(&dumps, s).display(),
+                1e3 * got,
+                1e3 * expected
+            )));
+        }
+        rows.push(row);
         progress.step(k as u64 + 1);
     }
     analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(CliError::internal)?;
     // The cone over the frames with the paper's added mass (read again: one frame in
     // memory at a time, whatever the bed's size).
-    let mut cells = ConeCells::new(&g);
+    let mut view = SideView::new(&g);
     for (row, &s) in rows.iter().zip(&steps) {
         if row.added_mass_kg.is_finite() {
             let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
-            cells.add(&f, &g, row);
+            view.add(&f, &g, row);
         }
     }
-    let cone = cells.cone();
-    let force = analysis::read_force(&dir.join("force.txt"), &g, &fp).map_err(CliError::input)?;
-    let windows = m.intrusion_steps / m.spec.force_every();
-    if (force.len() as u64) < windows {
+    let cone = view.cone(&g);
+    let force_path = dir.join("force.txt");
+    let force = analysis::read_force(&force_path, &g, &fp).map_err(CliError::input)?;
+    let fe = m.spec.force_every();
+    let windows = m.intrusion_steps / fe;
+    if force.len() as u64 != windows {
         return Err(CliError::input(format!(
             "{}: {} force windows where the run has {windows} (the file is cut short, or not \
              of this run)",
-            dir.join("force.txt").display(),
+            force_path.display(),
             force.len()
         )));
+    }
+    // Each window's mean foot height is the pieces' at its middle (the motion is linear
+    // within a window).
+    for (k, f) in force.iter().enumerate() {
+        let (a, b) = (k as u64 * fe, (k as u64 + 1) * fe);
+        let mid = 0.5
+            * (script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, a + 1)
+                + script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, b));
+        let got = g.surface_m - f.depth_m;
+        if (got - mid).abs() > FOOT_TOLERANCE_M {
+            return Err(CliError::input(format!(
+                "{}: window {} has the foot at {:.6} mm where this run put it at {:.6} mm (a \
+                 force file of another run)",
+                force_path.display(),
+                k + 1,
+                1e3 * got,
+                1e3 * mid
+            )));
+        }
     }
     let summary = summarise(&m, &rows, &force, &cone, min_speed_ratio);
     write_outputs(out, &m, &rows, &force, &cone, &summary)?;
     Ok(summary)
 }
+
+/// How far a frame's foot may be from where the run's pieces put it, m.
+pub const FOOT_TOLERANCE_M: f64 = 1e-7;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -396,7 +472,7 @@ fn summarise(
     m: &Manifest,
     rows: &[FlowRow],
     force: &[analysis::ForceRow],
-    cone: &analysis::Cone,
+    cone: &Option<analysis::Cone>,
     min_speed_ratio: f64,
 ) -> Summary {
     let d = m.spec.grain_diameter_m;
@@ -455,8 +531,31 @@ fn summarise(
         force_vs_penetration_force_median: median(ratios),
         peak_force_n: peak,
         peak_overlap_ratio: overlap / d,
-        cone_angle_deg: cone.angle_deg,
-        cone_note: cone.note.clone(),
+        cone_angle_deg: cone.as_ref().map(|c| c.angle_deg).filter(|a| a.is_finite()),
+        cone_left_deg: cone.as_ref().map(|c| c.left_deg).filter(|a| a.is_finite()),
+        cone_right_deg: cone.as_ref().map(|c| c.right_deg).filter(|a| a.is_finite()),
+        cone_apex_below_foot_m: cone
+            .as_ref()
+            .map(|c| c.apex_depth_m)
+            .filter(|a| a.is_finite()),
+        cone_rows: cone.as_ref().map_or(0, |c| c.rows.len()),
+        cone_note: match cone {
+            None => "fewer than three rows below the foot where the co-moving region is \
+                     narrower than the foot"
+                .into(),
+            Some(c) if c.angle_deg.is_finite() => format!(
+                "both sides narrow and agree, over {} rows and {} frames",
+                c.rows.len(),
+                c.samples
+            ),
+            Some(c) => format!(
+                "the sides ({:.0} and {:.0} deg) do not both narrow, or differ by more than 10 \
+                 deg, over {} rows",
+                c.left_deg,
+                c.right_deg,
+                c.rows.len()
+            ),
+        },
         min_speed_ratio,
         core_seconds,
         grain_steps_per_core_second: grain_steps / (m.intrusion_wall_s * f64::from(m.ranks)),
@@ -469,12 +568,18 @@ fn write_outputs(
     m: &Manifest,
     rows: &[FlowRow],
     force: &[analysis::ForceRow],
-    cone: &analysis::Cone,
+    cone: &Option<analysis::Cone>,
     summary: &Summary,
 ) -> Result<(), CliError> {
     write_csv(&out.join("flow.csv"), rows, &[]).map_err(CliError::internal)?;
     write_csv(&out.join("force_depth.csv"), force, &[]).map_err(CliError::internal)?;
-    write_csv(&out.join("cone.csv"), &cone.rows, &[]).map_err(CliError::internal)?;
+    let cone_rows = cone.as_ref().map_or(&[][..], |c| &c.rows[..]);
+    write_csv(
+        &out.join("cone.csv"),
+        cone_rows,
+        &["depth_below_foot_m", "left_m", "right_m", "contrast"],
+    )
+    .map_err(CliError::internal)?;
     std::fs::write(
         out.join("lammps.toml"),
         toml::to_string(&m.spec).map_err(io)?,
@@ -488,6 +593,14 @@ fn write_outputs(
         1e3 * m.spec.grain_diameter_m,
         m.settled.packing_fraction
     );
-    crate::figure::draw(out, &title, rows, force, cone, m.spec.foot_radius_m())
-        .map_err(CliError::internal)
+    crate::figure::draw(
+        out,
+        &title,
+        rows,
+        force,
+        cone.as_ref(),
+        &summary.cone_note,
+        m.spec.foot_radius_m(),
+    )
+    .map_err(CliError::internal)
 }

@@ -34,18 +34,35 @@ pub fn pieces(spec: &LammpsSpec, trajectory: &Trajectory) -> Vec<Piece> {
     let window = fe as f64 * dt;
     let windows = (trajectory.duration_s() / window).ceil().max(1.0) as u64;
     let mut out: Vec<Piece> = Vec::new();
+    let mut add = |steps: u64, vz: f64| match out.last_mut() {
+        Some(p) if (p.vz_m_s - vz).abs() <= 1e-12 * vz.abs().max(1e-9) => p.steps += steps,
+        _ => out.push(Piece { steps, vz_m_s: vz }),
+    };
     for k in 0..windows {
         let (t0, t1) = (k as f64 * window, (k + 1) as f64 * window);
-        let vz = -(trajectory.depth(t1) - trajectory.depth(t0)) / window;
-        match out.last_mut() {
-            Some(p) if (p.vz_m_s - vz).abs() <= 1e-12 * vz.abs().max(1e-9) => p.steps += fe,
-            _ => out.push(Piece {
-                steps: fe,
-                vz_m_s: vz,
-            }),
-        }
+        add(fe, -(trajectory.depth(t1) - trajectory.depth(t0)) / window);
+    }
+    // Held at its last depth up to the next dump, so the end is in a frame.
+    let de = spec.dump_every();
+    let total = windows * fe;
+    if !total.is_multiple_of(de) {
+        add(de - total % de, 0.0);
     }
     out
+}
+
+/// The foot's bottom height `steps` steps into `pieces`, from `start_m`.
+pub fn bottom_at(pieces: &[Piece], dt: f64, start_m: f64, steps: u64) -> f64 {
+    let (mut z, mut left) = (start_m, steps);
+    for p in pieces {
+        let n = left.min(p.steps);
+        z += p.vz_m_s * n as f64 * dt;
+        left -= n;
+        if left == 0 {
+            break;
+        }
+    }
+    z
 }
 
 /// The contact model's coefficients with friction `mu` (pair and wall alike).
@@ -126,12 +143,19 @@ pub fn intrude_script(
     let de = spec.dump_every();
     let total: u64 = pieces.iter().map(|p| p.steps).sum();
     let reach = spec.dump_radius_factor * spec.foot_radius_m();
+    let relax = ((spec.relax_s / spec.time_step_s()).round() as u64).max(1);
     let _ = write!(
         s,
         "group foot type 2\n\
          neigh_modify delay 0 every 1 check yes exclude type 2 2\n\
          fix gravity grains gravity {g} vector 0 0 -1\n\
          fix integrate grains nve/sphere\n\
+         # the bed relaxes against the foot, held still (the contacts' history starts anew)\n\
+         fix move foot move linear 0 0 0\n\
+         thermo {relax}\n\
+         run {relax}\n\
+         unfix move\n\
+         reset_timestep 0 time 0\n\
          compute foot_fz foot reduce sum fz\n\
          compute foot_zmin foot reduce min z\n\
          variable t equal time\n\
@@ -175,7 +199,7 @@ mod tests {
         let p = pieces(&spec, &t);
         let dt = spec.time_step_s();
         let total: u64 = p.iter().map(|p| p.steps).sum();
-        assert_eq!(total % spec.force_every(), 0);
+        assert_eq!(total % spec.dump_every(), 0, "the end is in a frame");
         assert!(total as f64 * dt >= 0.010 - 1e-12);
         // The integrated path equals the table at every window end.
         let mut z = 0.0;

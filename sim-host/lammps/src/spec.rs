@@ -63,6 +63,9 @@ pub struct LammpsSpec {
     pub settled_rms_speed_m_s: f64,
     /// The settle stops after this long in any case, s.
     pub max_settle_s: f64,
+    /// Time the settled bed relaxes against the foot, held still, before it moves (the
+    /// contacts' tangential history does not survive the data file between the stages), s.
+    pub relax_s: f64,
     /// Seed of the grains' sizes and start positions.
     pub seed: u64,
 }
@@ -90,6 +93,7 @@ impl LammpsSpec {
             dump_radius_factor: 2.0,
             settled_rms_speed_m_s: 0.002,
             max_settle_s: 1.0,
+            relax_s: 0.01,
             seed: 1,
         };
         match p {
@@ -195,6 +199,7 @@ impl LammpsSpec {
         pos(self.force_rate_hz, "the force rate")?;
         pos(self.settled_rms_speed_m_s, "the settled rms speed")?;
         pos(self.max_settle_s, "the longest settle")?;
+        pos(self.relax_s, "the relaxation before the intrusion")?;
         if !(0.0..0.5).contains(&self.grain_size_spread) {
             return Err(format!(
                 "the grain size spread is {} (allowed: 0 to below 0.5)",
@@ -256,12 +261,42 @@ impl LammpsSpec {
                 5e3 * self.grain_diameter_m
             ));
         }
-        if self.dump_every() < self.force_every() {
-            return Err("the dump rate is above the force rate".into());
+        if self.fps > self.force_rate_hz {
+            return Err(format!(
+                "the dump rate is {} frames/s, above the force rate {} Hz (allowed: up to the \
+                 force rate: dumps fall on force windows)",
+                self.fps, self.force_rate_hz
+            ));
+        }
+        let n = self.grain_count();
+        if n > MAX_GRAINS {
+            return Err(format!(
+                "the bed holds {n} grains (allowed: up to {MAX_GRAINS}: this tool builds the \
+                 pour in memory; a wider, deeper bed or smaller grains need a pour of its own)"
+            ));
         }
         self.pour_friction().map(|_| ())
     }
+
+    /// Refuse a trajectory that reaches deeper than `max_depth_m` into this bed: the foot
+    /// must stay at least 5 grain diameters above the floor.
+    pub fn check_depth(&self, max_depth_m: f64) -> Result<(), String> {
+        let allowed = self.bed_depth_m - 5.0 * self.grain_diameter_m;
+        if max_depth_m > allowed {
+            return Err(format!(
+                "the foot goes {:.1} mm deep into a bed {:.1} mm deep (allowed: down to {:.1} \
+                 mm, 5 grain diameters above the floor; give a deeper --bed-depth)",
+                1e3 * max_depth_m,
+                1e3 * self.bed_depth_m,
+                1e3 * allowed
+            ));
+        }
+        Ok(())
+    }
 }
+
+/// The most grains a run may have (the pour is built in memory: ~80 bytes a grain).
+pub const MAX_GRAINS: u64 = 50_000_000;
 
 /// Settled packing fraction against pouring friction, measured with this module's pour
 /// (see [`LammpsSpec::pour_friction`]; `--preset small`, seed 1, LAMMPS 22 Jul 2025):

@@ -1,7 +1,7 @@
 //! `sandjumper dem lammps` (the 3-D DEM of the intrusion, run by LAMMPS here or on a Slurm
 //! cluster) and `sandjumper dem lammps-read` (a finished run's dumps read back again).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
@@ -242,23 +242,32 @@ fn report(s: &Summary, out: &std::path::Path, json: bool) -> Result<(), CliError
 /// Run `dem lammps`.
 pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
     let spec = spec_of(a);
-    spec.check().map_err(CliError::input)?;
     let traj = trajectory(a)?;
+    outputs::check_inputs(&spec, &traj)?;
+    // LAMMPS is looked for here also before a job is submitted (a cluster's login node sees
+    // the shared file system its nodes do): a missing one is refused now, not after the queue.
+    let lammps = sandjumper_lammps::lammps::find(a.lmp.as_deref(), a.mpiexec.as_deref())
+        .map_err(CliError::input)?;
     if a.slurm.slurm {
-        return crate::slurm::submit_job(
+        crate::slurm::submit_job(
             "dem-lammps",
             &["dem", "lammps"],
             a.ranks,
             &a.out,
             &["summary.json"],
             &a.slurm,
-        );
+        )?;
+        if a.json && !a.slurm.queue.slurm_no_wait {
+            let p = a.out.join("summary.json");
+            let text = std::fs::read_to_string(&p)
+                .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
+            print!("{text}");
+        }
+        return Ok(());
     }
-    let lammps = sandjumper_lammps::lammps::find(a.lmp.as_deref(), a.mpiexec.as_deref())
-        .map_err(CliError::input)?;
     let staged = StagedDir::create(&a.out)?;
     let mut bar = Bar { bar: None };
-    let summary = outputs::run(
+    let result = outputs::run(
         &spec,
         &traj,
         &lammps,
@@ -266,10 +275,45 @@ pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
         a.min_speed_ratio,
         staged.path(),
         &mut bar,
-    )?;
+    );
     drop(bar);
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => return Err(keep_failed_run(staged.path(), &a.out, e)),
+    };
     let out = staged.commit()?;
     report(&summary, &out, a.json)
+}
+
+/// A run that failed keeps its LAMMPS files (inputs, logs, dumps: hours of a cluster) in
+/// `OUT.failed/`, beside where its output would have been, and the error says so; the
+/// output folder itself is not written.
+fn keep_failed_run(staged: &Path, out: &Path, mut e: CliError) -> CliError {
+    let files = staged.join("lammps");
+    if !files.join("in.settle").is_file() {
+        return e;
+    }
+    let mut name = out
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(".failed");
+    let kept = out.with_file_name(name);
+    // Only an earlier failed run of ours is replaced.
+    if kept.join("in.settle").is_file() {
+        let _ = std::fs::remove_dir_all(&kept);
+    }
+    if !kept.exists() && std::fs::rename(&files, &kept).is_ok() {
+        e.message += &format!(
+            "\nthe run's LAMMPS files (inputs, logs, data, dumps) are kept in {}",
+            kept.display()
+        );
+        // The log the message names moved with them.
+        e.message = e
+            .message
+            .replace(&files.display().to_string(), &kept.display().to_string());
+    }
+    e
 }
 
 /// Run `dem lammps-read`.
@@ -279,6 +323,19 @@ pub fn run_read(a: &LammpsReadArgs) -> Result<(), CliError> {
     } else {
         a.run.join("lammps")
     };
+    // The output must not be the run, or hold it, or lie inside it: replacing it would delete
+    // the run's dumps.
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| abs(p));
+    let (run, out) = (canon(&a.run), canon(&a.out));
+    if run.starts_with(&out) || out.starts_with(&run) {
+        return Err(CliError::input(format!(
+            "--out {} is the run {} or holds it or lies in it (allowed: a folder apart from the \
+             run: writing it would replace the run's files)",
+            a.out.display(),
+            a.run.display()
+        )));
+    }
     let staged = StagedDir::create(&a.out)?;
     let mut bar = Bar { bar: None };
     let summary = outputs::analyse(&dir, staged.path(), a.min_speed_ratio, &mut bar)?;

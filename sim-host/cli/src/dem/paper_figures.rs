@@ -72,6 +72,15 @@ struct Row {
     shear_band_apex_m: f64,
     /// Rows (2 mm each) below the foot with clear bands.
     shear_band_rows: usize,
+    /// Angle of the co-moving region's cone (down speed half the foot's), degrees (NaN:
+    /// none, or the sides differ by more than 10 degrees).
+    comoving_cone_deg: f64,
+    /// Its left side's angle, degrees.
+    comoving_left_deg: f64,
+    /// Its right side's angle, degrees.
+    comoving_right_deg: f64,
+    /// Depth below the foot where its sides meet, m.
+    comoving_apex_m: f64,
     /// Share of the column's momentum deeper than the 60 degree cone (median).
     momentum_beyond_cone_depth_share: f64,
     /// Share of the column's momentum in the coarse-graining window's bottom tenth.
@@ -286,6 +295,10 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
             "shear_band_right_deg",
             "shear_band_apex_m",
             "shear_band_rows",
+            "comoving_cone_deg",
+            "comoving_left_deg",
+            "comoving_right_deg",
+            "comoving_apex_m",
             "momentum_beyond_cone_depth_share",
             "momentum_in_window_bottom_tenth_share",
             "window_depth_warning",
@@ -366,7 +379,7 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
     );
     for r in &rows {
         println!(
-            "  {:<13} DEM/eq. 6 {:.2}, peak P under the foot {:.4} kg m/s, shear-band cone {}",
+            "  {:<13} DEM/eq. 6 {:.2}, peak P under the foot {:.4} kg m/s, shear-band cone {}, co-moving cone {}",
             r.name,
             r.added_mass_vs_eq6_median,
             r.grain_momentum_under_foot_kg_m_s,
@@ -377,6 +390,14 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
                 )
             } else {
                 format!("none (bands do not narrow over {} rows)", r.shear_band_rows)
+            },
+            if r.comoving_cone_deg.is_finite() {
+                format!("{:.0} deg", r.comoving_cone_deg)
+            } else {
+                format!(
+                    "none (sides {:.0} and {:.0} deg)",
+                    r.comoving_left_deg, r.comoving_right_deg
+                )
             }
         );
     }
@@ -453,6 +474,7 @@ fn read_row(dir: &Path, name: &str, what: &str, wall_s: f64) -> Result<Row, CliE
     let s = &j["summary"];
     let f = |k: &str| s[k].as_f64().unwrap_or(f64::NAN);
     let cone = &s["shear_band_cone"];
+    let moving = &s["comoving_cone"];
     Ok(Row {
         name: name.into(),
         what: what.into(),
@@ -465,6 +487,10 @@ fn read_row(dir: &Path, name: &str, what: &str, wall_s: f64) -> Result<Row, CliE
         shear_band_right_deg: cone["right_deg"].as_f64().unwrap_or(f64::NAN),
         shear_band_apex_m: cone["apex_depth_m"].as_f64().unwrap_or(f64::NAN),
         shear_band_rows: cone["rows"].as_array().map_or(0, Vec::len),
+        comoving_cone_deg: moving["angle_deg"].as_f64().unwrap_or(f64::NAN),
+        comoving_left_deg: moving["left_deg"].as_f64().unwrap_or(f64::NAN),
+        comoving_right_deg: moving["right_deg"].as_f64().unwrap_or(f64::NAN),
+        comoving_apex_m: moving["apex_depth_m"].as_f64().unwrap_or(f64::NAN),
         momentum_beyond_cone_depth_share: f("momentum_beyond_cone_depth_share"),
         momentum_in_window_bottom_tenth_share: f("momentum_in_window_bottom_tenth_share"),
         window_depth_warning: s["window_depth_warning"].as_str().map(str::to_string),
@@ -740,7 +766,7 @@ fn figures(
     )?;
     // The sensitivity rows and the cones as one bar-like figure: ratio per run.
     let sens = LineFigure {
-        title: "DEM / eq. 6 and the shear-band cone per run".into(),
+        title: "DEM / eq. 6 and the jammed cone per run".into(),
         panels: vec![
             LinePanel {
                 caption: rows
@@ -769,18 +795,32 @@ fn figures(
                     .into(),
                 x_desc: "run".into(),
                 y_desc: "angle (deg)".into(),
-                lines: vec![Line {
-                    label: "shear-band cone".into(),
-                    points: rows
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, r)| r.shear_band_cone_deg.is_finite())
-                        .map(|(i, r)| ((i + 1) as f64, r.shear_band_cone_deg))
-                        .collect(),
-                    color: palette(1),
-                    dashed: false,
-                    markers: true,
-                }],
+                lines: vec![
+                    Line {
+                        label: "shear-band cone".into(),
+                        points: rows
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, r)| r.shear_band_cone_deg.is_finite())
+                            .map(|(i, r)| ((i + 1) as f64, r.shear_band_cone_deg))
+                            .collect(),
+                        color: palette(1),
+                        dashed: false,
+                        markers: true,
+                    },
+                    Line {
+                        label: "co-moving cone".into(),
+                        points: rows
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, r)| r.comoving_cone_deg.is_finite())
+                            .map(|(i, r)| ((i + 1) as f64, r.comoving_cone_deg))
+                            .collect(),
+                        color: palette(2),
+                        dashed: false,
+                        markers: true,
+                    },
+                ],
                 y_from_zero: true,
             },
         ],

@@ -201,7 +201,7 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
                 "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
             ));
         }
-        let argv: Vec<String> = std::env::args().collect();
+        let argv = crate::slurm::arguments()?;
         return super::slurm::submit(&argv, &a.out, &a.slurm);
     }
     let shard = a.shard.unwrap_or(ShardSpec::WHOLE);
