@@ -151,15 +151,18 @@ pub fn fresh_job_dir(out: &Path) -> Result<PathBuf, CliError> {
         }
         if let Ok(id) = std::fs::read_to_string(dir.join("job.id")) {
             let id = id.trim();
+            // Unknown (no squeue, no controller) counts as queued: the folder stays.
             let queued = Command::new("squeue")
                 .args(["-h", "-j", id, "-o", "%i"])
                 .output()
-                .map(|o| !String::from_utf8_lossy(&o.stdout).trim().is_empty())
-                .unwrap_or(false);
+                .map(|o| {
+                    !o.status.success() || !String::from_utf8_lossy(&o.stdout).trim().is_empty()
+                })
+                .unwrap_or(true);
             if queued {
                 return Err(CliError::input(format!(
-                    "{}: its job {id} is still queued or running (allowed: a job directory whose \
-                     job has ended; wait for it, or `scancel {id}`)",
+                    "{}: its job {id} is still queued or running, or Slurm cannot say (allowed: a \
+                     job directory whose job has ended; wait for it, or `scancel {id}`)",
                     dir.display()
                 )));
             }

@@ -14,6 +14,10 @@ pub const MIN_BAND_CONTRAST: f64 = 1.5;
 /// Largest move of a band from one row to the next, grid spacings.
 pub const MAX_BAND_STEP: f64 = 2.0;
 
+/// Steepest side that still counts as narrowing, degrees from the horizontal (a steeper fit
+/// is a wall within the noise).
+pub const MAX_SIDE_ANGLE_DEG: f64 = 85.0;
+
 /// Largest difference of the two sides' angles for the cone to have one angle, degrees.
 pub const MAX_SIDE_DIFFERENCE_DEG: f64 = 10.0;
 
@@ -230,8 +234,9 @@ fn cone_from_rows(rows: Vec<BandRow>, samples: usize) -> Option<ShearBandCone> {
         (slope, my - slope * mx)
     };
     let angle = |slope: f64| {
-        if slope < 0.0 {
-            (1.0 / -slope).atan().to_degrees()
+        let a = (1.0 / -slope).atan().to_degrees();
+        if slope < 0.0 && a <= MAX_SIDE_ANGLE_DEG {
+            a
         } else {
             f64::NAN
         }
@@ -275,13 +280,15 @@ pub struct MotionSample<'a> {
 /// The jammed cone as the region that moves down with the foot: the grains' down speed over
 /// the foot's, averaged over `samples` in the foot's frame (as [`shear_band_cone`] averages
 /// the shear rate); in each row below the foot the cone's edge on each side is where that
-/// ratio, going out from the axis, first falls below one half (interpolated between grid
-/// columns): the middle of the velocity step a shear band makes. Rows are taken from one grid
-/// spacing below the foot down to the first whose axis (the columns within 0.1 R of it)
-/// moves slower than half the foot, and
-/// the sides' lines are fitted through the rows whose edges lie inside the foot's radius (the
-/// slanted part; above it the region is as wide as the foot). `contrast` in its rows is the
-/// axis's ratio. `None` when fewer than three rows have edges inside the radius.
+/// ratio, going out from the axis, first falls below half the row's own axis ratio
+/// (interpolated between grid columns): the middle of the velocity step a shear band makes,
+/// wherever the step's height (a region slowing with depth keeps its walls where they are).
+/// The axis's ratio is the mean of the columns within 0.1 R of it. Rows are taken from one
+/// grid spacing below the foot down to the first whose axis moves slower than half the foot
+/// (below, nothing moves with it), and the sides' lines are fitted through the rows whose
+/// edges lie inside the foot's radius (the slanted part; above it the region is as wide as
+/// the foot). `contrast` in its rows is the axis's ratio. `None` when fewer than three rows
+/// have edges inside the radius; a side steeper than [`MAX_SIDE_ANGLE_DEG`] does not narrow.
 pub fn comoving_cone(
     samples: &[MotionSample<'_>],
     xs: &[f64],
@@ -331,7 +338,8 @@ pub fn comoving_cone(
             break;
         }
         // Out from the axis on one side (`step` +1: right, -1: left): where the ratio first
-        // falls below a half, interpolated; None if it never does within 1.5 R.
+        // falls below half the axis's, interpolated; None if it never does within 1.5 R.
+        let half = 0.5 * on_axis;
         let edge = |step: isize| {
             let mut prev = (xs[axis].abs(), on_axis);
             let mut i = axis as isize + step;
@@ -339,8 +347,8 @@ pub fn comoving_cone(
                 let m = mean(i as usize);
                 if m.is_finite() {
                     let x = xs[i as usize].abs();
-                    if m < 0.5 {
-                        return Some(prev.0 + (prev.1 - 0.5) / (prev.1 - m) * (x - prev.0));
+                    if m < half {
+                        return Some(prev.0 + (prev.1 - half) / (prev.1 - m) * (x - prev.0));
                     }
                     prev = (x, m);
                 }
@@ -416,6 +424,26 @@ mod tests {
             foot_speed_m_s: 0.2,
         }];
         assert!(comoving_cone(&s, &xs, &hs, r).is_none_or(|c| c.angle_deg.is_nan()));
+        // Walls that stay put while the whole region slows with depth (the axis from 0.95 to
+        // 0.5 of the foot over 15 mm): no cone, whatever a fixed threshold would make of it.
+        let slowing: Vec<f64> = hs
+            .iter()
+            .flat_map(|&h| {
+                let d = -0.005 - h;
+                let a = (0.95 - 0.45 * d / 0.015).max(0.0);
+                xs.iter().map(move |&x| {
+                    let inside = 0.5 - 0.5 * ((x.abs() - 0.8 * r) / 0.0015).tanh();
+                    if d > 0.0 { -0.2 * a * inside } else { f64::NAN }
+                })
+            })
+            .collect();
+        let s = [MotionSample {
+            v_up_m_s: &slowing,
+            foot_bottom_m: -0.005,
+            foot_speed_m_s: 0.2,
+        }];
+        let c = comoving_cone(&s, &xs, &hs, r);
+        assert!(c.as_ref().is_none_or(|c| c.angle_deg.is_nan()), "{c:?}");
     }
 
     /// A field with bands along a cone of `deg` under a foot of radius `r` at `foot` height,

@@ -62,6 +62,47 @@ pub struct Manifest {
 }
 
 impl Manifest {
+    /// Check that the record agrees with its spec (a run.toml edited or cut by hand is
+    /// refused, not read into nonsense).
+    pub fn check(&self) -> Result<(), String> {
+        let s = &self.spec;
+        let g = &self.geometry;
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-12);
+        let agrees = same(g.grain_diameter_m, s.grain_diameter_m)
+            && same(g.foot_radius_m, s.foot_radius_m())
+            && same(g.foot_sphere_radius_m, 0.5 * s.min_grain_diameter_m())
+            && same(g.time_step_s, s.time_step_s())
+            && same(g.grain_density_kg_m3, s.grain_density_kg_m3);
+        if !agrees {
+            return Err(
+                "its geometry (grain, foot, time step) is not its spec's: not a run \
+                        record this tool wrote"
+                    .into(),
+            );
+        }
+        let finite = [
+            g.surface_m,
+            g.axis_m.0,
+            g.axis_m.1,
+            self.foot_start_bottom_m,
+            self.model_phi,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite || !(0.57..=0.62).contains(&self.model_phi) {
+            return Err("a position or the model's phi is not a number in range".into());
+        }
+        let steps: u64 = self.pieces.iter().map(|p| p.steps).sum();
+        if steps != self.intrusion_steps || self.pieces.iter().any(|p| !p.vz_m_s.is_finite()) {
+            return Err(format!(
+                "its foot's pieces add up to {steps} steps where it records {} (allowed: equal, \
+                 finite velocities)",
+                self.intrusion_steps
+            ));
+        }
+        Ok(())
+    }
+
     /// The dump steps this run wrote.
     pub fn frame_steps(&self) -> Vec<u64> {
         let de = self.spec.dump_every();
@@ -362,6 +403,7 @@ pub fn analyse(
         .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
     m.spec
         .check()
+        .and_then(|()| m.check())
         .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
     let data = dir.join("intrude.data");
     let (bed_box, atoms) = bed::read_data(&data).map_err(CliError::input)?;
@@ -401,7 +443,7 @@ pub fn analyse(
         // trajectory (or at another step) is not this run's.
         let expected = script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s);
         let got = g.surface_m - row.depth_m;
-        if (got - expected).abs() > FOOT_TOLERANCE_M {
+        if (got - expected).is_nan() || (got - expected).abs() > FOOT_TOLERANCE_M {
             return Err(CliError::input(format!(
                 "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at step \
                  {s} (a dump of another run)",
@@ -444,7 +486,7 @@ pub fn analyse(
             * (script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, a + 1)
                 + script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, b));
         let got = g.surface_m - f.depth_m;
-        if (got - mid).abs() > FOOT_TOLERANCE_M {
+        if (got - mid).is_nan() || (got - mid).abs() > FOOT_TOLERANCE_M {
             return Err(CliError::input(format!(
                 "{}: window {} has the foot at {:.6} mm where this run put it at {:.6} mm (a \
                  force file of another run)",

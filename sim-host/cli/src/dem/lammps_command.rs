@@ -325,8 +325,19 @@ pub fn run_read(a: &LammpsReadArgs) -> Result<(), CliError> {
     };
     // The output must not be the run, or hold it, or lie inside it: replacing it would delete
     // the run's dumps.
-    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| abs(p));
+    // A path that does not exist yet: its parent's real path and its name (a link in the
+    // path must not hide that it points into the run).
+    let canon = |p: &Path| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| {
+            let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+            match (abs.parent(), abs.file_name()) {
+                (Some(d), Some(n)) => std::fs::canonicalize(d)
+                    .map(|d| d.join(n))
+                    .unwrap_or(abs.clone()),
+                _ => abs.clone(),
+            }
+        })
+    };
     let (run, out) = (canon(&a.run), canon(&a.out));
     if run.starts_with(&out) || out.starts_with(&run) {
         return Err(CliError::input(format!(

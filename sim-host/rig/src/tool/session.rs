@@ -306,18 +306,30 @@ fn free_running(
     // run goes on; the record keeps them all.
     let mut streamed: Vec<SampleRecord> = Vec::new();
     let mut timed: Vec<(f64, SampleRecord)> = Vec::new();
-    // The board's own clock: ticks since the trajectory started (0 before it); a sample's
-    // time is the poll's run time moved by the ticks between the sample and the poll.
+    // The rig's time is the board's ticks since `Start`: the tick it started at is known from
+    // the first poll with a run tick (`tick - run_tick`; the run tick stays 0 while armed and
+    // stops at `Done`, so it is no clock of its own). Samples streamed before that wait, and
+    // go to the view with the settle's negative times once it is known.
+    let mut start_tick: Option<u32> = None;
+    let mut pending: Vec<SampleRecord> = Vec::new();
     let mut seen = |link: &mut dyn RigLink, s: &Status, started: bool| {
         let fresh = link.take_samples();
+        streamed.extend(fresh.iter().copied());
+        if start_tick.is_none() && s.run_tick > 0 {
+            start_tick = Some(s.tick.wrapping_sub(s.run_tick));
+        }
         timed.clear();
-        timed.extend(fresh.iter().map(|r| {
-            let ticks = f64::from(r.tick.wrapping_sub(s.tick) as i32);
-            ((f64::from(s.run_tick) + ticks) / hz, *r)
-        }));
-        streamed.extend(fresh);
+        match start_tick {
+            Some(t0) => {
+                let at = |r: &SampleRecord| f64::from(r.tick.wrapping_sub(t0) as i32) / hz;
+                timed.extend(pending.drain(..).map(|r| (at(&r), r)));
+                timed.extend(fresh.into_iter().map(|r| (at(&r), r)));
+            }
+            None => pending.extend(fresh),
+        }
+        let t_s = start_tick.map_or(0.0, |t0| f64::from(s.tick.wrapping_sub(t0) as i32) / hz);
         observe(&ProgramView {
-            t_s: f64::from(s.run_tick) / hz,
+            t_s,
             state: s.state,
             fault: s.fault,
             actuator: None,

@@ -209,10 +209,21 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
     let result = loop {
         let status = match query_status(link.as_mut()) {
             Ok(s) => s,
+            // Ctrl-C in a terminal also stops a simulated board's process (same process
+            // group): a query that fails then is the end of the watch, not an error.
+            Err(_) if crate::interrupt::interrupted() => break Ok(()),
             Err(e) => break Err(link_failed(&name, "status query", e)),
         };
         polls += 1;
         let t = f64::from(status.tick) / hz;
+        // What the board streams while it is watched (its samples, every tick) is taken at
+        // every poll: shown on the page on its own ticks, never piling up in the link.
+        let streamed: Vec<(f64, sandjumper_core::SampleRecord)> = link
+            .take_samples()
+            .into_iter()
+            .map(|r| (f64::from(r.tick) / hz, r))
+            .collect();
+        let _ = link.take_faults();
         if let Some(v) = view.as_mut() {
             v.program(
                 &super::session::ProgramView {
@@ -223,7 +234,7 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
                     sensor: None,
                     plant: None,
                     started: false,
-                    board_samples: &[],
+                    board_samples: &streamed,
                 },
                 None,
                 config.metres_per_count,
@@ -264,6 +275,9 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
             break Ok(());
         }
         std::thread::sleep(WATCH_INTERVAL);
+        if crate::interrupt::interrupted() {
+            break Ok(());
+        }
     };
     let closed = link
         .finish()
