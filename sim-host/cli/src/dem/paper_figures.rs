@@ -393,11 +393,13 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
             },
             if r.comoving_cone_deg.is_finite() {
                 format!("{:.0} deg", r.comoving_cone_deg)
-            } else {
+            } else if r.comoving_left_deg.is_finite() || r.comoving_right_deg.is_finite() {
                 format!(
                     "none (sides {:.0} and {:.0} deg)",
                     r.comoving_left_deg, r.comoving_right_deg
                 )
+            } else {
+                "none (the moving region does not narrow below the foot)".to_string()
             }
         );
     }
