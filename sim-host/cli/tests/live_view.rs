@@ -53,6 +53,19 @@ fn wait_for(rx: &mpsc::Receiver<String>, what: &str) -> String {
     }
 }
 
+/// Start `sandjumper args` (a command with `--live` and a linger), give `while_running` the
+/// page's address, then wait for the run's end and return the command and the page's final
+/// `state.json`.
+fn watched_to_end(args: &[&str], while_running: impl FnOnce(&str)) -> (Child, serde_json::Value) {
+    let (child, rx) = start(args);
+    let url = wait_for(&rx, "live view: http://");
+    let addr = addr_of(&url);
+    while_running(&addr);
+    wait_for(&rx, "the run has ended");
+    let (_, _, body) = get(&addr, "/state.json");
+    (child, serde_json::from_str(&body).unwrap())
+}
+
 #[test]
 fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
     let started = Instant::now();
@@ -216,20 +229,18 @@ fn a_resumed_campaign_shows_its_history_then_each_point_live_and_on_the_terminal
         .filter(|l| l.starts_with("point "))
         .count();
     assert_eq!(lines, 3);
-    let (child, rx) = start(&[
-        "campaign",
-        "resume",
-        out.to_str().unwrap(),
-        "--live",
-        "127.0.0.1:0",
-        "--linger",
-        "3",
-    ]);
-    let url = wait_for(&rx, "live view: http://");
-    let addr = addr_of(&url);
-    wait_for(&rx, "the run has ended");
-    let (_, _, body) = get(&addr, "/state.json");
-    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let (child, st) = watched_to_end(
+        &[
+            "campaign",
+            "resume",
+            out.to_str().unwrap(),
+            "--live",
+            "127.0.0.1:0",
+            "--linger",
+            "3",
+        ],
+        |_| {},
+    );
     let c = &st["campaign"];
     assert_eq!(c["points"].as_u64(), Some(8));
     assert_eq!(c["done"].as_u64(), Some(8));
@@ -276,32 +287,30 @@ fn finite_in(st: &serde_json::Value, c: usize) -> usize {
 fn watched_rig_jump(link: &str, while_running: impl FnOnce(&str)) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("jump");
-    let (child, rx) = start(&[
-        "rig",
-        "jump",
-        "--link",
-        link,
-        "--kind",
-        "single",
-        "--freq",
-        "10",
-        "--out",
-        out.to_str().unwrap(),
-        "--live",
-        "127.0.0.1:0",
-        "--linger",
-        "2",
-    ]);
-    let url = wait_for(&rx, "live view: http://");
-    let addr = addr_of(&url);
-    while_running(&addr);
-    wait_for(&rx, "the run has ended");
-    let (_, _, body) = get(&addr, "/state.json");
-    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let (child, st) = watched_to_end(
+        &[
+            "rig",
+            "jump",
+            "--link",
+            link,
+            "--kind",
+            "single",
+            "--freq",
+            "10",
+            "--out",
+            out.to_str().unwrap(),
+            "--live",
+            "127.0.0.1:0",
+            "--linger",
+            "2",
+        ],
+        while_running,
+    );
     assert!(st["title"].as_str().unwrap().starts_with("rig jump on"));
     assert!(
         st["samples_received"].as_u64().unwrap() > 2_000,
-        "{body:.300}"
+        "{:.300}",
+        st.to_string()
     );
     assert_eq!(st["samples_dropped"].as_u64(), Some(0));
     // The commanded position is there (finite) and the measured one follows it.
@@ -493,15 +502,11 @@ fn rig_intrude_and_replay_are_watched_live() {
     for (title, args) in runs {
         let mut args = args.clone();
         args.extend(["--live", "127.0.0.1:0", "--pace", "0", "--linger", "1"]);
-        let (child, rx) = start(&args);
-        let url = wait_for(&rx, "live view: http://");
-        let addr = addr_of(&url);
-        wait_for(&rx, "the run has ended");
-        let (_, _, body) = get(&addr, "/state.json");
-        let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+        let (child, st) = watched_to_end(&args, |_| {});
         assert!(
             st["title"].as_str().unwrap().starts_with(title),
-            "{body:.300}"
+            "{:.300}",
+            st.to_string()
         );
         assert!(st["samples_received"].as_u64().unwrap() > 1_000, "{title}");
         assert_eq!(st["samples_dropped"].as_u64(), Some(0));
@@ -531,24 +536,22 @@ fn a_failed_campaign_point_shows_its_reason_live() {
     assert!(text.contains("phis = [0.57, 0.61]") && text.contains("max_attempts = 1 "));
     std::fs::write(&file, text).unwrap();
     let out = dir.path().join("camp");
-    let (child, rx) = start(&[
-        "campaign",
-        "run",
-        file.to_str().unwrap(),
-        "--link",
-        "sil",
-        "--out",
-        out.to_str().unwrap(),
-        "--live",
-        "127.0.0.1:0",
-        "--linger",
-        "1",
-    ]);
-    let url = wait_for(&rx, "live view: http://");
-    let addr = addr_of(&url);
-    wait_for(&rx, "the run has ended");
-    let (_, _, body) = get(&addr, "/state.json");
-    let st: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let (child, st) = watched_to_end(
+        &[
+            "campaign",
+            "run",
+            file.to_str().unwrap(),
+            "--link",
+            "sil",
+            "--out",
+            out.to_str().unwrap(),
+            "--live",
+            "127.0.0.1:0",
+            "--linger",
+            "1",
+        ],
+        |_| {},
+    );
     let c = &st["campaign"];
     assert_eq!(c["points"].as_u64(), Some(2), "{c}");
     assert_eq!(c["failed"].as_u64(), Some(1), "{c}");
