@@ -78,13 +78,7 @@ pub fn shear_band_cone(
     radius_m: f64,
 ) -> Option<ShearBandCone> {
     let nx = xs.len();
-    let FootFrame {
-        sum,
-        cells,
-        count,
-        bins,
-        spacing,
-    } = FootFrame::average(
+    let frame = FootFrame::average(
         samples.iter().map(|s| (s.shear_rate, s.foot_bottom_m, 1.0)),
         nx,
         hs,
@@ -95,17 +89,14 @@ pub fn shear_band_cone(
     }
     let mut rows: Vec<BandRow> = Vec::new();
     let enough = samples.len().div_ceil(2);
-    for b in 1..bins {
+    for b in 1..frame.bins {
         // Rows seen in fewer than half the samples (deep under a shallow foot) are not
         // averages; the cone's sides are fitted from the foot down to the first row
         // without bands.
-        if count[b] < enough {
+        if frame.count[b] < enough {
             break;
         }
-        let mean = |i: usize| match cells[b * nx + i] {
-            0 => f64::NAN,
-            n => sum[b * nx + i] / n as f64,
-        };
+        let mean = |i: usize| frame.mean(b, i);
         let finite = |i: &usize| mean(*i).is_finite();
         let right = (0..nx)
             .filter(|&i| xs[i] >= 0.1 * radius_m && xs[i] <= 1.2 * radius_m)
@@ -137,12 +128,12 @@ pub fn shear_band_cone(
         // another feature (or noise), where the band as a line has ended.
         if let Some(prev) = rows.last() {
             let (dl, dr) = ((-xs[l] - prev.left_m).abs(), (xs[r] - prev.right_m).abs());
-            if dl > MAX_BAND_STEP * spacing || dr > MAX_BAND_STEP * spacing {
+            if dl > MAX_BAND_STEP * frame.spacing || dr > MAX_BAND_STEP * frame.spacing {
                 break;
             }
         }
         rows.push(BandRow {
-            depth_below_foot_m: b as f64 * spacing,
+            depth_below_foot_m: b as f64 * frame.spacing,
             left_m: -xs[l],
             right_m: xs[r],
             contrast,
@@ -156,6 +147,7 @@ pub fn shear_band_cone(
 /// values (an empty coarse-graining cell is NaN: it must neither poison the average nor be
 /// taken for a feature) and their count, and per bin the samples that reached it.
 struct FootFrame {
+    nx: usize,
     sum: Vec<f64>,
     cells: Vec<usize>,
     count: Vec<usize>,
@@ -178,6 +170,7 @@ impl FootFrame {
         let spacing = (hs[1] - hs[0]).abs();
         let bins = (radius_m * 70f64.to_radians().tan() / spacing).ceil() as usize + 1;
         let mut f = Self {
+            nx,
             sum: vec![0.0; bins * nx],
             cells: vec![0; bins * nx],
             count: vec![0; bins],
@@ -205,6 +198,14 @@ impl FootFrame {
             }
         }
         Some(f)
+    }
+
+    /// The mean in bin `b`, column `i` (NaN: no finite value fell there).
+    fn mean(&self, b: usize, i: usize) -> f64 {
+        match self.cells[b * self.nx + i] {
+            0 => f64::NAN,
+            n => self.sum[b * self.nx + i] / n as f64,
+        }
     }
 }
 
@@ -301,13 +302,7 @@ pub fn comoving_cone(
     if moving.is_empty() {
         return None;
     }
-    let FootFrame {
-        sum,
-        cells,
-        count,
-        bins,
-        spacing,
-    } = FootFrame::average(
+    let frame = FootFrame::average(
         moving
             .iter()
             .map(|s| (s.v_up_m_s, s.foot_bottom_m, -1.0 / s.foot_speed_m_s)),
@@ -318,14 +313,11 @@ pub fn comoving_cone(
     let axis = (0..nx).min_by(|&a, &b| xs[a].abs().total_cmp(&xs[b].abs()))?;
     let enough = moving.len().div_ceil(2);
     let mut rows = Vec::new();
-    for b in 1..bins {
-        if count[b] < enough {
+    for b in 1..frame.bins {
+        if frame.count[b] < enough {
             break;
         }
-        let mean = |i: usize| match cells[b * nx + i] {
-            0 => f64::NAN,
-            n => sum[b * nx + i] / n as f64,
-        };
+        let mean = |i: usize| frame.mean(b, i);
         // The axis's ratio: the mean of the columns within 0.1 R of it (one column alone may
         // be empty, or hold a grain or two).
         let near: Vec<f64> = (0..nx)
@@ -361,7 +353,7 @@ pub fn comoving_cone(
         };
         if left < radius_m && right < radius_m {
             rows.push(BandRow {
-                depth_below_foot_m: b as f64 * spacing,
+                depth_below_foot_m: b as f64 * frame.spacing,
                 left_m: left,
                 right_m: right,
                 contrast: on_axis,
