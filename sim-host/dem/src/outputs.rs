@@ -609,6 +609,16 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     })
 }
 
+/// The samples of `run` whose added mass is taken (the foot in the bed, intruding at least the
+/// speed threshold), with their fields: what both cone measures average.
+fn with_added_mass(run: &Run) -> impl Iterator<Item = (&FlowRow, &[Vec<f64>; 4])> {
+    run.state
+        .flow
+        .iter()
+        .zip(&run.fields)
+        .filter(|(r, _)| r.added_mass_kg.is_finite() && r.depth_m > 0.0)
+}
+
 /// The shear-band cone of `run` ([`sandjumper_flow::cone`]): the shear-rate fields of the
 /// samples whose added mass is taken (the foot intruding at least the speed threshold), on
 /// the grid's columns `xs` (from the foot's axis) and rows `hs` (from the surface, up).
@@ -617,12 +627,7 @@ fn shear_band_cone(
     xs: &[f64],
     hs: &[f64],
 ) -> Option<sandjumper_flow::cone::ShearBandCone> {
-    let samples: Vec<sandjumper_flow::cone::Sample<'_>> = run
-        .state
-        .flow
-        .iter()
-        .zip(&run.fields)
-        .filter(|(r, _)| r.added_mass_kg.is_finite() && r.depth_m > 0.0)
+    let samples: Vec<sandjumper_flow::cone::Sample<'_>> = with_added_mass(run)
         .map(|(r, f)| sandjumper_flow::cone::Sample {
             shear_rate: &f[2],
             foot_bottom_m: -r.depth_m,
@@ -638,12 +643,7 @@ fn comoving_cone(
     xs: &[f64],
     hs: &[f64],
 ) -> Option<sandjumper_flow::cone::ShearBandCone> {
-    let samples: Vec<sandjumper_flow::cone::MotionSample<'_>> = run
-        .state
-        .flow
-        .iter()
-        .zip(&run.fields)
-        .filter(|(r, _)| r.added_mass_kg.is_finite() && r.depth_m > 0.0)
+    let samples: Vec<sandjumper_flow::cone::MotionSample<'_>> = with_added_mass(run)
         .map(|(r, f)| sandjumper_flow::cone::MotionSample {
             v_up_m_s: &f[1],
             foot_bottom_m: -r.depth_m,
