@@ -183,7 +183,7 @@ pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) 
 }
 
 /// The middle value (the upper one of an even count), NaN for none.
-fn median(mut values: Vec<f64>) -> f64 {
+pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }

@@ -11,6 +11,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use sandjumper_dem::intruder::Trajectory;
+use sandjumper_dem::outputs::median;
 use sandjumper_output::{CliError, write_csv};
 
 use crate::analysis::{self, FlowRow, Geometry, SideView};
@@ -504,11 +505,6 @@ pub fn analyse(
 
 /// How far a frame's foot may be from where the run's pieces put it, m.
 pub const FOOT_TOLERANCE_M: f64 = 1e-7;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
 
 fn summarise(
     m: &Manifest,
