@@ -274,13 +274,25 @@ impl LiveView {
         while self.server.snapshot().ended.is_none() && asked.elapsed() < Duration::from_secs(2) {
             std::thread::sleep(Duration::from_millis(5));
         }
+        // Ctrl-C is caught before the page says it may be used: one sent right after the
+        // message ends the wait, never the process.
+        crate::interrupt::catch();
         match self.linger {
             Some(s) => eprintln!(
                 "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
             ),
             None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
         }
-        self.server.wait(self.linger.map(Duration::from_secs_f64))
+        let until = self
+            .linger
+            .map(|s| Instant::now() + Duration::from_secs_f64(s));
+        while until.is_none_or(|u| Instant::now() < u) {
+            if crate::interrupt::interrupted() {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        crate::interrupt::interrupted()
     }
 
     #[cfg(not(feature = "live"))]

@@ -323,7 +323,10 @@ fn watched_rig_jump(link: &str, while_running: impl FnOnce(&str)) -> serde_json:
         .iter()
         .filter_map(|v| v.as_f64())
         .collect();
-    assert!(t.windows(2).all(|w| w[1] >= w[0]), "time goes back");
+    if let Some(k) = t.windows(2).position(|w| w[1] < w[0]) {
+        let around = &t[k.saturating_sub(4)..(k + 6).min(t.len())];
+        panic!("time goes back at point {k} of {}: {around:?}", t.len());
+    }
     assert!(t[0] < 0.0 && t[0] > -1.0, "starts at {}", t[0]);
     let end = *t.last().unwrap();
     assert!(end > 0.1 && end < 3.0, "ends at {end}");

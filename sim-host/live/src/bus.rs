@@ -130,6 +130,8 @@ pub struct LiveBus {
     bin_start: f64,
     bin: Vec<(f64, f64, f64, f64)>,
     bin_samples: u64,
+    /// The rig times of the bin's first and last samples, s.
+    bin_span: (f64, f64),
     /// The batch being filled.
     batch: Batch,
     batch_start: f64,
@@ -158,6 +160,7 @@ pub fn channel(channels: &[&str]) -> (LiveBus, LiveFeed) {
             bin_start: f64::NAN,
             bin: vec![(f64::NAN, f64::NAN, f64::NAN, f64::NAN); n],
             bin_samples: 0,
+            bin_span: (f64::NAN, f64::NAN),
             batch: Batch {
                 t_s: Vec::new(),
                 columns: vec![Vec::new(); n],
@@ -218,6 +221,10 @@ impl LiveBus {
                 slot.3 = t_s;
             }
         }
+        if self.bin_samples == 0 {
+            self.bin_span.0 = t_s;
+        }
+        self.bin_span.1 = t_s;
         self.bin_samples += 1;
     }
 
@@ -253,14 +260,19 @@ impl LiveBus {
     }
 
     /// Put the bin's envelope into the batch: two points, each channel's extremes in their
-    /// order in time (both at the bin's quarter and three quarters).
+    /// order in time, at the times of the bin's first and last samples (one point if they
+    /// are one sample). Points never lie outside their samples' times, so rig time only goes
+    /// forward however batches and flushes cut the bins.
     fn close_bin(&mut self) {
         if self.bin_samples == 0 {
             return;
         }
-        let (t0, t1) = (self.bin_start + 0.25 * BIN_S, self.bin_start + 0.75 * BIN_S);
+        let (t0, t1) = self.bin_span;
+        let one = t1 <= t0;
         self.batch.t_s.push(t0);
-        self.batch.t_s.push(t1);
+        if !one {
+            self.batch.t_s.push(t1);
+        }
         for (c, slot) in self.bin.iter_mut().enumerate() {
             let (first, second) = if slot.2 <= slot.3 {
                 (slot.0, slot.1)
@@ -268,7 +280,9 @@ impl LiveBus {
                 (slot.1, slot.0)
             };
             self.batch.columns[c].push(first);
-            self.batch.columns[c].push(second);
+            if !one {
+                self.batch.columns[c].push(second);
+            }
             *slot = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
         }
         self.batch.samples += self.bin_samples;
@@ -376,6 +390,27 @@ mod tests {
             .flat_map(|b| b.columns[0].iter().copied())
             .fold(f64::MIN, f64::max);
         assert!(max > 99.0, "the spike survives the reduction: {max}");
+    }
+
+    #[test]
+    fn time_never_goes_back_when_a_batch_ends_inside_a_bin() {
+        // Bins open at a sample's time and batches end 50 ms after their first sample: with
+        // gaps in the stream (a free-running board's telemetry) a batch can end in the middle
+        // of a bin, and the bin's points must still come before the next bin's.
+        let (mut bus, feed) = channel(&["x"]);
+        let mut t = -0.3713;
+        for k in 0..20_000u32 {
+            bus.sample(t, &[f64::from(k % 7)]);
+            t += if k % 97 == 0 { 1.37e-3 } else { 1e-4 };
+        }
+        bus.flush_now();
+        let (batches, dropped, _) = feed.take_batches();
+        assert_eq!(dropped, 0);
+        assert_eq!(batches.iter().map(|b| b.samples).sum::<u64>(), 20_000);
+        let t: Vec<f64> = batches.iter().flat_map(|b| b.t_s.iter().copied()).collect();
+        if let Some(k) = t.windows(2).position(|w| w[1] <= w[0]) {
+            panic!("time goes back at point {k}: {:?}", &t[k..k + 2]);
+        }
     }
 
     #[test]

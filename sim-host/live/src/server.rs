@@ -58,26 +58,6 @@ impl LiveServer {
             Err(p) => p.into_inner().clone(),
         }
     }
-
-    /// Wait until Ctrl-C (true) or `linger` passes (false; `None`: only Ctrl-C).
-    pub fn wait(&self, linger: Option<Duration>) -> bool {
-        let rt = match tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-        {
-            Ok(rt) => rt,
-            Err(_) => return false,
-        };
-        rt.block_on(async {
-            match linger {
-                Some(d) => tokio::select! {
-                    r = tokio::signal::ctrl_c() => r.is_ok(),
-                    () = tokio::time::sleep(d) => false,
-                },
-                None => tokio::signal::ctrl_c().await.is_ok(),
-            }
-        })
-    }
 }
 
 impl Drop for LiveServer {
