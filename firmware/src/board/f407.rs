@@ -233,9 +233,11 @@ pub struct Parts {
     pub usb: stm32f4xx_hal::otg_fs::USB,
 }
 
-/// Wait-loop iterations for the crystal before giving up: at the 16 MHz HSI, a few cycles
-/// each, about 0.4-0.6 s, a hundred times an 8 MHz crystal's usual start-up.
-pub const HSE_STARTUP_SPINS: u32 = 1_600_000;
+/// Wait-loop iterations for the crystal before giving up: at the 16 MHz HSI, 3-8 cycles each,
+/// 0.08-0.2 s, a hundred times an 8 MHz crystal's usual start-up (1-2 ms), and inside the
+/// watchdog's shortest first window (0.35 s at the fastest LSI), so the report comes before the
+/// watchdog's reset would.
+pub const HSE_STARTUP_SPINS: u32 = 400_000;
 
 /// Starts the crystal oscillator and waits for it with a bound. The HAL's clock setup waits for
 /// HSE and PLL ready with none: a board whose crystal does not start would hang there forever,

@@ -2,6 +2,8 @@
 //! superset at the addresses the F407 uses) with a 8 MHz crystal and a 3.3 V supply, and our
 //! models bound to the slots rigless leaves unmodelled: TIM7, the DAC, the four OTG FS blocks and
 //! the OTG FS FIFO window (0x5000_1000..0x5004_0000, a window the patched part leaves free).
+//! The crystal is ours too: rigless's RCC brings `HSERDY` up with nothing fitted, so a crystal
+//! that does not start, or stops, is modelled here (see [`F407::crystal_runs`]).
 
 use std::num::{NonZeroU32, NonZeroU64};
 
@@ -9,6 +11,7 @@ use rigless::device::{ErasedDevice, ResetCause};
 use rigless::machine::{Board, Target, armv7m};
 use rigless::mcu::{Mcu, Operate};
 use rigless::soc::stm32f427::Stm32f427;
+use rigless::soc::stm32f427::generated::rcc::{Register as RccRegister, cir, cr};
 use rigless::soc::stm32f427::peripherals::rcc::Apb;
 use rigless::soc::{Bus, Window};
 use rigless::time::VirtualNanos;
@@ -27,9 +30,13 @@ pub const OTG_FS_FIFO_BASE: u64 = 0x5000_1000;
 pub const OTG_FS_FIFO_SIZE: u64 = 0x5004_0000 - OTG_FS_FIFO_BASE;
 /// The core's interrupt line of OTG FS (RM0090 table 63).
 pub const OTG_FS_IRQ: u16 = 67;
+/// The line that drives the core's NMI input (rigless-0.4.0.patch: the highest line the
+/// emulator numbers); the clock security system raises it (RM0090 6.2.7).
+pub const NMI_INPUT: u16 = rigless::emulator::INTERRUPT_LINES - 1;
 
 #[derive(Debug, Clone, Copy)]
 struct Slots {
+    rcc: usize,
     tim7: usize,
     dac: usize,
     otg_global: usize,
@@ -50,6 +57,9 @@ pub struct F407 {
     pub dac: Dac,
     /// The USB OTG FS core and its virtual host.
     pub otg: OtgFs,
+    /// The crystal oscillates: fitted (`hse_hz > 0`) and not stopped ([`F407::stop_crystal`]).
+    /// While it does not, the HSE never reads ready, whatever rigless's RCC schedules.
+    crystal_runs: bool,
     slots: Slots,
 }
 
@@ -70,6 +80,7 @@ impl F407 {
         )?;
         let bus = part.bus();
         let slots = Slots {
+            rcc: bus.slot("RCC")?,
             tim7: bus.slot("TIM7")?,
             dac: bus.slot("DAC")?,
             otg_global: bus.slot("OTG_FS_GLOBAL")?,
@@ -83,8 +94,47 @@ impl F407 {
             tim7: BasicTimer::default(),
             dac: Dac::default(),
             otg: OtgFs::default(),
+            crystal_runs: hse_hz > 0,
             slots,
         })
+    }
+
+    /// Whether the crystal oscillates.
+    pub fn crystal_runs(&self) -> bool {
+        self.crystal_runs
+    }
+
+    /// The crystal stops at `at` (a cracked crystal, a load capacitor come loose) and stays
+    /// stopped through resets. With the clock security system on (`CSSON`) the part notices:
+    /// rigless's RCC switches the system to the HSI, stops the PLL and sets `CSSF` (RM0090
+    /// 6.2.7); the NMI that follows is the caller's to raise (it belongs to the core). Returns
+    /// whether the part noticed, i.e. whether the NMI is due.
+    pub fn stop_crystal(&mut self, at: VirtualNanos) -> bool {
+        self.crystal_runs = false;
+        self.part.drive_clocks(at, |rcc, registers, context| {
+            rcc.fail_hse(registers, context);
+            cir::CSSF.is_set(registers.get(RccRegister::Cir))
+        })
+    }
+
+    /// Whether the system clock comes from the crystal: `SWS` on the HSE, or on the PLL with
+    /// the HSE as its source (RM0090 6.3.2-6.3.3).
+    pub fn system_clock_from_the_crystal(&mut self) -> bool {
+        let (_, registers) = self.part.clocks();
+        let sws = (registers.get(RccRegister::Cfgr) >> 2) & 0b11;
+        let pll_on_hse = registers.get(RccRegister::Pllcfgr) & (1 << 22) != 0;
+        sws == 0b01 || (sws == 0b10 && pll_on_hse)
+    }
+
+    /// A stopped or missing crystal is never ready: cleared before every access to the RCC,
+    /// so the firmware never reads the `HSERDY` (and `HSERDYF`) rigless's model raises at its
+    /// start-up time regardless.
+    fn hold_the_crystal_down(&mut self) {
+        let (_, registers) = self.part.clocks();
+        let cr_value = registers.get(RccRegister::Cr);
+        registers.set(RccRegister::Cr, cr::HSERDY.set(cr_value, 0));
+        let cir_value = registers.get(RccRegister::Cir);
+        registers.set(RccRegister::Cir, cir::HSERDYF.set(cir_value, 0));
     }
 }
 
@@ -106,6 +156,9 @@ impl Mcu for F407 {
     }
     fn split(&mut self, slot: usize) -> (&mut Bus, Option<&mut dyn ErasedDevice>) {
         let s = self.slots;
+        if slot == s.rcc && !self.crystal_runs {
+            self.hold_the_crystal_down();
+        }
         let block = if slot == s.tim7 {
             let (rcc, regs) = self.part.clocks();
             self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);

@@ -90,6 +90,11 @@ pub enum Action {
     Supply(u32),
     /// The reset button (NRST pulled low): the part restarts with the pin's flag.
     ResetButton,
+    /// The crystal stops for good (cracked, a load capacitor come loose). With the clock
+    /// security system on, the part switches to the HSI and raises the NMI (RM0090 6.2.7);
+    /// without it nothing notices, and a core clocked from the crystal (directly or through
+    /// the PLL) stops with its clock while the watchdog (LSI) counts on.
+    CrystalStops,
     /// The core's next access to `[from, to)` fails as a bus error (no model sees it).
     BusError {
         /// First address.
@@ -287,6 +292,17 @@ impl<H> BoardDriver<H> {
             }
             Action::HoldOnceTheWatchdogRuns => self.hold_when_watchdog_runs = true,
             Action::BusError { from, to } => s.fail_next(from, to),
+            Action::CrystalStops => {
+                let clock_lost = mcu.system_clock_from_the_crystal();
+                if mcu.stop_crystal(VirtualNanos(at)) {
+                    let line = emulator::InterruptLine::new(crate::board::NMI_INPUT)
+                        .expect("the NMI input is a line the emulator numbers");
+                    host.set_interrupt(line, rigless::device::Level::High);
+                    host.set_interrupt(line, rigless::device::Level::Low);
+                } else if clock_lost {
+                    self.apply(s, host, at, Action::Hold(true));
+                }
+            }
             Action::ResetButton => {
                 let instructions = 0;
                 s.reset_by_pin(VirtualNanos(at), instructions, host);

@@ -401,6 +401,40 @@ fn a_hang_early_in_the_start_up_is_reset_by_the_watchdog() {
     );
 }
 
+/// Issue 38 item 9: a board whose crystal does not start (none fitted, a broken one). The
+/// firmware waits for it with a bound, says so and keeps the rig safe; the watchdog restarts it
+/// and it says so again. The binary before the review waited in the HAL's clock setup with no
+/// bound: only the watchdog's resets, and no word of why.
+#[test]
+fn a_crystal_that_does_not_start_is_reported_and_nothing_runs() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(1_500_000_000);
+    cfg.crystal_hz = 0;
+    cfg.trace_every = 10;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    let said: Vec<&String> = r
+        .log
+        .iter()
+        .filter(|l| l.contains("crystal (HSE) did not start"))
+        .collect();
+    assert!(!said.is_empty(), "no word of the crystal: {:?}", r.log);
+    assert!(
+        r.trace.iter().all(|row| row.out.drive_and_lift_safe()),
+        "an output was on with no clock"
+    );
+    // The tick never ran, so nothing claims to (no boot line).
+    assert!(
+        !r.log
+            .iter()
+            .any(|l| l.contains("sandjumper firmware: STM32F407")),
+        "{:?}",
+        r.log
+    );
+}
+
 /// Issue 38 item 5: a probe that put RTT in blocking mode and stopped reading never stalls the
 /// tick, while the host sends bursts of small commands, more than the firmware's inbound queue
 /// holds (frames dropped, counted). A regression bound, not the fix's test: the binary whose link
