@@ -209,3 +209,45 @@ fn the_control_tick_and_the_usb_task_never_log() {
         "{from_nmi:#?}"
     );
 }
+
+/// The control tick has no panic path at all (the brief: the firmware never panics in the control
+/// path). Every function the tick's interrupt can reach, the panic machinery included: none of
+/// it is `core::panicking`, a failed index, `unwrap` or `expect`. `f32::clamp` (it panics on a
+/// bad limit, and pulled 16 KiB of float printing into the image) and indexing in the replay
+/// table's evaluation and upload used to be there.
+#[test]
+fn the_control_tick_has_no_panic_path() {
+    let Some((tool, elf)) = setup() else { return };
+    let from_tick = reachable(&tool, &elf, "TIM7", &[]);
+    assert!(
+        from_tick
+            .iter()
+            .any(|f| f.contains("Rig") && f.contains("tick")),
+        "the call graph misses the core's tick: {from_tick:#?}"
+    );
+    let panics: Vec<&String> = from_tick
+        .iter()
+        .filter(|f| {
+            [
+                "panic",
+                "unwind",
+                "unwrap_failed",
+                "expect_failed",
+                "index_fail",
+                "len_mismatch",
+            ]
+            .iter()
+            .any(|p| f.contains(p))
+        })
+        .collect();
+    assert!(
+        panics.is_empty(),
+        "the control tick can panic through {panics:#?}"
+    );
+    // The checker sees panics where there are some: the USB link task (the USB crates index).
+    let from_link = reachable(&tool, &elf, "OTG_FS", &[]);
+    assert!(
+        from_link.iter().any(|f| f.contains("panicking")),
+        "{from_link:#?}"
+    );
+}

@@ -267,6 +267,21 @@ pub struct PositionController {
     integral_n: f32,
 }
 
+/// `x` limited to `[-limit, limit]`. Unlike `f32::clamp` it has no panic path (that one panics
+/// on a NaN or negative limit, and links `core::fmt`'s float printing into the control tick):
+/// the limits are validated where they are set, and the tick must not be able to panic at all.
+/// A NaN `x` stays NaN, as with `clamp`.
+#[inline]
+fn clamp_symmetric(x: f32, limit: f32) -> f32 {
+    if x > limit {
+        limit
+    } else if x < -limit {
+        -limit
+    } else {
+        x
+    }
+}
+
 impl PositionController {
     /// `drive_limit_n`: saturation of the force command, N; `tick_hz`: control rate.
     pub fn new(gains: Gains, drive_limit_n: f32, tick_hz: u32) -> Self {
@@ -281,9 +296,7 @@ impl PositionController {
     /// Replace the gains (the integral term, in newtons, is kept: bumpless).
     pub fn set_gains(&mut self, gains: Gains) {
         self.gains = gains;
-        self.integral_n = self
-            .integral_n
-            .clamp(-gains.integral_limit_n, gains.integral_limit_n);
+        self.integral_n = clamp_symmetric(self.integral_n, gains.integral_limit_n);
     }
 
     /// The gains in use.
@@ -324,10 +337,10 @@ impl PositionController {
             let next = self.integral_n + scale.position * g.ki_n_per_m_s * error_m * self.dt_s;
             let lim = g.integral_limit_n;
             integrator_held = next.abs() > lim;
-            self.integral_n = next.clamp(-lim, lim);
+            self.integral_n = clamp_symmetric(next, lim);
         }
         ControlOutput {
-            force_n: u.clamp(-self.drive_limit_n, self.drive_limit_n),
+            force_n: clamp_symmetric(u, self.drive_limit_n),
             error_m,
             saturated,
             integrator_held,
@@ -338,6 +351,17 @@ impl PositionController {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_symmetric_clamp_limits_and_never_panics() {
+        assert_eq!(clamp_symmetric(5.0, 2.0), 2.0);
+        assert_eq!(clamp_symmetric(-5.0, 2.0), -2.0);
+        assert_eq!(clamp_symmetric(1.5, 2.0), 1.5);
+        assert!(clamp_symmetric(f32::NAN, 2.0).is_nan());
+        // Limits `f32::clamp` panics on: the value comes through.
+        assert_eq!(clamp_symmetric(1.0, f32::NAN), 1.0);
+        assert_eq!(clamp_symmetric(0.5, -1.0), -1.0);
+    }
     use crate::profile::Setpoint;
     use proptest::prelude::*;
 

@@ -203,7 +203,13 @@ impl ReplayTable {
                 });
             }
         }
-        self.samples[offset as usize..end as usize].copy_from_slice(chunk);
+        // Element by element, with no panic path (the firmware's tick handles the upload).
+        let Some(dst) = self.samples.get_mut(offset as usize..end as usize) else {
+            return Err(ReplayError::PastEnd { end, len: self.len });
+        };
+        for (d, &v) in dst.iter_mut().zip(chunk) {
+            *d = v;
+        }
         self.running.update(chunk);
         self.upload = Upload::Uploading { written: end };
         Ok(())
@@ -269,15 +275,25 @@ impl ReplayTable {
         let Some(&last) = s.last() else {
             return (0.0, 0.0, 0.0);
         };
-        let i = (n / self.period_ticks) as usize;
-        if i + 1 >= s.len() {
+        // Checked arithmetic and `get`: the control tick evaluates this and must have no
+        // panic path (a zero period is refused when the table is set up).
+        let (Some(i), Some(r)) = (
+            n.checked_div(self.period_ticks),
+            n.checked_rem(self.period_ticks),
+        ) else {
             return (last, 0.0, 0.0);
-        }
-        let u = (n % self.period_ticks) as f32 * self.inv_period;
-        let p1 = s[i];
-        let p2 = s[i + 1];
-        let p0 = if i > 0 { s[i - 1] } else { p1 };
-        let p3 = if i + 2 < s.len() { s[i + 2] } else { p2 };
+        };
+        let i = i as usize;
+        let (Some(&p1), Some(&p2)) = (s.get(i), s.get(i + 1)) else {
+            return (last, 0.0, 0.0);
+        };
+        let u = r as f32 * self.inv_period;
+        let p0 = i
+            .checked_sub(1)
+            .and_then(|k| s.get(k))
+            .copied()
+            .unwrap_or(p1);
+        let p3 = s.get(i + 2).copied().unwrap_or(p2);
         let m1 = 0.5 * (p2 - p0);
         let m2 = 0.5 * (p3 - p1);
         let (u2, u3) = (u * u, u * u * u);
