@@ -92,10 +92,15 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
                 .unwrap_or_else(|e| e.to_string())
         ));
     }
-    // The bring-up's three test images (firmware/src/inject_f407.rs), which the board's
+    // The four fault test images (firmware/src/inject_f407.rs; the bring-up scopes three), which the board's
     // injected.rs runs: built one after the other in one target directory (only the firmware
     // crate rebuilds between them), each copied to target/inject-<kind>.
-    for kind in ["panic", "hardfault", "stack-overflow"] {
+    for kind in [
+        "panic",
+        "hardfault",
+        "stack-overflow",
+        "unhandled-interrupt",
+    ] {
         let out = firmware_build(root, Some("target/inject-build"), Some(kind))
             .expect("run cargo build for a test image");
         assert!(

@@ -1,5 +1,6 @@
 //! Test images for the bring-up (docs/bringup.md step 4) and the virtual board's fault tests: a
-//! fault built in with `SANDJUMPER_INJECT=panic|hardfault|stack-overflow` at build time, fired
+//! fault built in with `SANDJUMPER_INJECT=panic|hardfault|stack-overflow|unhandled-interrupt`
+//! at build time, fired
 //! by the control tick [`INJECT_AT_TICK`] ticks after start-up, with the drive as the tick left
 //! it. A normal build has none: [`INJECTED`] is `None` and the tick's check compiles away.
 //!
@@ -18,6 +19,8 @@ pub enum Injected {
     /// Unbounded recursion with a large frame: flip-link's stack at the bottom of RAM makes
     /// the overflow a HardFault with the stack pointer below RAM.
     StackOverflow,
+    /// An interrupt with no handler of its own (EXTI0) enabled and pended: the default handler.
+    UnhandledInterrupt,
 }
 
 /// The fault this image fires, from `SANDJUMPER_INJECT` at build time.
@@ -37,8 +40,10 @@ const fn parse(text: &str) -> Injected {
         Injected::HardFault
     } else if eq(b, b"stack-overflow") {
         Injected::StackOverflow
+    } else if eq(b, b"unhandled-interrupt") {
+        Injected::UnhandledInterrupt
     } else {
-        panic!("SANDJUMPER_INJECT must be panic, hardfault or stack-overflow")
+        panic!("SANDJUMPER_INJECT must be panic, hardfault, stack-overflow or unhandled-interrupt")
     }
 }
 
@@ -73,6 +78,13 @@ fn fire(kind: Injected) {
         Injected::HardFault => cortex_m::asm::udf(),
         Injected::StackOverflow => {
             core::hint::black_box(overflow(0));
+        }
+        Injected::UnhandledInterrupt => {
+            use stm32f4xx_hal::pac::Interrupt;
+            // SAFETY: a test image; EXTI0 is bound to no task, so its vector is the default
+            // handler, at priority 0 (above the tick's): it runs at once.
+            unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::EXTI0) };
+            cortex_m::peripheral::NVIC::pend(Interrupt::EXTI0);
         }
     }
 }

@@ -302,8 +302,10 @@ fn ensure_brown_out_reset() {
             .optcr()
             .modify(|r, w| w.bits((r.bits() & !(0b11 << 2)) | (BOR_LEVEL_2 << 2)));
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b10)); // OPTSTRT
-        // Far beyond an option-byte write's ~16 ms at the 16 MHz HSI.
-        const OPTION_WRITE_SPINS: u32 = 16_000_000;
+        // 0.08-0.2 s at the 16 MHz HSI (3-8 cycles a spin), 5-12x an option-byte write's
+        // ~16 ms, and inside the early watchdog's shortest window (0.35 s), so a write that
+        // never ends is reported instead of reset silently over and over.
+        const OPTION_WRITE_SPINS: u32 = 400_000;
         let mut spins: u32 = 0;
         while flash.sr().read().bsy().bit_is_set() && spins < OPTION_WRITE_SPINS {
             spins += 1;
@@ -332,6 +334,14 @@ pub fn brown_out_level() -> u8 {
     }
 }
 
+/// Refresh the watchdog while `init` runs at its reset settings (IWDG_KR's reload key).
+fn feed_early_watchdog() {
+    // SAFETY: IWDG_KR's reload key; `init` owns the IWDG until it hands it to `RigIo`.
+    unsafe {
+        (*pac::IWDG::ptr()).kr().write(|w| w.key().bits(0xAAAA));
+    }
+}
+
 /// Clocks, pins and peripherals. The drive stays disabled at zero force; the tick timer is
 /// configured but not started ([`Rig::start_ticking`]). A crystal that does not start ends
 /// here in the safe state with a report (a panic): the board cannot keep time without it.
@@ -345,6 +355,9 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         (*pac::IWDG::ptr()).kr().write(|w| w.key().bits(0xCCCC));
     }
     ensure_brown_out_reset();
+    // Each bounded wait of the start-up fits the early watchdog's shortest window by itself:
+    // refreshed between them, they never add up to a reset before their report.
+    feed_early_watchdog();
     // More wait states before the clock rises (RM0090 3.5.1: raise LATENCY first).
     // SAFETY: FLASH_ACR's LATENCY, read back as the manual asks before the clock changes.
     unsafe {
@@ -352,7 +365,9 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         acr.modify(|_, w| w.latency().bits(FLASH_WAIT_STATES as u8));
         while u32::from(acr.read().latency().bits()) != FLASH_WAIT_STATES {}
     }
-    if !start_crystal() {
+    let crystal_started = start_crystal();
+    feed_early_watchdog();
+    if !crystal_started {
         force_safe_state();
         defmt::panic!("the 8 MHz crystal (HSE) did not start: check X2 and its load capacitors");
     }
@@ -369,7 +384,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
             .modify(|_, w| w.latency().bits(FLASH_WAIT_STATES as u8));
     }
     // Clock security system: if the crystal stops, the part switches to HSI and raises the NMI,
-    // whose handler (the default handler) puts the rig in the safe state.
+    // whose handler (`NonMaskableInt`, fault_f407.rs) puts the rig in the safe state.
     // SAFETY: RCC_CR's CSSON, set once the HAL has switched SYSCLK to the PLL on HSE.
     unsafe {
         (*pac::RCC::ptr()).cr().modify(|_, w| w.csson().set_bit());
@@ -388,8 +403,9 @@ pub fn init(dp: pac::Peripherals) -> Parts {
         .constrain((gpioa.pa4.into_analog(), gpioa.pa5.into_analog()), &mut rcc);
     // Output buffers off (BOFF1, BOFF2): buffered, the DAC is linear only from 0.2 V to
     // VDDA - 0.2 V (DS8626 table 70), which would cut the force range to about +-260 N unseen
-    // and leave the blower at 0.6 V when off. The drive's and the blower's input stages are
-    // high-impedance op-amp stages, which the unbuffered output (~15 kOhm) drives.
+    // and leave the blower at 0.6 V when off. Unbuffered, the output (up to 15 kOhm) needs a
+    // load of 1.5 MOhm or more: the drive's and the blower's stages are fed through unity-gain
+    // followers (docs/firmware.md, wiring).
     // SAFETY: a read-modify-write of DAC_CR's two BOFF bits before either channel is enabled.
     unsafe {
         (*pac::DAC::ptr())

@@ -268,8 +268,15 @@ fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
     let log_text = std::fs::read_to_string(out.join("acquisition.csv")).unwrap();
     assert!(log_text.contains(&format!("# replay_checksum: {checksum}")));
     // The replay's trajectory starts with the original log's first sample.
+    let (max, rms) = replay_error(&original, &out);
+    assert!(max < 1.5e-3 && rms < 0.5e-3, "max {max} m, rms {rms} m");
+}
+
+/// How far the replay in `replay` (a `rig replay --out`) followed the motor of the jump in
+/// `original` (a `rig jump --out`), sample by sample from the replay's start: (max, rms), m.
+fn replay_error(original: &Path, replay: &Path) -> (f64, f64) {
     let old = log_rows(&original.join("acquisition.csv"));
-    let new = log_rows(&out.join("acquisition.csv"));
+    let new = log_rows(&replay.join("acquisition.csv"));
     let start = new
         .iter()
         .position(|r| r.0 & 4 != 0)
@@ -285,7 +292,7 @@ fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
         .collect();
     let max = errors.iter().cloned().fold(0.0, f64::max);
     let rms = (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt();
-    assert!(max < 1.5e-3 && rms < 0.5e-3, "max {max} m, rms {rms} m");
+    (max, rms)
 }
 
 #[test]
@@ -774,4 +781,63 @@ fn status_and_jump_through_the_f407_binary_match_sil() {
     );
     // The bound: within 1 mm of sil (measured 62.69 mm against 62.82 mm).
     assert!((f407 - sil).abs() < 1e-3, "f407 {f407} m, sil {sil} m");
+}
+
+/// `rig intrude` and `rig replay` through the F407 binary as through sil: the slow intrusion's
+/// force at 20 mm (measured 29.29 N against 29.34 N) and a replay of a sil jump on the board
+/// (measured max 0.91 mm, rms 0.21 mm).
+#[test]
+fn intrusion_and_replay_through_the_f407_binary_match_sil() {
+    if virtual_board().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let force_at_20_mm = |link: &str| -> f64 {
+        let out = dir.path().join(format!("intrude-{link}"));
+        let o = sandjumper_within(
+            &[
+                "rig",
+                "intrude",
+                "--link",
+                link,
+                "--model",
+                "eq1",
+                "--out",
+                s(&out),
+            ],
+            Duration::from_secs(300),
+        );
+        assert!(o.status.success(), "{link}: {}", stderr(&o));
+        let sum = json(&out.join("summary.json"));
+        assert_eq!(sum["completed"], true, "{link}: {sum}");
+        assert!(
+            (sum["depth_m"].as_f64().unwrap() - 0.02).abs() < 1e-9,
+            "{sum}"
+        );
+        sum["force_at_depth_n"]
+            .as_f64()
+            .expect("the force at the depth")
+    };
+    let (f407, sil) = (force_at_20_mm("f407"), force_at_20_mm("sil"));
+    assert!(
+        (f407 - sil).abs() < 0.5,
+        "force at 20 mm: f407 {f407} N, sil {sil} N"
+    );
+    let original = jump(dir.path(), &["--link", "sil"]);
+    let out = dir.path().join("replay-f407");
+    let o = sandjumper_within(
+        &[
+            "rig",
+            "replay",
+            s(&original.join("acquisition.csv")),
+            "--link",
+            "f407",
+            "--out",
+            s(&out),
+        ],
+        Duration::from_secs(300),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (max, rms) = replay_error(&original, &out);
+    assert!(max < 1.5e-3 && rms < 0.5e-3, "max {max} m, rms {rms} m");
 }

@@ -51,7 +51,8 @@ pub enum Command {
     /// both through the controller; write stroke.csv for jump, hil and rig replay --stroke.
     Optimize(Box<crate::optimize::command::OptimizeArgs>),
     /// Run one jump through the control loop against the simulated rig: the core in-process
-    /// (sil), the real firmware in QEMU (pil) or a board on a serial port (serial:PATH).
+    /// (sil), the firmware in QEMU (pil), the F407 release binary on the virtual board (f407)
+    /// or a board on a serial port (serial:PATH).
     Hil(HilArgs),
     /// Replay an acquisition log's encoder record in the simulator (the paper's method):
     /// reports what `jump` reports, and predicted vs measured if the log has measurements.
@@ -75,7 +76,7 @@ pub enum Command {
     /// parameter space; resumable after a crash
     Campaign(crate::campaign::command::CampaignArgs),
     /// The rig's board over its USB serial port (--port PATH), or a simulated controller and
-    /// rig (--link sil|pil): flash, status, jump, intrude, replay.
+    /// rig (--link sil|pil|f407): flash, status, jump, intrude, replay.
     Rig(RigArgs),
 }
 

@@ -82,11 +82,10 @@ fn main() {
                 }
             }
             "--pace" => {
-                let x: f64 = value("--pace")
-                    .parse()
-                    .unwrap_or_else(|_| fail("--pace: a number > 0 (1 = real time)"));
-                if !(x > 0.0 && x.is_finite()) {
-                    fail("--pace: a number > 0 (1 = real time)");
+                const PACE: &str = "--pace: a number from 0.001 to 1000 (1 = real time)";
+                let x: f64 = value("--pace").parse().unwrap_or_else(|_| fail(PACE));
+                if !(1e-3..=1e3).contains(&x) {
+                    fail(PACE);
                 }
                 pace = Some(x);
             }
@@ -95,8 +94,10 @@ fn main() {
             "--intrusion" => intrusion_params = Some(value("--intrusion").into()),
             "--surface-p" => {
                 surface_p = value("--surface-p")
-                    .parse()
-                    .unwrap_or_else(|_| fail("--surface-p: metres"))
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|p| p.is_finite())
+                    .unwrap_or_else(|| fail("--surface-p: metres, a finite number"))
             }
             "--model" => model = value("--model"),
             "--p0" => {

@@ -521,7 +521,9 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         self.last = Some(row);
         self.stops += 1;
         if let Some(pace) = self.pace {
-            let due = std::time::Duration::from_secs_f64(now as f64 * 1e-9 / pace);
+            // Saturating: no pace makes the wait panic (the CLI keeps it within 0.001-1000).
+            let due = std::time::Duration::try_from_secs_f64(now as f64 * 1e-9 / pace)
+                .unwrap_or(std::time::Duration::MAX);
             let elapsed = self.wall.elapsed();
             if due > elapsed {
                 std::thread::sleep(due - elapsed);

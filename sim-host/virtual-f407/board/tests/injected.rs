@@ -1,5 +1,6 @@
 //! The bring-up's test images (firmware `inject_f407.rs`: `SANDJUMPER_INJECT=panic`,
-//! `hardfault`, `stack-overflow`, each fired by the control tick 2 s after start-up) on the
+//! `hardfault`, `stack-overflow`, `unhandled-interrupt`, each fired by the control tick 2 s
+//! after start-up) on the
 //! virtual board, armed with the robot on hard ground: the fault handlers put the whole rig in
 //! the safe state at once, report over RTT, and the watchdog restarts the board, which reports
 //! the watchdog reset. The images are built into `target/inject-<kind>` of the main workspace
@@ -91,9 +92,68 @@ fn check(kind: &str, report: &str) {
     }
 }
 
+/// The bed apparatus running (blower, shaker, lift: the rig Idle, the host's heartbeats on)
+/// when the image's fault comes at 2 s: all of it is off from the fault on. The binary before
+/// the review made only the drive safe in its handlers.
+fn check_bed(kind: &str) {
+    let Some(elf) = image(kind) else { return };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(2_050 * MS);
+    cfg.trace_every = 1;
+    cfg.actions = common::bed_switched_on();
+    cfg.actions
+        .extend(common::heartbeats(220 * MS, 2_050 * MS, 4));
+    let r = run(cfg, NoHost::default()).expect("the run").0;
+    let running = common::at(&r, 1_990 * MS);
+    assert!(
+        running.out.lift_enable && running.out.blower_dac_v > 1.0 && running.out.shaker_duty > 0.4,
+        "{kind}: the bed did not run before the fault: {running:?}; log {:?}",
+        r.log
+    );
+    let off_at = r
+        .trace
+        .windows(2)
+        .find(|w| w[0].out.lift_enable && !w[1].out.lift_enable)
+        .map(|w| w[1].t_ns)
+        .unwrap_or_else(|| panic!("{kind}: the lift never went off; log {:?}", r.log));
+    assert!(
+        (1_999 * MS..2_001 * MS).contains(&off_at),
+        "{kind}: the lift went off at {off_at} ns, not at the 2 s fault"
+    );
+    // The lift, the blower and the drive at once; the shaker's new duty (0) loads at the end
+    // of its PWM period (TIM3's compare preload, 50 us at 20 kHz): by the next 100 us stop.
+    let first = common::at(&r, off_at);
+    assert!(
+        !first.out.lift_enable && first.out.blower_dac_v < 0.01 && !first.out.drive_enable,
+        "{kind}: {first:?}"
+    );
+    for row in r.trace.iter().filter(|row| row.t_ns >= off_at + 100_000) {
+        assert!(
+            row.out.drive_and_lift_safe(),
+            "{kind}: the bed still on at {} ns: {row:?}",
+            row.t_ns
+        );
+    }
+}
+
 #[test]
 fn an_injected_panic_makes_the_rig_safe_reports_and_restarts() {
     check("panic", "panic: ");
+}
+
+#[test]
+fn the_panic_hardfault_and_default_handlers_turn_a_running_bed_off() {
+    for kind in ["panic", "hardfault", "unhandled-interrupt"] {
+        check_bed(kind);
+    }
+}
+
+/// An interrupt enabled with no handler of its own ends in cortex-m-rt's default handler, which
+/// makes the whole rig safe like the others (the binary before the review dropped the drive
+/// only, leaving the lift, the blower and the shaker on).
+#[test]
+fn an_unhandled_interrupt_makes_the_rig_safe_reports_and_restarts() {
+    check("unhandled-interrupt", "unexpected exception or interrupt");
 }
 
 #[test]

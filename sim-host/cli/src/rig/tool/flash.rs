@@ -1,7 +1,7 @@
 //! `sandjumper rig flash`: write the F407 firmware with the probe-rs CLI
 //! (`probe-rs download --chip STM32F407VGTx ELF`, then `probe-rs reset`). probe-rs is not
 //! linked in: it needs libusb/libudev to build; the CLI (`cargo install probe-rs-tools`) does
-//! the same job. For `--link sil|pil` there is nothing to flash.
+//! the same job. For `--link sil|pil|f407` there is nothing to flash.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -98,11 +98,11 @@ pub struct ControllerArgs {
 /// The controller and its firmware.
 #[derive(Debug, Clone, Args)]
 pub struct TargetArgs {
-    /// `--port PATH` or `--link sil|pil`.
+    /// `--port PATH` or `--link sil|pil|f407`.
     #[command(flatten)]
     pub controller: ControllerArgs,
-    /// Firmware ELF: for --link pil the QEMU build (--features board-qemu); for `flash` the
-    /// F407 build.
+    /// Firmware ELF: for --link pil the QEMU build (--features board-qemu); for --link f407
+    /// and `flash` the F407 build.
     #[arg(long, value_name = "ELF")]
     pub firmware: Option<PathBuf>,
     /// The virtual board's program for --link f407 (default:

@@ -89,14 +89,36 @@ pub fn armed_actions(arm_at: u64, heartbeats_until: u64) -> Vec<(u64, Action)> {
         (arm_at - 10 * MS, send(1, Command::Configure(single_sine()))),
         (arm_at, send(2, Command::Arm)),
     ];
-    let mut id = 3;
-    let mut t = arm_at + 20 * MS;
-    while t < heartbeats_until {
-        actions.push((t, send(id, Command::Heartbeat)));
-        id += 1;
-        t += 20 * MS;
-    }
+    actions.extend(heartbeats(arm_at + 20 * MS, heartbeats_until, 3));
     actions
+}
+
+/// The host's heartbeats every 20 ms from `from` until `until`, ids from `first_id`.
+pub fn heartbeats(from: u64, until: u64, first_id: u16) -> Vec<(u64, Action)> {
+    (0u16..)
+        .map(|k| (from + u64::from(k) * 20 * MS, first_id + k))
+        .take_while(|&(t, _)| t < until)
+        .map(|(t, id)| (t, send(id, Command::Heartbeat)))
+        .collect()
+}
+
+/// The host switches the bed apparatus on at 200-210 ms: blower 5 V, shaker half duty, lift up.
+pub fn bed_switched_on() -> Vec<(u64, Action)> {
+    use sandjumper_core::bed::{BedCommand, LiftMove};
+    vec![
+        (
+            200 * MS,
+            send(1, Command::Bed(BedCommand::Blower { volts: 5.0 })),
+        ),
+        (
+            205 * MS,
+            send(2, Command::Bed(BedCommand::Shaker { duty: 0.5 })),
+        ),
+        (
+            210 * MS,
+            send(3, Command::Bed(BedCommand::Lift(LiftMove::Up))),
+        ),
+    ]
 }
 
 /// The trace row at virtual time `t` (the first at or after it).

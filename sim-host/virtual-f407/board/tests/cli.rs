@@ -1,0 +1,63 @@
+//! The `virtual-f407` program's arguments: every bad one exits 2 with what was wrong and what
+//! is allowed, never a panic (101).
+
+use std::process::Command;
+
+/// Run the program with `args`; its exit status and standard error.
+fn run(args: &[&str]) -> (Option<i32>, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_virtual-f407"))
+        .args(args)
+        .output()
+        .expect("the program starts");
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_arguments_exit_2_with_a_message() {
+    let not_elf = std::env::temp_dir().join(format!("virtual-f407-cli-{}.txt", std::process::id()));
+    std::fs::write(&not_elf, "not an ELF").unwrap();
+    let not_elf = not_elf.to_str().unwrap().to_string();
+    for (args, says) in [
+        (vec!["--ms", "5"], "--elf ELF is required"),
+        (vec!["--elf", &not_elf], "give --ms N"),
+        (vec!["--elf", &not_elf, "--ms", "x"], "--ms: a whole number"),
+        (vec!["--elf", &not_elf, "--ms", "0"], "1 to"),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--pace", "1e-300"],
+            "0.001 to 1000",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--pace", "NaN"],
+            "0.001 to 1000",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--surface-p", "NaN"],
+            "a finite number",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--p0", "x"],
+            "--p0: metres",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--bed", "wet"],
+            "allowed ready, unwired",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--frobnicate"],
+            "unknown argument",
+        ),
+        (vec!["--elf", &not_elf, "--ms", "5"], "virtual-f407:"),
+        (
+            vec!["--elf", "/nonexistent/fw.elf", "--ms", "5"],
+            "virtual-f407:",
+        ),
+    ] {
+        let (code, err) = run(&args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_file(&not_elf);
+}
