@@ -233,11 +233,38 @@ pub struct Parts {
     pub usb: stm32f4xx_hal::otg_fs::USB,
 }
 
-/// Wait-loop iterations for the crystal before giving up: at the 16 MHz HSI, 3-8 cycles each,
-/// 0.08-0.2 s, a hundred times an 8 MHz crystal's usual start-up (1-2 ms), and inside the
+/// How long the start-up waits for the crystal, in core cycles: 0.1 s at the 16 MHz HSI the
+/// part runs on then, 50-100 times an 8 MHz crystal's usual start-up (1-2 ms), and inside the
 /// watchdog's shortest first window (0.35 s at the fastest LSI), so the report comes before the
-/// watchdog's reset would.
-pub const HSE_STARTUP_SPINS: u32 = 400_000;
+/// watchdog's reset would. Counted by the DWT's cycle counter, not by loop turns: a turn's
+/// cost depends on the flash wait states, the prefetch and the compiler's unrolling.
+pub const HSE_STARTUP_CYCLES: u32 = 1_600_000;
+
+/// How long the start-up waits for an option-byte write, in core cycles: 0.2 s at the 16 MHz
+/// HSI, 12 times the write's ~16 ms, inside the watchdog's shortest first window (0.35 s).
+pub const OPTION_WRITE_CYCLES: u32 = 3_200_000;
+
+/// Waits until `ready` or `cycles` core cycles have passed (the DWT's cycle counter, started
+/// here if it is not running); whether `ready` came.
+fn wait_for(cycles: u32, mut ready: impl FnMut() -> bool) -> bool {
+    // SAFETY: DEMCR's TRCENA and DWT_CTRL's CYCCNTENA set (read-modify-write): they only let
+    // the cycle counter run, which the tick's timing also reads.
+    unsafe {
+        let dcb = &*cortex_m::peripheral::DCB::PTR;
+        dcb.demcr.modify(|r| r | (1 << 24));
+        let dwt = &*cortex_m::peripheral::DWT::PTR;
+        dwt.ctrl.modify(|r| r | 1);
+    }
+    let start = cortex_m::peripheral::DWT::cycle_count();
+    loop {
+        if ready() {
+            return true;
+        }
+        if cortex_m::peripheral::DWT::cycle_count().wrapping_sub(start) >= cycles {
+            return false;
+        }
+    }
+}
 
 /// Starts the crystal oscillator and waits for it with a bound. The HAL's clock setup waits for
 /// HSE and PLL ready with none: a board whose crystal does not start would hang there forever,
@@ -248,15 +275,8 @@ fn start_crystal() -> bool {
     unsafe {
         let rcc = &*pac::RCC::ptr();
         rcc.cr().modify(|_, w| w.hseon().set_bit());
-        let mut spins: u32 = 0;
-        while rcc.cr().read().hserdy().bit_is_clear() {
-            spins += 1;
-            if spins >= HSE_STARTUP_SPINS {
-                return false;
-            }
-        }
+        wait_for(HSE_STARTUP_CYCLES, || rcc.cr().read().hserdy().bit_is_set())
     }
-    true
 }
 
 /// The chip's 96-bit unique ID (RM0090 39.1) as 24 hex digits: the USB serial number, so two
@@ -302,18 +322,15 @@ fn ensure_brown_out_reset() {
             .optcr()
             .modify(|r, w| w.bits((r.bits() & !(0b11 << 2)) | (BOR_LEVEL_2 << 2)));
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b10)); // OPTSTRT
-        // 0.08-0.2 s at the 16 MHz HSI (3-8 cycles a spin), 5-12x an option-byte write's
-        // ~16 ms, and inside the early watchdog's shortest window (0.35 s), so a write that
-        // never ends is reported instead of reset silently over and over.
-        const OPTION_WRITE_SPINS: u32 = 400_000;
-        let mut spins: u32 = 0;
-        while flash.sr().read().bsy().bit_is_set() && spins < OPTION_WRITE_SPINS {
-            spins += 1;
-        }
+        // Bounded inside the early watchdog's shortest window: a write that never ends is
+        // reported instead of reset silently over and over.
+        let written = wait_for(OPTION_WRITE_CYCLES, || {
+            flash.sr().read().bsy().bit_is_clear()
+        });
         flash.optcr().modify(|r, w| w.bits(r.bits() | 0b01)); // OPTLOCK
         // OPERR, WRPERR, PGAERR, PGPERR, PGSERR (RM0090 3.9.5): the level did not take.
         let errors = flash.sr().read().bits() & 0xF2;
-        if errors != 0 || spins >= OPTION_WRITE_SPINS {
+        if errors != 0 || !written {
             defmt::warn!(
                 "option bytes: the brown-out level was not programmed (FLASH_SR {=u32:#x}); the board runs with BOR off",
                 errors

@@ -11,6 +11,7 @@ use rigless::device::{ErasedDevice, ResetCause};
 use rigless::machine::{Board, Target, armv7m};
 use rigless::mcu::{Mcu, Operate};
 use rigless::soc::stm32f427::Stm32f427;
+use rigless::soc::stm32f427::generated::flash::{Register as FlashRegister, sr as flash_sr};
 use rigless::soc::stm32f427::generated::rcc::{Register as RccRegister, cir, cr};
 use rigless::soc::stm32f427::peripherals::rcc::Apb;
 use rigless::soc::{Bus, Window};
@@ -37,6 +38,7 @@ pub const NMI_INPUT: u16 = rigless::emulator::INTERRUPT_LINES - 1;
 #[derive(Debug, Clone, Copy)]
 struct Slots {
     rcc: usize,
+    flash: usize,
     tim7: usize,
     dac: usize,
     otg_global: usize,
@@ -60,6 +62,9 @@ pub struct F407 {
     /// The crystal oscillates: fitted (`hse_hz > 0`) and not stopped ([`F407::stop_crystal`]).
     /// While it does not, the HSE never reads ready, whatever rigless's RCC schedules.
     crystal_runs: bool,
+    /// The flash interface never finishes a write (`FLASH_SR.BSY` stays set): a part whose
+    /// option bytes cannot be programmed, say.
+    pub flash_stuck_busy: bool,
     slots: Slots,
 }
 
@@ -81,6 +86,7 @@ impl F407 {
         let bus = part.bus();
         let slots = Slots {
             rcc: bus.slot("RCC")?,
+            flash: bus.slot("FLASH")?,
             tim7: bus.slot("TIM7")?,
             dac: bus.slot("DAC")?,
             otg_global: bus.slot("OTG_FS_GLOBAL")?,
@@ -95,6 +101,7 @@ impl F407 {
             dac: Dac::default(),
             otg: OtgFs::default(),
             crystal_runs: hse_hz > 0,
+            flash_stuck_busy: false,
             slots,
         })
     }
@@ -111,10 +118,13 @@ impl F407 {
     /// whether the part noticed, i.e. whether the NMI is due.
     pub fn stop_crystal(&mut self, at: VirtualNanos) -> bool {
         self.crystal_runs = false;
-        self.part.drive_clocks(at, |rcc, registers, context| {
+        let noticed = self.part.drive_clocks(at, |rcc, registers, context| {
             rcc.fail_hse(registers, context);
             cir::CSSF.is_set(registers.get(RccRegister::Cir))
-        })
+        });
+        // No frequency from the pin from now on either: a PLL set up on it gets no clock.
+        self.part.rcc.attach_crystals(0, 0);
+        noticed
     }
 
     /// Whether the system clock comes from the crystal: `SWS` on the HSE, or on the PLL with
@@ -158,6 +168,11 @@ impl Mcu for F407 {
         let s = self.slots;
         if slot == s.rcc && !self.crystal_runs {
             self.hold_the_crystal_down();
+        }
+        if slot == s.flash && self.flash_stuck_busy {
+            let (_, registers) = self.part.program();
+            let sr = registers.get(FlashRegister::Sr);
+            registers.set(FlashRegister::Sr, flash_sr::BSY.set(sr, 1));
         }
         let block = if slot == s.tim7 {
             let (rcc, regs) = self.part.clocks();

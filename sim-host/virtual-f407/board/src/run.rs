@@ -131,6 +131,8 @@ pub struct RunConfig {
     /// The drive's power stage is on (false: the bring-up's first steps, the drive's input
     /// wired but its output off: the carriage does not follow the force).
     pub drive_powered: bool,
+    /// The flash interface never finishes a write ([`crate::board::F407::flash_stuck_busy`]).
+    pub flash_stuck_busy: bool,
 }
 
 impl RunConfig {
@@ -149,6 +151,7 @@ impl RunConfig {
             crystal_hz: crate::board::HSE_HZ,
             supply_mv: crate::board::SUPPLY_MV,
             drive_powered: true,
+            flash_stuck_busy: false,
         }
     }
 }
@@ -561,6 +564,7 @@ pub fn run<H: HostPort + Send + 'static>(
     let mut board =
         VirtualF407::with_crystal(cfg.crystal_hz).map_err(|e| format!("the virtual board: {e}"))?;
     board.mcu.part.set_supply(cfg.supply_mv);
+    board.mcu.flash_stuck_busy = cfg.flash_stuck_busy;
     let session = Session::new(Box::new(board), 0, VirtualNanos(cfg.period_ns))
         .map_err(|e| format!("the emulator session: {e}"))?;
     let mut actions = cfg.actions;

@@ -435,6 +435,38 @@ fn a_crystal_that_does_not_start_is_reported_and_nothing_runs() {
     );
 }
 
+/// A part whose option-byte write never ends (`FLASH_SR.BSY` stuck): the first boot's
+/// brown-out programming gives up after its bound (0.2 s at the HSI, inside the early
+/// watchdog's shortest window), says so, and the board starts anyway, with no watchdog reset.
+/// (The binary before bounded its wait by 16 M loop turns, 4-5 s on silicon, past the
+/// watchdog: reset over and over without a word. The virtual board, at 4 ns an instruction,
+/// runs those turns faster than the watchdog, so this shows the bound, not the old failure.)
+#[test]
+fn an_option_byte_write_that_never_ends_is_reported_and_the_board_starts() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(1_000_000_000);
+    cfg.flash_stuck_busy = true;
+    let (r, _) = run(cfg, NoHost::default()).expect("the run");
+    assert!(
+        r.log
+            .iter()
+            .any(|l| l.contains("the brown-out level was not programmed")),
+        "{:?}",
+        r.log
+    );
+    assert!(
+        r.log
+            .iter()
+            .any(|l| l.contains("sandjumper firmware: STM32F407")),
+        "the board did not start: {:?}",
+        r.log
+    );
+    assert!(r.resets.is_empty(), "reset: {:?}", r.resets);
+}
+
 /// Issue 38 item 5: a probe that put RTT in blocking mode and stopped reading never stalls the
 /// tick, while the host sends bursts of small commands, more than the firmware's inbound queue
 /// holds (frames dropped, counted). A regression bound, not the fix's test: the binary whose link

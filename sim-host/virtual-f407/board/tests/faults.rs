@@ -223,7 +223,7 @@ fn a_crystal_that_stops_while_armed_is_caught_by_the_clock_security_system() {
     ) else {
         return;
     };
-    safe_within(&r, FAULT_AT, 300_000, "crystal stopped");
+    safe_within(&r, FAULT_AT, 100_000, "crystal stopped");
     assert!(
         r.log.iter().any(|l| l.contains("clock security")),
         "{:?}",
