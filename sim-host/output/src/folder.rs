@@ -5,6 +5,8 @@
 //! every file into [`StagedDir::path`]; [`StagedDir::commit`] renames it onto the target. If
 //! the program fails or is interrupted first, the target is untouched and the staging
 //! directory is removed (on error) or left under its `.partial-` name, never as if complete.
+//! The next run into the same target names such a leftover of a killed run
+//! ([`unfinished_beside`]: its marker gives the process and the machine) and leaves it.
 //!
 //! An existing target is replaced only if it is empty or was itself written by sandjumper
 //! (it holds the [`MARKER_FILE`]); any other non-empty directory is refused, so a mistyped
@@ -121,13 +123,27 @@ impl StagedDir {
             action: "create the output directory".into(),
             reason: format!("its parent `{}` cannot be created: {e}", parent.display()),
         })?;
+        // Nothing lost silently: the partial output of an earlier run into this target that was
+        // killed (no chance to clean up) is named, and left as it is.
+        for unfinished in unfinished_beside(target) {
+            eprintln!(
+                "note: {} is the partial output of an earlier run into {} whose process is gone \
+                 (killed?); it is left as it is: look inside, or remove it",
+                unfinished.display(),
+                target.display()
+            );
+        }
         let staging = tempfile::Builder::new()
             .prefix(&format!(".{name}.partial-"))
             .tempdir_in(&parent)
             .map_err(|e| OutputError::io(target, "write the output directory", &e))?;
         fs::write(
             staging.path().join(MARKER_FILE),
-            "written by the sandjumper CLI\n",
+            format!(
+                "written by the sandjumper CLI (process {} on {})\n",
+                std::process::id(),
+                this_host()
+            ),
         )
         .map_err(|e| OutputError::io(target, "write the output directory", &e))?;
         Ok(Self {
@@ -199,6 +215,64 @@ impl StagedDir {
         }
         Ok(target)
     }
+}
+
+/// This machine's name (`/proc/sys/kernel/hostname`), or `unknown`.
+fn this_host() -> String {
+    fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|h| h.trim().to_string())
+        .ok()
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The staging directories beside `target` (`.<name>.partial-*`) of earlier runs on this
+/// machine whose process is gone: a run killed before it could commit or clean up (a Slurm
+/// job past its time, `kill -9`). A staging directory of a live process, of another machine
+/// (a cluster's shared filesystem) or of unknown origin is not one of them.
+pub fn unfinished_beside(target: &Path) -> Vec<PathBuf> {
+    let (Some(parent), Some(name)) = (target.parent(), target.file_name()) else {
+        return Vec::new();
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let prefix = format!(".{}.partial-", name.to_string_lossy());
+    let host = this_host();
+    let Ok(entries) = fs::read_dir(parent) else {
+        return Vec::new();
+    };
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .map(|n| n.to_string_lossy())
+                .is_some_and(|n| n.starts_with(&prefix) && !n.ends_with(".old"))
+        })
+        .filter(|p| {
+            let Ok(marker) = fs::read_to_string(p.join(MARKER_FILE)) else {
+                return false;
+            };
+            // "... (process PID on HOST)"
+            let Some(rest) = marker.split("(process ").nth(1) else {
+                return false;
+            };
+            let mut words = rest.trim_end().trim_end_matches(')').split(" on ");
+            let (Some(pid), Some(on)) = (words.next(), words.next()) else {
+                return false;
+            };
+            on == host
+                && host != "unknown"
+                && pid.parse::<u32>().is_ok()
+                && Path::new("/proc/self").exists()
+                && !Path::new("/proc").join(pid).exists()
+        })
+        .collect();
+    found.sort();
+    found
 }
 
 /// Write records (with a header, even when there are none) as CSV to `path`.
@@ -294,6 +368,41 @@ mod tests {
         }
         let bad = write_npy(&dir.path().join("b.npy"), &[2, 2], vec![1.0; 3]).unwrap_err();
         assert!(bad.contains("holds 4 values, not 3"), "{bad}");
+    }
+
+    #[test]
+    fn the_partial_output_of_a_killed_run_is_found_and_a_live_ones_is_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("jump");
+        let host = this_host();
+        let partial = |suffix: &str, pid: u64, on: &str| {
+            let p = dir.path().join(format!(".jump.partial-{suffix}"));
+            fs::create_dir(&p).unwrap();
+            fs::write(
+                p.join(MARKER_FILE),
+                format!("written by the sandjumper CLI (process {pid} on {on})\n"),
+            )
+            .unwrap();
+            p
+        };
+        // Above any pid_max (2^22): a process that cannot be running.
+        let killed = partial("aaaaaa", 99_999_999, &host);
+        partial("bbbbbb", u64::from(std::process::id()), &host); // this one: alive
+        partial("cccccc", 99_999_999, "another-node"); // a shared filesystem's other machine
+        fs::create_dir(dir.path().join(".jump.partial-dddddd")).unwrap(); // no marker
+        partial("eeeeee", 99_999_999, &host); // of another target
+        fs::rename(
+            dir.path().join(".jump.partial-eeeeee"),
+            dir.path().join(".other.partial-eeeeee"),
+        )
+        .unwrap();
+        assert_eq!(unfinished_beside(&target), vec![killed.clone()]);
+        // A run into the target names it and leaves it; its own staging directory is not one.
+        let staged = StagedDir::create(&target).unwrap();
+        assert!(killed.is_dir());
+        assert_eq!(unfinished_beside(&target), vec![killed.clone()]);
+        staged.commit().unwrap();
+        assert!(killed.is_dir());
     }
 
     #[test]
