@@ -352,6 +352,9 @@ impl PositionController {
 mod tests {
     use super::*;
 
+    use crate::profile::Setpoint;
+    use proptest::prelude::*;
+
     #[test]
     fn the_symmetric_clamp_limits_and_never_panics() {
         assert_eq!(clamp_symmetric(5.0, 2.0), 2.0);
@@ -362,8 +365,6 @@ mod tests {
         assert_eq!(clamp_symmetric(1.0, f32::NAN), 1.0);
         assert_eq!(clamp_symmetric(0.5, -1.0), -1.0);
     }
-    use crate::profile::Setpoint;
-    use proptest::prelude::*;
 
     fn sp(p: f32) -> Setpoint {
         Setpoint {

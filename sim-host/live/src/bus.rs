@@ -130,8 +130,8 @@ pub struct LiveBus {
     bin_start: f64,
     bin: Vec<(f64, f64, f64, f64)>,
     bin_samples: u64,
-    /// The rig times of the bin's first and last samples, s.
-    bin_span: (f64, f64),
+    /// The rig time of the bin's last sample, s (its first is `bin_start`).
+    bin_last: f64,
     /// The batch being filled.
     batch: Batch,
     batch_start: f64,
@@ -160,7 +160,7 @@ pub fn channel(channels: &[&str]) -> (LiveBus, LiveFeed) {
             bin_start: f64::NAN,
             bin: vec![(f64::NAN, f64::NAN, f64::NAN, f64::NAN); n],
             bin_samples: 0,
-            bin_span: (f64::NAN, f64::NAN),
+            bin_last: f64::NAN,
             batch: Batch {
                 t_s: Vec::new(),
                 columns: vec![Vec::new(); n],
@@ -200,7 +200,6 @@ impl LiveBus {
             self.close_bin();
             self.flush();
             self.batch_start = t_s;
-            self.bin_start = f64::NAN;
         }
         if !(t_s >= self.bin_start && t_s < self.bin_start + BIN_S) {
             self.close_bin();
@@ -221,10 +220,7 @@ impl LiveBus {
                 slot.3 = t_s;
             }
         }
-        if self.bin_samples == 0 {
-            self.bin_span.0 = t_s;
-        }
-        self.bin_span.1 = t_s;
+        self.bin_last = t_s;
         self.bin_samples += 1;
     }
 
@@ -267,7 +263,7 @@ impl LiveBus {
         if self.bin_samples == 0 {
             return;
         }
-        let (t0, t1) = self.bin_span;
+        let (t0, t1) = (self.bin_start, self.bin_last);
         let one = t1 <= t0;
         self.batch.t_s.push(t0);
         if !one {
@@ -287,6 +283,8 @@ impl LiveBus {
         }
         self.batch.samples += self.bin_samples;
         self.bin_samples = 0;
+        // The next sample opens a bin of its own (after a flush, too).
+        self.bin_start = f64::NAN;
     }
 
     fn flush(&mut self) {

@@ -240,7 +240,11 @@ pub fn unfinished_beside(target: &Path) -> Vec<PathBuf> {
         parent
     };
     let prefix = format!(".{}.partial-", name.to_string_lossy());
+    // Whose process is gone can be told only on a known machine with a process table.
     let host = this_host();
+    if host == "unknown" || !Path::new("/proc/self").exists() {
+        return Vec::new();
+    }
     let Ok(entries) = fs::read_dir(parent) else {
         return Vec::new();
     };
@@ -264,11 +268,7 @@ pub fn unfinished_beside(target: &Path) -> Vec<PathBuf> {
             let (Some(pid), Some(on)) = (words.next(), words.next()) else {
                 return false;
             };
-            on == host
-                && host != "unknown"
-                && pid.parse::<u32>().is_ok()
-                && Path::new("/proc/self").exists()
-                && !Path::new("/proc").join(pid).exists()
+            on == host && pid.parse::<u32>().is_ok() && !Path::new("/proc").join(pid).exists()
         })
         .collect();
     found.sort();
