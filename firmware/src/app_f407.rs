@@ -25,7 +25,7 @@
 //! Hardware-in-the-loop on the real board: the first `HostMessage::Sensor` frame switches the
 //! tick to lockstep (one core tick per sensor frame, the actuator frame sent back) until reset;
 //! the real drive stays disabled at zero force and the real bed apparatus off in that mode, and
-//! the real emergency stop still stops (it is OR-ed into the frame's bed inputs). The core restarts its encoder
+//! the real emergency stop still stops (its loop reaches the core every tick in every mode). The core restarts its encoder
 //! extension on entry (the host's count replaces TIM2's) and latches `LinkLost` when sensor
 //! frames stop for [`LOCKSTEP_TIMEOUT_TICKS`] timer ticks.
 //!
@@ -119,6 +119,8 @@ mod app {
             deadline_cycles: board::TICK_BUDGET_CYCLES,
             tick_period_cycles: board::TICK_PERIOD_CYCLES,
             lockstep_timeout_ticks: LOCKSTEP_TIMEOUT_TICKS,
+            // PE14, read every tick: `Arm` waits for the loop to read closed.
+            emergency_stop_input: true,
             ..RigConfig::default()
         };
         let mut rig = match Rig::new(config) {
@@ -204,6 +206,8 @@ mod app {
         // The sensors first, at a fixed time after the tick starts, whatever the host sent.
         let encoder_raw = io.encoder_count();
         let current_code = io.current_sense_code();
+        // The emergency stop every tick, whatever else is connected (lockstep included).
+        rig.set_emergency_stop_loop(io.emergency_stop_open());
         let real_bed = io.bed_inputs();
         if let Some(bed) = real_bed {
             rig.set_bed_inputs(bed);
@@ -229,8 +233,9 @@ mod app {
                     {
                         *lockstep = true;
                         rig.note_frame_ok();
-                        // The simulated bed stands in for the real one, except the real
-                        // emergency stop, which still stops.
+                        // The simulated bed stands in for the real one, except a real
+                        // harness pulled out, which still stops (the real emergency stop's
+                        // loop reaches the core above, in every mode).
                         if let Some(real) = real_bed {
                             let mut bed = frame.bed.unwrap_or(real);
                             bed.emergency_stop |= real.emergency_stop;

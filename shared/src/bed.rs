@@ -192,6 +192,11 @@ impl BedApparatus {
         self.tripped
     }
 
+    /// Any actuator is on: the lift moving, the shaker or the blower running.
+    pub fn any_on(&self) -> bool {
+        self.out.lift_enable || self.out.blower_v != 0.0 || self.out.shaker_duty != 0.0
+    }
+
     /// The emergency stop is pressed (as last read).
     pub fn emergency_stop(&self) -> bool {
         self.inputs.emergency_stop

@@ -2,6 +2,7 @@
 
 use crate::bed::{BedCommand, BedError};
 use crate::drive_calibration::{CalibrationError, DriveCalibration};
+use crate::emergency_stop::EmergencyStopError;
 use crate::reset::ResetCause;
 use core::fmt;
 
@@ -128,6 +129,9 @@ pub enum CommandError {
     InvalidCalibration(CalibrationError),
     /// A bed interlock refused the command (or `Arm`).
     Interlock(BedError),
+    /// The board's emergency-stop loop refused `Arm` (or a bed command that switches
+    /// something on).
+    EmergencyStop(EmergencyStopError),
 }
 
 impl fmt::Display for CommandError {
@@ -146,6 +150,7 @@ impl fmt::Display for CommandError {
             ),
             Self::InvalidCalibration(e) => write!(f, "drive calibration refused: {e}"),
             Self::Interlock(e) => write!(f, "bed interlock: {e}"),
+            Self::EmergencyStop(e) => write!(f, "{e}"),
         }
     }
 }
@@ -173,6 +178,38 @@ pub enum Rejection {
     InvalidCalibration(CalibrationError),
     /// See [`CommandError::Interlock`].
     Interlock(BedError),
+    /// See [`CommandError::EmergencyStop`].
+    EmergencyStop(EmergencyStopError),
+}
+
+impl fmt::Display for Rejection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::IllegalInState { command, state } => {
+                write!(f, "{command:?} is not allowed in state {state:?}")
+            }
+            Self::NotConfigured => write!(f, "no jump configured (send Configure first)"),
+            Self::InvalidConfiguration => write!(
+                f,
+                "invalid configuration (the InvalidConfiguration fault is latched)"
+            ),
+            Self::Replay {
+                actual_checksum: Some(c),
+            } => write!(
+                f,
+                "replay upload: checksum mismatch (the table's is {c:#010x})"
+            ),
+            Self::Replay {
+                actual_checksum: None,
+            } => write!(f, "replay upload refused"),
+            Self::ResetNotAcknowledged { cause } => {
+                write!(f, "{}", CommandError::ResetNotAcknowledged { cause })
+            }
+            Self::InvalidCalibration(e) => write!(f, "drive calibration refused: {e}"),
+            Self::Interlock(e) => write!(f, "bed interlock: {e}"),
+            Self::EmergencyStop(e) => write!(f, "{e}"),
+        }
+    }
 }
 
 impl From<&CommandError> for Rejection {
@@ -192,6 +229,7 @@ impl From<&CommandError> for Rejection {
             CommandError::ResetNotAcknowledged { cause } => Self::ResetNotAcknowledged { cause },
             CommandError::InvalidCalibration(e) => Self::InvalidCalibration(e),
             CommandError::Interlock(e) => Self::Interlock(e),
+            CommandError::EmergencyStop(e) => Self::EmergencyStop(e),
         }
     }
 }

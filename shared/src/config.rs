@@ -29,6 +29,14 @@ pub struct RigConfig {
     pub stroke_limit_m: f32,
     /// Host-link watchdog while the drive is enabled, ms (default 500; 0 disables).
     pub watchdog_ms: u32,
+    /// Host-link watchdog of the bed apparatus's actuators (lift, shaker, blower), ms: while any
+    /// of them is on, a host silent this long latches `BedWatchdog` (everything off), in every
+    /// state of the rig (default 500; 1..=60,000: it cannot be disabled).
+    pub bed_watchdog_ms: u32,
+    /// The board reads an emergency-stop loop of its own every tick
+    /// ([`crate::Rig::set_emergency_stop_loop`]): `Arm` is refused until it has read closed
+    /// since reset (see [`crate::emergency_stop`]). Default false (the simulated rigs, QEMU).
+    pub emergency_stop_input: bool,
     /// Tick deadline in cycles of the glue's cycle counter (0: only the glue's overrun flag).
     pub deadline_cycles: u32,
     /// Cut-off of the velocity estimate's first-order low-pass, Hz (default 2000). The
@@ -57,6 +65,8 @@ impl Default for RigConfig {
             drive_limit_n: 300.0,
             stroke_limit_m: 0.0255,
             watchdog_ms: 500,
+            bed_watchdog_ms: 500,
+            emergency_stop_input: false,
             deadline_cycles: 0,
             velocity_cutoff_hz: 2000.0,
             corrupted_frame_limit: 10,
@@ -106,11 +116,23 @@ impl RigConfig {
             "0 < f_c < tick_hz / 2",
         )?;
         field(
+            "bed_watchdog_ms",
+            self.bed_watchdog_ms as f32,
+            (1..=60_000).contains(&self.bed_watchdog_ms),
+            "1..=60000 ms",
+        )?;
+        field(
             "lockstep_timeout_ticks",
             self.lockstep_timeout_ticks as f32,
             (1..=self.tick_hz).contains(&self.lockstep_timeout_ticks),
             "1..=tick_hz ticks (at most 1 s)",
         )
+    }
+
+    /// The bed apparatus's host watchdog in ticks (at least 1).
+    pub fn bed_watchdog_ticks(&self) -> u32 {
+        ((self.bed_watchdog_ms as u64 * self.tick_hz as u64) / 1000).clamp(1, u32::MAX as u64)
+            as u32
     }
 
     /// Watchdog length in ticks (0 = disabled).

@@ -10,6 +10,8 @@
 //! | 6 | `InvalidConfiguration` | a jump configuration failed validation, or a replay jump is armed after its table was re-uploaded | `ClearFault` |
 //! | 7 | `LinkCorrupted` | too many consecutive corrupted frames on the host link | `ClearFault` |
 //! | 8 | `LinkLost` | lockstep sensor frames stopped (`Rig::lockstep_silent_period`), or the link closed mid-run | `ClearFault` |
+//! | 9 | `EmergencyStop` | the emergency-stop loop opened after reading closed, or the bed apparatus reported its stop (or its harness lost) | `ClearFault`, with the stop released |
+//! | 10 | `BedWatchdog` | host link silent longer than the bed watchdog while the lift, the shaker or the blower is on, in any state | `ClearFault` |
 //!
 //! Any fault: force command exactly zero from the faulting tick on, drive disabled, state
 //! `Faulted`; only the first fault is latched (later ones are counted, not reported over it).
@@ -37,13 +39,15 @@ pub enum FaultCode {
     LinkCorrupted = 7,
     /// Lockstep sensor frames stopped arriving (raised by the glue).
     LinkLost = 8,
-    /// The emergency stop was pressed (the bed apparatus's input).
+    /// The emergency stop was pressed (its loop opened, or the bed apparatus reported it).
     EmergencyStop = 9,
+    /// No host traffic for longer than the bed watchdog while a bed actuator was on.
+    BedWatchdog = 10,
 }
 
 impl FaultCode {
     /// Every code, in table order.
-    pub const ALL: [FaultCode; 9] = [
+    pub const ALL: [FaultCode; 10] = [
         Self::StrokeLimit,
         Self::TrackingError,
         Self::EncoderFault,
@@ -53,6 +57,7 @@ impl FaultCode {
         Self::LinkCorrupted,
         Self::LinkLost,
         Self::EmergencyStop,
+        Self::BedWatchdog,
     ];
 
     /// The stable number.
@@ -77,6 +82,7 @@ impl FaultCode {
             Self::LinkCorrupted => "link_corrupted",
             Self::LinkLost => "link_lost",
             Self::EmergencyStop => "emergency_stop",
+            Self::BedWatchdog => "bed_watchdog",
         }
     }
 }
@@ -93,12 +99,12 @@ mod tests {
 
     #[test]
     fn codes_are_stable_and_round_trip() {
-        let numbers: [u8; 9] = FaultCode::ALL.map(FaultCode::code);
-        assert_eq!(numbers, [1, 2, 3, 4, 5, 6, 7, 8, 9]);
+        let numbers: [u8; 10] = FaultCode::ALL.map(FaultCode::code);
+        assert_eq!(numbers, [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]);
         for f in FaultCode::ALL {
             assert_eq!(FaultCode::from_code(f.code()), Some(f));
         }
         assert_eq!(FaultCode::from_code(0), None);
-        assert_eq!(FaultCode::from_code(10), None);
+        assert_eq!(FaultCode::from_code(11), None);
     }
 }

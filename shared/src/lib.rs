@@ -15,6 +15,7 @@
 //! * [`encoder`], [`camera`], [`sample`]: acquisition.
 //! * [`fault`]: the fault-code table; [`rig`]: the state machine and control loop.
 //! * [`bed`]: the bed apparatus (blower, shaker, lift) and its interlocks.
+//! * [`emergency_stop`]: the board's own emergency-stop loop.
 //! * [`config`], [`command`], [`protocol`]: configuration, commands, wire format.
 #![no_std]
 
@@ -29,6 +30,7 @@ pub mod config;
 pub mod config_error;
 pub mod controller;
 pub mod drive_calibration;
+pub mod emergency_stop;
 pub mod encoder;
 pub mod fault;
 pub mod intrusion;

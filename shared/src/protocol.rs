@@ -21,7 +21,7 @@ use crate::sample::SampleRecord;
 use crate::status::{RigState, Status};
 
 /// Protocol version carried in every frame; bump on any change to the message set.
-pub const PROTOCOL_VERSION: u8 = 3;
+pub const PROTOCOL_VERSION: u8 = 4;
 /// Largest unencoded frame body (version + postcard payload + CRC), bytes.
 pub const MAX_BODY: usize = 1024;
 /// Largest frame on the wire (COBS overhead and the 0x00 delimiter included), bytes.

@@ -14,7 +14,10 @@
 //! The bed apparatus ([`crate::bed`]) rides along: its inputs arrive with
 //! [`Rig::set_bed_inputs`], its commands as [`Command::Bed`] in any state; `Arm` needs its
 //! interlock; the emergency stop latches [`FaultCode::EmergencyStop`], and any latched fault
-//! turns the apparatus off.
+//! turns the apparatus off. A board with an emergency-stop loop of its own reports it every
+//! tick ([`Rig::set_emergency_stop_loop`], see [`crate::emergency_stop`]): `Arm` waits for it
+//! to read closed. The host's silence is watched in every state: past the command watchdog
+//! while the drive is enabled, past the bed watchdog while a bed actuator is on.
 //!
 //! Per tick, in order: deadline check, encoder extension (and velocity estimate), host-link
 //! watchdog, setpoint, camera trigger, position controller, stroke and tracking checks, sample
@@ -27,6 +30,7 @@ use crate::command::{Command, CommandError, CommandKind, Reply};
 use crate::config::{ConfigError, JumpConfig, RigConfig, Trajectory};
 use crate::controller::{GainScale, GainSchedule, Gains, PositionController, VelocityEstimator};
 use crate::drive_calibration::DriveCalibration;
+use crate::emergency_stop::{EmergencyStopError, EmergencyStopLoop};
 use crate::encoder::EncoderExtender;
 use crate::fault::FaultCode;
 use crate::lockstep::LockstepLink;
@@ -109,6 +113,7 @@ struct TickTarget {
 pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     config: RigConfig,
     watchdog_ticks: u32,
+    bed_watchdog_ticks: u32,
     state: RigState,
     fault: Option<FaultCode>,
     fault_tick: u32,
@@ -139,6 +144,7 @@ pub struct Rig<const Q: usize = DEFAULT_SAMPLE_QUEUE> {
     samples: SampleQueue<Q>,
     counters: Counters,
     bed: BedApparatus,
+    emergency_stop: EmergencyStopLoop,
 }
 
 impl<const Q: usize> Rig<Q> {
@@ -148,6 +154,7 @@ impl<const Q: usize> Rig<Q> {
         Ok(Self {
             config,
             watchdog_ticks: config.watchdog_ticks(),
+            bed_watchdog_ticks: config.bed_watchdog_ticks(),
             state: RigState::Idle,
             fault: None,
             fault_tick: 0,
@@ -182,6 +189,7 @@ impl<const Q: usize> Rig<Q> {
             samples: SampleQueue::new(),
             counters: Counters::default(),
             bed: BedApparatus::new(),
+            emergency_stop: EmergencyStopLoop::new(config.emergency_stop_input),
         })
     }
 
@@ -240,6 +248,7 @@ impl<const Q: usize> Rig<Q> {
             reset_acknowledged: self.reset_acknowledged,
             drive_calibration: self.drive_calibration,
             bed: BedStatus::from(&self.bed),
+            emergency_stop: self.emergency_stop.status(),
         }
     }
 
@@ -247,6 +256,13 @@ impl<const Q: usize> Rig<Q> {
     /// board that has the apparatus).
     pub fn set_bed_inputs(&mut self, inputs: BedInputs) {
         self.bed.read_inputs(inputs);
+    }
+
+    /// This tick's reading of the board's emergency-stop loop (`open`: pressed, broken or not
+    /// wired), on a board with [`RigConfig::emergency_stop_input`]; the glue calls this before
+    /// [`Self::tick`] (or [`Self::lockstep`]) every tick, whatever else is connected.
+    pub fn set_emergency_stop_loop(&mut self, open: bool) {
+        self.emergency_stop.read(open);
     }
 
     /// The bed apparatus.
@@ -293,7 +309,7 @@ impl<const Q: usize> Rig<Q> {
         self.tick = tick.wrapping_add(1);
 
         self.check_timing(input.timing, tick);
-        if self.bed.emergency_stop() {
+        if self.bed.emergency_stop() || self.emergency_stop.tripped() {
             self.fault_at(FaultCode::EmergencyStop, tick);
         }
         let (count, position_m) = self.read_encoder(input.encoder_raw, tick);
@@ -375,14 +391,20 @@ impl<const Q: usize> Rig<Q> {
         (count, count_i32 as f32 * self.config.metres_per_count)
     }
 
-    /// While the drive is enabled, a host that stays silent past the command watchdog
-    /// latches [`FaultCode::CommandWatchdog`].
+    /// The host's silence is counted in every state. While the drive is enabled, a host silent
+    /// past the command watchdog latches [`FaultCode::CommandWatchdog`]; while a bed actuator
+    /// is on (lift, shaker, blower), in any state, past the bed watchdog
+    /// [`FaultCode::BedWatchdog`] (the latched fault turns the apparatus off this tick).
     fn watch_host(&mut self, tick: u32) {
-        if self.state.drive_enabled() {
-            self.ticks_since_host = self.ticks_since_host.saturating_add(1);
-            if self.watchdog_ticks > 0 && self.ticks_since_host > self.watchdog_ticks {
-                self.fault_at(FaultCode::CommandWatchdog, tick);
-            }
+        self.ticks_since_host = self.ticks_since_host.saturating_add(1);
+        if self.state.drive_enabled()
+            && self.watchdog_ticks > 0
+            && self.ticks_since_host > self.watchdog_ticks
+        {
+            self.fault_at(FaultCode::CommandWatchdog, tick);
+        }
+        if self.bed.any_on() && self.ticks_since_host > self.bed_watchdog_ticks {
+            self.fault_at(FaultCode::BedWatchdog, tick);
         }
     }
 
@@ -661,6 +683,9 @@ impl<const Q: usize> Rig<Q> {
                         cause: self.reset_cause,
                     });
                 }
+                self.emergency_stop
+                    .check()
+                    .map_err(CommandError::EmergencyStop)?;
                 let Some(j) = self.jump else {
                     return Err(CommandError::NotConfigured);
                 };
@@ -716,6 +741,11 @@ impl<const Q: usize> Rig<Q> {
                 Ok(Reply::Ack)
             }
             (Command::Bed(c), state) => {
+                if !c.is_off() {
+                    self.emergency_stop
+                        .check()
+                        .map_err(CommandError::EmergencyStop)?;
+                }
                 self.bed
                     .command(c, matches!(state, Armed | Running))
                     .map_err(CommandError::Interlock)?;
@@ -726,6 +756,9 @@ impl<const Q: usize> Rig<Q> {
                 Ok(Reply::Ack)
             }
             (Command::ClearFault, Faulted) => {
+                if self.emergency_stop.status().open {
+                    return Err(CommandError::EmergencyStop(EmergencyStopError::Open));
+                }
                 self.bed.clear().map_err(CommandError::Interlock)?;
                 self.fault = None;
                 self.stop_motion();

@@ -89,4 +89,14 @@ pub struct Status {
     pub drive_calibration: DriveCalibration,
     /// The bed apparatus.
     pub bed: crate::bed::BedStatus,
+    /// The board's own emergency-stop loop.
+    pub emergency_stop: crate::emergency_stop::EmergencyStopStatus,
+}
+
+impl Status {
+    /// A stop is pressed now: the board's loop reads open, or the bed apparatus reports its
+    /// stop (or its harness lost).
+    pub fn emergency_stop_pressed(&self) -> bool {
+        self.emergency_stop.open || (self.bed.present && self.bed.inputs.emergency_stop)
+    }
 }

@@ -16,8 +16,8 @@
 //! | shaker motor | PC6, TIM3 CH1 (AF2) | PWM at [`SHAKER_PWM_HZ`], duty = the core's shaker duty |
 //! | lift motor enable / direction | PE10 / PE11, push-pull | enable active high (low on reset, fit a pull-down); direction high = up |
 //! | lift limit switches up / down | PE12 / PE13, inputs with pull-up | switch closes to ground at its limit (low = at the limit) |
-//! | emergency stop | PE14, input with pull-up | normally-closed contact to ground: pressed **or a broken wire** reads high = stop |
-//! | bed apparatus present | PE15, input with pull-up | the apparatus's harness ties it to ground: until it (or a released emergency stop on PE14) has read low once since reset the apparatus is absent (its inputs are not reported and nothing of it can be switched on, so a board with nothing wired is Idle and can be armed); once seen, losing PE15 reads as the emergency stop (a harness pulled out is a stop) |
+//! | emergency stop | PE14, input with pull-up, on its own connector (PE14, GND) | normally-closed contact to ground: pressed, **a broken wire or nothing plugged in** reads high = open. Reported to the core every tick whatever PE15 says ([`RigIo::emergency_stop_open`]): `Arm` is refused until the loop has read closed since reset, and it opening after that latches the emergency stop. With no stop fitted, a jumper plug on its connector closes the loop |
+//! | bed apparatus present | PE15, input with pull-up | the apparatus's harness ties it to ground: until it has read low once since reset the apparatus is absent (its inputs are not reported and nothing of it can be switched on); once seen, losing PE15 reads as a stop (a harness pulled out is a stop) |
 //! | bed height sensor | PA2, ADC2 channel 2 | the laser distance sensor's 0..3.3 V output, raw 12-bit code to the host (sampled at the end of each tick) |
 //! | control tick | TIM7 update interrupt | highest priority, [`TICK_HZ`] |
 //! | watchdog | IWDG, [`WATCHDOG_MS`] | fed by the control tick; keeps counting while the core is halted by a debugger |
@@ -240,6 +240,16 @@ pub struct Parts {
 /// cost depends on the flash wait states, the prefetch and the compiler's unrolling.
 pub const HSE_STARTUP_CYCLES: u32 = 1_600_000;
 
+/// How long the start-up waits for the PLL to lock, in core cycles: 0.02 s at the 16 MHz HSI,
+/// about 100 times its lock time (DS8626 t_LOCK: 50-100 us), inside the early watchdog's
+/// shortest window.
+pub const PLL_LOCK_CYCLES: u32 = 320_000;
+
+/// The PLL's configuration for 168 MHz and 48 MHz from the 8 MHz crystal (RM0090 6.3.2): source
+/// HSE (bit 22), M = 4 (2 MHz at the VCO's input), N = 168 (336 MHz VCO), P = 2 (bits 17:16 =
+/// 0), Q = 7 (48 MHz for USB).
+pub const PLLCFGR_168_48: u32 = 4 | (168 << 6) | (1 << 22) | (7 << 24);
+
 /// How long the start-up waits for an option-byte write, in core cycles: 0.2 s at the 16 MHz
 /// HSI, 12 times the write's ~16 ms, inside the watchdog's shortest first window (0.35 s).
 pub const OPTION_WRITE_CYCLES: u32 = 3_200_000;
@@ -271,11 +281,50 @@ fn wait_for(cycles: u32, mut ready: impl FnMut() -> bool) -> bool {
 /// before the watchdog runs. Returns false if the crystal did not start.
 fn start_crystal() -> bool {
     // SAFETY: RCC_CR's HSEON set and HSERDY read before the HAL owns the RCC; the HAL's freeze
-    // sets HSEON again and finds the oscillator ready.
+    // sets HSEON again and finds the oscillator ready (and the PLL, [`pll_locks`], proven).
     unsafe {
         let rcc = &*pac::RCC::ptr();
         rcc.cr().modify(|_, w| w.hseon().set_bit());
         wait_for(HSE_STARTUP_CYCLES, || rcc.cr().read().hserdy().bit_is_set())
+    }
+}
+
+/// A start-up that cannot go on (no crystal, no PLL): the whole safe state, and the red LED
+/// (PD14) lit so that a board with no probe attached shows it, before the report (a panic; the
+/// watchdog then restarts the chip, which fails again and lights it again).
+fn startup_failed() {
+    force_safe_state();
+    // SAFETY: RCC_AHB1ENR's GPIODEN set (read-modify-write), then PD14 made a push-pull output
+    // and set high through GPIOD's MODER and BSRR, before the HAL owns either.
+    unsafe {
+        (*pac::RCC::ptr())
+            .ahb1enr()
+            .modify(|_, w| w.gpioden().set_bit());
+        cortex_m::asm::dsb();
+        let gpiod = &*pac::GPIOD::ptr();
+        gpiod
+            .moder()
+            .modify(|r, w| w.bits((r.bits() & !(0b11 << 28)) | (0b01 << 28)));
+        gpiod.bsrr().write(|w| w.bits(1 << 14));
+    }
+}
+
+/// Locks the PLL once on the running crystal with a bound, then switches it off again: the
+/// HAL's clock setup, which configures it (`PLLCFGR` may be written only with the PLL off) and
+/// waits for the lock with no bound, then finds a PLL known to lock. Returns false if it did not
+/// lock (the PLL is left off).
+fn pll_locks() -> bool {
+    // SAFETY: RCC_PLLCFGR written with the PLL off, RCC_CR's PLLON set and cleared, PLLRDY read,
+    // before the HAL owns the RCC; the system clock still runs on the HSI throughout.
+    unsafe {
+        let rcc = &*pac::RCC::ptr();
+        rcc.pllcfgr().write(|w| w.bits(PLLCFGR_168_48));
+        rcc.cr().modify(|_, w| w.pllon().set_bit());
+        let locked = wait_for(PLL_LOCK_CYCLES, || rcc.cr().read().pllrdy().bit_is_set());
+        rcc.cr().modify(|_, w| w.pllon().clear_bit());
+        // PLLRDY falls within a few cycles of the VCO's stop; bounded all the same.
+        wait_for(PLL_LOCK_CYCLES, || rcc.cr().read().pllrdy().bit_is_clear());
+        locked
     }
 }
 
@@ -364,8 +413,8 @@ fn feed_early_watchdog() {
 /// here in the safe state with a report (a panic): the board cannot keep time without it.
 pub fn init(dp: pac::Peripherals) -> Parts {
     // The watchdog first, at its reset settings (prescaler /4, reload 0xFFF: 0.35-0.96 s over
-    // the LSI's 17-47 kHz): a hang anywhere in the start-up (the HAL waits for the PLL with no
-    // bound) resets the chip instead of holding it, and the reset cause says so. The 10 ms
+    // the LSI's 17-47 kHz): a hang anywhere in the start-up (the HAL's own waits have no
+    // bound; the crystal's and the PLL's are proven first with one) resets the chip instead of holding it, and the reset cause says so. The 10 ms
     // setting replaces it at the end of `init`.
     // SAFETY: IWDG_KR's start key; nothing else owns the IWDG yet.
     unsafe {
@@ -385,8 +434,16 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     let crystal_started = start_crystal();
     feed_early_watchdog();
     if !crystal_started {
-        force_safe_state();
+        startup_failed();
         defmt::panic!("the 8 MHz crystal (HSE) did not start: check X2 and its load capacitors");
+    }
+    let pll_locked = pll_locks();
+    feed_early_watchdog();
+    if !pll_locked {
+        startup_failed();
+        defmt::panic!(
+            "the PLL did not lock on the 8 MHz crystal within 20 ms: check the supply (VDDA) and the crystal"
+        );
     }
     let mut rcc: Rcc = dp.RCC.freeze(
         Config::hse(HSE_HZ.Hz())
@@ -612,25 +669,30 @@ impl RigIo {
         self.fault_led.set_state(fault.into());
     }
 
-    /// The bed apparatus's inputs (limit switches low at their limit; the emergency stop's
-    /// normally-closed contact reads high when pressed or broken), and starts the next
+    /// The emergency-stop loop reads open (PE14 high: the normally-closed contact pressed, a
+    /// wire broken, or nothing plugged into its connector). Read every tick, whatever the bed
+    /// apparatus's harness says.
+    #[inline(always)]
+    pub fn emergency_stop_open(&self) -> bool {
+        self.emergency_stop.is_high()
+    }
+
+    /// The bed apparatus's inputs (limit switches low at their limit) and starts the next
     /// bed-height conversion. `None` until the apparatus's presence line (PE15) has read low
     /// once since reset: a board with nothing wired has no apparatus. Once seen, a presence
-    /// line that goes high reads as the emergency stop.
+    /// line that goes high reads as the apparatus's stop (`emergency_stop`: a harness pulled
+    /// out is a stop). The emergency stop itself is [`Self::emergency_stop_open`].
     #[inline(always)]
     pub fn bed_inputs(&mut self) -> Option<BedInputs> {
         let present = self.bed_present.is_low();
-        // A wired, released emergency stop (its normally-closed contact to ground) proves the
-        // harness as well: a harness whose presence link is broken then reads as a stop, never
-        // as no apparatus.
-        self.bed_seen |= present || self.emergency_stop.is_low();
+        self.bed_seen |= present;
         if !self.bed_seen {
             return None;
         }
         let inputs = BedInputs {
             lift_up_limit: self.lift_up_limit.is_low(),
             lift_down_limit: self.lift_down_limit.is_low(),
-            emergency_stop: self.emergency_stop.is_high() || !present,
+            emergency_stop: !present,
             height_raw: self.height_adc.read(),
         };
         self.height_adc.start();

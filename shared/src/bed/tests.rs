@@ -1,6 +1,7 @@
 use super::*;
 use crate::command::{Command, CommandError};
 use crate::config::{JumpConfig, RigConfig, TrajectorySpec};
+use crate::emergency_stop::EmergencyStopError;
 use crate::fault::FaultCode;
 use crate::rig::{Rig, RigState, TickInput, TickTiming};
 use crate::trajectory::JumpKind;
@@ -22,7 +23,12 @@ fn input() -> TickInput {
 }
 
 fn configured_rig() -> Rig<64> {
-    let mut r = Rig::new(RigConfig::default()).unwrap();
+    configured_rig_with(RigConfig::default())
+}
+
+/// A rig with `config` and a 10 Hz stutter configured.
+fn configured_rig_with(config: RigConfig) -> Rig<64> {
+    let mut r = Rig::new(config).unwrap();
     r.handle(&Command::Configure(JumpConfig::new(TrajectorySpec::Sine {
         kind: JumpKind::Stutter,
         amplitude_m: 0.01875,
@@ -206,4 +212,203 @@ fn the_lift_stops_at_its_limit_and_values_out_of_range_are_refused() {
         assert_eq!(b.command(&cmd, false), Err(BedError::OutOfRange), "{cmd:?}");
     }
     assert_eq!(b.outputs(), BedOutputs::default());
+}
+
+fn estop_rig() -> Rig<64> {
+    configured_rig_with(RigConfig {
+        emergency_stop_input: true,
+        ..RigConfig::default()
+    })
+}
+
+fn estop_refusal(r: Result<crate::command::Reply, CommandError>) -> EmergencyStopError {
+    match r {
+        Err(CommandError::EmergencyStop(e)) => e,
+        other => panic!("expected an emergency-stop refusal, got {other:?}"),
+    }
+}
+
+/// Issue 48 item 1: a board with an e-stop input whose loop has never read closed (nothing
+/// wired, or the stop pressed from power-up) stays Idle with no fault, and refuses `Arm` and
+/// anything that switches the bed on, whatever the apparatus reports.
+#[test]
+fn a_loop_that_never_read_closed_refuses_arm_and_the_bed_without_a_fault() {
+    for apparatus in [None, Some(READY)] {
+        let mut r = estop_rig();
+        assert_eq!(
+            estop_refusal(r.handle(&Command::Arm)),
+            EmergencyStopError::NeverClosed,
+            "before the first tick"
+        );
+        for _ in 0..100 {
+            if let Some(b) = apparatus {
+                r.set_bed_inputs(b);
+            }
+            r.set_emergency_stop_loop(true);
+            let out = r.tick(&input());
+            assert_eq!(out.state, RigState::Idle, "never closed: no fault latched");
+        }
+        assert_eq!(
+            estop_refusal(r.handle(&Command::Arm)),
+            EmergencyStopError::NeverClosed
+        );
+        assert_eq!(
+            estop_refusal(r.handle(&Command::Bed(BedCommand::Blower { volts: 1.0 }))),
+            EmergencyStopError::NeverClosed
+        );
+        // Switching off is always allowed.
+        r.handle(&Command::Bed(BedCommand::Blower { volts: 0.0 }))
+            .unwrap();
+        let s = r.status();
+        assert!(s.emergency_stop.fitted && s.emergency_stop.open);
+        assert!(!s.emergency_stop.closed_since_reset);
+        assert!(s.emergency_stop_pressed());
+        // Closed: Arm goes through.
+        if let Some(b) = apparatus {
+            r.set_bed_inputs(b);
+        }
+        r.set_emergency_stop_loop(false);
+        r.tick(&input());
+        r.handle(&Command::Arm).unwrap();
+        assert_eq!(r.state(), RigState::Armed);
+    }
+}
+
+/// Once it has read closed, the loop opening latches `EmergencyStop` on that tick (force zero,
+/// the bed tripped), and the fault cannot be cleared while it stays open.
+#[test]
+fn the_loop_opening_after_it_closed_latches_the_emergency_stop() {
+    let mut r = estop_rig();
+    r.set_emergency_stop_loop(false);
+    tick(&mut r, READY);
+    r.handle(&Command::Bed(BedCommand::Blower { volts: 0.0 }))
+        .unwrap();
+    r.handle(&Command::Arm).unwrap();
+    r.set_emergency_stop_loop(false);
+    let out = tick(&mut r, READY);
+    assert!(out.drive_enabled);
+    r.set_emergency_stop_loop(true);
+    let out = tick(&mut r, READY);
+    assert_eq!(out.fault, Some(FaultCode::EmergencyStop));
+    assert!(!out.drive_enabled && out.force_n == 0.0);
+    assert!(r.bed().tripped());
+    assert_eq!(
+        estop_refusal(r.handle(&Command::ClearFault)),
+        EmergencyStopError::Open
+    );
+    r.set_emergency_stop_loop(false);
+    tick(&mut r, READY);
+    r.handle(&Command::ClearFault).unwrap();
+    assert_eq!(r.state(), RigState::Idle);
+}
+
+/// A rig without the input (sil, pil, QEMU) ignores the loop: today's behaviour.
+#[test]
+fn a_board_without_the_loop_ignores_it() {
+    let mut r = configured_rig();
+    r.set_emergency_stop_loop(true);
+    r.tick(&input());
+    r.handle(&Command::Arm).unwrap();
+    assert!(!r.status().emergency_stop.fitted);
+}
+
+/// Issue 48 item 2: the lift, the shaker and the blower have a host watchdog in every state.
+/// Idle with all three on, a silent host latches `BedWatchdog` one tick past the timeout and
+/// everything goes off on that tick; heartbeats keep it running; with nothing on, silence is
+/// no fault.
+#[test]
+fn a_silent_host_turns_the_bed_off_after_its_watchdog_in_idle() {
+    let config = RigConfig::default();
+    let limit = config.bed_watchdog_ticks();
+    assert_eq!(limit, 5_000, "500 ms at 10 kHz");
+    let mut r = configured_rig();
+    // Nothing on: an idle board may be left alone.
+    for _ in 0..2 * limit {
+        assert_eq!(tick(&mut r, READY).fault, None);
+    }
+    for c in [
+        BedCommand::Blower { volts: 5.0 },
+        BedCommand::Shaker { duty: 0.5 },
+        BedCommand::Lift(LiftMove::Up),
+    ] {
+        r.handle(&Command::Bed(c)).unwrap();
+    }
+    // Fed: runs on.
+    for k in 0..2 * limit {
+        if k % 1000 == 0 {
+            r.handle(&Command::Heartbeat).unwrap();
+        }
+        let out = tick(&mut r, READY);
+        assert!(out.fault.is_none() && out.bed.lift_enable && out.bed.blower_v == 5.0);
+    }
+    r.handle(&Command::Heartbeat).unwrap();
+    for _ in 0..limit {
+        let out = tick(&mut r, READY);
+        assert!(
+            out.fault.is_none() && out.bed.shaker_duty == 0.5,
+            "too early"
+        );
+    }
+    let out = tick(&mut r, READY);
+    assert_eq!(out.fault, Some(FaultCode::BedWatchdog));
+    assert_eq!(
+        out.bed,
+        BedOutputs::default(),
+        "all off on the tick it latches"
+    );
+    assert_eq!(out.state, RigState::Faulted);
+    assert!(r.bed().tripped());
+    r.handle(&Command::ClearFault).unwrap();
+    assert_eq!(tick(&mut r, READY).bed, BedOutputs::default());
+}
+
+/// In Done (the drive holding the jump's end, the bed may be switched on) both watchdogs run;
+/// the bed's is the one that latches when it is the shorter.
+#[test]
+fn the_bed_watchdog_runs_while_the_drive_holds_after_a_jump() {
+    let mut r = configured_rig_with(RigConfig {
+        bed_watchdog_ms: 100,
+        ..RigConfig::default()
+    });
+    tick(&mut r, READY);
+    while r.samples().pop().is_some() {}
+    r.handle(&Command::Arm).unwrap();
+    r.handle(&Command::Start).unwrap();
+    // The carriage follows the setpoint exactly (a perfect plant).
+    let mut p = 18_750u32;
+    let mut n = 0;
+    while r.state() != RigState::Done {
+        r.set_bed_inputs(READY);
+        let out = r.tick(&TickInput {
+            encoder_raw: p,
+            current_a: None,
+            timing: TickTiming::Unknown,
+        });
+        while let Some(s) = r.samples().pop() {
+            p = (s.commanded_position_m * 1e6).round() as i32 as u32;
+        }
+        assert!(out.fault.is_none(), "{out:?}");
+        n += 1;
+        if n % 1000 == 0 {
+            r.handle(&Command::Heartbeat).unwrap();
+        }
+        assert!(n < 100_000);
+    }
+    r.handle(&Command::Bed(BedCommand::Blower { volts: 2.0 }))
+        .unwrap();
+    let mut latched = None;
+    for _ in 0..2_000 {
+        r.set_bed_inputs(READY);
+        let out = r.tick(&TickInput {
+            encoder_raw: p,
+            current_a: None,
+            timing: TickTiming::Unknown,
+        });
+        if out.fault.is_some() {
+            latched = out.fault;
+            assert_eq!(out.bed, BedOutputs::default());
+            break;
+        }
+    }
+    assert_eq!(latched, Some(FaultCode::BedWatchdog));
 }

@@ -141,6 +141,11 @@ fn worst_case_rig_messages_fit_a_frame() {
             },
             tripped: true,
         },
+        emergency_stop: crate::emergency_stop::EmergencyStopStatus {
+            fitted: true,
+            open: true,
+            closed_since_reset: true,
+        },
     };
     for msg in [
         full_batch(),

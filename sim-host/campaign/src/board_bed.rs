@@ -54,8 +54,10 @@ impl<'a> BoardBed<'a> {
         if !s.bed.present {
             return Err("the board reports no bed apparatus (its inputs were never read)".into());
         }
-        if s.bed.inputs.emergency_stop {
-            return Err("the emergency stop is pressed".into());
+        if s.emergency_stop_pressed() {
+            return Err(
+                "the emergency stop is pressed (or its loop or the bed's harness is open)".into(),
+            );
         }
         if s.bed.tripped {
             return Err("the bed apparatus tripped (a fault is latched)".into());

@@ -36,7 +36,7 @@ impl fmt::Display for LinkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Rejected { command, why } => {
-                write!(f, "the controller rejected {command}: {why:?}")
+                write!(f, "the controller rejected {command}: {why}")
             }
             Self::Timeout {
                 waiting_for,

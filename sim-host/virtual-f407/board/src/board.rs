@@ -65,6 +65,9 @@ pub struct F407 {
     /// The flash interface never finishes a write (`FLASH_SR.BSY` stays set): a part whose
     /// option bytes cannot be programmed, say.
     pub flash_stuck_busy: bool,
+    /// The PLL never locks (`RCC_CR.PLLRDY` and `RCC_CIR.PLLRDYF` stay clear, whatever
+    /// rigless's RCC schedules): a part with its VDDA missing, say.
+    pub pll_never_locks: bool,
     slots: Slots,
 }
 
@@ -102,6 +105,7 @@ impl F407 {
             otg: OtgFs::default(),
             crystal_runs: hse_hz > 0,
             flash_stuck_busy: false,
+            pll_never_locks: false,
             slots,
         })
     }
@@ -168,6 +172,13 @@ impl Mcu for F407 {
         let s = self.slots;
         if slot == s.rcc && !self.crystal_runs {
             self.hold_the_crystal_down();
+        }
+        if slot == s.rcc && self.pll_never_locks {
+            let (_, registers) = self.part.clocks();
+            let cr_value = registers.get(RccRegister::Cr);
+            registers.set(RccRegister::Cr, cr::PLLRDY.set(cr_value, 0));
+            let cir_value = registers.get(RccRegister::Cir);
+            registers.set(RccRegister::Cir, cir::PLLRDYF.set(cir_value, 0));
         }
         if slot == s.flash && self.flash_stuck_busy {
             let (_, registers) = self.part.program();

@@ -3,8 +3,9 @@
 //! gain stage (0 V -> -300 N, 1.65 V -> 0 N, 3.3 V -> +300 N) gated by its enable (PE7), the
 //! linear encoder into TIM2, the motor current monitor on PA1 (ADC1 channel 1), the bed's lift
 //! limit switches (PE12 up, PE13 down: closed to ground at the limit), the emergency stop's
-//! normally-closed contact (PE14: to ground while released), the harness's presence line
-//! (PE15: to ground while the apparatus is connected), the bed-height sensor (PA2, ADC2
+//! normally-closed loop on its own connector (PE14: to ground while released, or through a
+//! jumper plug; open when pressed, broken or unplugged), the harness's presence line (PE15: to
+//! ground while the apparatus is connected), the bed-height sensor (PA2, ADC2
 //! channel 2), and the outputs the bed apparatus reads: blower (DAC channel 2), shaker (PC6,
 //! TIM3 CH1), lift enable and direction (PE10, PE11), camera trigger (PE9), tick heartbeat (PE8).
 
@@ -39,32 +40,40 @@ pub const DRIVE_FULL_SCALE_N: f64 = 300.0;
 /// The encoder's resolution, m per count.
 pub const METRES_PER_COUNT: f64 = 1e-6;
 
-/// What is connected to the bed apparatus's inputs.
+/// What is connected to the bed apparatus's harness inputs (PE12, PE13, PE15, PA2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BedWiring {
-    /// Nothing: PE12-PE15 float (their pull-ups read high), PA2 floats (0 V here).
+    /// Nothing: PE12, PE13 and PE15 float (their pull-ups read high), PA2 floats (0 V here).
     Unwired,
     /// The apparatus's harness, which ties the presence line PE15 to ground.
     Connected {
-        /// E-stop pressed (or its wire broken).
-        emergency_stop: bool,
         /// The lift's upper limit switch closed.
         lift_up_limit: bool,
         /// The lift's lower limit switch closed.
         lift_down_limit: bool,
     },
-    /// The apparatus's harness with its presence link (PE15) broken: the e-stop released, the
-    /// lift down, PE15 floating.
+    /// The apparatus's harness with its presence link (PE15) broken: the lift down, PE15
+    /// floating.
     BrokenPresenceLink,
 }
 
 impl BedWiring {
     /// The apparatus at rest, ready to jump.
     pub const READY: Self = Self::Connected {
-        emergency_stop: false,
         lift_up_limit: false,
         lift_down_limit: true,
     };
+}
+
+/// The emergency stop's loop on its own connector (PE14 to ground).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmergencyStopLoop {
+    /// Closed: the stop released (its normally-closed contact), or a jumper plug on the
+    /// connector: PE14 at ground.
+    Closed,
+    /// Open: the stop pressed, a wire broken, or nothing plugged in: PE14 floats (its pull-up
+    /// reads high).
+    Open,
 }
 
 /// The outputs the board drives now, as the rig reads them.
@@ -157,30 +166,32 @@ pub fn outputs(mcu: &mut F407) -> Outputs {
     }
 }
 
-/// Drives the bed apparatus's inputs.
-pub fn drive_bed_inputs(part: &mut Stm32f427, at: VirtualNanos, wiring: BedWiring, height_mv: u32) {
+/// Drives the bed apparatus's inputs and the emergency stop's loop.
+pub fn drive_bed_inputs(
+    part: &mut Stm32f427,
+    at: VirtualNanos,
+    wiring: BedWiring,
+    emergency_stop: EmergencyStopLoop,
+    height_mv: u32,
+) {
     let closed = |c: bool| if c { Some(Level::Low) } else { None };
-    let levels = match wiring {
-        BedWiring::Unwired => [None, None, None, None],
-        BedWiring::BrokenPresenceLink => [None, Some(Level::Low), Some(Level::Low), None],
+    let (up, down, present) = match wiring {
+        BedWiring::Unwired => (None, None, None),
+        BedWiring::BrokenPresenceLink => (None, Some(Level::Low), None),
         BedWiring::Connected {
-            emergency_stop,
             lift_up_limit,
             lift_down_limit,
-        } => [
+        } => (
             closed(lift_up_limit),
             closed(lift_down_limit),
-            // Normally closed: released = closed to ground; pressed = open (the pull-up).
-            if emergency_stop {
-                None
-            } else {
-                Some(Level::Low)
-            },
-            // The harness's presence line.
             Some(Level::Low),
-        ],
+        ),
     };
-    for (pin, level) in [12u8, 13, 14, 15].into_iter().zip(levels) {
+    let stop = closed(emergency_stop == EmergencyStopLoop::Closed);
+    for (pin, level) in [12u8, 13, 14, 15]
+        .into_iter()
+        .zip([up, down, stop, present])
+    {
         part.drive_port(at, PORT_E, |gpio, regs, cx| {
             gpio.drive(Pin::new(pin).expect("pin"), level, regs, cx)
         });

@@ -111,6 +111,24 @@ impl RttLog {
         let _ = host.write(flags, Width::W32, 2);
     }
 
+    /// A probe attached from power-up that stopped reading and left up-buffer 0 full: blocking
+    /// mode, and the read offset one past the write offset (no byte free). False while the
+    /// firmware has not set the buffer up yet (its address or size still zero).
+    pub fn block_full(&self, host: &mut dyn Host) -> bool {
+        let up = self.control_block + 24;
+        let (buf, size, wr) = (
+            read32(host, up + 4),
+            read32(host, up + 8),
+            read32(host, up + 12),
+        );
+        if size == 0 || buf == 0 || wr >= size {
+            return false;
+        }
+        self.set_blocking(host);
+        let _ = host.write(up + 16, Width::W32, (wr + 1) % size);
+        true
+    }
+
     /// Every byte read from the buffer.
     pub fn bytes(&self) -> &[u8] {
         &self.bytes

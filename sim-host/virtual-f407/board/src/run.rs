@@ -17,7 +17,7 @@ use rigless::time::VirtualNanos;
 
 use crate::board::VirtualF407;
 use crate::encoder::QuadratureEncoder;
-use crate::rig::{self, BedWiring, METRES_PER_COUNT, Outputs, Robot};
+use crate::rig::{self, BedWiring, EmergencyStopLoop, METRES_PER_COUNT, Outputs, Robot};
 use crate::rtt::RttLog;
 use sandjumper_model::intrusion_rig::{IntrusionRig, SUBSTEP_S};
 
@@ -36,6 +36,9 @@ pub trait HostPort {
     fn receive(&mut self) -> Option<Vec<u8>>;
     /// Bytes the board sent.
     fn send(&mut self, bytes: &[u8]);
+    /// The board's virtual time at a stop, ns (every control period: a host that passes it on
+    /// keeps this cheap). Nothing by default.
+    fn clock(&mut self, _now_ns: u64) {}
 }
 
 /// No host: nothing sent, what arrives is kept.
@@ -59,6 +62,8 @@ impl HostPort for NoHost {
 pub enum Action {
     /// The bed apparatus's inputs change.
     Bed(BedWiring),
+    /// The emergency stop's loop opens (pressed, a wire broken, its connector out) or closes.
+    EmergencyStop(EmergencyStopLoop),
     /// The USB cable is unplugged (false) or plugged in (true).
     UsbAttached(bool),
     /// Bytes from the host.
@@ -70,6 +75,14 @@ pub enum Action {
     /// A probe attaches, puts RTT in blocking mode and stops reading it (a debugger session left
     /// open, a probe that went away): a full buffer then blocks a writer that waits.
     ProbeStopsReading,
+    /// A probe attached from power-up puts RTT in blocking mode as soon as the firmware has set
+    /// its buffer up (before `init`'s first log line), and has stopped reading with the buffer
+    /// full: the firmware's next log write finds no room. A firmware in blocking mode waits
+    /// there forever (with every interrupt masked: defmt's lock).
+    ProbeFullFromPowerUp,
+    /// TIM7 stops (its update events end: a timer or clock fault, its interrupt lost) while the
+    /// core and every other peripheral run on; a reset restarts it.
+    TickTimerStops,
     /// The core stops executing (true) or goes on (false), with time and the peripherals running
     /// on: a hang, as a debugger's halt shows it (the watchdog keeps counting: the firmware does
     /// not freeze it on debug).
@@ -114,6 +127,8 @@ pub struct RunConfig {
     pub until_ns: Option<u64>,
     /// The bed apparatus at power-up.
     pub bed: BedWiring,
+    /// The emergency stop's loop at power-up.
+    pub emergency_stop: EmergencyStopLoop,
     /// The robot the drive moves (None: the drive's output goes nowhere, the encoder is still).
     pub robot: Option<Robot>,
     /// Or the slow-intrusion fixture (the motor clamped; `p` is the rod's travel).
@@ -133,6 +148,8 @@ pub struct RunConfig {
     pub drive_powered: bool,
     /// The flash interface never finishes a write ([`crate::board::F407::flash_stuck_busy`]).
     pub flash_stuck_busy: bool,
+    /// The PLL never locks ([`crate::board::F407::pll_never_locks`]).
+    pub pll_never_locks: bool,
 }
 
 impl RunConfig {
@@ -143,6 +160,7 @@ impl RunConfig {
             period_ns: 100_000,
             until_ns: None,
             bed: BedWiring::READY,
+            emergency_stop: EmergencyStopLoop::Closed,
             robot: None,
             intrusion: None,
             pace: None,
@@ -152,6 +170,7 @@ impl RunConfig {
             supply_mv: crate::board::SUPPLY_MV,
             drive_powered: true,
             flash_stuck_busy: false,
+            pll_never_locks: false,
         }
     }
 }
@@ -177,6 +196,8 @@ pub struct TraceRow {
     pub ticks: u64,
     /// TIM2's counter as the firmware reads it (a debugger's read).
     pub tim2_count: u32,
+    /// Bulk OUT bytes the device has taken from the host so far.
+    pub usb_out_bytes: u64,
 }
 
 /// What a run leaves.
@@ -232,6 +253,7 @@ struct BoardDriver<H> {
     cfg_period: u64,
     until: Option<u64>,
     bed: BedWiring,
+    emergency_stop: EmergencyStopLoop,
     robot: Option<Robot>,
     intrusion: Option<IntrusionRig>,
     encoder: QuadratureEncoder,
@@ -255,6 +277,7 @@ struct BoardDriver<H> {
     hold_at_first_log_line: bool,
     hold_when_watchdog_runs: bool,
     rtt_draining: bool,
+    probe_full_pending: bool,
     supply_mv: u32,
     in_brown_out: bool,
     brown_outs: Vec<u64>,
@@ -277,6 +300,7 @@ impl<H> BoardDriver<H> {
         let mcu = &mut s.board_mut().mcu;
         match action {
             Action::Bed(b) => self.bed = b,
+            Action::EmergencyStop(l) => self.emergency_stop = l,
             Action::UsbAttached(a) => mcu.otg.set_attached(a),
             Action::HostBytes(b) => mcu.otg.host_send(&b),
             Action::EncoderFrozen => self.frozen = true,
@@ -293,6 +317,11 @@ impl<H> BoardDriver<H> {
                 self.rtt.set_blocking(host);
                 self.rtt_draining = false;
             }
+            Action::ProbeFullFromPowerUp => {
+                self.probe_full_pending = true;
+                self.rtt_draining = false;
+            }
+            Action::TickTimerStops => mcu.tim7.halt(),
             Action::HoldOnceTheWatchdogRuns => self.hold_when_watchdog_runs = true,
             Action::BusError { from, to } => s.fail_next(from, to),
             Action::CrystalStops => {
@@ -410,6 +439,9 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         if self.rtt_draining {
             self.rtt.drain(host);
         }
+        if self.probe_full_pending && self.rtt.block_full(host) {
+            self.probe_full_pending = false;
+        }
         self.brown_out(s, host, stop);
         if self.hold_when_watchdog_runs {
             let (_, regs) = s.board_mut().mcu.part.clocks();
@@ -450,6 +482,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         if !received.is_empty() {
             self.host.send(&received);
         }
+        self.host.clock(now);
         // The rig over the next period: the drive's force as the board commands it now.
         let mut out = rig::outputs(mcu);
         // The external enable gate: retriggered by every heartbeat edge.
@@ -500,7 +533,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.encoder.move_to(&mut mcu.part, stop.at, period, target);
         }
         rig::drive_current_sense(&mut mcu.part, if out.drive_enable { current } else { 0.0 });
-        rig::drive_bed_inputs(&mut mcu.part, stop.at, self.bed, 1650);
+        rig::drive_bed_inputs(&mut mcu.part, stop.at, self.bed, self.emergency_stop, 1650);
         let row = TraceRow {
             t_ns: now,
             out,
@@ -509,6 +542,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             x_r_m: x_r,
             x_f_m: x_f,
             usb_configured: mcu.otg.configured(),
+            usb_out_bytes: mcu.otg.out_bytes(),
             ticks: mcu.tim7.updates,
             tim2_count: rigless::mcu::Operate::peek(
                 mcu,
@@ -565,6 +599,7 @@ pub fn run<H: HostPort + Send + 'static>(
         VirtualF407::with_crystal(cfg.crystal_hz).map_err(|e| format!("the virtual board: {e}"))?;
     board.mcu.part.set_supply(cfg.supply_mv);
     board.mcu.flash_stuck_busy = cfg.flash_stuck_busy;
+    board.mcu.pll_never_locks = cfg.pll_never_locks;
     let session = Session::new(Box::new(board), 0, VirtualNanos(cfg.period_ns))
         .map_err(|e| format!("the emulator session: {e}"))?;
     let mut actions = cfg.actions;
@@ -573,6 +608,7 @@ pub fn run<H: HostPort + Send + 'static>(
         cfg_period: cfg.period_ns,
         until: cfg.until_ns,
         bed: cfg.bed,
+        emergency_stop: cfg.emergency_stop,
         robot: cfg.robot,
         intrusion: cfg.intrusion,
         encoder: QuadratureEncoder::default(),
@@ -596,6 +632,7 @@ pub fn run<H: HostPort + Send + 'static>(
         hold_at_first_log_line: false,
         hold_when_watchdog_runs: false,
         rtt_draining: true,
+        probe_full_pending: false,
         supply_mv: cfg.supply_mv,
         in_brown_out: false,
         brown_outs: Vec::new(),

@@ -4,14 +4,26 @@
 
 mod common;
 
-use sandjumper_virtual_f407::rig::BedWiring;
+use sandjumper_virtual_f407::rig::{BedWiring, EmergencyStopLoop};
 use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
 
 fn run_for(ms: u64, bed: BedWiring, trace_every: u64) -> Option<RunReport> {
+    run_wired(ms, bed, EmergencyStopLoop::Closed, vec![], trace_every)
+}
+
+fn run_wired(
+    ms: u64,
+    bed: BedWiring,
+    emergency_stop: EmergencyStopLoop,
+    actions: Vec<(u64, Action)>,
+    trace_every: u64,
+) -> Option<RunReport> {
     let elf = common::firmware_elf()?;
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(ms * 1_000_000);
     cfg.bed = bed;
+    cfg.emergency_stop = emergency_stop;
+    cfg.actions = actions;
     cfg.trace_every = trace_every;
     Some(run(cfg, NoHost::default()).expect("the run").0)
 }
@@ -54,15 +66,17 @@ fn clocks_from_the_registers_and_an_exact_10_khz_tick() {
     );
 }
 
+/// Nothing wired, the e-stop connector empty too: Idle (no fault latched), safe. That `Arm` is
+/// refused is `faults.rs::a_board_with_nothing_wired_is_idle_and_refuses_arm_naming_the_loop`.
 #[test]
 fn first_power_up_with_nothing_wired_is_idle_and_safe() {
-    let Some(r) = run_for(100, BedWiring::Unwired, 1) else {
+    let Some(r) = run_wired(100, BedWiring::Unwired, EmergencyStopLoop::Open, vec![], 1) else {
         return;
     };
     let last = r.last.expect("ran");
     assert!(
         !last.out.led_fault,
-        "the fault LED (PD14) is lit with nothing wired: the floating bed inputs read as a fault"
+        "the fault LED (PD14) is lit with nothing wired: the floating inputs read as a fault"
     );
     assert!(!last.out.drive_enable && !last.out.lift_enable);
     // The heartbeat (PE8) toggles at every tick: it differs between consecutive 100 us stops
@@ -78,6 +92,9 @@ fn first_power_up_with_nothing_wired_is_idle_and_safe() {
     );
 }
 
+/// The apparatus connected, the stop pressed at power-up: Idle and safe, no fault (its loop has
+/// never read closed: `Arm` waits for it); released, then pressed again: the emergency stop
+/// latches (the fault LED). Killed by the mutant that stops reading PE14 (`estop-not-read`).
 #[test]
 fn the_apparatus_connected_is_idle_and_its_emergency_stop_trips_it() {
     let Some(r) = run_for(60, BedWiring::READY, 0) else {
@@ -87,18 +104,28 @@ fn the_apparatus_connected_is_idle_and_its_emergency_stop_trips_it() {
         !r.last.expect("ran").out.led_fault,
         "the ready apparatus shows a fault"
     );
-    let pressed = BedWiring::Connected {
-        emergency_stop: true,
-        lift_up_limit: false,
-        lift_down_limit: true,
-    };
-    let Some(r) = run_for(60, pressed, 0) else {
+    let ms = 1_000_000;
+    let Some(r) = run_wired(
+        120,
+        BedWiring::READY,
+        EmergencyStopLoop::Open,
+        vec![
+            (60 * ms, Action::EmergencyStop(EmergencyStopLoop::Closed)),
+            (90 * ms, Action::EmergencyStop(EmergencyStopLoop::Open)),
+        ],
+        10,
+    ) else {
         return;
     };
+    let before = common::at(&r, 55 * ms).out;
+    assert!(
+        !before.led_fault && before.drive_and_lift_safe(),
+        "pressed since power-up: Idle and safe, no fault: {before:?}"
+    );
     let out = r.last.expect("ran").out;
     assert!(
         out.led_fault,
-        "the emergency stop pressed does not show as a fault"
+        "the emergency stop pressed again does not show as a fault"
     );
     assert!(out.drive_and_lift_safe());
 }
@@ -121,8 +148,11 @@ fn the_dac_outputs_reach_the_rails_zero_force_and_blower_off() {
     );
 }
 
+/// The virtual board is deterministic: a property of the board and its models (virtual time,
+/// no wall clock inside a run), not of the firmware. No firmware mutant can fail it, and none is
+/// expected to: it is what lets every other test compare runs at all.
 #[test]
-fn two_runs_are_identical() {
+fn the_virtual_board_is_deterministic_two_runs_are_identical() {
     let Some(a) = run_for(50, BedWiring::READY, 1) else {
         return;
     };
@@ -239,6 +269,8 @@ fn a_sagging_supply_never_runs_the_flash_out_of_its_table() {
         1,
         "no brown-out reset at 2.3 V (BOR off: the part runs on to 1.7 V)"
     );
+    // The board's own check, not the firmware's: held in reset, every pin is at its reset
+    // state whatever the firmware would do (no mutant can fail this row).
     let during = common::at(&r, 60_000_000);
     assert!(
         during.out.drive_and_lift_safe() && !during.out.heartbeat,
@@ -401,37 +433,85 @@ fn a_hang_early_in_the_start_up_is_reset_by_the_watchdog() {
     );
 }
 
-/// Issue 38 item 9: a board whose crystal does not start (none fitted, a broken one). The
-/// firmware waits for it with a bound, says so and keeps the rig safe; the watchdog restarts it
-/// and it says so again. The binary before the review waited in the HAL's clock setup with no
-/// bound: only the watchdog's resets, and no word of why.
-#[test]
-fn a_crystal_that_does_not_start_is_reported_and_nothing_runs() {
+/// A start-up that cannot go on (`fail` sets the part up so), run for 1.5 s: within `within` of
+/// power-up the red LED (PD14) is lit, with a board no probe is attached to as with one, and it
+/// is lit again after each of the watchdog's restarts; nothing else is ever on; the log says
+/// `why`; the tick never ran (no boot line).
+fn a_failed_start_up_shows_on_the_red_led(
+    fail: impl FnOnce(&mut RunConfig),
+    within: u64,
+    why: &str,
+) {
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(1_500_000_000);
-    cfg.crystal_hz = 0;
     cfg.trace_every = 10;
+    fail(&mut cfg);
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
-    let said: Vec<&String> = r
-        .log
+    let r = &r;
+    let lit = r
+        .trace
         .iter()
-        .filter(|l| l.contains("crystal (HSE) did not start"))
-        .collect();
-    assert!(!said.is_empty(), "no word of the crystal: {:?}", r.log);
+        .find(|row| row.out.led_fault)
+        .unwrap_or_else(|| panic!("the red LED never lit: {:?}; log {:?}", r.last, r.log));
+    assert!(
+        lit.t_ns <= within,
+        "the red LED lit only {} ms after power-up",
+        lit.t_ns / 1_000_000
+    );
     assert!(
         r.trace.iter().all(|row| row.out.drive_and_lift_safe()),
-        "an output was on with no clock"
+        "an output was on"
     );
-    // The tick never ran, so nothing claims to (no boot line).
+    for &(reset_at, _) in &r.resets {
+        assert!(
+            r.trace.iter().any(|row| row.t_ns > reset_at
+                && row.t_ns <= reset_at + within
+                && row.out.led_fault),
+            "the red LED was not lit again within {} ms of the reset at {reset_at} ns",
+            within / 1_000_000
+        );
+    }
+    assert!(
+        r.log.iter().any(|l| l.contains(why)),
+        "no `{why}` in {:?}",
+        r.log
+    );
     assert!(
         !r.log
             .iter()
             .any(|l| l.contains("sandjumper firmware: STM32F407")),
         "{:?}",
         r.log
+    );
+}
+
+/// Issue 38 item 9: a board whose crystal does not start (none fitted, a broken one). The
+/// firmware waits for it with a bound (0.1 s at the HSI), lights the red LED, says so and keeps
+/// the rig safe; the watchdog restarts it and it does so again. The binary before the review
+/// waited in the HAL's clock setup with no bound: only the watchdog's resets, no word and no
+/// light. Killed by `crystal-wait-unbounded`.
+#[test]
+fn a_crystal_that_does_not_start_is_reported_and_nothing_runs() {
+    a_failed_start_up_shows_on_the_red_led(
+        |cfg| cfg.crystal_hz = 0,
+        150_000_000,
+        "crystal (HSE) did not start",
+    );
+}
+
+/// Issue 48 item 5: a PLL that never locks (a part with its VDDA missing, say). Its own bound
+/// (20 ms at the HSI), the red LED, a report, nothing on. The binary before issue 48 waited in
+/// the HAL's clock setup with no bound: only the early watchdog's resets, no word and no light.
+/// Killed by `pll-wait-unbounded`.
+#[test]
+fn a_pll_that_does_not_lock_is_reported_and_nothing_runs() {
+    a_failed_start_up_shows_on_the_red_led(
+        |cfg| cfg.pll_never_locks = true,
+        50_000_000,
+        "the PLL did not lock",
     );
 }
 
@@ -467,22 +547,26 @@ fn an_option_byte_write_that_never_ends_is_reported_and_the_board_starts() {
     assert!(r.resets.is_empty(), "reset: {:?}", r.resets);
 }
 
-/// Issue 38 item 5: a probe that put RTT in blocking mode and stopped reading never stalls the
-/// tick, while the host sends bursts of small commands, more than the firmware's inbound queue
-/// holds (frames dropped, counted). A regression bound, not the fix's test: the binary whose link
-/// task logged each power of two of drops wrote too little to fill the 1 KiB buffer here (its
-/// stall needed a buffer already full); `tests/f407_disassembly.rs` shows the link task no longer
-/// reaches defmt at all.
+/// Issue 38 item 5 and issue 48 item 5, the RTT fix on the board: a probe attached from
+/// power-up put RTT in blocking mode (as probe-rs does) and stopped reading with its buffer full.
+/// The firmware's next log line (`init`'s boot line) finds no room: its RTT is non-blocking
+/// (`defmt-rtt`'s `disable-blocking-mode`), so the line is dropped and the board starts, ticks
+/// and answers, with no watchdog reset, while the host sends bursts of small commands, more than
+/// the firmware's inbound queue holds (frames dropped, counted). A blocking RTT waits there
+/// forever with every interrupt masked: the tick never starts and the early watchdog resets the
+/// chip over and over. Killed by `rtt-blocking`. (`tests/f407_disassembly.rs` checks statically
+/// that the tick and the link task never reach defmt.)
 #[test]
-fn a_probe_that_stops_reading_never_stalls_the_tick() {
+fn a_probe_that_stops_reading_with_its_buffer_full_never_stalls_the_board() {
     use sandjumper_core::Command;
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = Some(600_000_000);
+    cfg.trace_every = 10;
     let frame = |id: u16| common::command_frame(id, Command::Heartbeat);
-    let mut actions = vec![(150_000_000, Action::ProbeStopsReading)];
+    let mut actions = vec![(0, Action::ProbeFullFromPowerUp)];
     for burst in 0..40u16 {
         let bytes: Vec<u8> = (0..200u16)
             .flat_map(|k| frame(burst * 200 + k + 1))
@@ -496,9 +580,11 @@ fn a_probe_that_stops_reading_never_stalls_the_tick() {
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
     assert!(
         r.resets.is_empty(),
-        "the tick stalled and the watchdog reset the chip: {:?}",
+        "the start-up or the tick stalled and the watchdog reset the chip: {:?}",
         r.resets
     );
+    let ticks = r.last.expect("ran").ticks;
+    assert!(ticks > 5_000, "the tick ran {ticks} times in 600 ms");
     let (lo, hi) = r.force_dac_interval_ns.expect("the force DAC was written");
     assert!(
         lo >= 95_000 && hi <= 105_000,

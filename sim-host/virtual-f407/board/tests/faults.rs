@@ -8,7 +8,7 @@ mod common;
 use common::{MS, armed_actions, at, bed_switched_on, rig_messages, robot_at_single_start, send};
 use sandjumper_core::Command;
 use sandjumper_core::protocol::encode_frame_vec;
-use sandjumper_virtual_f407::rig::BedWiring;
+use sandjumper_virtual_f407::rig::{BedWiring, EmergencyStopLoop};
 use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
 /// When the host arms the rig (the board is enumerated by ~140 ms).
 const ARM_AT: u64 = 200 * MS;
@@ -36,6 +36,12 @@ fn safe_within(r: &RunReport, from: u64, within: u64, what: &str) {
         "{what}: the drive was not enabled before the fault: {before:?}\nlog {:?}",
         r.log
     );
+    // The stop the fault was applied at (stops are a period apart, not always on its multiples).
+    let applied = r
+        .trace
+        .iter()
+        .find(|row| row.t_ns >= from)
+        .map_or(from, |row| row.t_ns);
     let first_safe = r
         .trace
         .iter()
@@ -48,9 +54,9 @@ fn safe_within(r: &RunReport, from: u64, within: u64, what: &str) {
             )
         });
     assert!(
-        first_safe.t_ns <= from + within,
-        "{what}: safe only {} us after the fault",
-        (first_safe.t_ns - from) / 1000
+        first_safe.t_ns <= applied + within,
+        "{what}: safe only {} ns after the fault",
+        first_safe.t_ns - applied
     );
     for row in r.trace.iter().filter(|row| row.t_ns >= first_safe.t_ns) {
         assert!(
@@ -158,21 +164,47 @@ fn the_force_dac_reaches_the_rail_of_the_drives_full_scale() {
     );
 }
 
+/// Killed by `estop-not-read` (PE14 never reported) and `estop-not-latched` (the core ignores
+/// the loop opening).
 #[test]
 fn the_emergency_stop_stops_drive_and_bed_within_a_tick() {
-    let pressed = BedWiring::Connected {
-        emergency_stop: true,
-        lift_up_limit: false,
-        lift_down_limit: true,
-    };
     let Some(r) = armed_run(
         FAULT_AT + 200 * MS,
         FAULT_AT + 100 * MS,
-        vec![(FAULT_AT, Action::Bed(pressed))],
+        vec![(FAULT_AT, Action::EmergencyStop(EmergencyStopLoop::Open))],
     ) else {
         return;
     };
     safe_within(&r, FAULT_AT, 300_000, "emergency stop");
+}
+
+/// The stop pressed while the bed apparatus runs with the rig Idle (the host preparing the bed):
+/// the lift, the blower and the shaker off within a tick (the shaker at the end of its 50 us PWM
+/// period). Killed by `estop-not-read` and `bed-trip-keeps-outputs`.
+#[test]
+fn the_emergency_stop_stops_the_running_bed_within_a_tick() {
+    let Some(r) = bed_running_then(Action::EmergencyStop(EmergencyStopLoop::Open)) else {
+        return;
+    };
+    let first_off = r
+        .trace
+        .iter()
+        .filter(|row| row.t_ns >= 300 * MS)
+        .find(|row| row.out.drive_and_lift_safe())
+        .unwrap_or_else(|| panic!("the bed never went off: {:?}", r.last));
+    assert!(
+        first_off.t_ns <= 300 * MS + 300_000,
+        "the bed went off {} us after the stop",
+        (first_off.t_ns - 300 * MS) / 1000
+    );
+    assert!(
+        r.trace
+            .iter()
+            .filter(|row| row.t_ns >= first_off.t_ns)
+            .all(|row| row.out.drive_and_lift_safe()),
+        "an actuator came back on"
+    );
+    assert!(r.last.expect("ran").out.led_fault);
 }
 
 #[test]
@@ -232,22 +264,20 @@ fn a_crystal_that_stops_while_armed_is_caught_by_the_clock_security_system() {
     the_watchdog_restarts_after_the_fault(&r);
 }
 
+/// The virtual board is deterministic through a fault too: a property of the board (virtual
+/// time, its models), not of the firmware. No firmware mutant is expected to fail it.
 #[test]
-fn the_fault_runs_are_identical_twice() {
-    let pressed = BedWiring::Connected {
-        emergency_stop: true,
-        lift_up_limit: false,
-        lift_down_limit: true,
-    };
+fn the_virtual_board_is_deterministic_through_a_fault() {
+    let pressed = Action::EmergencyStop(EmergencyStopLoop::Open);
     let a = armed_run(
         FAULT_AT + 200 * MS,
         FAULT_AT + 50 * MS,
-        vec![(FAULT_AT, Action::Bed(pressed))],
+        vec![(FAULT_AT, pressed.clone())],
     );
     let b = armed_run(
         FAULT_AT + 200 * MS,
         FAULT_AT + 50 * MS,
-        vec![(FAULT_AT, Action::Bed(pressed))],
+        vec![(FAULT_AT, pressed)],
     );
     let (Some(a), Some(b)) = (a, b) else { return };
     assert_eq!(a.trace, b.trace);
@@ -310,6 +340,11 @@ fn all_off_after_the_reset(r: &RunReport) {
 /// The core stops (a stalled tick) while the rig is armed: the external enable gate drops the
 /// drive's enable within its 1 ms once the heartbeat stops, force zero at the drive, and the
 /// watchdog's reset (7-19 ms) then sets every pin to its reset state.
+///
+/// The gate's assertion checks the board's external monostable: with the whole core halted no
+/// firmware can keep its heartbeat going, so no mutant can fail it (the firmware's part is in
+/// `a_tick_timer_that_stops_alone_is_gated_and_reset_while_usb_runs_on`). The watchdog's reset
+/// is the firmware's: killed by `watchdog-frozen-on-debug`.
 #[test]
 fn a_stalled_tick_while_armed_is_gated_at_once_and_reset_by_the_watchdog() {
     let Some(r) = armed_run(
@@ -357,26 +392,203 @@ fn a_stalled_tick_while_the_bed_runs_ends_with_the_bed_off_at_the_watchdog() {
     all_off_after_the_reset(&r);
 }
 
-/// docs/bringup.md steps 2, 4 and 7 with nothing wired to the bed inputs: the board answers,
-/// takes a configuration and arms (the drive enable rises), where the floating inputs used to
-/// latch the emergency stop and refuse `Arm` ("lift not down").
+/// Configure and Arm at `ARM_AT` with the bed's harness `bed` and the stop's loop `stop` as
+/// wired from power-up; to `ARM_AT + 5 ms`. The run and the board's answer to `Arm` (id 2).
+fn arm_wired(
+    bed: BedWiring,
+    stop: EmergencyStopLoop,
+) -> Option<(
+    RunReport,
+    Option<Result<sandjumper_core::Reply, sandjumper_core::Rejection>>,
+)> {
+    use sandjumper_core::RigMessage;
+    let elf = common::firmware_elf()?;
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(ARM_AT + 5 * MS);
+    cfg.trace_every = 1;
+    cfg.bed = bed;
+    cfg.emergency_stop = stop;
+    cfg.robot = Some(robot_at_single_start());
+    cfg.actions = armed_actions(ARM_AT, ARM_AT);
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    let answer = rig_messages(&host.received)
+        .into_iter()
+        .find_map(|m| match m {
+            RigMessage::Reply { id: 2, result } => Some(result),
+            _ => None,
+        });
+    Some((r, answer))
+}
+
+/// Issue 48 item 1, docs/bringup.md's first power-up with nothing wired, not even the stop's
+/// connector: Idle, safe, no fault, and `Arm` refused with a message that names the loop; the
+/// drive enable never rises. The binary before issue 48 armed (the e-stop was read only once the
+/// bed's harness had been seen). Killed by `estop-not-read` and `estop-arm-not-checked`.
 #[test]
-fn a_board_with_nothing_wired_can_be_armed() {
+fn a_board_with_nothing_wired_is_idle_and_refuses_arm_naming_the_loop() {
+    use sandjumper_core::emergency_stop::EmergencyStopError;
+    use sandjumper_core::{CommandError, Rejection};
+    let Some((r, answer)) = arm_wired(BedWiring::Unwired, EmergencyStopLoop::Open) else {
+        return;
+    };
+    assert_eq!(
+        answer,
+        Some(Err(Rejection::EmergencyStop(
+            EmergencyStopError::NeverClosed
+        ))),
+        "the answer to Arm with nothing wired"
+    );
+    let message = CommandError::EmergencyStop(EmergencyStopError::NeverClosed).to_string();
+    assert!(message.contains("emergency-stop loop"), "{message}");
+    assert!(
+        r.trace
+            .iter()
+            .all(|row| !row.out.drive_enable && !row.out.led_fault),
+        "the drive enable rose (or a fault latched) with the stop's loop open"
+    );
+}
+
+/// The same board with a jumper plug in the stop's connector (docs/bringup.md's first power-up)
+/// and nothing else: it arms, the drive enable rises (the pin the test above watches does move).
+#[test]
+fn a_board_with_only_the_jumper_plug_arms() {
+    let Some((r, answer)) = arm_wired(BedWiring::Unwired, EmergencyStopLoop::Closed) else {
+        return;
+    };
+    assert_eq!(answer, Some(Ok(sandjumper_core::Reply::Ack)));
+    let after = at(&r, ARM_AT + 4 * MS);
+    assert!(
+        after.out.drive_enable && !after.out.led_fault,
+        "not armed with the jumper plug: {after:?}"
+    );
+}
+
+/// The bed's harness connected and ready, the stop pressed since power-up: `Arm` refused (the
+/// loop never read closed), no fault latched; the drive enable never rises.
+#[test]
+fn the_stop_pressed_at_power_up_refuses_arm_with_the_bed_connected() {
+    use sandjumper_core::Rejection;
+    use sandjumper_core::emergency_stop::EmergencyStopError;
+    let Some((r, answer)) = arm_wired(BedWiring::READY, EmergencyStopLoop::Open) else {
+        return;
+    };
+    assert_eq!(
+        answer,
+        Some(Err(Rejection::EmergencyStop(
+            EmergencyStopError::NeverClosed
+        )))
+    );
+    assert!(r.trace.iter().all(|row| !row.out.drive_enable));
+}
+
+/// Issue 48 item 2: the host falls silent with the rig Idle and the bed apparatus running (lift
+/// up, blower on, shaker at half duty, switched on at 200-210 ms): the bed watchdog (500 ms after
+/// the host's last frame) latches `BedWatchdog` and everything goes off, on the pins, within a
+/// tick of its timeout. The binary before issue 48 left all three running for good. Killed by
+/// `bed-watchdog-drive-only` and `bed-trip-keeps-outputs`.
+#[test]
+fn a_silent_host_turns_the_idle_bed_off_after_its_watchdog() {
+    use sandjumper_core::{FaultCode, RigMessage};
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
-    cfg.until_ns = Some(ARM_AT + 5 * MS);
+    cfg.until_ns = Some(800 * MS);
     cfg.trace_every = 1;
-    cfg.bed = BedWiring::Unwired;
-    cfg.robot = Some(robot_at_single_start());
-    cfg.actions = armed_actions(ARM_AT, ARM_AT);
-    let (r, _) = run(cfg, NoHost::default()).expect("the run");
-    let after = at(&r, ARM_AT + 4 * MS);
+    cfg.actions = bed_switched_on();
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    let last_frame = 210 * MS;
+    let running = at(&r, last_frame + 490 * MS).out;
     assert!(
-        after.out.drive_enable && !after.out.led_fault,
-        "not armed with nothing wired: {after:?}"
+        running.lift_gated
+            && running.blower_dac_v > 1.0
+            && (running.shaker_duty - 0.5).abs() < 0.01,
+        "the bed stopped before its watchdog's 500 ms: {running:?}"
     );
+    let first_off = r
+        .trace
+        .iter()
+        .filter(|row| row.t_ns >= last_frame)
+        .find(|row| {
+            !row.out.lift_enable && row.out.blower_dac_v < 0.01 && row.out.shaker_duty == 0.0
+        })
+        .unwrap_or_else(|| panic!("the bed ran on with the host silent: {:?}", r.last));
+    let after = first_off.t_ns - last_frame;
+    assert!(
+        (500 * MS..502 * MS).contains(&after),
+        "the bed went off {} us after the host's last frame",
+        after / 1000
+    );
+    assert!(
+        r.trace
+            .iter()
+            .filter(|row| row.t_ns >= first_off.t_ns)
+            .all(|row| row.out.drive_and_lift_safe() && row.out.led_fault),
+        "not latched off"
+    );
+    assert!(
+        rig_messages(&host.received)
+            .iter()
+            .any(|m| matches!(m, RigMessage::Fault(f) if f.code == FaultCode::BedWatchdog)),
+        "no BedWatchdog report"
+    );
+}
+
+/// Issue 48 item 4: TIM7 alone stops (the tick's interrupt lost) while the core, USB and the rest
+/// of the firmware run on, the rig armed. The heartbeat (PE8) is the tick's alone, so the
+/// external gate drops the drive within its 1 ms; the watchdog, fed by the tick alone, resets the
+/// board within its period; meanwhile the USB link task still takes the host's bytes (a burst of
+/// heartbeats 2 ms after: the rest of the firmware did run; commands are answered by the tick, so
+/// none is). Killed by `heartbeat-from-link` (the gate stays open) and
+/// `watchdog-fed-by-link` (no reset).
+#[test]
+fn a_tick_timer_that_stops_alone_is_gated_and_reset_while_usb_runs_on() {
+    use sandjumper_core::RigMessage;
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let mut cfg = RunConfig::new(elf);
+    cfg.until_ns = Some(FAULT_AT + 60 * MS);
+    cfg.trace_every = 1;
+    cfg.robot = Some(robot_at_single_start());
+    let mut actions = armed_actions(ARM_AT, FAULT_AT);
+    actions.push((FAULT_AT, Action::TickTimerStops));
+    let burst: Vec<u8> = (0..40u16)
+        .flat_map(|k| common::command_frame(900 + k, Command::Heartbeat))
+        .collect();
+    let burst_len = burst.len() as u64;
+    actions.push((FAULT_AT + 2 * MS, Action::HostBytes(burst)));
+    cfg.actions = actions;
+    let (r, host) = run(cfg, NoHost::default()).expect("the run");
+    assert!(at(&r, FAULT_AT - MS).out.drive_gated, "not armed before");
+    let (reset_at, cause) = r
+        .resets
+        .first()
+        .cloned()
+        .unwrap_or_else(|| panic!("no reset after the tick stopped: {:?}", r.last));
+    assert!(
+        cause.contains("IWDG") && reset_at > FAULT_AT && reset_at < FAULT_AT + 25 * MS,
+        "{reset_at} {cause}"
+    );
+    assert!(
+        r.trace
+            .iter()
+            .filter(|row| row.t_ns >= FAULT_AT + 1_200_000 && row.t_ns < reset_at)
+            .all(|row| !row.out.drive_gated && row.out.force_n == 0.0),
+        "the drive saw its enable more than 1.2 ms after the tick stopped"
+    );
+    let taken = at(&r, reset_at - 200_000).usb_out_bytes - at(&r, FAULT_AT + MS).usb_out_bytes;
+    assert!(
+        taken >= burst_len,
+        "the USB link took {taken} of the {burst_len} bytes sent after the tick stopped: the rest of the firmware did not run"
+    );
+    assert!(
+        !rig_messages(&host.received)
+            .iter()
+            .any(|m| matches!(m, RigMessage::Reply { id: 900.., .. })),
+        "a command was answered without the tick"
+    );
+    all_off_after_the_reset(&r);
 }
 
 /// With nothing wired the apparatus is absent: nothing of it can be switched on (no limit
@@ -400,22 +612,26 @@ fn an_absent_bed_apparatus_cannot_be_switched_on() {
     );
 }
 
-/// A harness whose presence link is broken but whose emergency stop is wired and released:
-/// the e-stop proves the harness, and the missing link reads as a stop (never as "no
-/// apparatus", which would leave the e-stop unread).
+/// A harness whose presence link is broken: the apparatus reads as absent (nothing of it can be
+/// switched on), and the emergency stop, on its own connector, is read all the same: pressed
+/// while armed, it stops the drive within a tick. (Before issue 48 the missing link had to read
+/// as a stop, since the e-stop was read only with the harness.)
 #[test]
-fn a_broken_presence_link_reads_as_an_emergency_stop() {
+fn a_broken_presence_link_leaves_the_apparatus_absent_and_the_stop_read() {
     let Some(elf) = common::firmware_elf() else {
         return;
     };
     let mut cfg = RunConfig::new(elf);
-    cfg.until_ns = Some(100 * MS);
+    cfg.until_ns = Some(FAULT_AT + 100 * MS);
+    cfg.trace_every = 1;
     cfg.bed = BedWiring::BrokenPresenceLink;
+    cfg.robot = Some(robot_at_single_start());
+    cfg.actions = armed_actions(ARM_AT, FAULT_AT + 100 * MS);
+    cfg.actions
+        .push((FAULT_AT, Action::EmergencyStop(EmergencyStopLoop::Open)));
     let (r, _) = run(cfg, NoHost::default()).expect("the run");
-    assert!(
-        r.last.expect("ran").out.led_fault,
-        "a broken presence link left the e-stop unmonitored"
-    );
+    assert!(!at(&r, FAULT_AT - MS).out.led_fault);
+    safe_within(&r, FAULT_AT, 300_000, "stop pressed, presence link broken");
 }
 
 /// Lockstep (hardware in the loop on the real board, the host's sensor frames): the real bed
@@ -455,12 +671,7 @@ fn lockstep_keeps_the_real_bed_off_and_the_real_emergency_stop_stops() {
             .to_vec();
         actions.push((300 * MS + u64::from(k) * MS, Action::HostBytes(bytes)));
     }
-    let pressed = BedWiring::Connected {
-        emergency_stop: true,
-        lift_up_limit: false,
-        lift_down_limit: true,
-    };
-    actions.push((350 * MS, Action::Bed(pressed)));
+    actions.push((350 * MS, Action::EmergencyStop(EmergencyStopLoop::Open)));
     cfg.actions = actions;
     let (r, host) = run(cfg, NoHost::default()).expect("the run");
     assert!(

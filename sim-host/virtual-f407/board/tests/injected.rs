@@ -167,6 +167,12 @@ fn an_injected_hardfault_makes_the_rig_safe_reports_and_restarts() {
 /// nothing is reported. The external enable gate (drive and lift enables) closes within its
 /// period (the heartbeat stopped), and the watchdog's reset ends the rest (blower and shaker:
 /// the DAC and TIM3 back to their reset state), then the board reports it.
+///
+/// What fails here and what cannot: the gate's timing checks the board's external monostable
+/// (a locked-up core toggles nothing, whatever the firmware), so no firmware mutant can fail
+/// it; the watchdog's reset within its period and the reported cause are the firmware's
+/// (`watchdog-frozen-on-debug` is not among the mutants that reach a lockup; the watchdog's
+/// own mutants are killed in `faults.rs` and `bring_up.rs`).
 #[test]
 fn a_stack_overflow_locks_the_core_up_the_enable_gate_drops_the_drive_and_the_watchdog_restarts() {
     let Some(elf) = image("stack-overflow") else {

@@ -105,24 +105,47 @@ pub fn describe(s: &Status) -> String {
         },
         s.drive_calibration.zero_code,
         s.drive_calibration.codes_per_newton,
-    ) + &bed_line(s)
+    ) + &estop_line(s)
+        + &bed_line(s)
 }
 
-/// The bed apparatus: present with its inputs, or absent, which a user must know (its
-/// emergency stop input is not monitored then).
+/// The board's own emergency-stop loop, where it has one.
+fn estop_line(s: &Status) -> String {
+    let e = &s.emergency_stop;
+    if !e.fitted {
+        return String::new();
+    }
+    let state = match (e.open, e.closed_since_reset) {
+        (false, _) => "closed",
+        (true, false) => {
+            "OPEN since reset (Arm refused until it reads closed: wire the stop, or a jumper plug on its connector)"
+        }
+        (true, true) => "OPEN (pressed, a wire broken or its connector out)",
+    };
+    format!("  emergency stop     loop {state}\n")
+}
+
+/// The bed apparatus: present with its inputs, or absent, which a user must know (its limit
+/// switches are not read then; on a board with an emergency-stop loop of its own, the stop is).
 fn bed_line(s: &Status) -> String {
     let b = &s.bed;
     if !b.present {
-        return "  bed apparatus      absent: its limit switches and emergency stop input are not \
-                read, and nothing of it can be switched on\n"
-            .to_string();
+        return if s.emergency_stop.fitted {
+            "  bed apparatus      absent: its limit switches are not read, and nothing of it can \
+             be switched on\n"
+        } else {
+            "  bed apparatus      absent: its limit switches and emergency stop input are not \
+             read, and nothing of it can be switched on\n"
+        }
+        .to_string();
     }
     format!(
-        "  bed apparatus      e-stop {}, lift {}{}, blower {} V, shaker {}{}\n",
-        if b.inputs.emergency_stop {
-            "PRESSED"
-        } else {
-            "released"
+        "  bed apparatus      {}, lift {}{}, blower {} V, shaker {}{}\n",
+        match (s.emergency_stop.fitted, b.inputs.emergency_stop) {
+            (true, true) => "harness LOST (a stop)",
+            (true, false) => "harness connected",
+            (false, true) => "e-stop PRESSED",
+            (false, false) => "e-stop released",
         },
         if b.inputs.lift_down_limit {
             "down"

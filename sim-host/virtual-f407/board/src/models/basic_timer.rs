@@ -22,6 +22,8 @@ pub struct BasicTimer {
     pub updates: u64,
     /// Virtual time of the last update event, ns.
     pub last_update_ns: u64,
+    /// Stopped by a fault ([`BasicTimer::halt`]) until the next reset.
+    halted: bool,
 }
 
 impl BasicTimer {
@@ -34,9 +36,15 @@ impl BasicTimer {
         }
     }
 
+    /// The timer stops for good (its clock gated, its update events lost), until a reset.
+    pub fn halt(&mut self) {
+        self.halted = true;
+        self.next = None;
+    }
+
     fn reschedule(&mut self, r: &mut RegisterFile, cx: &mut DeviceContext<'_>) {
         let cr1 = r.get(tim6::Register::Cr1);
-        if cr1 & 1 == 0 || self.clock_hz == 0 {
+        if cr1 & 1 == 0 || self.clock_hz == 0 || self.halted {
             self.next = None;
             return;
         }

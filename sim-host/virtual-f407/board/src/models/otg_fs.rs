@@ -185,6 +185,11 @@ impl OtgFs {
         &self.host.info
     }
 
+    /// Bulk OUT bytes the device took so far (the firmware's link drained its FIFO for them).
+    pub fn out_bytes(&self) -> u64 {
+        self.host.stats.out_bytes
+    }
+
     /// What the host and the core counted.
     pub fn stats(&self) -> UsbStats {
         UsbStats {
