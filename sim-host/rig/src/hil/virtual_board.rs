@@ -6,13 +6,17 @@
 //! reaches a board on a serial port: the USB CDC byte stream (here the program's stdin and
 //! stdout) carries commands, replies and telemetry, nothing else. The firmware runs free on its
 //! own tick, so programs run through the free-running path of the rig tool's session.
+//!
+//! The board runs in virtual time, as fast as the machine lets it: its program writes its
+//! virtual clock to a file (`--clock`; stdout stays the USB byte stream), which the link reads
+//! to count its waits in the board's time ([`super::framed::BoardClock`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command as Process, Stdio};
 use std::time::Duration;
 
-use super::framed::{ChildGuard, FramedLink};
+use super::framed::{BoardClock, ChildGuard, FramedLink};
 use super::link::{LinkError, LinkReport, RigLink};
 use crate::firmware_image::{Board, F407_BUILD, F407_ELF, check_elf};
 use sandjumper_core::protocol::FaultReport;
@@ -34,9 +38,12 @@ pub struct VirtualBoardConfig {
     pub elf: PathBuf,
     /// What the drive moves (None: nothing).
     pub load: Option<VirtualLoad>,
-    /// Run no faster than this multiple of real time (None: as fast as it can).
+    /// Run no faster than this multiple of real time (None: as fast as it can; the program
+    /// allows 0.001 to 1000). Slowing the board down does not fail a run: the link counts its
+    /// waits in the board's virtual time.
     pub pace: Option<f64>,
-    /// How long to wait for an answer.
+    /// How long to wait for an answer, in the board's virtual time (the board's clock standing
+    /// still this long in wall time is a hang).
     pub answer_timeout: Duration,
 }
 
@@ -115,6 +122,18 @@ fn with_log_tail(e: LinkError, log: &Path) -> LinkError {
     }
 }
 
+/// The virtual time in the board's `--clock` file: a u64 of ns, little-endian, at offset 0 and
+/// its bitwise complement at offset 8. `None` before the first write, or when a read caught a
+/// write half done.
+fn read_clock(path: &Path) -> Option<Duration> {
+    let bytes = std::fs::read(path).ok()?;
+    let word = |at: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+    };
+    let (ns, check) = (word(0)?, word(8)?);
+    (check == !ns).then(|| Duration::from_nanos(ns))
+}
+
 fn io(what: &str) -> impl Fn(std::io::Error) -> LinkError + '_ {
     move |e| LinkError::Io {
         what: what.to_string(),
@@ -145,12 +164,15 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
         .tempdir()
         .map_err(io("creating the virtual board's directory"))?;
     let summary_path = dir.path().join("summary.json");
+    let clock_path = dir.path().join("clock");
     let mut cmd = Process::new(&cfg.program);
     cmd.arg("--elf")
         .arg(&cfg.elf)
         .arg("--stdio")
         .arg("--summary")
-        .arg(&summary_path);
+        .arg(&summary_path)
+        .arg("--clock")
+        .arg(&clock_path);
     if let Some(load) = &cfg.load {
         let (params, model, flag, at_flag, at_m) = match load {
             VirtualLoad::Robot {
@@ -198,12 +220,14 @@ pub fn start(cfg: &VirtualBoardConfig) -> Result<VirtualBoard, LinkError> {
         what: "the virtual board".into(),
         message: "no stdout".into(),
     })?;
-    let link = FramedLink::start(
+    let clock: BoardClock = std::sync::Arc::new(move || read_clock(&clock_path));
+    let link = FramedLink::start_clocked(
         "f407",
         Box::new(stdout),
         Box::new(stdin),
         Some(ChildGuard::new(child, "the virtual board")),
         cfg.answer_timeout,
+        Some(clock),
     )
     .map_err(|e| with_log_tail(e, &log_path))?;
     Ok(VirtualBoard {
@@ -265,5 +289,27 @@ impl RigLink for VirtualBoard {
             .filter(|(_, wall)| *wall > 0.0)
             .map(|(virt, wall)| virt / wall);
         Ok(report)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_clock_file_is_read_only_when_whole() {
+        let dir = tempfile::tempdir().expect("a temporary directory");
+        let path = dir.path().join("clock");
+        assert_eq!(read_clock(&path), None, "not written yet");
+        let ns: u64 = 1_234_567_890;
+        let mut bytes = ns.to_le_bytes().to_vec();
+        std::fs::write(&path, &bytes).expect("written");
+        assert_eq!(read_clock(&path), None, "half written");
+        bytes.extend((!ns).to_le_bytes());
+        std::fs::write(&path, &bytes).expect("written");
+        assert_eq!(read_clock(&path), Some(Duration::from_nanos(ns)));
+        bytes[0] ^= 1;
+        std::fs::write(&path, &bytes).expect("written");
+        assert_eq!(read_clock(&path), None, "a torn write");
     }
 }

@@ -1,19 +1,24 @@
 //! `virtual-f407`: the rig's F407 firmware ELF on the virtual board.
 //!
 //! ```text
-//! virtual-f407 --elf ELF [--ms N] [--bed ready|unwired] [--pace X] [--stdio]
+//! virtual-f407 --elf ELF [--ms N] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
 //!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
 //!              [--intrusion PARAMS.toml --model eq4|... --surface-p M]
 //! ```
 //! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
 //! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
 //! `--ms`). The firmware's log goes to stderr. Exit status 2 on bad input.
+//! `--clock FILE`: the board's virtual time, ns, written in place at most every 10 ms of wall
+//! time and at the end, as a u64 little-endian at offset 0 and its bitwise complement at
+//! offset 8 (a read that catches a write half done sees them disagree): a host counts its
+//! waits in the board's time with it (stdout carries the USB bytes only).
 
-use std::io::{Read, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::time::{Duration, Instant};
 
-use sandjumper_virtual_f407::rig::{BedWiring, Robot};
+use sandjumper_virtual_f407::rig::{BedWiring, EmergencyStopLoop, Robot};
 use sandjumper_virtual_f407::run::{self, HostPort, NoHost, RunConfig, RunReport};
 
 fn fail(msg: impl std::fmt::Display) -> ! {
@@ -47,11 +52,79 @@ impl HostPort for Stdio {
     }
 }
 
+/// How often `--clock FILE` is rewritten at most, wall time.
+const CLOCK_EVERY: Duration = Duration::from_millis(10);
+
+/// `--clock FILE`: the board's virtual time for the host.
+struct ClockFile {
+    file: std::fs::File,
+    path: PathBuf,
+    /// Wall time of the last write.
+    written: Option<Instant>,
+    /// A write failed (reported once).
+    failed: bool,
+}
+
+impl ClockFile {
+    /// Create (or empty) `path`; exit 2 when it cannot be.
+    fn create(path: PathBuf) -> Self {
+        let file = std::fs::File::create(&path)
+            .unwrap_or_else(|e| fail(format!("--clock {}: {e}", path.display())));
+        Self {
+            file,
+            path,
+            written: None,
+            failed: false,
+        }
+    }
+
+    /// Write `now_ns` in place (the first failure said on stderr; the host then sees the clock
+    /// stand still).
+    fn write(&mut self, now_ns: u64) {
+        let mut bytes = [0u8; 16];
+        bytes[..8].copy_from_slice(&now_ns.to_le_bytes());
+        bytes[8..].copy_from_slice(&(!now_ns).to_le_bytes());
+        let written = self
+            .file
+            .seek(SeekFrom::Start(0))
+            .and_then(|_| self.file.write_all(&bytes));
+        self.written = Some(Instant::now());
+        if let Err(e) = written
+            && !std::mem::replace(&mut self.failed, true)
+        {
+            eprintln!("virtual-f407: --clock {}: {e}", self.path.display());
+        }
+    }
+}
+
+/// A host port that also passes the board's clock to `--clock FILE`.
+struct Clocked<H> {
+    port: H,
+    clock: Option<ClockFile>,
+}
+
+impl<H: HostPort> HostPort for Clocked<H> {
+    fn receive(&mut self) -> Option<Vec<u8>> {
+        self.port.receive()
+    }
+    fn send(&mut self, bytes: &[u8]) {
+        self.port.send(bytes);
+    }
+    fn clock(&mut self, now_ns: u64) {
+        if let Some(c) = self.clock.as_mut()
+            && c.written.is_none_or(|t| t.elapsed() >= CLOCK_EVERY)
+        {
+            c.write(now_ns);
+        }
+    }
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let mut elf: Option<PathBuf> = None;
     let mut ms: Option<u64> = None;
     let mut bed = BedWiring::READY;
+    let mut emergency_stop = EmergencyStopLoop::Closed;
     let mut pace = None;
     let mut stdio = false;
     let mut robot_params: Option<PathBuf> = None;
@@ -60,6 +133,7 @@ fn main() {
     let mut model = "eq4".to_string();
     let mut p0 = 0.0;
     let mut summary: Option<PathBuf> = None;
+    let mut clock: Option<PathBuf> = None;
     while let Some(a) = args.next() {
         let mut value = |name: &str| {
             args.next()
@@ -79,6 +153,15 @@ fn main() {
                     "ready" => BedWiring::READY,
                     "unwired" => BedWiring::Unwired,
                     other => fail(format!("--bed {other}: allowed ready, unwired")),
+                }
+            }
+            "--estop" => {
+                emergency_stop = match value("--estop").as_str() {
+                    "closed" => EmergencyStopLoop::Closed,
+                    "open" => EmergencyStopLoop::Open,
+                    other => fail(format!(
+                        "--estop {other}: allowed closed (released, or a jumper plug), open (pressed or not wired)"
+                    )),
                 }
             }
             "--pace" => {
@@ -106,13 +189,14 @@ fn main() {
                     .unwrap_or_else(|_| fail("--p0: metres"))
             }
             "--summary" => summary = Some(value("--summary").into()),
+            "--clock" => clock = Some(value("--clock").into()),
             "-h" | "--help" => {
                 println!(
                     "{}",
                     include_str!("main.rs")
                         .lines()
                         .skip(2)
-                        .take(9)
+                        .take_while(|l| l.starts_with("//!"))
                         .map(|l| l.trim_start_matches("//! "))
                         .collect::<Vec<_>>()
                         .join("\n")
@@ -149,6 +233,7 @@ fn main() {
             .unwrap_or_else(|| fail(format!("VIRTUAL_F407_PERIOD_NS={p}: 1000 to 1000000 ns")));
     }
     cfg.bed = bed;
+    cfg.emergency_stop = emergency_stop;
     cfg.pace = pace;
     if let Some(path) = robot_params {
         let params = read_params(&path, "--robot");
@@ -172,6 +257,7 @@ fn main() {
                 .unwrap_or_else(|e| fail(format!("the intrusion fixture: {e}"))),
         );
     }
+    let clock = clock.map(ClockFile::create);
     let report = if stdio {
         let (tx, rx) = channel();
         std::thread::spawn(move || {
@@ -183,18 +269,19 @@ fn main() {
                 }
             }
         });
-        run::run(
-            cfg,
-            Stdio {
-                rx,
-                out: std::io::stdout(),
-            },
-        )
-        .map(|(r, _)| r)
+        let port = Stdio {
+            rx,
+            out: std::io::stdout(),
+        };
+        run::run(cfg, Clocked { port, clock }).map(|(r, h)| (r, h.clock))
     } else {
-        run::run(cfg, NoHost::default()).map(|(r, _)| r)
+        let port = NoHost::default();
+        run::run(cfg, Clocked { port, clock }).map(|(r, h)| (r, h.clock))
     };
-    let report = report.unwrap_or_else(|e| fail(e));
+    let (report, clock) = report.unwrap_or_else(|e| fail(e));
+    if let Some(mut c) = clock {
+        c.write(report.end_ns);
+    }
     print_report(&report);
     if let Some(path) = summary {
         std::fs::write(&path, summary_json(&report))

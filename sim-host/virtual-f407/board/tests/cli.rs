@@ -3,6 +3,8 @@
 
 use std::process::Command;
 
+mod common;
+
 /// Run the program with `args`; its exit status and standard error.
 fn run(args: &[&str]) -> (Option<i32>, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_virtual-f407"))
@@ -49,6 +51,21 @@ fn bad_arguments_exit_2_with_a_message() {
             vec!["--elf", &not_elf, "--ms", "5", "--frobnicate"],
             "unknown argument",
         ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--clock"],
+            "--clock needs a value",
+        ),
+        (
+            vec![
+                "--elf",
+                &not_elf,
+                "--ms",
+                "5",
+                "--clock",
+                "/nonexistent/virtual-f407/clock",
+            ],
+            "--clock /nonexistent/virtual-f407/clock:",
+        ),
         (vec!["--elf", &not_elf, "--ms", "5"], "virtual-f407:"),
         (
             vec!["--elf", "/nonexistent/fw.elf", "--ms", "5"],
@@ -60,4 +77,30 @@ fn bad_arguments_exit_2_with_a_message() {
         assert!(err.contains(says), "{args:?}: {err}");
     }
     let _ = std::fs::remove_file(&not_elf);
+}
+
+/// `--clock FILE` holds the virtual time at the end: the run's length, ns, and its complement.
+#[test]
+fn the_clock_file_holds_the_virtual_time_at_the_end() {
+    let Some(elf) = common::firmware_elf() else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("virtual-f407-clock-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let clock = dir.join("clock");
+    let (code, err) = run(&[
+        "--elf",
+        elf.to_str().unwrap(),
+        "--ms",
+        "30",
+        "--clock",
+        clock.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let bytes = std::fs::read(&clock).unwrap();
+    assert_eq!(bytes.len(), 16, "{bytes:?}");
+    let word = |i: usize| u64::from_le_bytes(bytes[i..i + 8].try_into().unwrap());
+    assert_eq!(word(0), 30_000_000);
+    assert_eq!(word(8), !30_000_000u64);
+    let _ = std::fs::remove_dir_all(&dir);
 }

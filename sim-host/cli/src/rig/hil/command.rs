@@ -600,6 +600,7 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         // hil's default is the QEMU build's ELF: the virtual board takes the F407 build's.
         firmware: (a.firmware != emulated).then(|| a.firmware.clone()),
         virtual_board: None,
+        board_pace: None,
         drive_calibration: None,
     };
     let rig = crate::rig::tool::RigParamArgs {

@@ -109,9 +109,24 @@ pub struct TargetArgs {
     /// sim-host/virtual-f407/target/release/virtual-f407).
     #[arg(long, value_name = "PATH")]
     pub virtual_board: Option<PathBuf>,
+    /// Run the virtual board of --link f407 no faster than X times real time (0.001..=1000;
+    /// default: as fast as the machine allows). The host counts its waits in the board's
+    /// virtual time, so a slow board runs the same program.
+    #[arg(long, value_name = "X", value_parser = parse_board_pace)]
+    pub board_pace: Option<f64>,
     /// Drive calibration saved by `rig calibrate-drive --save`: sent when the session opens.
     #[arg(long, value_name = "FILE.toml")]
     pub drive_calibration: Option<PathBuf>,
+}
+
+/// `--board-pace X`: the virtual board's pace, times real time (its program's range).
+fn parse_board_pace(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.001..=1000.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a board pace (allowed: 0.001..=1000 times real time)"
+        )),
+    }
 }
 
 /// The ELF QEMU runs for `--link pil` unless `--firmware` says otherwise.
@@ -151,6 +166,11 @@ impl TargetArgs {
             .as_deref()
             .map(calibrate::read_calibration)
             .transpose()?;
+        if self.board_pace.is_some() && self.controller.link != Some(SimLink::F407) {
+            return Err(CliError::input(
+                "--board-pace paces the virtual board: it needs --link f407",
+            ));
+        }
         let mut link = if self.controller.link == Some(SimLink::F407) {
             let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
             if let Some(p) = &self.virtual_board {
@@ -160,6 +180,7 @@ impl TargetArgs {
                 cfg.elf = elf.clone();
             }
             cfg.load = load;
+            cfg.pace = self.board_pace;
             let board = virtual_board::start(&cfg).map_err(|e| {
                 CliError::input(format!("cannot start the virtual F407 board: {e}"))
             })?;
