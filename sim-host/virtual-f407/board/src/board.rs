@@ -38,6 +38,7 @@ pub const NMI_INPUT: u16 = rigless::emulator::INTERRUPT_LINES - 1;
 #[derive(Debug, Clone, Copy)]
 struct Slots {
     rcc: usize,
+    gpioe: usize,
     flash: usize,
     tim7: usize,
     dac: usize,
@@ -68,6 +69,11 @@ pub struct F407 {
     /// The PLL never locks (`RCC_CR.PLLRDY` and `RCC_CIR.PLLRDYF` stay clear, whatever
     /// rigless's RCC schedules): a part with its VDDA missing, say.
     pub pll_never_locks: bool,
+    /// Level changes of PE8 (the tick heartbeat) so far, seen at every access to GPIOE and at
+    /// every stop ([`F407::note_heartbeat`]): what the external enable gate's monostable counts,
+    /// however fast the pin toggles between two stops.
+    pub heartbeat_edges: u64,
+    heartbeat_high: bool,
     slots: Slots,
 }
 
@@ -89,6 +95,7 @@ impl F407 {
         let bus = part.bus();
         let slots = Slots {
             rcc: bus.slot("RCC")?,
+            gpioe: bus.slot("GPIOE")?,
             flash: bus.slot("FLASH")?,
             tim7: bus.slot("TIM7")?,
             dac: bus.slot("DAC")?,
@@ -106,8 +113,19 @@ impl F407 {
             crystal_runs: hse_hz > 0,
             flash_stuck_busy: false,
             pll_never_locks: false,
+            heartbeat_edges: 0,
+            heartbeat_high: false,
             slots,
         })
+    }
+
+    /// Counts a change of PE8's level since the last look (see [`F407::heartbeat_edges`]).
+    pub fn note_heartbeat(&mut self) {
+        let high = crate::rig::high(&mut self.part, crate::rig::PORT_E, 8);
+        if high != self.heartbeat_high {
+            self.heartbeat_high = high;
+            self.heartbeat_edges += 1;
+        }
     }
 
     /// Whether the crystal oscillates.
@@ -170,6 +188,10 @@ impl Mcu for F407 {
     }
     fn split(&mut self, slot: usize) -> (&mut Bus, Option<&mut dyn ErasedDevice>) {
         let s = self.slots;
+        if slot == s.gpioe {
+            // Before every access: the level the previous access left.
+            self.note_heartbeat();
+        }
         if slot == s.rcc && !self.crystal_runs {
             self.hold_the_crystal_down();
         }

@@ -284,7 +284,7 @@ struct BoardDriver<H> {
     flash_violations: Vec<String>,
     pending_host_bytes: Vec<u8>,
     robot_released: bool,
-    heartbeat_level: bool,
+    heartbeat_edges: u64,
     last_heartbeat_edge_ns: Option<u64>,
     drive_powered: bool,
 }
@@ -485,9 +485,11 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         self.host.clock(now);
         // The rig over the next period: the drive's force as the board commands it now.
         let mut out = rig::outputs(mcu);
-        // The external enable gate: retriggered by every heartbeat edge.
-        if out.heartbeat != self.heartbeat_level {
-            self.heartbeat_level = out.heartbeat;
+        // The external enable gate: retriggered by every heartbeat edge, counted at every access
+        // to GPIOE (a pin toggled many times between two stops retriggers it as on silicon).
+        mcu.note_heartbeat();
+        if mcu.heartbeat_edges != self.heartbeat_edges {
+            self.heartbeat_edges = mcu.heartbeat_edges;
             self.last_heartbeat_edge_ns = Some(now);
         }
         let gate_open = self
@@ -639,7 +641,7 @@ pub fn run<H: HostPort + Send + 'static>(
         flash_violations: Vec::new(),
         pending_host_bytes: Vec::new(),
         robot_released: false,
-        heartbeat_level: false,
+        heartbeat_edges: 0,
         last_heartbeat_edge_ns: None,
         drive_powered: cfg.drive_powered,
     };

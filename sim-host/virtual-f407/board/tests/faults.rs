@@ -371,7 +371,9 @@ fn a_stalled_tick_while_armed_is_gated_at_once_and_reset_by_the_watchdog() {
 }
 
 /// The core stops while the bed apparatus runs (the rig Idle): the gate drops the lift within
-/// 1 ms, and the watchdog's reset turns the blower and the shaker off.
+/// 1 ms, and the watchdog's reset turns the blower and the shaker off. The gate's assertion is
+/// the board's (a halted core toggles nothing, whatever the firmware: no mutant can fail it);
+/// the watchdog's reset and everything off after it are the firmware's.
 #[test]
 fn a_stalled_tick_while_the_bed_runs_ends_with_the_bed_off_at_the_watchdog() {
     let Some(r) = bed_running_then(Action::Hold(true)) else {
@@ -481,6 +483,27 @@ fn the_stop_pressed_at_power_up_refuses_arm_with_the_bed_connected() {
     assert!(r.trace.iter().all(|row| !row.out.drive_enable));
 }
 
+/// The bed's interlock at the pins: the apparatus connected with its lift up (its lower limit
+/// switch open), `Arm` is refused ("lift not down") and the drive enable never rises. Killed by
+/// `lift-interlock-off`.
+#[test]
+fn arm_is_refused_with_the_lift_not_down() {
+    use sandjumper_core::Rejection;
+    use sandjumper_core::bed::BedError;
+    let lift_up = BedWiring::Connected {
+        lift_up_limit: true,
+        lift_down_limit: false,
+    };
+    let Some((r, answer)) = arm_wired(lift_up, EmergencyStopLoop::Closed) else {
+        return;
+    };
+    assert_eq!(
+        answer,
+        Some(Err(Rejection::Interlock(BedError::LiftNotDown)))
+    );
+    assert!(r.trace.iter().all(|row| !row.out.drive_enable));
+}
+
 /// Issue 48 item 2: the host falls silent with the rig Idle and the bed apparatus running (lift
 /// up, blower on, shaker at half duty, switched on at 200-210 ms): the bed watchdog (500 ms after
 /// the host's last frame) latches `BedWatchdog` and everything goes off, on the pins, within a
@@ -558,6 +581,13 @@ fn a_tick_timer_that_stops_alone_is_gated_and_reset_while_usb_runs_on() {
         .collect();
     let burst_len = burst.len() as u64;
     actions.push((FAULT_AT + 2 * MS, Action::HostBytes(burst)));
+    // The host goes on talking, as a host does (its traffic wakes the link task).
+    actions.extend((0..18u16).map(|k| {
+        (
+            FAULT_AT + 4 * MS + u64::from(k) * 2 * MS,
+            send(950 + k, Command::Heartbeat),
+        )
+    }));
     cfg.actions = actions;
     let (r, host) = run(cfg, NoHost::default()).expect("the run");
     assert!(at(&r, FAULT_AT - MS).out.drive_gated, "not armed before");
