@@ -250,6 +250,10 @@ pub const PLL_LOCK_CYCLES: u32 = 320_000;
 /// 0), Q = 7 (48 MHz for USB).
 pub const PLLCFGR_168_48: u32 = 4 | (168 << 6) | (1 << 22) | (7 << 24);
 
+/// `RCC_PLLCFGR`'s fields (PLLM, PLLN, PLLP, PLLSRC, PLLQ); the other bits are reserved and
+/// keep their reset value (bit 29 is set out of reset).
+const PLLCFGR_FIELDS: u32 = 0x0F43_7FFF;
+
 /// How long the start-up waits for an option-byte write, in core cycles: 0.2 s at the 16 MHz
 /// HSI, 12 times the write's ~16 ms, inside the watchdog's shortest first window (0.35 s).
 pub const OPTION_WRITE_CYCLES: u32 = 3_200_000;
@@ -312,19 +316,21 @@ fn startup_failed() {
 /// Locks the PLL once on the running crystal with a bound, then switches it off again: the
 /// HAL's clock setup, which configures it (`PLLCFGR` may be written only with the PLL off) and
 /// waits for the lock with no bound, then finds a PLL known to lock. Returns false if it did not
-/// lock (the PLL is left off).
+/// lock, or did not stop after (the HAL must not write `PLLCFGR` with it on). The HAL's own
+/// second lock and its switch of SYSCLK to the PLL stay bounded by the early watchdog alone.
 fn pll_locks() -> bool {
     // SAFETY: RCC_PLLCFGR written with the PLL off, RCC_CR's PLLON set and cleared, PLLRDY read,
     // before the HAL owns the RCC; the system clock still runs on the HSI throughout.
     unsafe {
         let rcc = &*pac::RCC::ptr();
-        rcc.pllcfgr().write(|w| w.bits(PLLCFGR_168_48));
+        rcc.pllcfgr()
+            .modify(|r, w| w.bits((r.bits() & !PLLCFGR_FIELDS) | PLLCFGR_168_48));
         rcc.cr().modify(|_, w| w.pllon().set_bit());
         let locked = wait_for(PLL_LOCK_CYCLES, || rcc.cr().read().pllrdy().bit_is_set());
         rcc.cr().modify(|_, w| w.pllon().clear_bit());
         // PLLRDY falls within a few cycles of the VCO's stop; bounded all the same.
-        wait_for(PLL_LOCK_CYCLES, || rcc.cr().read().pllrdy().bit_is_clear());
-        locked
+        let stopped = wait_for(PLL_LOCK_CYCLES, || rcc.cr().read().pllrdy().bit_is_clear());
+        locked && stopped
     }
 }
 
@@ -442,7 +448,7 @@ pub fn init(dp: pac::Peripherals) -> Parts {
     if !pll_locked {
         startup_failed();
         defmt::panic!(
-            "the PLL did not lock on the 8 MHz crystal within 20 ms: check the supply (VDDA) and the crystal"
+            "the PLL did not lock on the 8 MHz crystal within 20 ms (or did not stop after): check the supply (VDDA) and the crystal"
         );
     }
     let mut rcc: Rcc = dp.RCC.freeze(

@@ -412,3 +412,28 @@ fn the_bed_watchdog_runs_while_the_drive_holds_after_a_jump() {
     }
     assert_eq!(latched, Some(FaultCode::BedWatchdog));
 }
+
+/// Each actuator alone keeps the bed watchdog armed: the shaker left running after the lift
+/// stopped at its limit, the blower alone, the lift alone.
+#[test]
+fn each_actuator_alone_is_watched() {
+    let limit = RigConfig::default().bed_watchdog_ticks();
+    for cmd in [
+        BedCommand::Shaker { duty: 0.3 },
+        BedCommand::Blower { volts: 2.0 },
+        BedCommand::Lift(LiftMove::Up),
+    ] {
+        let mut r = configured_rig();
+        tick(&mut r, READY);
+        r.handle(&Command::Bed(cmd)).unwrap();
+        let mut latched_at = None;
+        for k in 0..=limit + 1 {
+            if tick(&mut r, READY).fault == Some(FaultCode::BedWatchdog) {
+                latched_at = Some(k);
+                break;
+            }
+        }
+        assert_eq!(latched_at, Some(limit), "{cmd:?} alone");
+        assert_eq!(r.bed().outputs(), BedOutputs::default(), "{cmd:?} alone");
+    }
+}

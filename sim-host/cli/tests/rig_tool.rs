@@ -354,7 +354,11 @@ fn bad_input_exits_2_with_a_message() {
         ),
         (
             vec!["rig", "status", "--link", "f407", "--board-pace", "0"],
-            "0.001..=1000",
+            "0.001..=1 times real time",
+        ),
+        (
+            vec!["rig", "status", "--link", "f407", "--board-pace", "2"],
+            "0.001..=1 times real time",
         ),
         (
             vec![

@@ -20,7 +20,7 @@
 use std::io::{Read, Write};
 use std::process::Child;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError, channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -346,17 +346,33 @@ impl FramedLink {
     ) -> Result<T, LinkError> {
         let mut patience = Patience::new(self.clock.clone(), self.answer_timeout);
         loop {
-            let left = match patience.check() {
-                Waited::For(left) => left,
-                over => return Err(patience.error(waiting_for, over)),
-            };
-            let item = match self.incoming.recv_timeout(left) {
-                Ok(item) => item,
-                Err(RecvTimeoutError::Timeout) => continue,
-                Err(RecvTimeoutError::Disconnected) => {
+            // What has already arrived first: a host starved of CPU time must not declare a
+            // timeout with the answer waiting in the queue.
+            let queued = match self.incoming.try_recv() {
+                Ok(item) => Some(item),
+                Err(TryRecvError::Empty) => None,
+                Err(TryRecvError::Disconnected) => {
                     return Err(LinkError::Closed {
                         waiting_for: waiting_for.into(),
                     });
+                }
+            };
+            let item = match queued {
+                Some(item) => item,
+                None => {
+                    let left = match patience.check() {
+                        Waited::For(left) => left,
+                        over => return Err(patience.error(waiting_for, over)),
+                    };
+                    match self.incoming.recv_timeout(left) {
+                        Ok(item) => item,
+                        Err(RecvTimeoutError::Timeout) => continue,
+                        Err(RecvTimeoutError::Disconnected) => {
+                            return Err(LinkError::Closed {
+                                waiting_for: waiting_for.into(),
+                            });
+                        }
+                    }
                 }
             };
             match item {

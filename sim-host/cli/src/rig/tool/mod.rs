@@ -109,7 +109,9 @@ pub struct TargetArgs {
     /// sim-host/virtual-f407/target/release/virtual-f407).
     #[arg(long, value_name = "PATH")]
     pub virtual_board: Option<PathBuf>,
-    /// Run the virtual board of --link f407 no faster than X times real time (0.001..=1000;
+    /// Run the virtual board of --link f407 no faster than X times real time (0.001..=1: only
+    /// slower, since the host polls every 50 ms of wall time and the board's 500 ms watchdogs
+    /// count its virtual time;
     /// default: as fast as the machine allows). The host counts its waits in the board's
     /// virtual time, so a slow board runs the same program.
     #[arg(long, value_name = "X", value_parser = parse_board_pace)]
@@ -122,9 +124,10 @@ pub struct TargetArgs {
 /// `--board-pace X`: the virtual board's pace, times real time (its program's range).
 fn parse_board_pace(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if (0.001..=1000.0).contains(&v) => Ok(v),
+        Ok(v) if (0.001..=1.0).contains(&v) => Ok(v),
         _ => Err(format!(
-            "`{s}` is not a board pace (allowed: 0.001..=1000 times real time)"
+            "`{s}` is not a board pace (allowed: 0.001..=1 times real time: a board run faster \
+             than real time would see the host's 50 ms polls spread past its watchdogs)"
         )),
     }
 }
