@@ -138,7 +138,7 @@ fn a_rig_whose_lift_is_not_down_refuses_to_arm_and_one_whose_lift_is_down_jumps(
     });
     let mut link = SilLink::new(rig_config(&config)).unwrap();
     let err = run_jump(&p, &spec, config, &mut link).expect_err("the interlock refuses Arm");
-    assert!(err.to_string().contains("LiftNotDown"), "{err}");
+    assert!(err.to_string().contains("the lift is not down"), "{err}");
     spec.bed = Some(BedInputs {
         lift_down_limit: true,
         ..BedInputs::default()
