@@ -4,34 +4,14 @@
 //! message) without the virtual board or the F407 ELF, unless `CI` is set.
 
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
+use std::time::Duration;
 
 mod common;
-use common::virtual_board;
+use common::{sandjumper_within, virtual_board};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Run with a deadline: a hung run fails the test instead of hanging it.
-fn sandjumper_within(args: &[&str], limit: Duration) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run sandjumper");
-    let start = Instant::now();
-    while child.try_wait().expect("the run").is_none() {
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let o = child.wait_with_output().expect("the killed run");
-            panic!("{args:?} did not finish within {limit:?}: {}", stderr(&o));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().expect("the run's output")
 }
 
 /// The summary of a short slow intrusion through `--link f407` (`pace`: `--board-pace`).

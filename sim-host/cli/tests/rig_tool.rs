@@ -14,11 +14,11 @@
 
 use sandjumper_rig::hil::emulated_firmware;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
+use std::time::Duration;
 
 mod common;
-use common::{ok, sandjumper, succeeded, virtual_board, workspace};
+use common::{ok, sandjumper, sandjumper_within, succeeded, virtual_board, workspace};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -529,26 +529,6 @@ fn qemu_firmware() -> Option<PathBuf> {
             None
         }
     }
-}
-
-/// Run with a deadline: a hung firmware fails the test instead of hanging it.
-fn sandjumper_within(args: &[&str], limit: Duration) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run sandjumper");
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > limit {
-            child.kill().unwrap();
-            let o = child.wait_with_output().unwrap();
-            panic!("{args:?} did not finish within {limit:?}: {}", stderr(&o));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
 }
 
 #[test]

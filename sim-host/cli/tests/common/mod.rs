@@ -7,7 +7,8 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// Runs this build's `sandjumper` binary with `args` and returns what it did.
 pub fn sandjumper(args: &[&str]) -> Output {
@@ -153,4 +154,28 @@ pub fn lammps() -> Option<PathBuf> {
         eprintln!("{msg}");
     }
     found
+}
+
+/// `sandjumper args` with a deadline: a hung run (a hung firmware, a virtual board that never
+/// finishes) fails the test after `limit` instead of hanging it.
+pub fn sandjumper_within(args: &[&str], limit: Duration) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run sandjumper");
+    let start = Instant::now();
+    while child.try_wait().expect("the run").is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let o = child.wait_with_output().expect("the killed run");
+            panic!(
+                "{args:?} did not finish within {limit:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("the run's output")
 }
