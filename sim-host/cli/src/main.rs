@@ -1,6 +1,8 @@
 //! The `sandjumper` command line (see [`sandjumper_cli::cli`]).
 fn main() -> std::process::ExitCode {
     restore_default_sigpipe();
+    // The libraries' notes (a partial output a killed run left beside --out) on stderr.
+    sandjumper_output::set_note_sink(|line| eprintln!("{line}"));
     sandjumper_cli::cli::run(std::env::args_os())
 }
 

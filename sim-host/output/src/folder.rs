@@ -126,12 +126,12 @@ impl StagedDir {
         // Nothing lost silently: the partial output of an earlier run into this target that was
         // killed (no chance to clean up) is named, and left as it is.
         for unfinished in unfinished_beside(target) {
-            eprintln!(
+            crate::progress::note(&format!(
                 "note: {} is the partial output of an earlier run into {} whose process is gone \
                  (killed?); it is left as it is: look inside, or remove it",
                 unfinished.display(),
                 target.display()
-            );
+            ));
         }
         let staging = tempfile::Builder::new()
             .prefix(&format!(".{name}.partial-"))

@@ -16,4 +16,4 @@ pub mod progress;
 
 pub use error::*;
 pub use folder::*;
-pub use progress::{Blame, Blamed, Progress, Silent};
+pub use progress::{Blame, Blamed, Progress, Silent, set_note_sink};

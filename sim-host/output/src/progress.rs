@@ -31,6 +31,24 @@ pub trait Progress: Sync {
     }
 }
 
+/// Where a note goes that has no call's [`Progress`] at hand (an output folder that names
+/// the partial output a killed run left beside it): nowhere until a face sets it
+/// ([`set_note_sink`]); the command line prints it on stderr.
+static NOTE_SINK: std::sync::OnceLock<fn(&str)> = std::sync::OnceLock::new();
+
+/// Send the process's notes (see [`note`]) to `sink`, once; later calls are ignored.
+pub fn set_note_sink(sink: fn(&str)) {
+    let _ = NOTE_SINK.set(sink);
+}
+
+/// A note for the user from code that has no [`Progress`] to hand: given to the sink
+/// [`set_note_sink`] set, dropped if none was set.
+pub fn note(line: &str) {
+    if let Some(sink) = NOTE_SINK.get() {
+        sink(line);
+    }
+}
+
 /// Reports nothing and never asks to stop: for tests, examples and callers that only want
 /// the outcome.
 #[derive(Clone, Copy, Debug, Default)]

@@ -21,6 +21,9 @@ use pyo3::prelude::*;
 #[pyo3(name = "sandjumper")]
 fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The libraries' notes (a partial output a killed run left beside `out`) on stderr, as the
+    // command line has them.
+    sandjumper_output::set_note_sink(|line| eprintln!("{line}"));
     m.add_class::<simulate::JumpResult>()?;
     m.add_class::<simulate::SweepResult>()?;
     m.add_class::<simulate::HilResult>()?;
