@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand};
 
 use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL, Silent};
+use crate::command::progress::cli_error;
+use sandjumper_output::{CliError, Silent};
 
 /// `sandjumper log`.
 #[derive(Debug, Clone, Args)]
@@ -77,17 +78,6 @@ pub fn run(a: &LogArgs) -> Result<(), CliError> {
     match &a.action {
         LogAction::Check(c) => check(c),
         LogAction::Convert(c) => convert(c),
-    }
-}
-
-/// A library error as the command line's message and exit status.
-fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
     }
 }
 

@@ -7,8 +7,8 @@ use clap::{Args, Subcommand};
 
 use super::point::Connect;
 use super::session::{self, Hooks, ResumeRequest, RunRequest, SessionOutcome, StatusRequest};
-use crate::command::progress::Bars;
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
+use crate::command::progress::{Bars, cli_error};
+use sandjumper_output::CliError;
 
 /// `campaign`.
 #[derive(Args, Debug)]
@@ -93,17 +93,6 @@ pub fn run(a: &CampaignArgs) -> Result<(), CliError> {
         CampaignCommand::Run(r) => run_new(r),
         CampaignCommand::Resume(r) => resume(r),
         CampaignCommand::Status(s) => status(s),
-    }
-}
-
-/// A library error as the command line's message and exit status.
-fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
     }
 }
 

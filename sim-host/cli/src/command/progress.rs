@@ -1,9 +1,9 @@
 //! The command line's [`Progress`]: indicatif bars on stderr (shown only on a terminal) and
-//! notes printed on stderr.
+//! notes printed on stderr; and a library error as the command line's error.
 
 use std::sync::Mutex;
 
-use sandjumper_output::Progress;
+use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL, Progress};
 
 /// Progress bars and notes on stderr; Ctrl-C is read from [`crate::interrupt`].
 #[derive(Default)]
@@ -56,5 +56,16 @@ impl Progress for Bars {
 
     fn cancelled(&self) -> bool {
         crate::interrupt::interrupted()
+    }
+}
+
+/// A library error as the command line's message and exit status.
+pub fn cli_error<E: Blamed>(e: E) -> CliError {
+    CliError {
+        message: e.to_string(),
+        exit: match e.blame() {
+            Blame::Input => EXIT_BAD_INPUT,
+            Blame::Internal => EXIT_INTERNAL,
+        },
     }
 }
