@@ -107,6 +107,9 @@ pub struct StatusRequest {
     pub dir: PathBuf,
 }
 
+/// Called with a point's row and its line of the table as the point is done.
+pub type OnPoint<'a> = dyn FnMut(&ResultRow, &str) + 'a;
+
 /// What a session reports besides its progress: the live view's bus and each point as it
 /// is done. The default reports nowhere.
 #[derive(Default)]
@@ -115,7 +118,7 @@ pub struct Hooks<'a> {
     pub live: Option<&'a mut LiveBus>,
     /// Called with each point's row and its line of the table (the command line prints the
     /// line on stdout) as the point is done.
-    pub on_point: Option<Box<dyn FnMut(&ResultRow, &str) + 'a>>,
+    pub on_point: Option<Box<OnPoint<'a>>>,
 }
 
 /// How a session ended without an error.
