@@ -45,7 +45,9 @@
 //! counts_per_m + position_offset_m` (docs/model.md `p = x_m - x_r`).
 
 pub mod binary;
+pub mod check;
 pub mod columns;
+pub mod convert;
 pub mod error;
 pub mod mcap_file;
 pub mod metadata;
@@ -54,7 +56,9 @@ pub mod summary;
 pub mod writer;
 
 pub use binary::{BinaryLogWriter, ConvertReport, SampleLogBuilder, convert_binary};
+pub use check::{CheckOutcome, CheckRequest, LogError};
 pub use columns::{Column, ColumnSet, LogRow};
+pub use convert::{ConvertOutcome, ConvertRequest, LogForm};
 pub use error::{AcqLogError, AcqLogErrorKind};
 pub use mcap_file::{
     McapCompression, McapReport, ReadBack, read_messages, write_mcap, write_mcap_compressed,

@@ -10,11 +10,15 @@
 //! - [`journal`]: the append-only journal, the campaign's only source of truth.
 //! - [`records`]: state, `results.csv` and Bluesky documents derived from the journal.
 //! - [`figure`]: jump height against phi and frequency.
+//! - [`session`]: `campaign run`, `resume` and `status` as calls ([`session::run`],
+//!   [`session::resume`], [`session::status`]), the journal's lock and the folder's names.
+//! - [`error`]: what they return when they fail.
 //!
-//! The subcommands `campaign run|resume|status` live in the CLI crate.
+//! The command line's `campaign run|resume|status` maps its arguments to these calls.
 
 pub mod bed;
 pub mod board_bed;
+pub mod error;
 pub mod figure;
 pub mod file;
 pub mod journal;
@@ -23,3 +27,7 @@ pub mod point;
 pub mod prepare;
 pub mod records;
 pub mod result_row;
+pub mod session;
+
+pub use error::CampaignError;
+pub use session::{Hooks, ResumeRequest, RunRequest, SessionOutcome, StatusReport, StatusRequest};

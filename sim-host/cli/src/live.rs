@@ -3,10 +3,6 @@
 //! period put on the bus and, for a simulated link, paced at real time (or `--pace`), then
 //! the page kept up after the run until Ctrl-C or `--linger` passes.
 
-use std::time::{Duration, Instant};
-
-#[cfg(feature = "live")]
-use sandjumper_live::LiveServer;
 use sandjumper_live::{Event, LiveBus};
 use sandjumper_output::CliError;
 use sandjumper_rig::hil::PeriodView;
@@ -60,70 +56,63 @@ fn parse_linger(s: &str) -> Result<f64, String> {
     }
 }
 
-/// A live view for one command: its bus and server, and the run's pacing.
+/// A live view for one command: [`sandjumper_live::LiveView`] (its bus, server and pacing)
+/// and the rig's state as last shown.
 pub struct LiveView {
-    bus: LiveBus,
-    #[cfg(feature = "live")]
-    server: LiveServer,
-    pace: f64,
-    linger: Option<f64>,
-    wall_start: Option<(Instant, f64)>,
+    view: sandjumper_live::LiveView,
     last_state: Option<sandjumper_core::RigState>,
     fault_sent: bool,
+}
+
+impl LiveArgs {
+    /// The view these options ask for (`None` without `--live`).
+    pub fn config(&self) -> Option<sandjumper_live::LiveConfig> {
+        self.live.as_ref().map(|addr| sandjumper_live::LiveConfig {
+            addr: addr.clone(),
+            pace: self.pace.unwrap_or(1.0),
+            foxglove: self.foxglove.clone(),
+            linger: self.linger,
+        })
+    }
 }
 
 impl LiveView {
     /// Start the view `a` asks for (`None` without `--live`); `channels` name the samples.
     pub fn start(a: &LiveArgs, channels: &[&str]) -> Result<Option<Self>, CliError> {
-        let Some(addr) = &a.live else {
+        let Some(config) = a.config() else {
             return Ok(None);
         };
         #[cfg(not(feature = "live"))]
         {
             let _ = channels;
             Err(CliError::input(format!(
-                "--live {addr}: this build has no live view (built with --no-default-features; build sandjumper-cli with its default features)"
+                "--live {}: this build has no live view (built with --no-default-features; build sandjumper-cli with its default features)",
+                config.addr
             )))
         }
         #[cfg(feature = "live")]
         {
-            Self::start_server(a, addr, channels).map(Some)
+            let view =
+                sandjumper_live::LiveView::start(&config, channels).map_err(CliError::input)?;
+            for line in view.addresses() {
+                eprintln!("{line}");
+            }
+            Ok(Some(Self {
+                view,
+                last_state: None,
+                fault_sent: false,
+            }))
         }
-    }
-
-    #[cfg(feature = "live")]
-    fn start_server(a: &LiveArgs, addr: &str, channels: &[&str]) -> Result<Self, CliError> {
-        let (bus, feed) = sandjumper_live::channel(channels);
-        let server = sandjumper_live::serve_with_foxglove(addr, feed, a.foxglove.as_deref())
-            .map_err(CliError::input)?;
-        eprintln!(
-            "live view: {} (state: {}state.json)",
-            server.url(),
-            server.url()
-        );
-        if let (Some(port), Some(fg)) = (server.foxglove_port, &a.foxglove) {
-            let host = fg.rsplit_once(':').map_or(fg.as_str(), |(h, _)| h);
-            eprintln!("foxglove: ws://{host}:{port} (Foxglove, or Lichtblick after 1.21)");
-        }
-        Ok(Self {
-            bus,
-            server,
-            pace: a.pace.unwrap_or(1.0),
-            linger: a.linger,
-            wall_start: None,
-            last_state: None,
-            fault_sent: false,
-        })
     }
 
     /// Do not pace this run (a real board keeps its own time).
     pub fn unpaced(&mut self) {
-        self.pace = 0.0;
+        self.view.unpaced();
     }
 
     /// The bus, for events of the command's own.
     pub fn bus(&mut self) -> &mut LiveBus {
-        &mut self.bus
+        self.view.bus()
     }
 
     /// One control period of a jump through the loop.
@@ -131,7 +120,7 @@ impl LiveView {
         let r = &v.row;
         let t = r.t_s;
         if v.started {
-            self.bus.event(Event::Jump {
+            self.bus().event(Event::Jump {
                 t_s: t,
                 phase: "start".into(),
             });
@@ -139,7 +128,7 @@ impl LiveView {
         if let Some(st) = v.state {
             self.state_and_fault(t, st, v.fault);
         }
-        self.bus.sample(
+        self.bus().sample(
             t,
             &[
                 1e3 * v.p_ref_m,
@@ -160,7 +149,7 @@ impl LiveView {
     pub fn program(&mut self, v: &ProgramView<'_>, p_cmd_m: Option<f64>, metres_per_count: f64) {
         let t = v.t_s;
         if v.started {
-            self.bus.event(Event::Jump {
+            self.bus().event(Event::Jump {
                 t_s: t,
                 phase: "start".into(),
             });
@@ -168,7 +157,7 @@ impl LiveView {
         self.state_and_fault(t, v.state, v.fault);
         let nan = f64::NAN;
         for (ts, r) in v.board_samples {
-            self.bus.sample(
+            self.bus().sample(
                 *ts,
                 &[
                     1e3 * f64::from(r.commanded_position_m),
@@ -189,7 +178,7 @@ impl LiveView {
         let (p, rod, foot, spring) = v.plant.map_or((encoder_m, nan, nan, nan), |pl| {
             (pl.p_m, pl.rod_height_m, -pl.depth_m, pl.spring_force_n)
         });
-        self.bus.sample(
+        self.bus().sample(
             t,
             &[
                 1e3 * p_cmd_m.unwrap_or(nan),
@@ -213,12 +202,12 @@ impl LiveView {
     ) {
         if self.last_state != Some(state) {
             if state == sandjumper_core::RigState::Done {
-                self.bus.event(Event::Jump {
+                self.bus().event(Event::Jump {
                     t_s: t,
                     phase: "end".into(),
                 });
             }
-            self.bus.event(Event::State {
+            self.bus().event(Event::State {
                 t_s: t,
                 state: format!("{state:?}"),
             });
@@ -228,77 +217,51 @@ impl LiveView {
             && !self.fault_sent
         {
             self.fault_sent = true;
-            self.bus.event(Event::Fault {
+            self.bus().event(Event::Fault {
                 t_s: t,
                 fault: format!("{f:?}"),
             });
         }
     }
 
-    /// Sleep so that rig time `t_s` is not ahead of the wall clock times the pace (checked
-    /// every period, slept in steps of at least 2 ms).
+    /// Sleep so that rig time `t_s` is not ahead of the wall clock times the pace.
     pub fn keep_pace(&mut self, t_s: f64) {
-        if self.pace <= 0.0 {
-            return;
-        }
-        let (w0, t0) = *self.wall_start.get_or_insert((Instant::now(), t_s));
-        let due = (t_s - t0) / self.pace;
-        let now = w0.elapsed().as_secs_f64();
-        if due - now > 0.002 {
-            std::thread::sleep(Duration::from_secs_f64(due - now));
-        }
+        self.view.keep_pace(t_s);
     }
 
     /// The run is over: say how, send what is left, keep the page up until Ctrl-C or the
     /// linger time; returns whether Ctrl-C ended it.
     pub fn finish(mut self, t_s: f64, outcome: String, ok: bool) -> bool {
-        // The last samples first (waiting for the lock is free now), then the end.
-        self.bus.flush_and_wait();
-        self.bus.event(Event::RunEnded { t_s, outcome, ok });
+        self.view.end(t_s, outcome, ok);
         self.wait_on_the_page()
     }
 
     /// The run is over and the command ends now (the user stopped it): say how and send what
     /// is left, without keeping the page up.
     pub fn end_now(mut self, t_s: f64, outcome: String, ok: bool) {
-        self.bus.flush_and_wait();
-        self.bus.event(Event::RunEnded { t_s, outcome, ok });
+        self.view.end(t_s, outcome, ok);
     }
 
     /// Keep the page up until Ctrl-C or the linger; whether Ctrl-C ended it.
     #[cfg(feature = "live")]
     fn wait_on_the_page(&self) -> bool {
-        // The page's state has the end before the command says so (the server reads the bus
-        // every 25 ms).
-        let asked = Instant::now();
-        while self.server.snapshot().ended.is_none() && asked.elapsed() < Duration::from_secs(2) {
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        // The page's state has the end before the command says so.
+        self.view.wait_until_shown();
         // Ctrl-C is caught before the page says it may be used: one sent right after the
         // message ends the wait, never the process.
         crate::interrupt::catch();
-        match self.linger {
+        match self.view.linger() {
             Some(s) => eprintln!(
                 "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
             ),
             None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
         }
-        let until = self
-            .linger
-            .map(|s| Instant::now() + Duration::from_secs_f64(s));
-        while until.is_none_or(|u| Instant::now() < u) {
-            if crate::interrupt::interrupted() {
-                return true;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        crate::interrupt::interrupted()
+        self.view.linger_until(&crate::interrupt::interrupted)
     }
 
     #[cfg(not(feature = "live"))]
     fn wait_on_the_page(&self) -> bool {
-        let _ = self.linger; // no page to keep up
-        false
+        false // no page to keep up
     }
 }
 

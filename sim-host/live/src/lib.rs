@@ -10,13 +10,16 @@
 //!   campaign table), as `state.json`.
 //! - [`server`]: the HTTP server (axum): the page with its chart library embedded (uPlot,
 //!   MIT), `state.json`, and Server-Sent Events of everything new.
+//! - [`view`]: one run's view: its bus and page, the run's pace, the page kept up after.
 pub mod bus;
 #[cfg(feature = "foxglove")]
 pub mod foxglove_bridge;
 #[cfg(feature = "server")]
 pub mod server;
 pub mod state;
+pub mod view;
 
 pub use bus::{CampaignRecord, Event, LiveBus, LiveFeed, channel};
 #[cfg(feature = "server")]
 pub use server::{FOXGLOVE, LiveServer, serve, serve_with_foxglove};
+pub use view::{LiveConfig, LiveView};

@@ -1,16 +1,12 @@
 //! `sandjumper log check FILE` and `sandjumper log convert IN OUT`.
 
-use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
-use serde::Serialize;
 
-use super::binary::{ConvertReport, MAGIC, convert_binary};
-use super::reader::ReadOptions;
-use super::summary::LogSummary;
-use super::{AcqLog, read_log};
-use sandjumper_output::CliError;
+use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
+use crate::command::progress::cli_error;
+use sandjumper_output::{CliError, Silent};
 
 /// `sandjumper log`.
 #[derive(Debug, Clone, Args)]
@@ -85,198 +81,44 @@ pub fn run(a: &LogArgs) -> Result<(), CliError> {
     }
 }
 
-/// JSON of `log check --json`.
-#[derive(Serialize)]
-struct CheckReport<'a> {
-    file: String,
-    form: &'static str,
-    #[serde(flatten)]
-    summary: &'a LogSummary,
-    conversion: Option<&'a ConvertReport>,
-}
-
-fn bad(path: &Path, e: impl std::fmt::Display) -> CliError {
-    CliError::input(format!("log `{}`: {e}", path.display()))
-}
-
-fn is_binary(path: &Path) -> Result<bool, CliError> {
-    let mut head = [0u8; 8];
-    let mut file = std::fs::File::open(path).map_err(|e| bad(path, e))?;
-    let mut got = 0;
-    while got < head.len() {
-        match file.read(&mut head[got..]) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) => return Err(bad(path, e)),
-        }
-    }
-    Ok(got == head.len() && &head == MAGIC)
-}
-
-fn load(path: &Path, allow_gaps: bool) -> Result<(AcqLog, Option<ConvertReport>), CliError> {
-    let opts = ReadOptions {
-        allow_gaps,
-        ..ReadOptions::default()
-    };
-    let file = std::fs::File::open(path).map_err(|e| bad(path, e))?;
-    if is_binary(path)? {
-        let (log, report) = convert_binary(BufReader::new(file), allow_gaps, opts.max_rows)
-            .map_err(|e| bad(path, e))?;
-        Ok((log, Some(report)))
-    } else {
-        let log = read_log(BufReader::new(file), &opts).map_err(|e| bad(path, e))?;
-        Ok((log, None))
-    }
-}
-
 /// Reads and checks a log (CSV or binary) as `log check` does: the log and the JSON object
 /// `log check --json` prints. Errors are the CLI's.
 pub fn load_checked(path: &Path, allow_gaps: bool) -> Result<(AcqLog, String), CliError> {
-    let (log, conversion) = load(path, allow_gaps)?;
-    let json = check_json(path, &log, conversion.as_ref())?;
-    Ok((log, json))
-}
-
-fn check_json(
-    path: &Path,
-    log: &AcqLog,
-    conversion: Option<&ConvertReport>,
-) -> Result<String, CliError> {
-    let summary = log.summary();
-    let report = CheckReport {
-        file: path.display().to_string(),
-        form: if conversion.is_some() {
-            "binary"
-        } else {
-            "csv"
-        },
-        summary: &summary,
-        conversion,
+    let request = CheckRequest {
+        file: path.to_path_buf(),
+        allow_gaps,
     };
-    serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))
+    let outcome = super::check::run(&request, &Silent).map_err(cli_error)?;
+    let json = outcome.json().map_err(cli_error)?;
+    Ok((outcome.log, json))
 }
 
 fn check(a: &CheckArgs) -> Result<(), CliError> {
-    let (log, conversion) = load(&a.file, a.allow_gaps)?;
-    let summary = log.summary();
+    let request = CheckRequest {
+        file: a.file.clone(),
+        allow_gaps: a.allow_gaps,
+    };
+    let outcome = super::check::run(&request, &Silent).map_err(cli_error)?;
     if a.json {
-        println!("{}", check_json(&a.file, &log, conversion.as_ref())?);
-        return Ok(());
-    }
-    println!(
-        "{}: valid {} log",
-        a.file.display(),
-        if conversion.is_some() {
-            "binary"
-        } else {
-            "CSV"
-        }
-    );
-    print!("{summary}");
-    if let Some(c) = &conversion {
-        println!(
-            "frames:             {} decoded ({} sample batches), {} rejected, {} other messages",
-            c.frames_ok, c.sample_batches, c.frames_rejected, c.other_messages
-        );
-        println!("samples lost (seq): {}", c.samples_lost);
-        for (code, name, tick) in &c.faults {
-            println!("fault reported:     {code} {name} at tick {tick}");
-        }
+        println!("{}", outcome.json().map_err(cli_error)?);
+    } else {
+        print!("{outcome}");
     }
     Ok(())
-}
-
-/// An existing OUT is replaced only with `--force`.
-fn refuse_overwrite(a: &ConvertArgs) -> Result<(), CliError> {
-    if a.output.exists() && !a.force {
-        return Err(CliError::input(format!(
-            "`{}` exists: choose another name or pass --force",
-            a.output.display()
-        )));
-    }
-    Ok(())
-}
-
-/// Write `out` through `write` into `out` with extension `tmp_extension`, then rename it into
-/// place: a failed conversion leaves no half file.
-fn write_then_rename<T>(
-    out: &Path,
-    tmp_extension: &str,
-    write: impl FnOnce(&Path) -> Result<T, super::AcqLogError>,
-) -> Result<T, CliError> {
-    let tmp = out.with_extension(tmp_extension);
-    write(&tmp)
-        .and_then(|r| {
-            std::fs::rename(&tmp, out).map_err(|e| super::AcqLogError::io(&e))?;
-            Ok(r)
-        })
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            CliError::input(format!("cannot write `{}`: {e}", out.display()))
-        })
 }
 
 fn convert(a: &ConvertArgs) -> Result<(), CliError> {
-    let to = a.to.unwrap_or(
-        if a.output
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-        {
-            ConvertTo::Mcap
-        } else {
-            ConvertTo::Csv
-        },
-    );
-    if to == ConvertTo::Mcap {
-        return convert_to_mcap(a);
-    }
-    if !is_binary(&a.input)? {
-        return Err(bad(
-            &a.input,
-            "not a binary log (no `SJACQBIN` header); a CSV log needs no conversion (check it with `sandjumper log check`)",
-        ));
-    }
-    refuse_overwrite(a)?;
-    let (log, report) = load(&a.input, a.allow_gaps)?;
-    let report = report.unwrap_or_default();
-    write_then_rename(&a.output, "csv.partial", |tmp| log.write_file(tmp))?;
-    eprintln!(
-        "wrote {} ({} samples from {} frames; {} rejected frames; {} samples lost by sequence number)",
-        a.output.display(),
-        report.samples,
-        report.frames_ok,
-        report.frames_rejected,
-        report.samples_lost
-    );
-    Ok(())
-}
-
-fn convert_to_mcap(a: &ConvertArgs) -> Result<(), CliError> {
-    refuse_overwrite(a)?;
-    // The same reader and the same refusals as `log check` and `replay`.
-    let (log, conversion) = load(&a.input, a.allow_gaps)?;
-    let report = write_then_rename(&a.output, "mcap.partial", |tmp| {
-        log.write_mcap_file(tmp, conversion.as_ref())
-    })?;
-    let counts: Vec<String> = report
-        .messages
-        .iter()
-        .map(|(topic, n)| format!("{topic} {n}"))
-        .collect();
-    eprintln!(
-        "wrote {} ({} samples, {} interpolated; {} chunks; messages: {})",
-        a.output.display(),
-        log.rows.len(),
-        log.interpolated_samples(),
-        report.chunks,
-        counts.join(", ")
-    );
-    if let Some(c) = &conversion {
-        eprintln!(
-            "from binary: {} frames, {} rejected, {} samples lost by sequence number",
-            c.frames_ok, c.frames_rejected, c.samples_lost
-        );
-    }
+    let request = ConvertRequest {
+        input: a.input.clone(),
+        output: a.output.clone(),
+        to: a.to.map(|t| match t {
+            ConvertTo::Csv => LogForm::Csv,
+            ConvertTo::Mcap => LogForm::Mcap,
+        }),
+        allow_gaps: a.allow_gaps,
+        force: a.force,
+    };
+    let outcome = super::convert::run(&request, &Silent).map_err(cli_error)?;
+    eprint!("{outcome}");
     Ok(())
 }

@@ -1,0 +1,130 @@
+//! A campaign session called as a library: one point through sil, stopped, resumed and
+//! finished, its status read between; and the refusals a session gives.
+
+use std::path::{Path, PathBuf};
+
+use sandjumper_campaign::session::{self, point_line};
+use sandjumper_campaign::{
+    CampaignError, Hooks, ResumeRequest, RunRequest, SessionOutcome, StatusRequest,
+};
+use sandjumper_output::{Blame, Blamed, Silent};
+
+/// The repository's small campaign cut to one point, without camera and analyses.
+fn one_point(dir: &Path) -> PathBuf {
+    let small = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/campaign-small.toml"
+    );
+    let text = std::fs::read_to_string(small)
+        .unwrap()
+        .replace(r#"kinds = ["single", "delayed"]"#, r#"kinds = ["single"]"#)
+        .replace("frequencies_hz = [10.0, 14.0]", "frequencies_hz = [10.0]")
+        .replace("phis = [0.58, 0.61]", "phis = [0.58]")
+        .replace("fps = 200", "fps = 0")
+        .replace("track = true", "track = false")
+        .replace("replay = true", "replay = false");
+    let p = dir.join("one.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn a_one_point_campaign_stops_resumes_and_finishes_with_typed_outcomes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("one");
+    let request = RunRequest {
+        file: one_point(tmp.path()),
+        link: Some("sil".into()),
+        out: out.clone(),
+        stop_after: Some(0),
+        ..RunRequest::default()
+    };
+    let stopped = session::run(&request, Hooks::default(), &Silent).unwrap();
+    assert_eq!(
+        stopped,
+        SessionOutcome::Stopped {
+            this_session: 0,
+            done: 0,
+            total: 1,
+            out: out.clone()
+        }
+    );
+    let status = session::status(&StatusRequest { dir: out.clone() }).unwrap();
+    assert_eq!(
+        (status.state.as_str(), status.points),
+        ("stopped (resumable)", 1)
+    );
+    assert_eq!((status.link.as_str(), status.sessions), ("sil", 1));
+
+    let mut lines = Vec::new();
+    let hooks = Hooks {
+        live: None,
+        on_point: Some(Box::new(|row, line| {
+            assert_eq!(line, point_line(row, 1));
+            lines.push(line.to_string());
+        })),
+    };
+    let resume = ResumeRequest {
+        dir: out.clone(),
+        ..ResumeRequest::default()
+    };
+    let finished = session::resume(&resume, hooks, &Silent).unwrap();
+    let SessionOutcome::Finished {
+        done,
+        failed,
+        sessions,
+        ..
+    } = &finished
+    else {
+        panic!("{finished:?}");
+    };
+    assert_eq!((*done, *failed, *sessions), (1, 0, 2));
+    assert_eq!(lines.len(), 1);
+    assert!(lines[0].starts_with("point    1/1  single"), "{}", lines[0]);
+    assert!(out.join("results.csv").is_file());
+    assert!(
+        finished
+            .to_string()
+            .contains("1 points done (0 failed or faulted) over 2 session(s)")
+    );
+    let status = session::status(&StatusRequest { dir: out.clone() }).unwrap();
+    assert_eq!((status.state.as_str(), status.done), ("finished", 1));
+
+    // A finished campaign is not resumed, nor run over.
+    let e = session::resume(&resume, Hooks::default(), &Silent).unwrap_err();
+    assert!(
+        e.to_string()
+            .ends_with("the campaign is finished; nothing to resume"),
+        "{e}"
+    );
+    let e = session::run(&request, Hooks::default(), &Silent).unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert!(
+        e.to_string().contains("exists (allowed: a new folder"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_link_other_than_sil_and_pil_is_refused_before_anything_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let request = RunRequest {
+        file: one_point(tmp.path()),
+        link: Some("f407".into()),
+        out: tmp.path().join("x"),
+        ..RunRequest::default()
+    };
+    assert_eq!(
+        request.validate(),
+        Err(CampaignError::Input(
+            "--link f407 (allowed: sil, pil; a board is --port PATH)".into()
+        ))
+    );
+    assert!(session::run(&request, Hooks::default(), &Silent).is_err());
+    assert!(!tmp.path().join("x.incomplete").exists());
+    let e = session::status(&StatusRequest {
+        dir: tmp.path().join("x"),
+    })
+    .unwrap_err();
+    assert!(e.to_string().contains("no campaign here"), "{e}");
+}
