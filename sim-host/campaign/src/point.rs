@@ -91,7 +91,7 @@ pub fn run_point(
         ..BedInputs::default()
     });
     let model_config = RigModelConfig::default();
-    let mut l = open_link(&link.arg, &model_config, &link.firmware).map_err(|e| e.message)?;
+    let mut l = open_link(&link.arg, &model_config, &link.firmware).map_err(|e| e.to_string())?;
     let outcome = run_jump(&params, &spec, model_config, l.as_mut()).map_err(|e| {
         format!(
             "point {}: the jump through the link failed: {e}",
@@ -243,7 +243,7 @@ pub fn run_point_on_board(
             m.phi = Some(prep.achieved_phi);
         },
     )
-    .map_err(|e| e.message)?;
+    .map_err(|e| e.to_string())?;
     log.write_file(&staging.join("acquisition.csv"))
         .map_err(|e| format!("cannot write the acquisition log: {e}"))?;
     journal.append(Event::Jumped { point: point.index })?;

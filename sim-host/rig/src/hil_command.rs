@@ -130,29 +130,35 @@ impl HilRequest {
     /// rate does not divide the control rate), the lockstep-only settings on the virtual
     /// board, and there a sine the parameters cannot run.
     pub fn validate(&self) -> Result<(), RigError> {
-        if self.link == LinkArg::F407 {
-            let lockstep = [
-                (self.encoder_noise_counts != 0.0, "--encoder-noise"),
-                (self.rtol.is_some(), "--rtol"),
-                (self.gain_lowering.is_some(), "--gain-lowering"),
-            ];
-            if let Some((_, flag)) = lockstep.iter().find(|(set, _)| *set) {
-                return Err(lockstep_only(flag));
-            }
-        }
+        self.refuse_lockstep_only()?;
         if let Some(s) = &self.stroke {
             s.table
                 .period_ticks(RigModelConfig::default().tick_hz)
                 .map_err(|e| RigError::input(format!("{}: {e}", s.name)))?;
-            s.table
-                .check(&RigLimits::of(&self.params))
-                .map_err(|e| {
-                    RigError::input(format!("{}: refused before anything ran: {e}", s.name))
-                })?;
+            s.table.check(&RigLimits::of(&self.params)).map_err(|e| {
+                RigError::input(format!("{}: refused before anything ran: {e}", s.name))
+            })?;
         } else if self.link == LinkArg::F407 {
             trajectory(&self.params, &self.spec()).map_err(|e| RigError::input(e.to_string()))?;
         }
         Ok(())
+    }
+
+    /// On the virtual board, refuse what only a lockstep link can do (encoder noise, a
+    /// tolerance, gain lowering).
+    pub fn refuse_lockstep_only(&self) -> Result<(), RigError> {
+        if self.link != LinkArg::F407 {
+            return Ok(());
+        }
+        let lockstep = [
+            (self.encoder_noise_counts != 0.0, "--encoder-noise"),
+            (self.rtol.is_some(), "--rtol"),
+            (self.gain_lowering.is_some(), "--gain-lowering"),
+        ];
+        match lockstep.iter().find(|(set, _)| *set) {
+            Some((_, flag)) => Err(lockstep_only(flag)),
+            None => Ok(()),
+        }
     }
 
     /// [`HilRequest::validate`], then the warning a setting that does nothing deserves
@@ -279,7 +285,10 @@ impl LoopRun {
             .map_err(RigError::internal)?;
         }
         staged.write_text("params.toml", &self.params.to_toml())?;
-        staged.write_text("summary.json", &format!("{}\n", to_json(&self.report, "the summary")?))?;
+        staged.write_text(
+            "summary.json",
+            &format!("{}\n", to_json(&self.report, "the summary")?),
+        )?;
         save_figure(
             &log::figure(&self.outcome, self.title.clone()),
             &staged.file("hil.png"),
@@ -391,6 +400,22 @@ impl HilJump {
     pub fn json(&self) -> Result<String, RigError> {
         to_json(self, "the summary")
     }
+}
+
+/// The JSON of a board's record (a [`JumpOutcome`] or a [`ReplayOutcome`]) as `hil --json`
+/// prints it: its own keys, then `jump_height_m` (m; the value of its
+/// `simulated_jump_height_m`).
+pub fn with_jump_height<R: Serialize>(
+    record: &R,
+    jump_height_m: Option<f64>,
+) -> Result<String, RigError> {
+    to_json(
+        &WithJumpHeight {
+            record,
+            jump_height_m,
+        },
+        "the summary",
+    )
 }
 
 /// A board's record with `jump_height_m` added after its own keys.
@@ -594,9 +619,7 @@ fn on_the_board(
         }
         BoardRequest::Replay(r) => {
             let plan = r.plan()?;
-            BoardRecord::Replay(crate::tool::replay::run_planned(
-                &r, plan, progress, watch,
-            )?)
+            BoardRecord::Replay(crate::tool::replay::run_planned(&r, plan, progress, watch)?)
         }
     })
 }

@@ -11,8 +11,8 @@ use super::rig_model::RigModelConfig;
 use super::run::rig_config;
 use super::serial;
 use super::sil::SilLink;
-use crate::firmware_image::{Board, check_elf};
 use crate::error::RigError;
+use crate::firmware_image::{Board, check_elf};
 
 /// Where the controller is.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -34,4 +34,3 @@ pub fn bring_to_idle(link: &mut dyn RigLink) -> Result<(), LinkError> {
     }
     Ok(())
 }
-

@@ -106,7 +106,10 @@ impl fmt::Display for Calibrated {
 }
 
 /// Run `rig calibrate-drive`: send the codes, read them back, save them if asked.
-pub fn calibrate(request: &CalibrateRequest, _progress: &dyn Progress) -> Result<Calibrated, RigError> {
+pub fn calibrate(
+    request: &CalibrateRequest,
+    _progress: &dyn Progress,
+) -> Result<Calibrated, RigError> {
     request.validate()?;
     let cal = request.calibration();
     let mut link = request.target.open(&RigModelConfig::default())?;
@@ -150,7 +153,10 @@ impl fmt::Display for Acknowledged {
 
 /// Run `rig acknowledge-reset`: after a reset other than power-on the board refuses `Arm`
 /// until the carriage's position has been checked and this is sent.
-pub fn acknowledge_reset(target: &Target, _progress: &dyn Progress) -> Result<Acknowledged, RigError> {
+pub fn acknowledge_reset(
+    target: &Target,
+    _progress: &dyn Progress,
+) -> Result<Acknowledged, RigError> {
     let mut link = target.open(&RigModelConfig::default())?;
     let name = link.name();
     let before =

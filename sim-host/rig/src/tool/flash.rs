@@ -145,7 +145,12 @@ pub fn flash(request: &FlashRequest, _progress: &dyn Progress) -> Result<Flashed
     let chip: &std::ffi::OsStr = CHIP.as_ref();
     probe_rs(
         exe,
-        &["download".as_ref(), "--chip".as_ref(), chip, elf.as_os_str()],
+        &[
+            "download".as_ref(),
+            "--chip".as_ref(),
+            chip,
+            elf.as_os_str(),
+        ],
         "download",
     )?;
     probe_rs(exe, &["reset".as_ref(), "--chip".as_ref(), chip], "reset")?;

@@ -181,7 +181,15 @@ impl JumpOutcome {
             )
             .map_err(RigError::internal)?;
         }
-        write_run_files(staged, &self.log, &self.params, &json, &self.figure, "jump", mcap)
+        write_run_files(
+            staged,
+            &self.log,
+            &self.params,
+            &json,
+            &self.figure,
+            "jump",
+            mcap,
+        )
     }
 
     /// Whether the jump completed cleanly, once its folder `dir` is written.

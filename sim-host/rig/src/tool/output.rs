@@ -2,10 +2,10 @@
 //! [`SampleLogBuilder`] from the controller's sample records exactly as they arrived) and a
 //! figure of commanded vs measured motor position and the force command.
 
+use crate::error::RigError;
 use sandjumper_acqlog::{AcqLog, LogMetadata, SampleLogBuilder};
 use sandjumper_core::SampleRecord;
 use sandjumper_core::sample::flags;
-use crate::error::RigError;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::palette;
 

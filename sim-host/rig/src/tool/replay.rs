@@ -376,7 +376,15 @@ impl ReplayOutcome {
     pub fn write(&self, staged: StagedDir, mcap: bool) -> Result<PathBuf, RigError> {
         let json = self.json()?;
         staged.write_text("table.csv", &table_csv(&self.plan))?;
-        write_run_files(staged, &self.log, &self.params, &json, &self.figure, "replay", mcap)
+        write_run_files(
+            staged,
+            &self.log,
+            &self.params,
+            &json,
+            &self.figure,
+            "replay",
+            mcap,
+        )
     }
 
     /// Whether the replay completed cleanly, once its folder `dir` is written.

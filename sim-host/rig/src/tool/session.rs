@@ -19,9 +19,9 @@
 
 use std::time::{Duration, Instant};
 
+use crate::hil::rig_model::RigModel;
 use crate::protocol::link::{LinkError, LinkReport, RigLink};
 pub use crate::protocol::{bring_to_idle, query_status};
-use crate::hil::rig_model::RigModel;
 use sandjumper_core::protocol::FaultReport;
 use sandjumper_core::{
     ActuatorFrame, Command, JumpConfig, RigState, SampleRecord, SensorFrame, Status,

@@ -220,6 +220,33 @@ pub struct Watched {
     pub polls: u64,
 }
 
+/// A watch whose session is open ([`StatusWatch::open`]): a link that cannot be opened is
+/// refused before the watch begins.
+pub struct StatusWatch {
+    link: Box<dyn crate::protocol::link::RigLink>,
+    watch_for_s: Option<f64>,
+}
+
+impl StatusWatch {
+    /// Open the session of `request`'s target.
+    pub fn open(request: &WatchRequest) -> Result<Self, RigError> {
+        Ok(Self {
+            link: request.target.open(&RigModelConfig::default())?,
+            watch_for_s: request.watch_for_s,
+        })
+    }
+
+    /// Run the watch (see [`watch`]).
+    pub fn run(
+        self,
+        progress: &dyn Progress,
+        on_change: &mut dyn FnMut(&WatchLine) -> Result<(), RigError>,
+        watch: Option<&mut dyn RunWatch>,
+    ) -> Result<Watched, RigError> {
+        poll(self, progress, on_change, watch)
+    }
+}
+
 /// Poll the status every [`WATCH_INTERVAL`] until `progress.cancelled()` or the request's
 /// time is up; `on_change` gets a line whenever the state, phase or fault changes, `watch` every
 /// poll (its time, the board's tick). Says "watched LINK for S s (N polls)" through
@@ -228,10 +255,22 @@ pub fn watch(
     request: &WatchRequest,
     progress: &dyn Progress,
     on_change: &mut dyn FnMut(&WatchLine) -> Result<(), RigError>,
+    watch: Option<&mut dyn RunWatch>,
+) -> Result<Watched, RigError> {
+    StatusWatch::open(request)?.run(progress, on_change, watch)
+}
+
+fn poll(
+    session: StatusWatch,
+    progress: &dyn Progress,
+    on_change: &mut dyn FnMut(&WatchLine) -> Result<(), RigError>,
     mut watch: Option<&mut dyn RunWatch>,
 ) -> Result<Watched, RigError> {
     let config = RigModelConfig::default();
-    let mut link = request.target.open(&config)?;
+    let StatusWatch {
+        mut link,
+        watch_for_s,
+    } = session;
     let name = link.name();
     let hz = f64::from(config.tick_hz);
     if let Some(w) = watch.as_deref_mut() {
@@ -285,10 +324,8 @@ pub fn watch(
                 fault_code: status.fault.map(|f| f.code()),
             })?;
         }
-        let done = progress.cancelled()
-            || request
-                .watch_for_s
-                .is_some_and(|s| began.elapsed().as_secs_f64() >= s);
+        let done =
+            progress.cancelled() || watch_for_s.is_some_and(|s| began.elapsed().as_secs_f64() >= s);
         if done {
             break Ok(());
         }
@@ -302,7 +339,9 @@ pub fn watch(
         .map_err(|e| RigError::link(&name, "closing the session", e));
     let result = result.and(closed.map(|_| ()));
     let watched_s = began.elapsed().as_secs_f64();
-    progress.note(&format!("watched {name} for {watched_s:.1} s ({polls} polls)"));
+    progress.note(&format!(
+        "watched {name} for {watched_s:.1} s ({polls} polls)"
+    ));
     result.map(|()| Watched {
         link: name,
         watched_s,
