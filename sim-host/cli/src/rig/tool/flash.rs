@@ -8,7 +8,6 @@ use clap::Args;
 use super::TargetArgs;
 use crate::rig::face::cli_error;
 use sandjumper_output::{CliError, Silent};
-pub use sandjumper_rig::tool::flash::{CHIP, DEFAULT_F407_ELF};
 use sandjumper_rig::tool::flash::{FlashRequest, flash};
 
 /// `rig flash`.

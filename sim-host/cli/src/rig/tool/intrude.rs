@@ -11,7 +11,6 @@ use crate::rig::face::{cli_error, conclude, start_live, watch};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_output::{CliError, StagedDir};
 use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest};
-pub use sandjumper_rig::tool::intrude::{CurvePoint, intrusion_gains};
 
 fn metres(
     what: &'static str,

@@ -13,7 +13,7 @@ use crate::rig::face::{cli_error, conclude, start_live, watch};
 use sandjumper_output::{CliError, StagedDir};
 use sandjumper_rig::RigError;
 use sandjumper_rig::tool::replay::{self as lib, ReplayOutcome, ReplayRequest, ReplaySource};
-pub use sandjumper_rig::tool::replay::{Clip, ReplayPlan, upload};
+pub use sandjumper_rig::tool::replay::{Clip, ReplayPlan};
 
 fn factor(
     what: &'static str,

@@ -10,7 +10,6 @@ use sandjumper_output::{CliError, Silent};
 use sandjumper_rig::RigError;
 use sandjumper_rig::error::to_json;
 use sandjumper_rig::tool::status::{self as lib, WatchLine, WatchRequest};
-pub use sandjumper_rig::tool::status::{WATCH_INTERVAL, describe};
 
 /// `rig status`.
 #[derive(Debug, Clone, Args)]
