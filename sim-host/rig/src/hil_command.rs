@@ -360,9 +360,9 @@ impl fmt::Display for LoopRun {
 /// The rig tool's record of a jump on the virtual board.
 pub enum BoardRecord {
     /// A sine jump (`rig jump --link f407`).
-    Jump(JumpOutcome),
+    Jump(Box<JumpOutcome>),
     /// A stroke (`rig replay --stroke --link f407`).
-    Replay(ReplayOutcome),
+    Replay(Box<ReplayOutcome>),
 }
 
 /// What `hil` did on one link.
@@ -370,7 +370,7 @@ pub enum HilJump {
     /// A lockstep link (sil, pil, serial).
     Loop(Box<LoopRun>),
     /// The virtual F407 board: the rig tool's record.
-    Board(Box<BoardRecord>),
+    Board(BoardRecord),
 }
 
 impl HilJump {
@@ -378,7 +378,7 @@ impl HilJump {
     pub fn jump_height_m(&self) -> Option<f64> {
         match self {
             Self::Loop(r) => Some(r.report.summary.jump_height_m),
-            Self::Board(b) => match b.as_ref() {
+            Self::Board(b) => match b {
                 BoardRecord::Jump(j) => j.simulated_jump_height_m,
                 BoardRecord::Replay(r) => r.simulated_jump_height_m,
             },
@@ -389,7 +389,7 @@ impl HilJump {
     pub fn faults(&self) -> &[FaultEntry] {
         match self {
             Self::Loop(r) => &r.report.faults,
-            Self::Board(b) => match b.as_ref() {
+            Self::Board(b) => match b {
                 BoardRecord::Jump(j) => &j.faults,
                 BoardRecord::Replay(r) => &r.faults,
             },
@@ -433,7 +433,7 @@ impl Serialize for HilJump {
         let jump_height_m = self.jump_height_m();
         match self {
             Self::Loop(r) => r.report.serialize(s),
-            Self::Board(b) => match b.as_ref() {
+            Self::Board(b) => match b {
                 BoardRecord::Jump(j) => WithJumpHeight {
                     record: j,
                     jump_height_m,
@@ -462,7 +462,7 @@ pub fn run_checked(
     watch: Option<&mut dyn RunWatch>,
 ) -> Result<HilJump, RigError> {
     if request.link == LinkArg::F407 {
-        return on_the_board(request, progress, watch).map(|b| HilJump::Board(Box::new(b)));
+        return on_the_board(request, progress, watch).map(HilJump::Board);
     }
     run_loop(request, watch).map(|r| HilJump::Loop(Box::new(r)))
 }
@@ -573,7 +573,7 @@ fn title(request: &HilRequest, spec: &HilSpec, link_name: &str) -> String {
 /// ELF, so only another path is handed to the board (which takes the F407 build's).
 pub fn board_target(request: &HilRequest) -> Target {
     Target {
-        firmware: (request.firmware != PathBuf::from(EMULATED_ELF))
+        firmware: (request.firmware.as_path() != std::path::Path::new(EMULATED_ELF))
             .then(|| request.firmware.clone()),
         ..Target::on(LinkArg::F407)
     }
@@ -614,12 +614,14 @@ fn on_the_board(
     watch: Option<&mut dyn RunWatch>,
 ) -> Result<BoardRecord, RigError> {
     Ok(match board_request(request) {
-        BoardRequest::Jump(j) => {
-            BoardRecord::Jump(crate::tool::jump::run_watching(&j, progress, watch)?)
-        }
+        BoardRequest::Jump(j) => BoardRecord::Jump(Box::new(crate::tool::jump::run_watching(
+            &j, progress, watch,
+        )?)),
         BoardRequest::Replay(r) => {
             let plan = r.plan()?;
-            BoardRecord::Replay(crate::tool::replay::run_planned(&r, plan, progress, watch)?)
+            BoardRecord::Replay(Box::new(crate::tool::replay::run_planned(
+                &r, plan, progress, watch,
+            )?))
         }
     })
 }

@@ -193,7 +193,7 @@ impl HilRun {
     pub fn acquisition_log(&self) -> sandjumper_acqlog::AcqLog {
         match &self.jump {
             HilJump::Loop(run) => run.acquisition_log(),
-            HilJump::Board(b) => match b.as_ref() {
+            HilJump::Board(b) => match b {
                 BoardRecord::Jump(j) => j.log.clone(),
                 BoardRecord::Replay(r) => r.log.clone(),
             },
