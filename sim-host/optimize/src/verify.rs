@@ -96,7 +96,7 @@ pub fn run_through(
     let model_config = RigModelConfig::default();
     let mut l = match open_link(link, &model_config, firmware) {
         Ok(l) => l,
-        Err(e) => return Ok(LinkRun::skipped(link, e.message)),
+        Err(e) => return Ok(LinkRun::skipped(link, e.to_string())),
     };
     let mut spec = HilSpec::new(
         sandjumper_core::trajectory::JumpKind::Single,

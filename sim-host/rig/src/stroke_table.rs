@@ -26,8 +26,8 @@ use sandjumper_core::trajectory::STROKE_M;
 use sandjumper_model::params::Params;
 use sandjumper_model::table_stroke::TableStroke;
 
-use crate::hil::link::{LinkError, RigLink};
-use crate::tool::session::query_status;
+use crate::protocol::link::{LinkError, RigLink};
+use crate::protocol::query_status;
 
 /// The limits of the rig's feasibility check.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,20 +1,49 @@
-//! The command line's [`Progress`]: indicatif bars on stderr (shown only on a terminal) and
-//! notes printed on stderr; and a library error as the command line's error.
+//! The command line's [`Progress`]: a library call's stages drawn as indicatif bars on stderr
+//! (shown only on a terminal), its notes printed there, Ctrl-C read from [`crate::interrupt`];
+//! and a library error as the command line's error ([`cli_error`]).
 
-use std::sync::Mutex;
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL, Progress};
 
-/// Progress bars and notes on stderr; Ctrl-C is read from [`crate::interrupt`].
-#[derive(Default)]
+use super::{progress_bar, progress_counter};
+
+/// Progress bars and notes on stderr; [`Progress::cancelled`] is Ctrl-C once the command has
+/// called [`crate::interrupt::catch`].
+#[derive(Debug)]
 pub struct Bars {
     bar: Mutex<Option<indicatif::ProgressBar>>,
+    notes: bool,
+}
+
+impl Default for Bars {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Bars {
+    /// Bars, and notes printed.
+    pub fn new() -> Self {
+        Self {
+            bar: Mutex::new(None),
+            notes: true,
+        }
+    }
+
+    /// With `notes` false the notes are not printed (`--json`: stderr stays quiet but for the
+    /// bars on a terminal).
+    pub fn with_notes(self, notes: bool) -> Self {
+        Self { notes, ..self }
+    }
+
+    fn current(&self) -> MutexGuard<'_, Option<indicatif::ProgressBar>> {
+        self.bar.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
     /// Run `f` (which prints) with the current bar out of the way.
     pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
-        let bar = self.bar.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let bar = self.current().clone();
         match bar {
             Some(b) => b.suspend(f),
             None => f(),
@@ -25,33 +54,30 @@ impl Bars {
 impl Progress for Bars {
     fn start(&self, what: &str, len: Option<u64>) {
         let bar = match len {
-            Some(n) => super::progress_bar(n, what),
-            None => super::progress_counter(what),
+            Some(n) => progress_bar(n, what),
+            None => progress_counter(what),
         };
-        if let Some(old) = self
-            .bar
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .replace(bar)
-        {
+        if let Some(old) = self.current().replace(bar) {
             old.finish_and_clear();
         }
     }
 
     fn advance(&self, n: u64) {
-        if let Some(b) = &*self.bar.lock().unwrap_or_else(|e| e.into_inner()) {
+        if let Some(b) = self.current().as_ref() {
             b.inc(n);
         }
     }
 
     fn finish(&self) {
-        if let Some(b) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        if let Some(b) = self.current().take() {
             b.finish_and_clear();
         }
     }
 
     fn note(&self, line: &str) {
-        self.suspend(|| eprintln!("{line}"));
+        if self.notes {
+            self.suspend(|| eprintln!("{line}"));
+        }
     }
 
     fn cancelled(&self) -> bool {
@@ -59,7 +85,8 @@ impl Progress for Bars {
     }
 }
 
-/// A library error as the command line's message and exit status.
+/// A library error as the command line's: its message, exit status 2 for bad input and 1
+/// for an internal failure.
 pub fn cli_error<E: Blamed>(e: E) -> CliError {
     CliError {
         message: e.to_string(),

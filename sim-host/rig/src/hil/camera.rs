@@ -85,3 +85,12 @@ pub fn write_frames(
     .map_err(|e| format!("cannot write camera.toml: {e}"))?;
     Ok(frames.len())
 }
+
+/// The camera model of a TOML file (`hil --camera`; every key optional), or the defaults
+/// without one. A file that cannot be read or parsed is bad input naming `--camera`.
+pub fn read_camera(path: Option<&Path>) -> Result<CameraModel, crate::error::RigError> {
+    path.map_or(Ok(CameraModel::default()), |p| {
+        CameraModel::from_toml_file(p)
+            .map_err(|e| crate::error::RigError::input(format!("--camera {e}")))
+    })
+}

@@ -16,7 +16,6 @@ pub mod affinity;
 pub mod camera;
 pub mod emulated_firmware;
 pub mod framed;
-pub mod link;
 pub mod log;
 pub mod loop_margins;
 pub mod open;
@@ -26,6 +25,9 @@ pub mod run;
 pub mod serial;
 pub mod sil;
 pub mod virtual_board;
+
+/// The link layer lives in [`crate::protocol`], under both the loop runs and the rig tool.
+pub use crate::protocol::link;
 
 pub use link::{LinkError, LinkReport, RigLink};
 pub use rig_model::{CameraFrame, DacScaling, EncoderInjection, RigModel, RigModelConfig};

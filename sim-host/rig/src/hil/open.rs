@@ -11,13 +11,14 @@ use super::rig_model::RigModelConfig;
 use super::run::rig_config;
 use super::serial;
 use super::sil::SilLink;
+use crate::error::RigError;
 use crate::firmware_image::{Board, check_elf};
-use sandjumper_output::CliError;
 
 /// Where the controller is.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub enum LinkArg {
     /// The core in this process.
+    #[default]
     Sil,
     /// The firmware in QEMU over semihosting FIFOs.
     Pil,
@@ -56,7 +57,7 @@ pub fn parse_link(s: &str) -> Result<LinkArg, String> {
 }
 
 /// A fault as reported.
-#[derive(Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct FaultEntry {
     /// Stable code (README table).
     pub code: u8,
@@ -71,12 +72,12 @@ pub fn open_link(
     arg: &LinkArg,
     model_config: &RigModelConfig,
     firmware: &std::path::Path,
-) -> Result<Box<dyn RigLink>, CliError> {
-    let fail = |e: LinkError| CliError::input(format!("cannot open the link: {e}"));
+) -> Result<Box<dyn RigLink>, RigError> {
+    let fail = |e: LinkError| RigError::input(format!("cannot open the link: {e}"));
     Ok(match arg {
         LinkArg::Sil => Box::new(SilLink::new(rig_config(model_config)).map_err(fail)?),
         LinkArg::Pil => {
-            check_elf(firmware, Board::Emulated).map_err(|e| CliError::input(e.to_string()))?;
+            check_elf(firmware, Board::Emulated).map_err(|e| RigError::input(e.to_string()))?;
             Box::new(pil::start(&PilConfig::new(firmware)).map_err(fail)?)
         }
         LinkArg::F407 => {
@@ -88,4 +89,15 @@ pub fn open_link(
             Box::new(serial::start(path, Duration::from_secs(2)).map_err(fail)?)
         }
     })
+}
+
+impl FaultEntry {
+    /// The entry of a fault report.
+    pub fn of(f: &sandjumper_core::protocol::FaultReport) -> Self {
+        Self {
+            code: f.code.code(),
+            name: f.code.name(),
+            tick: f.tick,
+        }
+    }
 }

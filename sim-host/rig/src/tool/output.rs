@@ -2,10 +2,10 @@
 //! [`SampleLogBuilder`] from the controller's sample records exactly as they arrived) and a
 //! figure of commanded vs measured motor position and the force command.
 
+use crate::error::RigError;
 use sandjumper_acqlog::{AcqLog, LogMetadata, SampleLogBuilder};
 use sandjumper_core::SampleRecord;
 use sandjumper_core::sample::flags;
-use sandjumper_output::CliError;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::palette;
 
@@ -18,7 +18,7 @@ pub fn samples_log(
     firmware: String,
     source: String,
     fill: impl FnOnce(&mut LogMetadata),
-) -> Result<AcqLog, CliError> {
+) -> Result<AcqLog, RigError> {
     let mut meta = LogMetadata::new(f64::from(tick_hz), 1.0 / metres_per_count);
     meta.firmware = Some(firmware);
     meta.source = Some(source);
@@ -27,7 +27,7 @@ pub fn samples_log(
     for s in samples {
         builder
             .push(s)
-            .map_err(|e| CliError::internal(format!("the controller's samples: {e}")))?;
+            .map_err(|e| RigError::internal(format!("the controller's samples: {e}")))?;
     }
     Ok(builder.finish())
 }
@@ -119,12 +119,12 @@ pub fn write_run_files(
     figure: &LineFigure,
     stem: &str,
     mcap: bool,
-) -> Result<std::path::PathBuf, CliError> {
+) -> Result<std::path::PathBuf, RigError> {
     log.write_file(&staged.file("acquisition.csv"))
-        .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
+        .map_err(|e| RigError::internal(format!("cannot write acquisition.csv: {e}")))?;
     if mcap {
         log.write_mcap_file(&staged.file("acquisition.mcap"), None)
-            .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
+            .map_err(|e| RigError::internal(format!("cannot write acquisition.mcap: {e}")))?;
     }
     staged.write_text("params.toml", &params.to_toml())?;
     staged.write_text("summary.json", &format!("{summary_json}\n"))?;
@@ -151,14 +151,7 @@ pub use crate::hil::open::FaultEntry;
 
 /// The faults of a run, for summaries.
 pub fn fault_entries(faults: &[sandjumper_core::protocol::FaultReport]) -> Vec<FaultEntry> {
-    faults
-        .iter()
-        .map(|f| FaultEntry {
-            code: f.code.code(),
-            name: f.code.name(),
-            tick: f.tick,
-        })
-        .collect()
+    faults.iter().map(FaultEntry::of).collect()
 }
 
 /// The simulated robot (sil/pil) with the motor at `p0_m`, or `None` for a board.
@@ -168,7 +161,7 @@ pub fn robot_fixture(
     model: sandjumper_model::params::ModelName,
     p0_m: f64,
     config: crate::hil::rig_model::RigModelConfig,
-) -> Result<Option<crate::hil::rig_model::RigModel>, CliError> {
+) -> Result<Option<crate::hil::rig_model::RigModel>, RigError> {
     if !simulated {
         return Ok(None);
     }
@@ -178,5 +171,5 @@ pub fn robot_fixture(
     };
     crate::hil::rig_model::RigModel::new(params, model, p0_m, config, &opts)
         .map(Some)
-        .map_err(|e| CliError::input(e.to_string()))
+        .map_err(|e| RigError::input(e.to_string()))
 }

@@ -19,11 +19,12 @@
 
 use std::time::{Duration, Instant};
 
-use crate::hil::link::{LinkError, LinkReport, RigLink};
 use crate::hil::rig_model::RigModel;
+use crate::protocol::link::{LinkError, LinkReport, RigLink};
+pub use crate::protocol::{bring_to_idle, query_status};
 use sandjumper_core::protocol::FaultReport;
 use sandjumper_core::{
-    ActuatorFrame, Command, JumpConfig, Reply, RigState, SampleRecord, SensorFrame, Status,
+    ActuatorFrame, Command, JumpConfig, RigState, SampleRecord, SensorFrame, Status,
 };
 use sandjumper_model::error::SimError;
 
@@ -161,34 +162,6 @@ impl RunRecord {
     pub fn first_fault(&self) -> Option<FaultReport> {
         self.faults.first().copied()
     }
-}
-
-fn status_of(reply: Reply) -> Result<Status, LinkError> {
-    match reply {
-        Reply::Status(s) => Ok(s),
-        Reply::Ack => Err(LinkError::Protocol(
-            "a status query was answered with a plain Ack".into(),
-        )),
-    }
-}
-
-/// Ask for the controller's status.
-pub fn query_status(link: &mut dyn RigLink) -> Result<Status, LinkError> {
-    status_of(link.command(&Command::StatusQuery)?)
-}
-
-/// Bring a controller left Armed, Running, Done or Faulted by an earlier session to Idle.
-pub fn bring_to_idle(link: &mut dyn RigLink) -> Result<(), LinkError> {
-    match query_status(link)?.state {
-        RigState::Faulted => {
-            link.command(&Command::ClearFault)?;
-        }
-        RigState::Armed | RigState::Running | RigState::Done => {
-            link.command(&Command::Abort)?;
-        }
-        RigState::Idle => {}
-    }
-    Ok(())
 }
 
 /// Run `program` through `link`. With a fixture the host plays the rig in lockstep; without
@@ -481,7 +454,7 @@ fn free_running(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sandjumper_core::{JumpKind, Rig, RigConfig, TrajectorySpec};
+    use sandjumper_core::{JumpKind, Reply, Rig, RigConfig, TrajectorySpec};
 
     /// A free-running board that answers at once and whose tick moves `per_poll` ticks per
     /// status query (a board the machine runs slowly, or a fast one), finishing its program

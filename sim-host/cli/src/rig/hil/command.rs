@@ -1,29 +1,29 @@
-//! `sandjumper hil`: one jump through the loop (SIL, PIL or a real board), reported like
-//! `sandjumper jump` plus the loop's own figures; `--out` writes the acquisition log, the
-//! parameters, the summary and a figure; `--bench` repeats the run and prints speed figures.
+//! `sandjumper hil`: one jump through the loop (SIL, PIL, the virtual F407 board or a real
+//! board), reported like `sandjumper jump` plus the loop's own figures; `--out` writes the
+//! acquisition log, the parameters, the summary and a figure; `--bench` repeats the run and
+//! prints speed figures. A face over [`sandjumper_rig::hil_command`].
 
 use std::path::PathBuf;
 
 use clap::Args;
-use serde::Serialize;
 
-use super::log;
-use super::rig_model::RigModelConfig;
-use super::run::{HilOutcome, HilSpec, PeriodView, run_jump_observed};
 use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
+use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::command::stroke::checked_stroke;
-use sandjumper_core::trajectory::JumpKind;
+use crate::rig::face::{cli_error, watch};
+use crate::rig::tool::{jump, replay};
 use sandjumper_imaging::render::CameraModel;
-use sandjumper_model::params::{ModelName, Params};
-use sandjumper_model::record::JumpSummary;
-use sandjumper_model::trajectory::kind_name;
-use sandjumper_output::CliError;
-use sandjumper_output::StagedDir;
-use sandjumper_output::plot::save_figure;
+use sandjumper_model::params::Params;
+use sandjumper_output::{CliError, Progress, Silent, StagedDir};
+use sandjumper_rig::hil::camera::read_camera;
 pub use sandjumper_rig::hil::open::{FaultEntry, LinkArg, open_link, parse_link};
+use sandjumper_rig::hil_command::{
+    self as lib, BoardRecord, BoardRequest, HilJump, HilRequest, LoopRun, NamedStroke,
+    with_jump_height,
+};
+use sandjumper_rig::stroke_table::StrokeTable;
 
 fn parse_factor(s: &str) -> Result<f32, String> {
     parse_gain_lowering(s).map(|v| v as f32)
@@ -141,210 +141,74 @@ pub struct HilArgs {
     pub bench: Option<u32>,
 }
 
-/// The JSON object of `hil --json` and `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct HilReport<'a> {
-    /// The link.
-    pub link: String,
-    /// `single`, `stutter` or `delayed`.
-    pub kind: &'static str,
-    /// Ground model.
-    pub model: &'static str,
-    /// Packing fraction.
-    pub phi: f64,
-    /// Forcing frequency, Hz (null for a stroke file).
-    pub freq_hz: Option<f64>,
-    /// Delay, s (null for a stroke file).
-    pub tau_s: Option<f64>,
-    /// The stroke file run instead of a sine.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stroke: Option<String>,
-    /// Gain-lowering factor, if any.
-    pub gain_lowering: Option<f32>,
-    /// Jump metrics (times from the trajectory's start).
-    #[serde(flatten)]
-    pub summary: &'a JumpSummary,
-    /// What a final jump height that is not positive means, in words (absent otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub final_jump_note: Option<&'static str>,
-    /// Control periods simulated.
-    pub ticks: u64,
-    /// Frames lost (controller-side gaps + host-side undecodable).
-    pub frames_lost: u32,
-    /// Frames the controller rejected.
-    pub frames_rejected: u32,
-    /// Faults reported.
-    pub faults: Vec<FaultEntry>,
-    /// Camera frames taken.
-    pub camera_frames: usize,
-    /// Largest |p_cmd - p| until the force first saturated, m.
-    pub tracking_error_max_m: f64,
-    /// Wall-clock time, s.
-    pub wall_time_s: f64,
-    /// Simulated over wall time.
-    pub realtime_factor: f64,
-    /// Most instructions one control tick took (PIL).
-    pub max_tick_instructions: Option<u32>,
-    /// The firmware's exit status (PIL).
-    pub exit_code: Option<i32>,
-}
-
-fn spec_of(a: &HilArgs, params: &Params) -> Result<HilSpec, CliError> {
-    let kind: JumpKind = a.kind.unwrap_or(KindArg::Single).into();
-    let model: ModelName = a.model.into();
-    let mut spec = HilSpec::new(kind, a.freq.unwrap_or(0.0), a.tau.unwrap_or(0.0), model);
-    spec.gain_lowering = a.gain_lowering.map(HilSpec::gain_lowering_factor);
-    spec.camera_fps = a.camera_fps;
-    spec.rtol = a.rtol.unwrap_or(spec.rtol);
-    if let Some(path) = &a.stroke {
-        spec.stroke = Some(checked_stroke(path, params)?);
+impl HilArgs {
+    /// The library's request with `params` (resolved from `phi` and the overrides by
+    /// [`resolve_params`]); the stroke file read, the camera the default.
+    pub fn request(&self, params: Params) -> Result<HilRequest, CliError> {
+        let stroke = self
+            .stroke
+            .as_ref()
+            .map(|path| {
+                StrokeTable::read_csv(path).map(|table| NamedStroke {
+                    name: path.display().to_string(),
+                    table,
+                })
+            })
+            .transpose()
+            .map_err(CliError::input)?;
+        Ok(HilRequest {
+            link: self.link.clone(),
+            kind: self.kind.unwrap_or(KindArg::Single).into(),
+            freq_hz: self.freq.unwrap_or(0.0),
+            tau_s: self.tau,
+            stroke,
+            gain_lowering: self.gain_lowering,
+            model: self.model.into(),
+            params,
+            rtol: self.rtol,
+            camera_fps: self.camera_fps,
+            encoder_noise_counts: self.encoder_noise,
+            firmware: self.firmware.clone(),
+            camera: CameraModel::default(),
+        })
     }
-    Ok(spec)
-}
 
-/// What runs, in words: `stutter at 10 Hz` or `stroke FILE`.
-fn describe(a: &HilArgs, spec: &HilSpec) -> String {
-    match &a.stroke {
-        Some(path) => format!("stroke {}", path.display()),
-        None => format!("{} at {} Hz", kind_name(spec.kind), spec.freq_hz),
+    fn resolve(&self) -> Result<Params, CliError> {
+        let file = ParamsFile::read_opt(self.params.as_deref())?;
+        resolve_params(self.phi, file.as_ref())
     }
 }
 
-fn one_run(
-    a: &HilArgs,
-    params: &Params,
-    spec: &HilSpec,
-    model_config: RigModelConfig,
-    observe: Option<&mut dyn FnMut(&PeriodView)>,
-) -> Result<HilOutcome, CliError> {
-    let mut link = open_link(&a.link, &model_config, &a.firmware)?;
-    run_jump_observed(params, spec, model_config, link.as_mut(), observe).map_err(|e| {
-        CliError::input(format!(
-            "the run through the loop ({}) failed: {e}",
-            link.name()
-        ))
-    })
-}
-
-/// One jump through the loop as `sandjumper hil` runs it: the resolved parameters, the
-/// request, the outcome, the JSON object `hil --json` prints and its text summary.
+/// One jump as `sandjumper hil` runs it (the Python module's entry): the outcome and the
+/// JSON object `hil --json` prints.
 pub struct HilRun {
-    /// Parameters after the preset and the overrides.
-    pub params: Params,
-    /// The jump and the loop's settings.
-    pub spec: HilSpec,
-    /// The rig model (tick rate, encoder scale, noise).
-    pub model_config: RigModelConfig,
-    /// The run's outcome.
-    pub outcome: HilOutcome,
+    /// What the run did.
+    pub jump: HilJump,
     /// `hil --json`'s object, pretty-printed.
     pub json: String,
-    /// The title of the summary and the figure.
-    pub title: String,
-    /// The human summary `hil` prints without `--json`.
-    pub human: String,
 }
 
 impl HilRun {
     /// The acquisition log of the run (what `hil --out` writes as acquisition.csv).
     pub fn acquisition_log(&self) -> sandjumper_acqlog::AcqLog {
-        log::acquisition_log(
-            &self.outcome,
-            &self.spec,
-            self.model_config.tick_hz,
-            self.model_config.metres_per_count,
-            self.params.robot.stroke_amplitude_m,
-            self.params.sand.packing_fraction,
-        )
-    }
-}
-
-/// The rig model `a` asks for (its encoder noise; the rest the defaults).
-fn rig_model_config(a: &HilArgs) -> RigModelConfig {
-    RigModelConfig {
-        encoder_noise_counts: a.encoder_noise,
-        ..RigModelConfig::default()
+        match &self.jump {
+            HilJump::Loop(run) => run.acquisition_log(),
+            HilJump::Board(b) => match b {
+                BoardRecord::Jump(j) => j.log.clone(),
+                BoardRecord::Replay(r) => r.log.clone(),
+            },
+        }
     }
 }
 
 /// Run the jump `a` asks for through its link with `params` (resolved from `a.phi` and the
-/// overrides by [`resolve_params`]; `a.params` is not read here). Errors are the CLI's.
+/// overrides by [`resolve_params`]; `a.params` is not read here).
 pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
-    simulate_run_observed(a, params, None)
-}
-
-/// [`simulate_run`], calling `observe` after every control period.
-pub fn simulate_run_observed(
-    a: &HilArgs,
-    params: Params,
-    observe: Option<&mut dyn FnMut(&PeriodView)>,
-) -> Result<HilRun, CliError> {
-    let spec = spec_of(a, &params)?;
-    let model_config = rig_model_config(a);
-    let outcome = one_run(a, &params, &spec, model_config, observe)?;
-    let phi = params.sand.packing_fraction;
-    let report = HilReport {
-        link: outcome.link_name.clone(),
-        kind: if spec.stroke.is_some() {
-            "stroke"
-        } else {
-            kind_name(spec.kind)
-        },
-        model: spec.model.as_str(),
-        phi,
-        freq_hz: spec.stroke.is_none().then_some(spec.freq_hz),
-        tau_s: spec.stroke.is_none().then_some(spec.tau_s),
-        stroke: a.stroke.as_ref().map(|p| p.display().to_string()),
-        gain_lowering: a.gain_lowering,
-        summary: &outcome.summary,
-        final_jump_note: outcome.summary.final_height_note(),
-        ticks: outcome.ticks,
-        frames_lost: outcome.frames_lost,
-        frames_rejected: outcome.frames_rejected,
-        faults: outcome
-            .faults
-            .iter()
-            .map(|f| FaultEntry {
-                code: f.code.code(),
-                name: f.code.name(),
-                tick: f.tick,
-            })
-            .collect(),
-        camera_frames: outcome.camera_frames.len(),
-        tracking_error_max_m: outcome.tracking_error_until_saturation().0,
-        wall_time_s: outcome.wall_time_s,
-        realtime_factor: outcome.realtime_factor,
-        max_tick_instructions: outcome.link.max_tick_instructions,
-        exit_code: outcome.link.exit_code,
-    };
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
-    let title = format!(
-        "{} through {}{}, model {}, φ = {phi}",
-        match &a.stroke {
-            Some(p) => format!("stroke {}", p.display()),
-            None => kind_name(spec.kind).to_string(),
-        },
-        outcome.link_name,
-        if spec.stroke.is_some() {
-            String::new()
-        } else if spec.kind == JumpKind::DelayedStutter {
-            format!(", f = {} Hz, τ = {} s", spec.freq_hz, spec.tau_s)
-        } else {
-            format!(", f = {} Hz", spec.freq_hz)
-        },
-        spec.model
-    );
-    let human = human(&title, &report);
-    Ok(HilRun {
-        params,
-        spec,
-        model_config,
-        outcome,
-        json,
-        title,
-        human,
-    })
+    let request = a.request(params)?;
+    request.validate().map_err(cli_error)?;
+    let jump = lib::run_checked(&request, &Silent, None).map_err(cli_error)?;
+    let json = jump.json().map_err(cli_error)?;
+    Ok(HilRun { jump, json })
 }
 
 /// Run `hil`.
@@ -357,57 +221,55 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     if a.link == LinkArg::F407 {
         return run_on_the_virtual_board(a);
     }
-    let file = ParamsFile::read_opt(a.params.as_deref())?;
-    let params = resolve_params(a.phi, file.as_ref())?;
-    let spec = spec_of(a, &params)?;
-    if spec.kind != JumpKind::DelayedStutter && a.gain_lowering.is_some() {
-        eprintln!("warning: --gain-lowering only acts during a delayed stutter's delay");
-    }
+    let progress = Bars::new();
+    let mut request = a.request(a.resolve()?)?;
+    request.check(&progress).map_err(cli_error)?;
     if let Some(n) = a.bench {
-        return bench(a, &params, &spec, rig_model_config(a), n);
+        print!("{}", lib::bench(&request, n, &progress).map_err(cli_error)?);
+        return Ok(());
     }
-    let camera = read_camera(a.camera.as_deref())?;
+    request.camera = read_camera(a.camera.as_deref()).map_err(cli_error)?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
     if let (Some(v), LinkArg::Serial(_)) = (live.as_mut(), &a.link) {
         // A board runs at its own pace.
         v.unpaced();
     }
-    if let Some(v) = live.as_mut() {
-        v.bus().event(sandjumper_live::Event::RunStarted {
-            title: format!(
-                "hil --link {}: {}, {}, phi {}",
-                a.link,
-                describe(a, &spec),
-                spec.model.as_str(),
-                params.sand.packing_fraction
-            ),
-            t_s: -spec.settle_s,
-        });
-    }
-    let result = match live.as_mut() {
-        Some(v) => simulate_run_observed(a, params, Some(&mut |p| v.period(p))),
-        None => simulate_run(a, params),
-    };
-    let run = match (result, live.take()) {
-        (Ok(run), v) => {
-            live = v;
-            run
+    let run = match lib::run_checked(&request, &progress, watch(&mut live)) {
+        Ok(HilJump::Loop(run)) => run,
+        Ok(HilJump::Board(_)) => {
+            return Err(CliError::internal("a board's run on a lockstep link"));
         }
-        (Err(e), Some(v)) => {
-            eprintln!("error: {}", e.message);
-            v.finish(0.0, e.message.clone(), false);
+        Err(e) => {
+            let e = cli_error(e);
+            if let Some(v) = live {
+                eprintln!("error: {}", e.message);
+                v.finish(0.0, e.message.clone(), false);
+            }
             return Err(e);
         }
-        (Err(e), None) => return Err(e),
     };
+    finish_loop(a, &run, staged, live)
+}
+
+/// Write, print and end the live view of a lockstep run.
+fn finish_loop(
+    a: &HilArgs,
+    run: &LoopRun,
+    staged: Option<StagedDir>,
+    live: Option<crate::live::LiveView>,
+) -> Result<(), CliError> {
     if let Some(staged) = staged {
-        write_outputs(a, staged, &camera, &run)?;
+        let dir = run.write(staged, a.mcap).map_err(cli_error)?;
+        eprintln!("wrote {}", dir.display());
     }
     if a.json {
-        println!("{}", run.json);
+        println!(
+            "{}",
+            sandjumper_rig::error::to_json(&run.report, "the summary").map_err(cli_error)?
+        );
     } else {
-        print!("{}", run.human);
+        print!("{run}");
     }
     if let Some(v) = live {
         let t_end = run.outcome.trace.last().map_or(0.0, |r| r.t_s);
@@ -423,162 +285,22 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `hil --out`: the acquisition log (and MCAP), frames, parameters, summary and figure.
-fn write_outputs(
-    a: &HilArgs,
-    staged: StagedDir,
-    camera: &CameraModel,
-    run: &HilRun,
-) -> Result<(), CliError> {
-    let log = run.acquisition_log();
-    log.write_file(&staged.file("acquisition.csv"))
-        .map_err(|e| CliError::internal(format!("cannot write acquisition.csv: {e}")))?;
-    if a.mcap {
-        log.write_mcap_file(&staged.file("acquisition.mcap"), None)
-            .map_err(|e| CliError::internal(format!("cannot write acquisition.mcap: {e}")))?;
-    }
-    if a.camera_fps > 0 {
-        sandjumper_rig::hil::camera::write_frames(
-            &run.outcome.camera_frames,
-            &sandjumper_rig::hil::camera::heights_by_period(&run.outcome),
-            camera,
-            1.0 / f64::from(run.model_config.tick_hz),
-            &staged.file("frames"),
-        )
-        .map_err(CliError::internal)?;
-    }
-    staged.write_text("params.toml", &run.params.to_toml())?;
-    staged.write_text("summary.json", &format!("{}\n", run.json))?;
-    save_figure(
-        &log::figure(&run.outcome, run.title.clone()),
-        &staged.file("hil.png"),
-        Some(&staged.file("hil.svg")),
-    )?;
-    let dir = staged.commit()?;
-    eprintln!("wrote {}", dir.display());
-    Ok(())
-}
-
-/// The camera model of `--camera` (the defaults when absent).
-pub fn read_camera(path: Option<&std::path::Path>) -> Result<CameraModel, CliError> {
-    path.map_or(Ok(CameraModel::default()), |p| {
-        CameraModel::from_toml_file(p).map_err(|e| CliError::input(format!("--camera {e}")))
-    })
-}
-
-fn human(title: &str, r: &HilReport<'_>) -> String {
-    let s = r.summary;
-    let mm = |v: f64| format!("{:.2} mm", 1e3 * v);
-    let mut t = format!("{title}\n");
-    t += &format!(
-        "  jump height        {}  (apex at t = {:.4} s)\n",
-        mm(s.jump_height_m),
-        s.apex_time_s
-    );
-    t += &format!("  final jump height  {}\n", mm(s.final_jump_height_m));
-    if let Some(note) = s.final_height_note() {
-        t += &format!("                     {note}\n");
-    }
-    t += &format!("  max depth          {}\n", mm(s.max_depth_m));
-    t += &format!(
-        "  tracking error     {} (max until the force first saturated)\n",
-        mm(r.tracking_error_max_m)
-    );
-    t += &format!("  ticks              {}\n", r.ticks);
-    t += &format!(
-        "  frames lost        {} (rejected {})\n",
-        r.frames_lost, r.frames_rejected
-    );
-    let faults: Vec<String> = r
-        .faults
-        .iter()
-        .map(|f| format!("{} {} at tick {}", f.code, f.name, f.tick))
-        .collect();
-    t += &format!(
-        "  faults             {}\n",
-        if faults.is_empty() {
-            "none".into()
-        } else {
-            faults.join(", ")
-        }
-    );
-    t += &format!("  camera frames      {}\n", r.camera_frames);
-    t += &format!(
-        "  wall time          {:.3} s ({:.1}x real time)\n",
-        r.wall_time_s, r.realtime_factor
-    );
-    if let Some(n) = r.max_tick_instructions {
-        t += &format!("  max tick cost      {n} instructions (Cortex-M4, QEMU -icount)\n");
-    }
-    if let Some(c) = r.exit_code {
-        t += &format!("  firmware exit      {c}\n");
-    }
-    t
-}
-
-fn bench(
-    a: &HilArgs,
-    params: &Params,
-    spec: &HilSpec,
-    model_config: RigModelConfig,
-    n: u32,
-) -> Result<(), CliError> {
-    let mut factors = Vec::new();
-    let mut last = None;
-    for _ in 0..n {
-        let o = one_run(a, params, spec, model_config, None)?;
-        factors.push((o.wall_time_s, o.realtime_factor));
-        last = Some(o);
-    }
-    factors.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let Some(o) = last else { return Ok(()) };
-    let (best, median) = (factors[0], factors[factors.len() / 2]);
-    println!(
-        "hil bench: link {} {} tau {} s model {}: {} runs of {:.3} s simulated ({} ticks at {} Hz)",
-        o.link_name,
-        describe(a, spec),
-        spec.tau_s,
-        spec.model,
-        n,
-        o.simulated_time_s,
-        o.ticks,
-        model_config.tick_hz
-    );
-    println!(
-        "  wall time best {:.4} s ({:.0}x real time), median {:.4} s ({:.0}x real time)",
-        best.0, best.1, median.0, median.1
-    );
-    println!(
-        "  plant: {} rhs evaluations, {} steps ({} rejected): {:.1} rhs per tick",
-        o.summary.rhs_evaluations,
-        o.summary.steps_accepted,
-        o.summary.steps_rejected,
-        o.summary.rhs_evaluations as f64 / o.ticks as f64
-    );
-    if let Some(m) = o.link.max_tick_instructions {
-        println!("  max tick cost {m} instructions");
-    }
-    Ok(())
-}
-
 /// `hil --link f407`: the F407 release binary on the virtual board runs the jump free on its own
 /// tick, the robot coupled through its peripherals, so the jump goes the way `rig jump` runs it
-/// on a board (the same program, log, summary and figure; `--out` optional here). What only a
-/// lockstep link can do is refused.
+/// on a board (the same program, log, summary and figure; `--out` optional here; `--json`
+/// adds `jump_height_m`). What only a lockstep link can do is refused.
 fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
-    let lockstep_only = [
-        (a.bench.is_some(), "--bench"),
-        (a.encoder_noise != 0.0, "--encoder-noise"),
-        (a.rtol.is_some(), "--rtol"),
-        (a.gain_lowering.is_some(), "--gain-lowering"),
-    ];
-    if let Some((_, flag)) = lockstep_only.iter().find(|(set, _)| *set) {
-        return Err(CliError::input(format!(
-            "{flag} is not available with --link f407 (the virtual board runs the flashed binary \
-             free on its own tick, the plant behind its pins; allowed there: --kind, --freq, --tau, \
-             --model, --phi, --params, --camera-fps, --camera, --firmware, --out, --mcap, --json)"
-        )));
+    if a.bench.is_some() {
+        return Err(cli_error(lib::lockstep_only("--bench")));
     }
+    let flags = HilRequest {
+        link: LinkArg::F407,
+        encoder_noise_counts: a.encoder_noise,
+        rtol: a.rtol,
+        gain_lowering: a.gain_lowering,
+        ..HilRequest::default()
+    };
+    flags.refuse_lockstep_only().map_err(cli_error)?;
     let scratch = match &a.out {
         Some(_) => None,
         None => Some(
@@ -591,69 +313,32 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         .clone()
         .or_else(|| scratch.as_ref().map(|d| d.path().join("jump")))
         .ok_or_else(|| CliError::internal("no output directory"))?;
-    let emulated = PathBuf::from(sandjumper_rig::firmware_image::EMULATED_ELF);
-    let target = crate::rig::tool::TargetArgs {
-        controller: crate::rig::tool::ControllerArgs {
-            port: None,
-            link: Some(crate::rig::tool::SimLink::F407),
-        },
-        // hil's default is the QEMU build's ELF: the virtual board takes the F407 build's.
-        firmware: (a.firmware != emulated).then(|| a.firmware.clone()),
-        virtual_board: None,
-        board_pace: None,
-        drive_calibration: None,
-    };
-    let rig = crate::rig::tool::RigParamArgs {
-        model: a.model,
-        phi: a.phi,
-        params: a.params.clone(),
-    };
-    if let Some(stroke) = &a.stroke {
-        // A stroke runs on the board as `rig replay --stroke` does, at the file's own rate.
-        let file = ParamsFile::read_opt(a.params.as_deref())?;
-        let params = resolve_params(a.phi, file.as_ref())?;
-        let table = checked_stroke(stroke, &params)?;
-        let replay = crate::rig::tool::replay::ReplayArgs {
-            live: a.live.clone(),
-            log: None,
-            stroke: Some(stroke.clone()),
-            target,
-            scale: 1.0,
-            time_stretch: 1.0,
-            clip: None,
-            table_rate: Some(table.rate_hz),
-            allow_gaps: false,
-            rig,
-            out,
-            mcap: a.mcap,
-            json: a.json,
-        };
-        let result = crate::rig::tool::replay::run(&replay);
-        if scratch.is_some() {
-            eprintln!(
-                "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)"
-            );
-        }
-        return result;
-    }
-    let jump = crate::rig::tool::jump::JumpArgs {
-        live: a.live.clone(),
-        target,
-        kind: a.kind.unwrap_or(KindArg::Single),
-        freq: a.freq.unwrap_or(0.0),
-        tau: a.tau,
-        camera_fps: a.camera_fps,
-        rig,
-        camera: a.camera.clone(),
-        out,
-        mcap: a.mcap,
-        json: a.json,
-    };
-    let result = crate::rig::tool::jump::run(&jump);
+    let result = on_the_board(a, &out, &Bars::new());
     if scratch.is_some() {
         eprintln!(
             "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)"
         );
     }
     result
+}
+
+/// The jump (or the stroke's replay) on the virtual board, as the rig tool runs it.
+fn on_the_board(
+    a: &HilArgs,
+    out: &std::path::Path,
+    progress: &dyn Progress,
+) -> Result<(), CliError> {
+    let request = a.request(a.resolve()?)?;
+    request.check(progress).map_err(cli_error)?;
+    let outputs = (out, a.mcap, a.json);
+    match lib::board_request(&request) {
+        BoardRequest::Jump(j) => {
+            jump::run_request(j, &a.live, a.camera.as_deref(), outputs, &|o| {
+                with_jump_height(o, o.simulated_jump_height_m)
+            })
+        }
+        BoardRequest::Replay(r) => replay::run_request(r, &a.live, outputs, &|o| {
+            with_jump_height(o, o.simulated_jump_height_m)
+        }),
+    }
 }

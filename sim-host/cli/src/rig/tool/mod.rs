@@ -15,7 +15,8 @@
 //!   bring-up; `--drive-calibration FILE` sends saved codes at the start of any command.
 //! - `acknowledge-reset`: allow `Arm` again after a reset other than power-on.
 //!
-//! All programs run through [`session::run_program`], the one code path for the three links.
+//! Each is a face over its typed call in `sandjumper_rig::tool`; all programs run through
+//! [`session::run_program`], the one code path for the links.
 
 pub mod calibrate;
 pub mod flash;
@@ -27,19 +28,15 @@ pub mod status;
 pub use sandjumper_rig::tool::{intrusion_fixture, output, session};
 
 use std::path::PathBuf;
-use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
 
 use crate::command::args::ModelArg;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::rig::hil::command::{LinkArg, open_link};
 use sandjumper_model::params::{ModelName, Params};
 use sandjumper_output::CliError;
-use sandjumper_rig::hil::link::RigLink;
-use sandjumper_rig::hil::rig_model::RigModelConfig;
-use sandjumper_rig::hil::serial;
-use sandjumper_rig::hil::virtual_board::{self, VirtualBoardConfig, VirtualLoad};
+use sandjumper_rig::hil::open::LinkArg;
+use sandjumper_rig::tool::target::Target;
 
 /// `sandjumper rig`.
 #[derive(Debug, Clone, Args)]
@@ -132,11 +129,8 @@ fn parse_board_pace(s: &str) -> Result<f64, String> {
     }
 }
 
-/// The ELF QEMU runs for `--link pil` unless `--firmware` says otherwise.
-pub const DEFAULT_QEMU_ELF: &str = sandjumper_rig::firmware_image::EMULATED_ELF;
-
 impl TargetArgs {
-    /// The link argument of `sandjumper hil` this target is.
+    /// The link this target is (`Serial` for `--port`).
     pub fn link_arg(&self) -> LinkArg {
         match (&self.controller.port, self.controller.link) {
             (Some(p), _) => LinkArg::Serial(p.clone()),
@@ -146,75 +140,14 @@ impl TargetArgs {
         }
     }
 
-    /// True when the rig is simulated (sil, pil, f407).
-    pub fn is_simulated(&self) -> bool {
-        self.controller.port.is_none()
-    }
-
-    /// True when the host plays the rig in lockstep (sil/pil); the virtual F407 board moves its
-    /// own robot.
-    pub fn host_plays_the_rig(&self) -> bool {
-        self.is_simulated() && self.controller.link != Some(SimLink::F407)
-    }
-
-    /// Open the link (as `sandjumper hil` does) and send the saved drive calibration, if
-    /// `--drive-calibration` names one. `load`: what a virtual F407 board's drive moves.
-    pub fn open_with_load(
-        &self,
-        model: &RigModelConfig,
-        load: Option<VirtualLoad>,
-    ) -> Result<Box<dyn RigLink>, CliError> {
-        let calibration = self
-            .drive_calibration
-            .as_deref()
-            .map(calibrate::read_calibration)
-            .transpose()?;
-        if self.board_pace.is_some() && self.controller.link != Some(SimLink::F407) {
-            return Err(CliError::input(
-                "--board-pace paces the virtual board: it needs --link f407",
-            ));
-        }
-        let mut link = if self.controller.link == Some(SimLink::F407) {
-            let mut cfg = VirtualBoardConfig::new(std::path::Path::new("."));
-            if let Some(p) = &self.virtual_board {
-                cfg.program = p.clone();
-            }
-            if let Some(elf) = &self.firmware {
-                cfg.elf = elf.clone();
-            }
-            cfg.load = load;
-            cfg.pace = self.board_pace;
-            let board = virtual_board::start(&cfg).map_err(|e| {
-                CliError::input(format!("cannot start the virtual F407 board: {e}"))
-            })?;
-            Box::new(board)
-        } else {
-            self.open_link(model)?
-        };
-        if let Some(cal) = calibration {
-            calibrate::send_calibration(link.as_mut(), cal)?;
-        }
-        Ok(link)
-    }
-
-    /// [`TargetArgs::open_with_load`] with nothing for a virtual board's drive to move.
-    pub fn open(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
-        self.open_with_load(model, None)
-    }
-
-    fn open_link(&self, model: &RigModelConfig) -> Result<Box<dyn RigLink>, CliError> {
-        let elf = self
-            .firmware
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(DEFAULT_QEMU_ELF));
-        match self.link_arg() {
-            // A board that streams samples needs longer than a lockstep answer.
-            LinkArg::Serial(path) => Ok(Box::new(
-                serial::start(&path, Duration::from_secs(2)).map_err(|e| {
-                    CliError::input(format!("cannot open the board on {path}: {e}"))
-                })?,
-            )),
-            other => open_link(&other, model, &elf),
+    /// The library's target.
+    pub fn target(&self) -> Target {
+        Target {
+            link: self.link_arg(),
+            firmware: self.firmware.clone(),
+            virtual_board: self.virtual_board.clone(),
+            board_pace: self.board_pace,
+            drive_calibration: self.drive_calibration.clone(),
         }
     }
 }
@@ -247,12 +180,6 @@ impl RigParamArgs {
     }
 }
 
-/// A link failure as a command error: the controller's refusals and a bad port are bad input
-/// (exit 2), like every other failure of the run.
-pub fn link_failed(link: &str, what: &str, e: impl std::fmt::Display) -> CliError {
-    CliError::input(format!("{what} through {link} failed: {e}"))
-}
-
 /// Run `rig`.
 pub fn run(a: &RigArgs) -> Result<(), CliError> {
     match &a.command {
@@ -264,65 +191,4 @@ pub fn run(a: &RigArgs) -> Result<(), CliError> {
         RigCommand::CalibrateDrive(c) => calibrate::run(c),
         RigCommand::AcknowledgeReset(a) => calibrate::acknowledge_reset(a),
     }
-}
-
-/// The end of every program: list the faults (unless JSON was asked for), say where the files
-/// went, and fail (exit 1) when the controller did not complete the program cleanly.
-pub fn conclude(
-    what: &str,
-    completed: bool,
-    faults: &[sandjumper_rig::hil::open::FaultEntry],
-    dir: &std::path::Path,
-    json: bool,
-) -> Result<(), CliError> {
-    if !json {
-        for f in faults {
-            println!("  fault {} {} at tick {}", f.code, f.name, f.tick);
-        }
-    }
-    eprintln!("wrote {}", dir.display());
-    if !faults.is_empty() || !completed {
-        return Err(CliError::internal(format!(
-            "the {what} did not complete cleanly (see {})",
-            dir.join("summary.json").display()
-        )));
-    }
-    Ok(())
-}
-
-/// The live view `live` asks for, started before anything else of the command (its URL
-/// printed first; a bad address refused before a board or a virtual board is opened).
-pub fn start_live(live: &crate::live::LiveArgs) -> Result<Option<crate::live::LiveView>, CliError> {
-    crate::live::LiveView::start(live, &crate::live::JUMP_CHANNELS)
-}
-
-/// Run `program` through `link` (`fixture`: the rig the host plays in lockstep, if it does)
-/// with the live view `view` ([`start_live`]), titled `rig WHAT on LINK`, every step put on
-/// it; `p_cmd` gives the commanded motor position at a rig time, when the host knows it.
-/// Returns the run and the view, to be finished once the command's outputs are written
-/// ([`crate::live::finish`]).
-pub fn run_program_live(
-    mut view: Option<crate::live::LiveView>,
-    what: &str,
-    link: &mut dyn RigLink,
-    fixture: Option<&mut dyn session::Fixture>,
-    program: &session::Program,
-    p_cmd: Option<&dyn Fn(f64) -> f64>,
-    metres_per_count: f64,
-) -> (
-    Result<session::RunRecord, sandjumper_rig::hil::link::LinkError>,
-    Option<crate::live::LiveView>,
-) {
-    let Some(v) = view.as_mut() else {
-        return (session::run_program(link, fixture, program), None);
-    };
-    v.bus().event(sandjumper_live::Event::RunStarted {
-        title: format!("rig {what} on {}", link.name()),
-        t_s: 0.0,
-    });
-    let mut watch = |step: &session::ProgramView<'_>| {
-        v.program(step, p_cmd.map(|f| f(step.t_s)), metres_per_count);
-    };
-    let run = session::run_program_observed(link, fixture, program, Some(&mut watch));
-    (run, view)
 }

@@ -6,9 +6,9 @@
 //!
 //! | link | the controller | transport |
 //! |---|---|---|
-//! | [`super::sil::SilLink`] | the core's [`sandjumper_core::Rig`] in this process | values (corrupted frames go through the real decoder) |
-//! | [`super::framed::FramedLink`] via [`super::pil`] | the real firmware in QEMU `mps2-an386` | COBS frames over semihosting FIFOs (`-icount`) or the CMSDK UART |
-//! | [`super::framed::FramedLink`] via [`super::serial`] | the F407 firmware in its HIL mode | COBS frames over USB CDC |
+//! | [`crate::hil::sil::SilLink`] | the core's [`sandjumper_core::Rig`] in this process | values (corrupted frames go through the real decoder) |
+//! | [`crate::hil::framed::FramedLink`] via [`crate::hil::pil`] | the real firmware in QEMU `mps2-an386` | COBS frames over semihosting FIFOs (`-icount`) or the CMSDK UART |
+//! | [`crate::hil::framed::FramedLink`] via [`crate::hil::serial`] | the F407 firmware in its HIL mode | COBS frames over USB CDC |
 
 use sandjumper_core::protocol::{FaultReport, encode_frame_vec};
 use sandjumper_core::rig::Counters;
