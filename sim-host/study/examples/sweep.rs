@@ -6,12 +6,15 @@
 
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_output::Silent;
-use sandjumper_study::sweep::{self, SweepRequest};
+use sandjumper_study::sweep::{self, SweepRequest, SweepSpec};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let request = SweepRequest {
-        kinds: vec![JumpKind::Single, JumpKind::Stutter],
-        freqs_hz: vec![8.0, 10.0, 12.0, 14.0],
+        spec: SweepSpec {
+            kinds: vec![JumpKind::Single, JumpKind::Stutter],
+            freqs_hz: vec![8.0, 10.0, 12.0, 14.0],
+            ..SweepSpec::default()
+        },
         ..SweepRequest::default()
     };
     let swept = sweep::run(&request, &Silent)?;

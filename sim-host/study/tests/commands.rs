@@ -11,7 +11,7 @@ use sandjumper_study::fit::intrusion::CurveKind;
 use sandjumper_study::fit::{FitKind, FitRequest};
 use sandjumper_study::jump::{self, JumpRequest};
 use sandjumper_study::replay::{self, ReplayRequest};
-use sandjumper_study::sweep::{self, MergeRequest, ShardSpec, SweepRequest};
+use sandjumper_study::sweep::{self, MergeRequest, ShardSpec, SweepRequest, SweepSpec};
 
 fn delayed() -> JumpRequest {
     JumpRequest {
@@ -126,8 +126,11 @@ fn a_replayed_log_predicts_the_logged_jump() {
 #[test]
 fn two_shards_merge_into_the_whole_sweep() {
     let request = SweepRequest {
-        kinds: vec![JumpKind::Single, JumpKind::Stutter],
-        freqs_hz: vec![10.0, 14.0],
+        spec: SweepSpec {
+            kinds: vec![JumpKind::Single, JumpKind::Stutter],
+            freqs_hz: vec![10.0, 14.0],
+            ..SweepSpec::default()
+        },
         threads: Some(1),
         ..SweepRequest::default()
     };

@@ -22,31 +22,21 @@ use super::{
 use crate::StudyError;
 
 /// A sweep: every combination of the axes, on this machine, whole or one shard.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct SweepRequest {
-    /// Jump kinds (the command line has no default).
-    pub kinds: Vec<JumpKind>,
-    /// Ground models.
-    pub models: Vec<ModelName>,
-    /// Packing fractions.
-    pub phis: Vec<f64>,
-    /// Forcing frequencies, Hz (the command line has no default).
-    pub freqs_hz: Vec<f64>,
-    /// Delays of the delayed stutter, s (other kinds use 0).
-    pub taus_s: Vec<f64>,
-    /// Relative tolerance of the integrator.
-    pub rtol: f64,
+    /// The axes (kinds, models, packing fractions, frequencies, delays), the tolerance and
+    /// the drive.
+    pub spec: SweepSpec,
     /// Parameter overrides on top of each packing fraction's preset.
     pub params: Option<ParamsFile>,
     /// Worker threads (None: one per core).
     pub threads: Option<usize>,
     /// Run only this shard (None: the whole sweep).
     pub shard: Option<ShardSpec>,
-    /// What drives each jump.
-    pub drive: SweepDrive,
 }
 
-impl Default for SweepRequest {
+/// The command line's defaults; `kinds` and `freqs_hz` have none there (single, 10 Hz here).
+impl Default for SweepSpec {
     fn default() -> Self {
         Self {
             kinds: vec![JumpKind::Single],
@@ -55,32 +45,16 @@ impl Default for SweepRequest {
             freqs_hz: vec![10.0],
             taus_s: vec![0.0],
             rtol: 1e-8,
-            params: None,
-            threads: None,
-            shard: None,
             drive: SweepDrive::Kinematic,
         }
     }
 }
 
 impl SweepRequest {
-    /// The combinations' spec.
-    pub fn spec(&self) -> SweepSpec {
-        SweepSpec {
-            kinds: self.kinds.clone(),
-            models: self.models.clone(),
-            phis: self.phis.clone(),
-            freqs_hz: self.freqs_hz.clone(),
-            taus_s: self.taus_s.clone(),
-            rtol: self.rtol,
-            drive: self.drive,
-        }
-    }
-
     /// The parameters of each packing fraction (keyed by `phi.to_bits()`), the overrides on top
     /// of each preset, and their TOML text (what the sweep's hash covers).
     pub fn resolved_params(&self) -> Result<(HashMap<u64, Params>, String), StudyError> {
-        resolve_sweep_params(&self.spec(), self.params.as_ref())
+        resolve_sweep_params(&self.spec, self.params.as_ref())
     }
 
     /// Refuse bad parameters before anything runs.
@@ -134,7 +108,7 @@ pub struct WrittenSweep {
 /// Run the sweep `request` asks for; one `progress` step per jump ("jumps").
 pub fn run(request: &SweepRequest, progress: &dyn Progress) -> Result<SweepRunOutcome, StudyError> {
     let (params_by_phi, params_text) = request.resolved_params()?;
-    let spec = request.spec();
+    let spec = request.spec.clone();
     let shard = request.shard.unwrap_or(ShardSpec::WHOLE);
     let combos = spec.combinations();
     let total = combos.len();

@@ -107,7 +107,7 @@ pub fn resolve_sweep_params(
     file: Option<&ParamsFile>,
 ) -> Result<(HashMap<u64, Params>, String), CliError> {
     let request = SweepRequest {
-        phis: spec.phis.clone(),
+        spec: spec.clone(),
         params: file.map(ParamsFile::to_library),
         ..SweepRequest::default()
     };
@@ -117,22 +117,25 @@ pub fn resolve_sweep_params(
 impl SweepArgs {
     /// The library's request for these arguments (`params`: the `--params` file, read).
     pub fn request(&self, params: Option<&ParamsFile>) -> SweepRequest {
-        SweepRequest {
+        let spec = SweepSpec {
             kinds: self.kind.iter().map(|&k| k.into()).collect(),
             models: self.model.iter().map(|&m| m.into()).collect(),
             phis: self.phi.values.clone(),
             freqs_hz: self.freq.values.clone(),
             taus_s: self.tau.values.clone(),
             rtol: self.source.rtol,
-            params: params.map(ParamsFile::to_library),
-            threads: self.threads.map(|t| t as usize),
-            shard: self.shard,
             drive: match self.link {
                 None => SweepDrive::Kinematic,
                 Some(SweepLinkArg::Sil) => SweepDrive::Sil {
                     gain_lowering: self.gain_lowering,
                 },
             },
+        };
+        SweepRequest {
+            spec,
+            params: params.map(ParamsFile::to_library),
+            threads: self.threads.map(|t| t as usize),
+            shard: self.shard,
         }
     }
 }
