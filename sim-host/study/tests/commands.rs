@@ -119,7 +119,10 @@ fn a_replayed_log_predicts_the_logged_jump() {
     assert!((r - e).abs() < 0.01 * e, "replayed {r} m vs exact {e} m");
     let json: serde_json::Value = serde_json::from_str(&out.json().unwrap()).unwrap();
     assert_eq!(json["phi"], 0.57);
-    assert!(json["replay"]["samples"].as_u64().unwrap() > 1000);
+    assert!(
+        json["replay"]["samples"].as_u64().unwrap() > 800,
+        "1/12 s at 10 kHz"
+    );
     assert!(out.to_string().contains("  replayed log       "));
 }
 
