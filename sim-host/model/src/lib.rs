@@ -8,7 +8,7 @@
 //! [`simulation`] (the hybrid run loop), [`trajectory`] (the core's trajectories as a
 //! prescribed `p(t)`), [`table_stroke`] (a stroke sampled at a fixed rate, as the rig replays it), [`jump`] (one kinematic jump, the paper's method), [`plant`] (the
 //! force-driven plant the rig links drive), [`options`] and [`record`] (what a run is asked
-//! and what it records), [`error`] (why a run could not run).
+//! and what it records), [`resolve`] (a preset with a user's overrides on top), [`error`] (why a run could not run).
 
 //!
 //! # Choices where docs/model.md is open
@@ -50,6 +50,7 @@ pub mod options;
 pub mod params;
 pub mod plant;
 pub mod record;
+pub mod resolve;
 pub mod robot;
 pub mod simulation;
 pub mod table_stroke;

@@ -7,10 +7,14 @@
 //! (`jump`, `sweep`, `merge`, `replay`, `fit`, `figures`) live in the CLI crate. All of them
 //! use [`sandjumper_model`]; sweeps driven through the controller use `sandjumper-rig`.
 
+pub mod error;
 pub mod figures;
 pub mod fit;
+pub mod jump;
 pub mod jump_figure;
 pub mod replay;
 pub mod ringing;
 pub mod series;
 pub mod sweep;
+
+pub use error::StudyError;

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
+use sandjumper_output::CliError;
+
 use sandjumper_rig::hil::PeriodView;
 use sandjumper_rig::hil::open::FaultEntry;
 use sandjumper_rig::tool::session::ProgramView;
@@ -11,16 +12,7 @@ use sandjumper_rig::watch::RunWatch;
 
 use crate::live::LiveView;
 
-/// A library error as the command line's: its message, exit 2 for input, 1 otherwise.
-pub fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
-    }
-}
+pub use crate::command::progress::cli_error;
 
 impl RunWatch for LiveView {
     fn started(&mut self, title: &str, t_s: f64) {

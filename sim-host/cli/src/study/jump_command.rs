@@ -1,22 +1,14 @@
 //! `sandjumper jump`: one jump, a summary or JSON, and with `--out` its files and figure.
 
-use serde::Serialize;
-
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
-use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::command::stroke::checked_stroke;
+use crate::command::progress::Bars;
+use crate::command::resolve::ParamsFile;
+use crate::study::cli_error;
 use clap::Args;
-use sandjumper_core::trajectory::JumpKind;
-use sandjumper_model::jump::{JumpOutcome, JumpSpec, simulate_jump, simulate_stroke};
-use sandjumper_model::options::SimOptions;
-use sandjumper_model::params::ModelName;
-use sandjumper_model::record::JumpSummary;
-use sandjumper_model::trajectory::kind_name;
+use sandjumper_model::jump::{JumpOutcome, JumpSpec};
 use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
-use sandjumper_output::plot::save_figure;
-use sandjumper_study::jump_figure::JumpFigure;
-use sandjumper_study::series::write_series_csv;
+use sandjumper_study::jump::{self, JumpRequest};
 use std::path::PathBuf;
 
 /// `sandjumper jump`.
@@ -55,116 +47,21 @@ pub struct JumpArgs {
     pub json: bool,
 }
 
-/// The JSON object of `jump --json` and `summary.json`: the request, then every metric of
-/// [`JumpSummary`] at top level, then the warnings.
-#[derive(Debug, Serialize)]
-pub struct JumpReport<'a> {
-    /// `single`, `stutter` or `delayed`.
-    pub kind: &'static str,
-    /// Ground model.
-    pub model: &'static str,
-    /// Packing fraction used (from the resolved parameters).
-    pub phi: f64,
-    /// Forcing frequency, Hz (null for a stroke file).
-    pub freq_hz: Option<f64>,
-    /// Delay, s (null for a stroke file).
-    pub tau_s: Option<f64>,
-    /// The stroke file run instead of a sine.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stroke: Option<String>,
-    /// Integrator relative tolerance.
-    pub rtol: f64,
-    /// Metrics.
-    #[serde(flatten)]
-    pub summary: &'a JumpSummary,
-    /// What a final jump height that is not positive means, in words (absent otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub final_jump_note: Option<&'static str>,
-    /// Warnings (e.g. motor force above its peak).
-    pub warnings: &'a [String],
-}
-
-/// Title naming a jump: kind, frequency, delay, model, packing fraction.
-pub fn jump_title(spec: &JumpSpec, phi: f64) -> String {
-    let kind = match spec.kind {
-        JumpKind::Single => "single jump".to_string(),
-        JumpKind::Stutter => "stutter jump".to_string(),
-        JumpKind::DelayedStutter => format!("delayed stutter (τ = {} s)", spec.tau_s),
-    };
-    format!(
-        "{kind}, f = {} Hz, model {}, φ = {phi}",
-        spec.freq_hz, spec.model
-    )
-}
-
-pub(crate) fn human_summary(title: &str, out: &JumpOutcome) -> String {
-    let s = &out.summary;
-    let mut t = format!("{title}\n");
-    let mm = |v: f64| format!("{:.2} mm", 1e3 * v);
-    t += &format!(
-        "  jump height        {}  (apex at t = {:.4} s)\n",
-        mm(s.jump_height_m),
-        s.apex_time_s
-    );
-    t += &format!(
-        "  final jump height  {}  (after the push-off half begins; apex at t = {:.4} s)\n",
-        mm(s.final_jump_height_m),
-        s.final_apex_time_s
-    );
-    if let Some(note) = s.final_height_note() {
-        t += &format!("                     {note}\n");
-    }
-    t += &format!("  max depth          {}\n", mm(s.max_depth_m));
-    t += &format!("  peak added mass    {:.1} g\n", 1e3 * s.peak_added_mass_kg);
-    t += &match s.liftoff_time_s {
-        Some(tl) => format!("  first lift-off     t = {tl:.4} s\n"),
-        None => "  first lift-off     never (the foot did not leave the ground)\n".to_string(),
-    };
-    t += &format!("  peak motor force   {:.1} N\n", s.peak_motor_force_n);
-    let mut counts: Vec<(String, usize)> = Vec::new();
-    for e in &s.events {
-        let k = e.kind.to_string();
-        match counts.iter_mut().find(|c| c.0 == k) {
-            Some(c) => c.1 += 1,
-            None => counts.push((k, 1)),
+impl JumpArgs {
+    /// The library's request for these arguments (`params`: the `--params` file, read).
+    pub fn request(&self, params: Option<&ParamsFile>, record_series: bool) -> JumpRequest {
+        JumpRequest {
+            kind: self.kind.unwrap_or(KindArg::Single).into(),
+            freq_hz: self.freq.unwrap_or(0.0),
+            tau_s: self.tau,
+            stroke: self.stroke.clone(),
+            model: self.model.into(),
+            phi: self.phi,
+            params: params.map(ParamsFile::to_library),
+            rtol: self.source.rtol,
+            record_series,
         }
     }
-    let counts: Vec<String> = counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
-    t += &format!(
-        "  events             {} ({})\n",
-        s.events.len(),
-        counts.join(", ")
-    );
-    t += &format!(
-        "  integration        {} rhs evaluations, {} steps ({} rejected), run ends at t = {:.4} s\n",
-        s.rhs_evaluations, s.steps_accepted, s.steps_rejected, s.end_time_s
-    );
-    t
-}
-
-/// Write a jump's files into a staged output directory: trajectory.csv, params.toml,
-/// summary.json (`json`), jump.png and jump.svg (also used by `replay`).
-pub(crate) fn write_jump_files(
-    staged: &StagedDir,
-    title: &str,
-    params: &sandjumper_model::params::Params,
-    json: &str,
-    outcome: &JumpOutcome,
-) -> Result<(), CliError> {
-    write_series_csv(&staged.file("trajectory.csv"), &outcome.series)?;
-    staged.write_text("params.toml", &params.to_toml())?;
-    staged.write_text("summary.json", &format!("{json}\n"))?;
-    let fig = JumpFigure {
-        title: title.to_string(),
-        rows: &outcome.series,
-        summary: &outcome.summary,
-    };
-    save_figure(
-        &fig,
-        &staged.file("jump.png"),
-        Some(&staged.file("jump.svg")),
-    )?;
-    Ok(())
 }
 
 /// One jump as `sandjumper jump` runs it: the resolved parameters, the request, the outcome
@@ -180,88 +77,36 @@ pub struct JumpRun {
     pub json: String,
 }
 
-/// Simulate the jump `a` asks for with `params` (resolved from `a.phi` and the overrides by
-/// [`resolve_params`]; `a.source.params` is not read here); `record_series` keeps every
-/// output step (`trajectory.csv`). Errors are the CLI's.
+/// Simulate the jump `a` asks for with `params` (resolved by the caller; `a.source.params` is
+/// not read here); `record_series` keeps every output step (`trajectory.csv`). Errors are the
+/// CLI's.
 pub fn simulate_run(
     a: &JumpArgs,
     params: sandjumper_model::params::Params,
     record_series: bool,
 ) -> Result<JumpRun, CliError> {
-    let kind: JumpKind = a.kind.unwrap_or(KindArg::Single).into();
-    let model: ModelName = a.model.into();
-    let spec = JumpSpec {
-        kind,
-        freq_hz: a.freq.unwrap_or(0.0),
-        tau_s: a.tau.unwrap_or(0.0),
-        model,
-    };
-    let opts = SimOptions {
-        rtol: a.source.rtol,
-        record_series,
-        ..SimOptions::default()
-    };
-    let outcome = match &a.stroke {
-        None => simulate_jump(&params, &spec, &opts),
-        Some(path) => {
-            let table = checked_stroke(path, &params)?;
-            let stroke = table.kinematic_stroke().map_err(CliError::input)?;
-            simulate_stroke(&params, model, stroke, &opts)
-        }
-    }
-    .map_err(|e| CliError::input(format!("simulation of the jump failed: {e}")))?;
-    let report = JumpReport {
-        kind: if a.stroke.is_some() {
-            "stroke"
-        } else {
-            kind_name(kind)
-        },
-        model: model.as_str(),
-        phi: params.sand.packing_fraction,
-        freq_hz: a.stroke.is_none().then_some(spec.freq_hz),
-        tau_s: a.stroke.is_none().then_some(spec.tau_s),
-        stroke: a.stroke.as_ref().map(|p| p.display().to_string()),
-        rtol: opts.rtol,
-        summary: &outcome.summary,
-        final_jump_note: outcome.summary.final_height_note(),
-        warnings: &outcome.warnings,
-    };
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
+    let request = a.request(None, record_series);
+    let out =
+        jump::run_with_params(&request, params, &sandjumper_output::Silent).map_err(cli_error)?;
     Ok(JumpRun {
-        params,
-        spec,
-        outcome,
-        json,
+        json: out.json().map_err(cli_error)?,
+        params: out.params,
+        spec: out.spec,
+        outcome: out.simulated,
     })
 }
 
 /// Run `jump`.
 pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    let request = a.request(file.as_ref(), a.out.is_some());
     // Bad parameters are refused before an output directory is touched.
-    let params = resolve_params(a.phi, file.as_ref())?;
-    if a.kind != Some(KindArg::Delayed) && a.tau.is_some_and(|t| t != 0.0) {
-        eprintln!(
-            "warning: --tau {} is ignored: only --kind delayed has a delay",
-            a.tau.unwrap_or(0.0)
-        );
-    }
+    request.validate().map_err(cli_error)?;
     // Fail on an unwritable output directory before spending time on the simulation.
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let JumpRun {
-        params,
-        spec,
-        outcome,
-        json,
-    } = simulate_run(a, params, staged.is_some())?;
-    let phi = params.sand.packing_fraction;
-    let title = match &a.stroke {
-        Some(path) => format!("stroke {}, model {}, φ = {phi}", path.display(), spec.model),
-        None => jump_title(&spec, phi),
-    };
+    let outcome = jump::run(&request, &Bars::default()).map_err(cli_error)?;
     if let Some(staged) = staged {
-        write_jump_files(&staged, &title, &params, &json, &outcome)?;
+        outcome.write_into(&staged).map_err(cli_error)?;
         let dir = staged.commit()?;
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
@@ -269,11 +114,11 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         );
     }
     if a.json {
-        println!("{json}");
+        println!("{}", outcome.json().map_err(cli_error)?);
     } else {
-        print!("{}", human_summary(&title, &outcome));
+        print!("{outcome}");
     }
-    for w in &outcome.warnings {
+    for w in &outcome.simulated.warnings {
         eprintln!("warning: {w}");
     }
     Ok(())

@@ -39,18 +39,18 @@ use sweeps::{BEST_HEADER, BestRow, Grids, LOW_PHI, best_rows, find_best};
 
 /// How to run the figures.
 #[derive(Clone)]
-pub struct FiguresOptions {
+pub struct FiguresOptions<'a> {
     /// Coarse grids ([`Grids::quick`]) instead of the full set.
     pub quick: bool,
     /// Worker threads (0: one per core).
     pub threads: usize,
     /// Called after every simulated jump, from any worker thread (e.g. a progress bar).
-    pub on_jump: std::sync::Arc<dyn Fn() + Send + Sync>,
+    pub on_jump: &'a (dyn Fn() + Sync),
     /// Relative tolerance of the integrator.
     pub rtol: f64,
 }
 
-impl std::fmt::Debug for FiguresOptions {
+impl std::fmt::Debug for FiguresOptions<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("FiguresOptions")
             .field("quick", &self.quick)
@@ -136,8 +136,59 @@ impl Writer {
     }
 }
 
+/// The jump model's figures (`sandjumper figures`), written into `out`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FiguresRequest {
+    /// Output directory (created, or replacing an earlier sandjumper output).
+    pub out: PathBuf,
+    /// Coarse grids ([`Grids::quick`]) instead of the full set.
+    pub quick: bool,
+    /// Worker threads (None: one per core).
+    pub threads: Option<usize>,
+    /// Relative tolerance of the integrator.
+    pub rtol: f64,
+}
+
+impl Default for FiguresRequest {
+    fn default() -> Self {
+        Self {
+            out: PathBuf::new(),
+            quick: false,
+            threads: None,
+            rtol: sandjumper_model::options::SimOptions::default().rtol,
+        }
+    }
+}
+
+/// Simulate and write every figure `request` asks for; one `progress` step per jump (its
+/// count is known only as they run).
+pub fn run(
+    request: &FiguresRequest,
+    progress: &dyn sandjumper_output::Progress,
+) -> Result<FiguresReport, FiguresError> {
+    progress.start("jumps simulated", None);
+    let opts = FiguresOptions {
+        quick: request.quick,
+        threads: request.threads.unwrap_or(0),
+        on_jump: &|| progress.advance(1),
+        rtol: request.rtol,
+    };
+    let report = write_figures(&request.out, &opts);
+    progress.finish();
+    report
+}
+
+impl sandjumper_output::Blamed for FiguresError {
+    fn blame(&self) -> sandjumper_output::Blame {
+        match self {
+            Self::Output(_) => sandjumper_output::Blame::Input,
+            Self::Internal(_) => sandjumper_output::Blame::Internal,
+        }
+    }
+}
+
 /// Simulate and write every figure into `out`.
-pub fn write_figures(out: &Path, opts: &FiguresOptions) -> Result<FiguresReport, FiguresError> {
+pub fn write_figures(out: &Path, opts: &FiguresOptions<'_>) -> Result<FiguresReport, FiguresError> {
     let mut w = Writer {
         dir: StagedDir::create(out)?,
         files: Vec::new(),

@@ -67,24 +67,22 @@ pub fn params_for(model: ModelName, phi: f64) -> Result<Params, String> {
 }
 
 /// Simulate every combination in parallel (calling `opts.on_jump` after each), kinematically.
-pub fn run(combos: &[Combination], opts: &FiguresOptions) -> Result<SweepOutcome, FiguresError> {
+pub fn run(
+    combos: &[Combination],
+    opts: &FiguresOptions<'_>,
+) -> Result<SweepOutcome, FiguresError> {
     run_driven(combos, opts, SweepDrive::Kinematic)
 }
 
 /// [`run`] with every jump driven by `drive`; the rows name the drive.
 pub fn run_driven(
     combos: &[Combination],
-    opts: &FiguresOptions,
+    opts: &FiguresOptions<'_>,
     drive: SweepDrive,
 ) -> Result<SweepOutcome, FiguresError> {
-    drive::run_driven(
-        combos,
-        opts.threads,
-        &*opts.on_jump,
-        drive,
-        opts.rtol,
-        |c| params_for(c.model, c.phi),
-    )
+    drive::run_driven(combos, opts.threads, opts.on_jump, drive, opts.rtol, |c| {
+        params_for(c.model, c.phi)
+    })
     .map_err(FiguresError::Internal)
 }
 

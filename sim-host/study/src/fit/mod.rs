@@ -23,6 +23,7 @@ pub mod intrusion;
 pub mod jumps;
 pub mod least_squares;
 pub mod report;
+mod request;
 
 use core::fmt;
 use std::path::{Path, PathBuf};
@@ -30,6 +31,7 @@ use std::path::{Path, PathBuf};
 pub use data::DataError;
 pub use least_squares::LeastSquaresError;
 pub use report::{FitReport, FittedValue, Override};
+pub use request::{FitKind, FitRequest, check_rtol, run};
 
 use sandjumper_model::params::ParamsError;
 

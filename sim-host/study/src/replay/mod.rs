@@ -21,6 +21,9 @@
 //! motor force of a replay includes the quantization noise of `p''` and so reads high.
 
 pub mod differentiate;
+mod request;
+
+pub use request::{ReplayOutcome, ReplayRequest, run, run_log};
 
 use crate::replay::differentiate::SavitzkyGolay;
 use sandjumper_acqlog::AcqLog;
@@ -223,7 +226,7 @@ pub struct MeasuredComparison {
 /// A replayed log: the simulation's outcome (as `sandjumper jump` reports it), how the stroke
 /// was made, and predicted vs measured.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ReplayOutcome {
+pub struct Replayed {
     /// The kinematic run driven by the log.
     pub outcome: JumpOutcome,
     /// How the stroke was made.
@@ -241,7 +244,7 @@ pub fn replay_log(
     model: ModelName,
     window_s: f64,
     opts: &SimOptions,
-) -> Result<ReplayOutcome, String> {
+) -> Result<Replayed, String> {
     let stroke = ReplayStroke::from_log(log, window_s)?;
     let info = ReplayInfo {
         samples: stroke.len(),
@@ -295,7 +298,7 @@ pub fn replay_log(
     } else {
         Vec::new()
     };
-    Ok(ReplayOutcome {
+    Ok(Replayed {
         outcome: JumpOutcome {
             summary,
             series,

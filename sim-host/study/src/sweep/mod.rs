@@ -16,6 +16,7 @@ pub mod drive;
 pub mod merge;
 pub mod plot;
 pub mod range;
+mod request;
 pub mod shard;
 
 use std::path::Path;
@@ -25,6 +26,10 @@ use sandjumper_core::trajectory::JumpKind;
 use serde::{Deserialize, Serialize};
 
 pub use range::{RangeError, ValueRange};
+pub use request::{
+    MergeOutcome, MergeRequest, SweepRequest, SweepRunOutcome, WrittenSweep, merge,
+    params_file_name, run,
+};
 use sandjumper_model::params::ModelName;
 pub use shard::{ShardSpec, ShardSpecError};
 

@@ -5,8 +5,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use super::{FiguresError, FiguresOptions, write_figures};
-use sandjumper_model::options::SimOptions;
+use super::FiguresRequest;
+use crate::command::progress::Bars;
+use crate::study::cli_error;
 use sandjumper_output::CliError;
 
 /// `sandjumper figures`: the jump model's figures, or `figures dem` (Supplementary I).
@@ -46,22 +47,13 @@ pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
         return Err(CliError::input("figures: --out DIR is required"));
     };
     let started = Instant::now();
-    // One bar over all the figures' jumps (their count is known only as they run).
-    let bar = crate::command::progress_counter("jumps simulated");
-    let opts = FiguresOptions {
+    let request = FiguresRequest {
+        out: out.clone(),
         quick: a.quick,
-        threads: a.threads.map_or(0, |t| t as usize),
-        on_jump: {
-            let bar = bar.clone();
-            std::sync::Arc::new(move || bar.inc(1))
-        },
-        rtol: SimOptions::default().rtol,
+        threads: a.threads.map(|t| t as usize),
+        ..FiguresRequest::default()
     };
-    let report = write_figures(out, &opts).map_err(|e| match e {
-        FiguresError::Output(e) => CliError::input(e.to_string()),
-        FiguresError::Internal(m) => CliError::internal(m),
-    })?;
-    bar.finish_and_clear();
+    let report = super::run(&request, &Bars::default()).map_err(cli_error)?;
     println!(
         "wrote {} files to {} ({} jumps, {} failed, {:.1} s)",
         report.files.len(),

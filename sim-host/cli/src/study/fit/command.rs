@@ -1,18 +1,18 @@
 //! `sandjumper fit intrusion|added-mass|drag|inertial FILE.csv [--out FILE.toml] [--json]`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use super::added_mass::{DEFAULT_EXCLUDE_DEEPEST, fit_added_mass_file};
+use super::added_mass::DEFAULT_EXCLUDE_DEEPEST;
 use super::data::HeightColumn;
-use super::intrusion::{CurveKind, fit_intrusion_file};
-use super::jumps::{DragParam, JumpFitSetup, fit_jumps_file};
-use super::{FitReport, write_params_files};
+use super::intrusion::CurveKind;
+use super::jumps::DragParam;
+use super::{FitKind, FitReport, FitRequest, check_rtol, write_params_files};
 use crate::command::args::{ModelArg, check_phi};
-use crate::command::resolve::{ParamsFile, resolve_params};
-use sandjumper_model::options::SimOptions;
-use sandjumper_output::CliError;
+use crate::command::resolve::ParamsFile;
+use crate::study::cli_error;
+use sandjumper_output::{CliError, Silent};
 
 /// `sandjumper fit`.
 #[derive(Debug, Clone, Args)]
@@ -134,74 +134,64 @@ fn parse_phi(s: &str) -> Result<f64, String> {
     check_phi(v)
 }
 
-/// Run `fit ...`.
-pub fn run(a: &FitArgs) -> Result<(), CliError> {
-    let (report, output) = match &a.what {
-        FitCommand::Intrusion(i) => {
-            let file = ParamsFile::read_opt(i.output.params.as_deref())?;
-            let params = resolve_params(i.phi, file.as_ref())?;
-            let kind = match (i.reintrusion, i.first) {
-                (true, _) => CurveKind::Re,
-                (_, true) => CurveKind::First,
-                _ => CurveKind::Auto,
-            };
-            if let Some(z) = i.z_start
-                && !(z.is_finite() && z > 0.0)
-            {
-                return Err(CliError::input(format!(
-                    "--z-start {z}: allowed a depth > 0 in m"
-                )));
+impl FitCommand {
+    /// The library's request (`--params` read and checked in the order the command line
+    /// always had: a jump fit's `--rtol` first).
+    pub fn request(&self) -> Result<(FitRequest, &FitOutput), CliError> {
+        let (file, phi, kind, output) = match self {
+            FitCommand::Intrusion(i) => {
+                let curve = match (i.reintrusion, i.first) {
+                    (true, _) => CurveKind::Re,
+                    (_, true) => CurveKind::First,
+                    _ => CurveKind::Auto,
+                };
+                let z_start_m = i.z_start;
+                let kind = FitKind::Intrusion { curve, z_start_m };
+                (&i.file, i.phi, kind, &i.output)
             }
-            (
-                fit_intrusion_file(&i.file, kind, &params, i.z_start),
-                &i.output,
-            )
-        }
-        FitCommand::AddedMass(m) => {
-            let file = ParamsFile::read_opt(m.output.params.as_deref())?;
-            let params = resolve_params(m.phi, file.as_ref())?;
-            (
-                fit_added_mass_file(&m.file, &params, m.exclude_deepest),
-                &m.output,
-            )
-        }
-        FitCommand::Drag(j) => (jump_fit(j, DragParam::Alpha)?, &j.output),
-        FitCommand::Inertial(j) => (jump_fit(j, DragParam::B)?, &j.output),
-    };
-    let report = report.map_err(|e| CliError::input(e.to_string()))?;
-    emit(&report, output)
+            FitCommand::AddedMass(m) => {
+                let exclude_deepest = m.exclude_deepest;
+                (
+                    &m.file,
+                    m.phi,
+                    FitKind::AddedMass { exclude_deepest },
+                    &m.output,
+                )
+            }
+            FitCommand::Drag(j) => (&j.file, 0.57, j.kind(DragParam::Alpha)?, &j.output),
+            FitCommand::Inertial(j) => (&j.file, 0.57, j.kind(DragParam::B)?, &j.output),
+        };
+        let params = ParamsFile::read_opt(output.params.as_deref())?;
+        let request = FitRequest {
+            file: file.clone(),
+            kind,
+            phi,
+            params: params.as_ref().map(ParamsFile::to_library),
+        };
+        Ok((request, output))
+    }
 }
 
-fn jump_fit(
-    j: &JumpFitArgs,
-    param: DragParam,
-) -> Result<Result<FitReport, super::FitError>, CliError> {
-    if !(1e-14..1.0).contains(&j.rtol) {
-        return Err(CliError::input(format!(
-            "--rtol {}: allowed 1e-14 <= rtol < 1",
-            j.rtol
-        )));
+impl JumpFitArgs {
+    fn kind(&self, param: DragParam) -> Result<FitKind, CliError> {
+        check_rtol(self.rtol).map_err(cli_error)?;
+        Ok(FitKind::Jumps {
+            param,
+            model: self.model.map(Into::into),
+            height: match self.height {
+                HeightArg::Jump => HeightColumn::Jump,
+                HeightArg::Final => HeightColumn::Final,
+            },
+            rtol: self.rtol,
+        })
     }
-    let file = ParamsFile::read_opt(j.output.params.as_deref())?;
-    let model = j.model.map(Into::into).unwrap_or(match param {
-        DragParam::Alpha => sandjumper_model::params::ModelName::Eq1,
-        DragParam::B => sandjumper_model::params::ModelName::Eq4,
-    });
-    let base = move |phi: f64| resolve_params(phi, file.as_ref()).map_err(|e| e.message);
-    let setup = JumpFitSetup {
-        param,
-        model,
-        height: match j.height {
-            HeightArg::Jump => HeightColumn::Jump,
-            HeightArg::Final => HeightColumn::Final,
-        },
-        sim: SimOptions {
-            rtol: j.rtol,
-            ..SimOptions::default()
-        },
-        base: &base,
-    };
-    Ok(fit_jumps_file(&j.file, &setup))
+}
+
+/// Run `fit ...`.
+pub fn run(a: &FitArgs) -> Result<(), CliError> {
+    let (request, output) = a.what.request()?;
+    let report = super::run(&request, &Silent).map_err(cli_error)?;
+    emit(&report, output)
 }
 
 fn emit(report: &FitReport, output: &FitOutput) -> Result<(), CliError> {
@@ -214,12 +204,8 @@ fn emit(report: &FitReport, output: &FitOutput) -> Result<(), CliError> {
     } else {
         print!("{}", report.summary());
         for path in &written {
-            println!("wrote {}", display(path));
+            println!("wrote {}", path.display());
         }
     }
     Ok(())
-}
-
-fn display(p: &Path) -> String {
-    p.display().to_string()
 }

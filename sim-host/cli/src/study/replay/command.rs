@@ -5,18 +5,14 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use serde::Serialize;
 
 use crate::command::args::{ModelArg, ParamSource};
-use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::study::jump_command::{human_summary, write_jump_files};
-use sandjumper_acqlog::{AcqLog, ReadOptions};
-use sandjumper_model::options::SimOptions;
-use sandjumper_model::params::ModelName;
-use sandjumper_model::record::JumpSummary;
-use sandjumper_output::CliError;
-use sandjumper_output::StagedDir;
-use sandjumper_study::replay::{DEFAULT_WINDOW_S, MeasuredComparison, ReplayInfo, replay_log};
+use crate::command::progress::Bars;
+use crate::command::resolve::ParamsFile;
+use crate::study::cli_error;
+use sandjumper_acqlog::AcqLog;
+use sandjumper_output::{CliError, Silent, StagedDir};
+use sandjumper_study::replay::{self, DEFAULT_WINDOW_S, ReplayRequest};
 
 /// `sandjumper replay`.
 #[derive(Debug, Clone, Args)]
@@ -57,36 +53,30 @@ fn parse_window_ms(s: &str) -> Result<f64, String> {
     }
 }
 
-/// The JSON object of `replay --json` and `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct ReplayReport<'a> {
-    /// The log replayed.
-    pub log: String,
-    /// Ground model.
-    pub model: &'static str,
-    /// Packing fraction used.
-    pub phi: f64,
-    /// Integrator relative tolerance.
-    pub rtol: f64,
-    /// How the stroke was made from the log.
-    pub replay: &'a ReplayInfo,
-    /// Metrics (the same as `sandjumper jump`).
-    #[serde(flatten)]
-    pub summary: &'a JumpSummary,
-    /// Predicted vs measured, when the log has measurements.
-    pub measured: Option<&'a MeasuredComparison>,
-    /// Warnings.
-    pub warnings: &'a [String],
+impl ReplayArgs {
+    /// The library's request for these arguments (`params`: the `--params` file, read).
+    pub fn request(&self, params: Option<&ParamsFile>, record_series: bool) -> ReplayRequest {
+        ReplayRequest {
+            log: self.log.clone(),
+            model: self.model.into(),
+            phi: self.phi,
+            params: params.map(ParamsFile::to_library),
+            rtol: self.source.rtol,
+            window_s: self.window_ms * 1e-3,
+            allow_gaps: self.allow_gaps,
+            record_series,
+        }
+    }
 }
 
 /// Reads a CSV log for the CLI: errors name the file and line (exit 2).
 pub fn read_log_file(path: &Path, allow_gaps: bool) -> Result<AcqLog, CliError> {
-    let opts = ReadOptions {
+    let request = ReplayRequest {
+        log: path.to_path_buf(),
         allow_gaps,
-        ..ReadOptions::default()
+        ..ReplayRequest::default()
     };
-    AcqLog::read_file(path, &opts)
-        .map_err(|e| CliError::input(format!("log `{}`: {e}", path.display())))
+    request.read_log().map_err(cli_error)
 }
 
 /// One replay as `sandjumper replay` runs it: the resolved parameters, the replay, the JSON
@@ -95,7 +85,7 @@ pub struct ReplayRun {
     /// Parameters after the preset and the overrides.
     pub params: sandjumper_model::params::Params,
     /// The replay and its outcome.
-    pub replayed: sandjumper_study::replay::ReplayOutcome,
+    pub replayed: sandjumper_study::replay::Replayed,
     /// `replay --json`'s object, pretty-printed.
     pub json: String,
     /// Title of the summary and the figure.
@@ -111,69 +101,25 @@ pub fn replay_run(
     file: Option<&ParamsFile>,
     record_series: bool,
 ) -> Result<ReplayRun, CliError> {
-    let phi = match (a.phi, log.meta.phi) {
-        (Some(phi), _) => phi,
-        (None, Some(phi)) => phi,
-        (None, None) => {
-            return Err(CliError::input(format!(
-                "log `{}` has no `phi` metadata: give the packing fraction with --phi",
-                a.log.display()
-            )));
-        }
-    };
-    let params = resolve_params(phi, file)?;
-    let model: ModelName = a.model.into();
-    let opts = SimOptions {
-        rtol: a.source.rtol,
-        record_series,
-        ..SimOptions::default()
-    };
-    let replayed = replay_log(log, &params, model, a.window_ms * 1e-3, &opts)
-        .map_err(|e| CliError::input(format!("log `{}`: {e}", a.log.display())))?;
-    let outcome = &replayed.outcome;
-    let report = ReplayReport {
-        log: a.log.display().to_string(),
-        model: model.as_str(),
-        phi: params.sand.packing_fraction,
-        rtol: opts.rtol,
-        replay: &replayed.info,
-        summary: &outcome.summary,
-        measured: replayed.measured.as_ref(),
-        warnings: &outcome.warnings,
-    };
-    let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::internal(format!("cannot encode the summary as JSON: {e}")))?;
-    let name = a.log.file_name().map_or_else(
-        || a.log.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let title = format!(
-        "replay of {name}, model {model}, φ = {}",
-        params.sand.packing_fraction
-    );
+    let out = replay::run_log(&a.request(file, record_series), log, &Silent).map_err(cli_error)?;
     Ok(ReplayRun {
-        params,
-        replayed,
-        json,
-        title,
+        json: out.json().map_err(cli_error)?,
+        params: out.params,
+        replayed: out.replayed,
+        title: out.title,
     })
 }
 
 /// Run `replay`.
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    let request = a.request(file.as_ref(), a.out.is_some());
     // The log is checked before an output directory is touched.
-    let log = read_log_file(&a.log, a.allow_gaps)?;
+    let log = request.read_log().map_err(cli_error)?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let ReplayRun {
-        params,
-        replayed,
-        json,
-        title,
-    } = replay_run(a, &log, file.as_ref(), staged.is_some())?;
-    let outcome = &replayed.outcome;
+    let outcome = replay::run_log(&request, &log, &Bars::default()).map_err(cli_error)?;
     if let Some(staged) = staged {
-        write_jump_files(&staged, &title, &params, &json, outcome)?;
+        outcome.write_into(&staged).map_err(cli_error)?;
         let dir = staged.commit()?;
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
@@ -181,62 +127,12 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         );
     }
     if a.json {
-        println!("{json}");
+        println!("{}", outcome.json().map_err(cli_error)?);
     } else {
-        print!("{}", human_summary(&title, outcome));
-        print!("{}", stroke_lines(&replayed.info));
-        if let Some(m) = &replayed.measured {
-            print!("{}", measured_lines(m));
-        }
+        print!("{outcome}");
     }
     for w in &outcome.warnings {
         eprintln!("warning: {w}");
     }
     Ok(())
-}
-
-fn stroke_lines(i: &ReplayInfo) -> String {
-    let mut t = format!(
-        "  replayed log       {} samples at {:.3} Hz (rate_hz {}), log time {:.6} s is t = 0, ends at t = {:.4} s\n",
-        i.samples, i.grid_rate_hz, i.rate_hz, i.log_start_s, i.log_end_s
-    );
-    t += &format!(
-        "  p'' method         Savitzky-Golay, order {}, window {} samples ({:.2} ms), -3 dB at {:.0} Hz; peak |p''| {:.1} m/s^2\n",
-        i.polynomial_order,
-        i.window_samples,
-        i.window_s * 1e3,
-        i.cutoff_hz,
-        i.peak_accel_m_s2
-    );
-    if i.interpolated_samples > 0 {
-        t += &format!(
-            "  gaps               {} sample(s) interpolated (--allow-gaps)\n",
-            i.interpolated_samples
-        );
-    }
-    t
-}
-
-fn measured_lines(m: &MeasuredComparison) -> String {
-    let mut t = String::new();
-    if let Some(measured) = m.measured_jump_height_m {
-        t += &format!(
-            "  predicted vs measured jump height  {:.2} mm vs {:.2} mm",
-            1e3 * m.predicted_jump_height_m,
-            1e3 * measured
-        );
-        if let Some(r) = m.jump_height_relative_error {
-            t += &format!(" ({:+.1} %)", 100.0 * r);
-        }
-        t += "\n";
-    }
-    if let Some(rms) = m.rod_height_rms_error_m {
-        t += &format!(
-            "  rod height         RMS predicted - measured {:.2} mm over {} camera samples (highest measured {:.2} mm)\n",
-            1e3 * rms,
-            m.rod_height_samples,
-            1e3 * m.max_measured_rod_height_m.unwrap_or(0.0)
-        );
-    }
-    t
 }

@@ -1,11 +1,11 @@
-//! `sandjumper merge`: join the shard directories of one sweep.
+//! `sandjumper merge`: join the shard directories of one sweep ([`sandjumper_study::sweep::merge`]).
 
-use super::command::{write_sweep_files, write_sweep_plots};
 use clap::Args;
-use sandjumper_output::CliError;
-use sandjumper_output::StagedDir;
-use sandjumper_study::sweep::merge::{merge_shards, read_sweep_dir};
+use sandjumper_output::{CliError, Silent};
+use sandjumper_study::sweep::{MergeRequest, merge};
 use std::path::PathBuf;
+
+use crate::study::cli_error;
 
 /// `sandjumper merge`.
 #[derive(Debug, Clone, Args)]
@@ -20,47 +20,30 @@ pub struct MergeArgs {
 
 /// Run `merge`.
 pub fn run(a: &MergeArgs) -> Result<(), CliError> {
-    let out_canon = std::fs::canonicalize(&a.out).ok();
-    let mut shards = Vec::with_capacity(a.dirs.len());
-    for dir in &a.dirs {
-        if out_canon.is_some() && std::fs::canonicalize(dir).ok() == out_canon {
-            return Err(CliError::input(format!(
-                "--out `{}` is one of the shard directories: write the merged sweep elsewhere",
-                a.out.display()
-            )));
-        }
-        shards.push(read_sweep_dir(dir).map_err(|e| CliError::input(e.0))?);
-    }
-    let first_dir = shards[0].dir.clone();
-    let (meta, outcome) = merge_shards(shards).map_err(|e| CliError::input(e.0))?;
-    let staged = StagedDir::create(&a.out)?;
-    write_sweep_files(staged.path(), &meta, &outcome)?;
-    // The parameter files are identical in every shard (they are part of the spec hash).
-    let entries = std::fs::read_dir(&first_dir)
-        .map_err(|e| CliError::input(format!("cannot read `{}`: {e}", first_dir.display())))?;
-    for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if name.starts_with("params") && name.ends_with(".toml") {
-            std::fs::copy(entry.path(), staged.file(&name)).map_err(|e| {
-                CliError::internal(format!("cannot copy `{}`: {e}", entry.path().display()))
-            })?;
-        }
-    }
-    let plots = write_sweep_plots(staged.path(), &outcome)?;
-    let dir = staged.commit()?;
+    merge_into(&MergeRequest {
+        dirs: a.dirs.clone(),
+        out: a.out.clone(),
+    })
+}
+
+/// Merge the shards `request` names into its `out` and tell the user (also `sweep --slurm`'s
+/// last step).
+pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
+    let merged = merge(request, &Silent).map_err(cli_error)?;
+    let written = merged.write(&request.out).map_err(cli_error)?;
+    let (rows, failures) = (merged.outcome.rows.len(), merged.outcome.failures.len());
     eprintln!(
-        "merged {} shard(s): {} rows, {} failures; wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{})",
-        a.dirs.len(),
-        outcome.rows.len(),
-        outcome.failures.len(),
-        dir.display(),
-        plots.iter().map(|p| format!(", {p}")).collect::<String>()
+        "merged {} shard(s): {rows} rows, {failures} failures; wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{})",
+        merged.shards,
+        written.dir.display(),
+        written
+            .plots
+            .iter()
+            .map(|p| format!(", {p}"))
+            .collect::<String>()
     );
-    if !outcome.failures.is_empty() {
-        eprintln!(
-            "warning: {} jump(s) of the sweep failed; see failures.csv",
-            outcome.failures.len()
-        );
+    if failures > 0 {
+        eprintln!("warning: {failures} jump(s) of the sweep failed; see failures.csv");
     }
     Ok(())
 }

@@ -16,11 +16,9 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use crate::slurm::{
-    fresh_job_dir, log_tail, passed_on, program_and_cwd, quote, sbatch, tool, unsuccessful,
-    wait_for,
-};
+use crate::study::cli_error;
 use sandjumper_output::CliError;
+use sandjumper_slurm::{self as slurm, JobScript, quote};
 
 /// The Slurm options of `sweep`.
 #[derive(Debug, Clone, Args)]
@@ -42,7 +40,7 @@ pub struct SlurmArgs {
 /// The sweep's own arguments (after `sweep`) without the ones each task sets itself:
 /// `--out`, `--shard`, `--threads` and every `--slurm*`.
 fn task_arguments(argv: &[String]) -> Vec<String> {
-    passed_on(
+    slurm::passed_on(
         argv,
         &["sweep"],
         &[
@@ -58,78 +56,82 @@ fn task_arguments(argv: &[String]) -> Vec<String> {
     )
 }
 
-/// Submit the sweep `argv` asks for as a job array, and (unless told not to) wait for it and
-/// merge its shards into `out`.
-pub fn submit(argv: &[String], out: &Path, s: &SlurmArgs) -> Result<(), CliError> {
+/// Submit the sweep `argv` asks for as a job array; unless told not to, wait for it: the
+/// shard directories to merge into `out` (None: not waited for).
+pub fn submit(
+    argv: &[String],
+    out: &Path,
+    s: &SlurmArgs,
+) -> Result<Option<Vec<PathBuf>>, CliError> {
     let tasks = s.slurm.unwrap_or(1);
-    tool("sbatch", "--slurm")?;
-    let dir = fresh_job_dir(out)?;
-    let (exe, cwd) = program_and_cwd()?;
-    let mut script = s.queue.script_head(
-        "sweep",
-        &[
+    slurm::tool("sbatch", "--slurm").map_err(cli_error)?;
+    let dir = slurm::fresh_job_dir(out).map_err(cli_error)?;
+    let (exe, cwd) = slurm::program_and_cwd().map_err(cli_error)?;
+    let script = JobScript {
+        name: "sweep".into(),
+        shape: vec![
             format!("--array=1-{tasks}"),
             format!("--cpus-per-task={}", s.slurm_cpus),
         ],
-        &dir.join("logs").join("task-%a.out"),
-        &cwd,
-    );
-    script += &format!(
-        "exec {} sweep {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
-         \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
-        quote(&exe.to_string_lossy()),
-        task_arguments(argv)
-            .iter()
-            .map(|a| quote(a))
-            .collect::<Vec<_>>()
-            .join(" "),
-        quote(&dir.to_string_lossy())
-    );
-    let job = sbatch(&dir, &script)?;
+        log: dir.join("logs").join("task-%a.out"),
+        cwd,
+        queue: s.queue.options(),
+        command: format!(
+            "exec {} sweep {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
+             \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
+            quote(&exe.to_string_lossy()),
+            task_arguments(argv)
+                .iter()
+                .map(|a| quote(a))
+                .collect::<Vec<_>>()
+                .join(" "),
+            quote(&dir.to_string_lossy())
+        ),
+    };
+    let job = slurm::submit(&dir, &script).map_err(cli_error)?;
     eprintln!(
-        "submitted Slurm job {job} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
+        "submitted Slurm job {} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
+        job.id,
         s.slurm_cpus,
         dir.display()
     );
-    let shards: Vec<PathBuf> = (1..=tasks)
-        .map(|i| dir.join(format!("shard-{i}")))
-        .collect();
     if s.queue.slurm_no_wait {
-        println!("{job}");
+        println!("{}", job.id);
         eprintln!(
             "when it is done: sandjumper merge {}/shard-* --out {}",
             dir.display(),
             out.display()
         );
-        return Ok(());
+        return Ok(None);
     }
-    wait_for(&job)?;
+    job.wait().map_err(cli_error)?;
+    let shards: Vec<PathBuf> = (1..=tasks)
+        .map(|i| dir.join(format!("shard-{i}")))
+        .collect();
     let mut failed = Vec::new();
     for (i, shard) in (1..=tasks).zip(&shards) {
         let complete = shard.join("sweep.toml").is_file();
-        if let Some((st, code)) = unsuccessful(&job, Some(i), complete) {
+        if let Some((st, code)) = job.unsuccessful(Some(i), complete) {
             let log = dir.join("logs").join(format!("task-{i}.out"));
             failed.push(format!(
                 "task {i}: {st}, exit code {code}, shard {}; log {}:\n    {}",
                 if complete { "written" } else { "missing" },
                 log.display(),
-                log_tail(&log, 5)
+                slurm::log_tail(&log, 5)
             ));
         }
     }
     if !failed.is_empty() {
         return Err(CliError::internal(format!(
-            "Slurm job {job}: {} of {tasks} task(s) did not succeed; nothing merged (fix and \
+            "Slurm job {}: {} of {tasks} task(s) did not succeed; nothing merged (fix and \
              resubmit, or merge the good shards by hand)\n{}",
+            job.id,
             failed.len(),
             failed.join("\n")
         )));
     }
-    eprintln!("all {tasks} task(s) of job {job} done; merging");
-    super::merge_command::run(&super::merge_command::MergeArgs {
-        dirs: shards,
-        out: out.to_path_buf(),
-    })
+    eprintln!("all {tasks} task(s) of job {} done; merging", job.id);
+    Ok(Some(shards))
 }
 
 #[cfg(test)]

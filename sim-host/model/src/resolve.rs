@@ -1,0 +1,134 @@
+//! The parameters of a run as a user gives them: a packing fraction's preset, then a file of
+//! overrides on top (the command line's `--phi` and `--params`, Python's `phi` and `params`).
+//!
+//! A packing fraction outside the presets (0.57..=0.62) is accepted only together with an
+//! overrides text that has a `[sand]` table (the sand values at that phi); keys the text does
+//! not set come from the nearest preset row, and `sand.packing_fraction` is set to `phi`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::params::{PRESET_PHI_MAX, PRESET_PHI_MIN, Params};
+
+/// A user's parameter overrides (TOML, tables `[robot]`, `[drive]`, `[sand]`, `[model]`),
+/// read once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamsFile {
+    /// Where the text came from (a file's path as given, or a name such as `<params dict>`);
+    /// errors name it.
+    pub path: PathBuf,
+    /// The TOML text.
+    pub text: String,
+}
+
+/// Why parameters could not be resolved: the whole message, naming the flag or the file, the
+/// key and the line, and what is allowed. Always the caller's input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResolveError(pub String);
+
+impl fmt::Display for ResolveError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ResolveError {}
+
+impl ParamsFile {
+    /// Read `path`; an unreadable file is an error naming the path.
+    pub fn read(path: &Path) -> Result<Self, ResolveError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            ResolveError(format!("cannot read params file `{}`: {e}", path.display()))
+        })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            text,
+        })
+    }
+
+    /// Read an optional file.
+    pub fn read_opt(path: Option<&Path>) -> Result<Option<Self>, ResolveError> {
+        path.map(Self::read).transpose()
+    }
+
+    fn has_sand_table(&self) -> bool {
+        self.text
+            .parse::<toml::Table>()
+            .is_ok_and(|t| t.get("sand").is_some_and(toml::Value::is_table))
+    }
+}
+
+/// The parameters for packing fraction `phi` with the optional overrides `file` applied and
+/// validated. Errors name `--phi` or the file, key and line.
+pub fn resolve_params(phi: f64, file: Option<&ParamsFile>) -> Result<Params, ResolveError> {
+    let in_presets = (PRESET_PHI_MIN - 1e-9..=PRESET_PHI_MAX + 1e-9).contains(&phi);
+    let preset = |phi_row: f64| {
+        Params::preset(phi_row).map_err(|e| ResolveError(format!("--phi {phi}: {e}")))
+    };
+    let base = if in_presets {
+        preset(phi)?
+    } else {
+        match file {
+            Some(f) if f.has_sand_table() => {
+                let mut p = preset(phi.clamp(PRESET_PHI_MIN, PRESET_PHI_MAX))?;
+                p.sand.packing_fraction = phi;
+                p
+            }
+            Some(f) => {
+                return Err(ResolveError(format!(
+                    "--phi {phi} is outside the presets ({PRESET_PHI_MIN}..={PRESET_PHI_MAX}) and the \
+                     params file `{}` has no [sand] table to supply the sand values (allowed: a phi \
+                     in {PRESET_PHI_MIN}..={PRESET_PHI_MAX}, or a params file with a [sand] table)",
+                    f.path.display()
+                )));
+            }
+            None => {
+                return Err(ResolveError(format!(
+                    "--phi {phi} is outside the presets' range (allowed: {PRESET_PHI_MIN}..={PRESET_PHI_MAX}, \
+                     or any phi together with --params FILE giving the [sand] values)"
+                )));
+            }
+        }
+    };
+    let params = match file {
+        Some(f) => base
+            .with_overrides_toml(&f.text, &f.path.display().to_string())
+            .map_err(|e| ResolveError(format!("params file: {e}")))?,
+        None => base,
+    };
+    params
+        .validate()
+        .map_err(|e| ResolveError(format!("parameters: {e}")))?;
+    Ok(params)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_phi_outside_the_presets_needs_a_sand_table() {
+        let err = resolve_params(0.5, None).unwrap_err();
+        assert!(err.0.contains("outside the presets' range"), "{err}");
+        let file = ParamsFile {
+            path: "x.toml".into(),
+            text: "[sand]\n".into(),
+        };
+        let p = resolve_params(0.5, Some(&file)).unwrap();
+        assert_eq!(p.sand.packing_fraction, 0.5);
+        let bad = ParamsFile {
+            path: "y.toml".into(),
+            text: "[robot]\n".into(),
+        };
+        assert!(
+            resolve_params(0.5, Some(&bad))
+                .unwrap_err()
+                .0
+                .contains("`y.toml` has no [sand]")
+        );
+        assert_eq!(
+            resolve_params(0.6, None).unwrap(),
+            Params::preset(0.6).unwrap()
+        );
+    }
+}
