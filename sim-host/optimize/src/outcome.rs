@@ -191,6 +191,19 @@ pub struct OptimizeOutcome {
     pub dir: PathBuf,
 }
 
+/// The files of an outcome's folder ([`OptimizeOutcome::write`]).
+pub const FILES: [&str; 9] = [
+    "stroke.csv",
+    "paper_stroke.csv",
+    "candidates.csv",
+    "paper_sweep.csv",
+    "history.csv",
+    "summary.json",
+    "params.toml",
+    "optimize.png",
+    "optimize.svg",
+];
+
 /// `c` in words: its start, then each move's target and duration and the holds between.
 pub fn chain_text(c: &MoveChain) -> String {
     let mut s = format!("start {:.3} mm", 1e3 * c.start_m);

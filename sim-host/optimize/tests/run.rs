@@ -5,7 +5,8 @@ use std::path::Path;
 use std::sync::Mutex;
 
 use sandjumper_optimize::{
-    OptimizeError, OptimizeOutcome, OptimizeRequest, checkpoint_path, run, run_with_board,
+    NoBoard, OptimizeError, OptimizeOutcome, OptimizeRequest, StrokeOnBoard, checkpoint_path, run,
+    run_with_board,
 };
 use sandjumper_output::{Blame, Blamed, Progress, Silent};
 use sandjumper_rig::hil::open::LinkArg;
@@ -57,17 +58,7 @@ fn a_tiny_search_is_at_least_the_paper_sweeps_best_and_writes_its_folder() {
     assert!(o.answer.links.is_empty());
     // The folder: the files, summary.json the serialised outcome, no checkpoint left.
     assert_eq!(o.dir, out);
-    for f in [
-        "stroke.csv",
-        "paper_stroke.csv",
-        "candidates.csv",
-        "paper_sweep.csv",
-        "history.csv",
-        "summary.json",
-        "params.toml",
-        "optimize.png",
-        "optimize.svg",
-    ] {
+    for f in sandjumper_optimize::outcome::FILES {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
@@ -193,16 +184,11 @@ fn ranked_through_sil_refined_and_f407_through_the_board_given() {
         .filter(|v| v.is_finite())
         .collect();
     assert!(values.windows(2).all(|w| w[0] >= w[1]), "{values:?}");
-    // Without a board, the F407 runs are skipped, saying why.
-    let o = run(
-        &OptimizeRequest {
-            verify: vec![LinkArg::F407],
-            ..tiny(&dir.path().join("f407"))
-        },
-        &Silent,
-    )
-    .unwrap();
-    let why = o.answer.links[0].skipped.as_deref().unwrap_or_default();
+    // Without a board (`run`), an F407 run is skipped, saying why.
+    let why = NoBoard
+        .replay(&request, &o.stroke)
+        .skipped
+        .unwrap_or_default();
     assert!(why.contains("no virtual board"), "{why}");
 }
 
