@@ -370,9 +370,9 @@ impl fmt::Display for OptimizeOutcome {
                 format!("{v:.4e} {}", self.objective_unit)
             }
         };
-        write!(
+        writeln!(
             f,
-            "best {} on {} at phi {} ({}): {}, the paper's best {}: ratio {:.3}\n",
+            "best {} on {} at phi {} ({}): {}, the paper's best {}: ratio {:.3}",
             self.objective,
             self.model,
             self.phi,
