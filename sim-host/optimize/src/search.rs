@@ -36,6 +36,14 @@ pub struct SearchSettings {
     pub elites_per_start: usize,
 }
 
+impl SearchSettings {
+    /// Evaluations a search from `starts` starts makes in all: the budget shared evenly (at
+    /// least one generation per start).
+    pub fn budget(&self, starts: usize) -> usize {
+        (self.evaluations / starts.max(1)).max(self.population) * starts
+    }
+}
+
 /// Where a search started.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Start {
@@ -156,8 +164,8 @@ pub fn search(
     if starts.is_empty() {
         return Err("no start for the search".into());
     }
-    let per_start = (settings.evaluations / starts.len()).max(settings.population);
-    let budget = per_start * starts.len();
+    let budget = settings.budget(starts.len());
+    let per_start = budget / starts.len();
     let mut history = Vec::new();
     let mut by_start = Vec::new();
     let (mut evaluations, mut replayed, mut infeasible) = (0usize, 0usize, 0usize);

@@ -15,6 +15,7 @@ use sandjumper_rig::hil::run::{HilSpec, run_jump};
 use sandjumper_rig::stroke_table::StrokeTable;
 
 use crate::evaluate::Objective;
+use crate::request::OptimizeRequest;
 
 /// One stroke run through one link.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -127,4 +128,32 @@ pub fn run_through(
         peak_power_w: Some(o.summary.peak_motor_power_w),
         work_j: Some(o.summary.motor_work_j),
     })
+}
+
+/// The F407 release binary on the virtual board, as [`crate::run_with_board`] reaches it:
+/// `table` replayed there (free-running on the board's own tick, not in lockstep) for the
+/// request's model and parameters, its run as a [`LinkRun`] (skipped, with the reason, when
+/// the board or the binary is not there).
+pub trait StrokeOnBoard {
+    /// Replay `table` on the board for `request`.
+    fn replay(&self, request: &OptimizeRequest, table: &StrokeTable) -> LinkRun;
+}
+
+impl<F: Fn(&OptimizeRequest, &StrokeTable) -> LinkRun> StrokeOnBoard for F {
+    fn replay(&self, request: &OptimizeRequest, table: &StrokeTable) -> LinkRun {
+        self(request, table)
+    }
+}
+
+/// No board: every F407 run is skipped, saying so ([`crate::run`] without a board).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoBoard;
+
+impl StrokeOnBoard for NoBoard {
+    fn replay(&self, _: &OptimizeRequest, _: &StrokeTable) -> LinkRun {
+        LinkRun::skipped(
+            &LinkArg::F407,
+            "no virtual board was given to this run (sandjumper_optimize::run_with_board)".into(),
+        )
+    }
 }

@@ -1,0 +1,278 @@
+//! What `optimize` is asked: [`OptimizeRequest`] (its `Default` is the command line's
+//! defaults), its checks ([`OptimizeRequest::validate`], the command line's messages) and the
+//! search it sets up ([`Setup`]).
+
+use std::path::{Path, PathBuf};
+
+use sandjumper_model::SimOptions;
+use sandjumper_model::params::{ModelName, Params};
+use sandjumper_rig::hil::open::LinkArg;
+use sandjumper_rig::hil::rig_model::RigModelConfig;
+use sandjumper_rig::stroke_table::RigLimits;
+
+use crate::error::OptimizeError;
+use crate::evaluate::{Objective, Problem, SearchLimits};
+use crate::family::Encoding;
+use crate::search::SearchSettings;
+
+/// A stroke search: what to maximise, on which ground, within which limits, how hard to
+/// search, which links verify the answer and where to write it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OptimizeRequest {
+    /// What to maximise.
+    pub objective: Objective,
+    /// Ground model.
+    pub model: ModelName,
+    /// Robot, drive and sand (the `--phi` preset with any `--params` file applied).
+    pub params: Params,
+    /// Relative tolerance of the Dormand-Prince 5(4) integrator (1e-14 <= rtol < 1).
+    pub rtol: f64,
+    /// Largest |p| a stroke may reach, m (0 < X <= 0.025, the rig's stroke).
+    pub max_stroke_m: f64,
+    /// Longest stroke, s (start to the end of its last move; at most what the replay buffer
+    /// holds at `table_rate_hz`).
+    pub max_duration_s: f64,
+    /// Samples per second of the stroke table, Hz (10..=10000; divides the 10 kHz control
+    /// rate).
+    pub table_rate_hz: u32,
+    /// Least jump height of a stroke for the ratio objectives, m (0 < X <= 1).
+    pub min_height_m: f64,
+    /// Moves per stroke (2..=8; the paper's strokes have 2).
+    pub moves: usize,
+    /// Longest hold between moves, s (0 < X <= 5).
+    pub max_hold_s: f64,
+    /// Evaluations of the search in all, shared by its starts (100..=10,000,000).
+    pub evaluations: usize,
+    /// Candidates per CMA-ES generation (4..=1000).
+    pub population: usize,
+    /// Random starts after the three paper strokes' starts (0..=100).
+    pub random_starts: usize,
+    /// Seed of the search (the same seed, the same answer).
+    pub seed: u64,
+    /// Step of the paper strokes' frequency sweep (1..25 Hz), Hz (0 < X <= 5).
+    pub sweep_freq_step_hz: f64,
+    /// Step of the delayed stutter's delay in the sweep, s (0 < X <= 1).
+    pub sweep_tau_step_s: f64,
+    /// Links the best strokes are re-run through, force-driven: `Sil` (candidates are
+    /// re-ranked through it, or through the first link without it), `Pil`, `F407`; empty:
+    /// none, the answer is the kinematic model's.
+    pub verify: Vec<LinkArg>,
+    /// Candidates of each start re-ranked through the controller (1..=1000).
+    pub elites: usize,
+    /// Runs through sil refining the best re-ranked stroke (0..=100,000; 0: none).
+    pub refine: usize,
+    /// Paper strokes of each kind re-ranked through the controller (1..=1000).
+    pub paper_candidates: usize,
+    /// Firmware ELF for the `Pil` link (built with `--features board-qemu`).
+    pub firmware: PathBuf,
+    /// Worker threads (1..=1024; `None`: one per core).
+    pub threads: Option<usize>,
+    /// Output folder. The search's checkpoint lives beside it ([`checkpoint_path`]) until
+    /// the run finishes: the same request again resumes it.
+    pub out: PathBuf,
+}
+
+impl Default for OptimizeRequest {
+    /// The command line's defaults; `out` is empty (the command line requires `--out`).
+    fn default() -> Self {
+        Self {
+            objective: Objective::Height,
+            model: ModelName::Eq4,
+            params: Params::preset(0.57).expect("0.57 is a preset packing fraction"),
+            rtol: 1e-8,
+            max_stroke_m: 0.025,
+            max_duration_s: 2.0,
+            table_rate_hz: 1000,
+            min_height_m: 0.02,
+            moves: 4,
+            max_hold_s: 0.5,
+            evaluations: 192_000,
+            population: 24,
+            random_starts: 9,
+            seed: 1,
+            sweep_freq_step_hz: 0.1,
+            sweep_tau_step_s: 0.01,
+            verify: vec![LinkArg::Sil, LinkArg::Pil, LinkArg::F407],
+            elites: 16,
+            refine: 600,
+            paper_candidates: 8,
+            firmware: PathBuf::from(sandjumper_rig::firmware_image::EMULATED_ELF),
+            threads: None,
+            out: PathBuf::new(),
+        }
+    }
+}
+
+/// The search a request sets up: the problem every candidate is evaluated on, the family's
+/// encoding and the CMA-ES settings.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    /// Robot, ground, limits, objective.
+    pub problem: Problem,
+    /// The family searched (its bounds).
+    pub encoding: Encoding,
+    /// How the search runs.
+    pub settings: SearchSettings,
+}
+
+/// The checkpoint's path for the output folder `out`: `DIR.checkpoint` beside it.
+pub fn checkpoint_path(out: &Path) -> PathBuf {
+    let mut name = out
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(".checkpoint");
+    out.with_file_name(name)
+}
+
+/// `v` within `lo < v <= hi` (in `unit`), or the command line's refusal of `flag`.
+fn within(flag: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), OptimizeError> {
+    if v.is_finite() && v > lo && v <= hi {
+        Ok(())
+    } else {
+        Err(OptimizeError::Invalid(format!(
+            "{flag} `{v}` out of range (allowed: {lo} < X <= {hi} {unit})"
+        )))
+    }
+}
+
+/// `v` within `lo..=hi`, or a refusal naming `flag`.
+fn counted(flag: &str, v: usize, lo: usize, hi: usize) -> Result<(), OptimizeError> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(OptimizeError::Invalid(format!(
+            "{flag} {v} out of range (allowed: {lo}..={hi})"
+        )))
+    }
+}
+
+impl OptimizeRequest {
+    /// Check every field: the ranges the command line's parsers hold, then the limits that
+    /// depend on each other (the messages the command line gives after parsing).
+    pub fn validate(&self) -> Result<(), OptimizeError> {
+        self.setup().map(|_| ())
+    }
+
+    /// The ranges of the command line's value parsers (a Rust caller has none).
+    fn check_ranges(&self) -> Result<(), OptimizeError> {
+        if self.out.as_os_str().is_empty() {
+            return Err(OptimizeError::Invalid(
+                "no output folder given (--out DIR)".into(),
+            ));
+        }
+        if !(1e-14..1.0).contains(&self.rtol) {
+            return Err(OptimizeError::Invalid(format!(
+                "rtol {} out of range (allowed: 1e-14 <= rtol < 1)",
+                self.rtol
+            )));
+        }
+        within("--max-stroke", self.max_stroke_m, 0.0, 0.025, "m")?;
+        within("--max-duration", self.max_duration_s, 0.0, 409.5, "s")?;
+        within("--min-height", self.min_height_m, 0.0, 1.0, "m")?;
+        within("--max-hold", self.max_hold_s, 0.0, 5.0, "s")?;
+        within("--sweep-freq-step", self.sweep_freq_step_hz, 0.0, 5.0, "Hz")?;
+        within("--sweep-tau-step", self.sweep_tau_step_s, 0.0, 1.0, "s")?;
+        counted("--table-rate", self.table_rate_hz as usize, 10, 10_000)?;
+        counted("--moves", self.moves, 2, 8)?;
+        counted("--evaluations", self.evaluations, 100, 10_000_000)?;
+        counted("--population", self.population, 4, 1000)?;
+        counted("--random-starts", self.random_starts, 0, 100)?;
+        counted("--elites", self.elites, 1, 1000)?;
+        counted("--refine", self.refine, 0, 100_000)?;
+        counted("--paper-candidates", self.paper_candidates, 1, 1000)?;
+        if let Some(t) = self.threads {
+            counted("--threads", t, 1, 1024)?;
+        }
+        if let Some(l) = self.verify.iter().find(|l| matches!(l, LinkArg::Serial(_))) {
+            return Err(OptimizeError::Invalid(format!(
+                "link `{l}` not allowed in --verify (allowed: sil, pil, f407, a \
+                 comma-separated list of them, or none)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The limits a candidate must keep and the largest acceleration the drive allows
+    /// (m/s²), checked against each other.
+    fn limits(&self) -> Result<(SearchLimits, f64), OptimizeError> {
+        let rig = RigLimits {
+            stroke_m: self.max_stroke_m,
+            ..RigLimits::of(&self.params)
+        };
+        let tick_hz = RigModelConfig::default().tick_hz;
+        if !tick_hz.is_multiple_of(self.table_rate_hz) {
+            return Err(OptimizeError::Invalid(format!(
+                "--table-rate {} Hz does not divide the {tick_hz} Hz control rate (allowed: e.g. \
+                 500, 1000, 2000, 5000)",
+                self.table_rate_hz
+            )));
+        }
+        let buffer_s = rig.max_duration_s(self.table_rate_hz);
+        if self.max_duration_s > buffer_s {
+            return Err(OptimizeError::Invalid(format!(
+                "--max-duration {} s is longer than the replay buffer holds at {} samples/s \
+                 ({buffer_s:.3} s; allowed: up to that, or lower --table-rate)",
+                self.max_duration_s, self.table_rate_hz
+            )));
+        }
+        let (lo, hi) = rig.accel_range_m_s2();
+        let max_accel = hi.min(-lo);
+        if max_accel <= 0.0 {
+            return Err(OptimizeError::Invalid(format!(
+                "the drive's peak force {} N cannot hold the motor ({} kg) against gravity",
+                self.params.drive.peak_force_n, self.params.robot.motor_mass_kg
+            )));
+        }
+        let limits = SearchLimits {
+            rig,
+            table_rate_hz: self.table_rate_hz,
+            max_duration_s: self.max_duration_s,
+            min_height_m: self.min_height_m,
+        };
+        Ok((limits, max_accel))
+    }
+
+    /// The search this request sets up, checked as [`validate`](Self::validate) checks it.
+    pub fn setup(&self) -> Result<Setup, OptimizeError> {
+        self.check_ranges()?;
+        self.params
+            .validate()
+            .map_err(|e| OptimizeError::Invalid(format!("parameters: {e}")))?;
+        let (limits, max_accel) = self.limits()?;
+        let encoding = Encoding {
+            moves: self.moves,
+            stroke_m: self.max_stroke_m,
+            max_accel_m_s2: max_accel,
+            min_move_s: 4.0 / f64::from(self.table_rate_hz),
+            // The longest move: the slowest half period of the sweep (1 Hz), whatever the
+            // moves and the duration limit (checked on every candidate).
+            max_move_s: 0.5,
+            max_hold_s: self.max_hold_s,
+        };
+        let problem = Problem {
+            params: self.params.clone(),
+            model: self.model,
+            limits,
+            objective: self.objective,
+            opts: SimOptions {
+                rtol: self.rtol,
+                ..SimOptions::default()
+            },
+        };
+        let settings = SearchSettings {
+            seed: self.seed,
+            evaluations: self.evaluations,
+            population: self.population,
+            random_starts: self.random_starts,
+            sigma_paper: 0.1,
+            sigma_random: 0.3,
+            elites_per_start: self.elites,
+        };
+        Ok(Setup {
+            problem,
+            encoding,
+            settings,
+        })
+    }
+}

@@ -1,0 +1,817 @@
+//! `optimize` as one call ([`run`]): its stages in order, each a function passing typed
+//! values to the next: setup, the paper sweep, the search (checkpointed), the candidates
+//! re-ranked through the controller, the refinement through sil, the answer and the paper's
+//! best verified through every link, the ranking, and the folder.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use sandjumper_model::SimOptions;
+use sandjumper_model::jump::simulate_stroke;
+use sandjumper_model::record::SeriesRow;
+use sandjumper_output::{Progress, StagedDir};
+use sandjumper_rig::hil::open::LinkArg;
+
+use crate::checkpoint::Checkpoint;
+use crate::error::OptimizeError;
+use crate::evaluate::Evaluation;
+use crate::family::{Encoding, MoveChain};
+use crate::outcome::{CandidateRow, KindBest, OptimizeOutcome, ResultStroke, chain_text};
+use crate::paper_sweep::{PaperGrid, PaperStroke, PaperSweep, SweptPoint, sweep};
+use crate::refine::{RefineSettings, refine};
+use crate::request::{OptimizeRequest, Setup, checkpoint_path};
+use crate::search::{SearchOutcome, SearchSettings, Start, search};
+use crate::verify::{LinkRun, NoBoard, StrokeOnBoard, run_through};
+
+/// Run the search `request` asks for, reporting to `progress`, and write its folder
+/// (`request.out`). The F407 link, if asked, is skipped ([`NoBoard`]); give a board with
+/// [`run_with_board`]. A search killed mid-way leaves its checkpoint beside the folder
+/// ([`checkpoint_path`]): the same request again resumes it to the same answer.
+pub fn run(
+    request: &OptimizeRequest,
+    progress: &dyn Progress,
+) -> Result<OptimizeOutcome, OptimizeError> {
+    run_with_board(request, progress, &NoBoard)
+}
+
+/// [`run`], with the F407 link's runs made by `board`.
+pub fn run_with_board(
+    request: &OptimizeRequest,
+    progress: &dyn Progress,
+    board: &dyn StrokeOnBoard,
+) -> Result<OptimizeOutcome, OptimizeError> {
+    let cx = Context::new(request, progress)?;
+    let staged = prepare_output(&request.out)?;
+    let started = Instant::now();
+    cx.say(format!(
+        "optimize: {} on {} at phi {}, {} moves, {} evaluations on {} thread(s)",
+        cx.setup.problem.objective.name(),
+        cx.setup.problem.model.as_str(),
+        request.params.sand.packing_fraction,
+        cx.setup.encoding.moves,
+        cx.setup.settings.evaluations,
+        cx.threads
+    ));
+    let paper = cx.paper_sweep()?;
+    let starts = starts(
+        &paper.sweep.best_by_kind,
+        &cx.setup.encoding,
+        &cx.setup.settings,
+    );
+    let ckpt_path = checkpoint_path(&request.out);
+    let mut checkpoint = cx.open_checkpoint(&ckpt_path, &starts)?;
+    let searched = cx.search(&starts, &mut checkpoint)?;
+    let mut ranking = cx.rank(cx.candidates(&paper, &searched));
+    ranking.ranked = cx.runs_through(&ranking)?;
+    cx.refine(&mut ranking, &mut checkpoint)?;
+    let verified = cx.verify(&ranking, board)?;
+    let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
+    outcome.write_into(&staged)?;
+    outcome.dir = staged.commit()?;
+    // The answer is safe in the folder: the checkpoint has done its job.
+    drop(checkpoint);
+    let _ = std::fs::remove_file(&ckpt_path);
+    Ok(outcome)
+}
+
+/// A resumed search's killed runs left their half-written output folders
+/// (`.DIR.partial-*` beside DIR): removed, then the folder is staged (refused early when it
+/// cannot be written).
+fn prepare_output(out: &Path) -> Result<StagedDir, OptimizeError> {
+    if checkpoint_path(out).exists() {
+        remove_stale_partials(out);
+    }
+    Ok(StagedDir::create(out)?)
+}
+
+/// Remove `.DIR.partial-*` beside `out`.
+fn remove_stale_partials(out: &Path) {
+    let (Some(parent), Some(name)) = (out.parent(), out.file_name()) else {
+        return;
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    let prefix = format!(".{}.partial-", name.to_string_lossy());
+    if let Ok(entries) = std::fs::read_dir(parent) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&prefix) && e.path().is_dir() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+}
+
+/// The starts: the paper's best of each kind, then seeded random points.
+fn starts(sweep_best: &[SweptPoint], encoding: &Encoding, s: &SearchSettings) -> Vec<Start> {
+    let mut v: Vec<Start> = sweep_best
+        .iter()
+        .map(|p| Start {
+            label: format!("from the best {}", p.stroke.describe()),
+            x: encoding.encode(&p.stroke.chain(encoding.moves)),
+            sigma: s.sigma_paper,
+        })
+        .collect();
+    // SplitMix64 from the seed: random starts depend on the seed alone.
+    let mut state = s.seed ^ 0x5EED_5EED_5EED_5EED;
+    let mut next = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for i in 0..s.random_starts {
+        v.push(Start {
+            label: format!("random start {}", i + 1),
+            x: (0..encoding.dim()).map(|_| next()).collect(),
+            sigma: s.sigma_random,
+        });
+    }
+    v
+}
+
+/// Reports a stage's position (steps done so far) to a [`Progress`] as steps advanced.
+struct Position<'a> {
+    progress: &'a dyn Progress,
+    at: AtomicU64,
+}
+
+impl<'a> Position<'a> {
+    /// Start the stage `what` of `len` steps.
+    fn start(progress: &'a dyn Progress, what: &str, len: usize) -> Self {
+        progress.start(what, Some(len as u64));
+        Self {
+            progress,
+            at: AtomicU64::new(0),
+        }
+    }
+
+    /// `n` steps are done.
+    fn at(&self, n: usize) {
+        let n = n as u64;
+        let before = self.at.fetch_max(n, Ordering::Relaxed);
+        if n > before {
+            self.progress.advance(n - before);
+        }
+    }
+}
+
+impl Drop for Position<'_> {
+    fn drop(&mut self) {
+        self.progress.finish();
+    }
+}
+
+/// The paper sweep's result.
+struct PaperStage {
+    sweep: PaperSweep,
+    /// Its best feasible point.
+    best: SweptPoint,
+    /// Points within the limits.
+    feasible: usize,
+    /// Seconds it took.
+    seconds: f64,
+}
+
+/// The search's result.
+struct SearchStage {
+    starts: Vec<Start>,
+    outcome: SearchOutcome,
+    /// Seconds it took.
+    seconds: f64,
+}
+
+/// A stroke considered for the answer.
+#[derive(Clone, Debug)]
+struct Candidate {
+    label: String,
+    chain: MoveChain,
+    kinematic: Evaluation,
+    /// The paper stroke it is, if it is one.
+    paper: Option<PaperStroke>,
+}
+
+impl Candidate {
+    fn paper(p: &SweptPoint, moves: usize) -> Self {
+        Self {
+            label: p.stroke.describe(),
+            chain: p.stroke.chain(moves),
+            kinematic: p.evaluation.clone(),
+            paper: Some(p.stroke),
+        }
+    }
+}
+
+/// The candidates and their runs through the ranking link.
+struct Ranking {
+    pool: Vec<Candidate>,
+    /// One run per candidate (None: no link).
+    ranked: Vec<Option<LinkRun>>,
+    /// The link they are ranked through: sil if asked, else the first link asked.
+    link: Option<LinkArg>,
+    /// Runs through sil of the refinement.
+    refine_runs: usize,
+}
+
+/// The answer and the paper's best, through every link.
+struct Verified {
+    answer_i: usize,
+    paper_i: usize,
+    answer: ResultStroke,
+    paper_answer: ResultStroke,
+    kinematic_optimum: Option<ResultStroke>,
+    /// `sil` (the ranking link) or `kinematic`.
+    basis: String,
+}
+
+/// What every stage needs: the request, its setup, the threads, the sink.
+struct Context<'a> {
+    request: &'a OptimizeRequest,
+    setup: Setup,
+    threads: usize,
+    pool: rayon::ThreadPool,
+    progress: &'a dyn Progress,
+}
+
+impl<'a> Context<'a> {
+    /// Setup: the request checked, the search set up, the threads started.
+    fn new(
+        request: &'a OptimizeRequest,
+        progress: &'a dyn Progress,
+    ) -> Result<Self, OptimizeError> {
+        let setup = request.setup()?;
+        let threads = request
+            .threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| OptimizeError::Internal(format!("cannot start {threads} threads: {e}")))?;
+        Ok(Self {
+            request,
+            setup,
+            threads,
+            pool,
+            progress,
+        })
+    }
+
+    fn say(&self, line: String) {
+        self.progress.note(&line);
+    }
+
+    /// Stage 1: the paper's strokes swept on the kinematic model.
+    fn paper_sweep(&self) -> Result<PaperStage, OptimizeError> {
+        let r = self.request;
+        let grid = PaperGrid::standard(
+            r.max_stroke_m,
+            r.sweep_freq_step_hz,
+            r.max_hold_s,
+            r.sweep_tau_step_s,
+        );
+        let started = Instant::now();
+        let sweep = {
+            let at = Position::start(self.progress, "paper strokes", grid.len());
+            let moves = self.setup.encoding.moves;
+            self.pool
+                .install(|| sweep(&self.setup.problem, &grid, moves, &|n| at.at(n)))
+        };
+        let seconds = started.elapsed().as_secs_f64();
+        let feasible = sweep
+            .points
+            .iter()
+            .filter(|p| p.evaluation.feasible())
+            .count();
+        let Some(best) = sweep.best().cloned() else {
+            return Err(OptimizeError::NoFeasiblePaperStroke {
+                points: sweep.points.len(),
+                stroke_m: r.max_stroke_m,
+                peak_force_n: r.params.drive.peak_force_n,
+                duration_s: r.max_duration_s,
+            });
+        };
+        self.say(format!(
+            "  paper strokes: {} swept in {seconds:.1} s ({feasible} within the limits); best {} \
+             ({:.2} mm)",
+            sweep.points.len(),
+            best.stroke.describe(),
+            1e3 * best.evaluation.jump_height_m
+        ));
+        Ok(PaperStage {
+            sweep,
+            best,
+            feasible,
+            seconds,
+        })
+    }
+
+    /// The checkpoint for `starts` at `path`: new, or resumed when it was made with the same
+    /// settings.
+    fn open_checkpoint(&self, path: &Path, starts: &[Start]) -> Result<Checkpoint, OptimizeError> {
+        let checkpoint = Checkpoint::open(path, &checkpoint_settings(&self.setup, starts)?)
+            .map_err(OptimizeError::Checkpoint)?;
+        if checkpoint.resumed_evaluations > 0 {
+            self.say(format!(
+                "  resuming from {}: {} evaluations recorded",
+                path.display(),
+                checkpoint.resumed_evaluations
+            ));
+        }
+        Ok(checkpoint)
+    }
+
+    /// Stage 2: the search, from the paper's bests and random points.
+    fn search(
+        &self,
+        starts: &[Start],
+        checkpoint: &mut Checkpoint,
+    ) -> Result<SearchStage, OptimizeError> {
+        let s = &self.setup;
+        let started = Instant::now();
+        let outcome = {
+            let at = Position::start(
+                self.progress,
+                "evaluations",
+                s.settings.budget(starts.len()),
+            );
+            self.pool
+                .install(|| {
+                    search(
+                        &s.problem,
+                        &s.encoding,
+                        starts,
+                        &s.settings,
+                        Some(checkpoint),
+                        &|p| at.at(p.evaluations),
+                    )
+                })
+                .map_err(OptimizeError::Internal)?
+        };
+        let seconds = started.elapsed().as_secs_f64();
+        self.say(format!(
+            "  search: {} evaluations in {seconds:.1} s ({} resumed, {} outside the limits)",
+            outcome.evaluations, outcome.replayed, outcome.infeasible,
+        ));
+        Ok(SearchStage {
+            starts: starts.to_vec(),
+            outcome,
+            seconds,
+        })
+    }
+
+    /// Stage 3: the candidates for the controller: the kinematic optimum (the search's best,
+    /// or the paper's best when the search found nothing better: the paper's strokes are
+    /// members of the family), each start's elites, and the paper's best of each kind.
+    fn candidates(&self, paper: &PaperStage, searched: &SearchStage) -> Vec<Candidate> {
+        let (problem, moves) = (&self.setup.problem, self.setup.encoding.moves);
+        let optimum = match searched.outcome.by_start.first() {
+            Some(b)
+                if b.evaluation.feasible() && b.evaluation.value >= paper.best.evaluation.value =>
+            {
+                Candidate {
+                    label: format!("optimised ({})", b.start.label),
+                    chain: b.chain.clone(),
+                    kinematic: b.evaluation.clone(),
+                    paper: None,
+                }
+            }
+            _ => Candidate::paper(&paper.best, moves),
+        };
+        let mut pool = vec![optimum];
+        for e in &searched.outcome.elites {
+            let kinematic = problem.evaluate(&e.chain);
+            if kinematic.feasible() {
+                pool.push(Candidate {
+                    label: format!("optimised ({})", searched.starts[e.start].label),
+                    chain: e.chain.clone(),
+                    kinematic,
+                    paper: None,
+                });
+            }
+        }
+        for kind in ["single", "stutter", "delayed"] {
+            let mut of_kind: Vec<&SweptPoint> = paper
+                .sweep
+                .points
+                .iter()
+                .filter(|p| p.stroke.kind == kind && p.evaluation.feasible())
+                .collect();
+            of_kind.sort_by(|x, y| y.evaluation.value.total_cmp(&x.evaluation.value));
+            pool.extend(
+                of_kind
+                    .into_iter()
+                    .take(self.request.paper_candidates)
+                    .map(|p| Candidate::paper(p, moves)),
+            );
+        }
+        pool
+    }
+
+    /// The ranking of `pool`, before any run: through sil if asked, else the first link.
+    fn rank(&self, pool: Vec<Candidate>) -> Ranking {
+        let verify = &self.request.verify;
+        let link = verify
+            .iter()
+            .find(|l| **l == LinkArg::Sil)
+            .or(verify.first())
+            .cloned();
+        Ranking {
+            ranked: vec![None; pool.len()],
+            pool,
+            link,
+            refine_runs: 0,
+        }
+    }
+
+    /// Stage 4: every candidate through the ranking link (a stroke the controller cannot
+    /// follow is worth nothing).
+    fn runs_through(&self, ranking: &Ranking) -> Result<Vec<Option<LinkRun>>, OptimizeError> {
+        let (pool, problem) = (&ranking.pool, &self.setup.problem);
+        let Some(link) = &ranking.link else {
+            return Ok(vec![None; pool.len()]);
+        };
+        self.say(format!(
+            "  re-ranking {} candidates (the search's best, the paper's best) through {link}",
+            pool.len()
+        ));
+        let at = Position::start(self.progress, "runs through the controller", pool.len());
+        let done = AtomicU64::new(0);
+        self.pool
+            .install(|| {
+                use rayon::prelude::*;
+                pool.par_iter()
+                    .map(|c| {
+                        let r = run_through(
+                            link,
+                            &problem.params,
+                            problem.model,
+                            &problem.table(&c.chain),
+                            &self.request.firmware,
+                        );
+                        at.at(done.fetch_add(1, Ordering::Relaxed) as usize + 1);
+                        r.map(Some)
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .map_err(OptimizeError::Internal)
+    }
+
+    /// Stage 5: the best stroke through the controller refined there (sil only).
+    fn refine(
+        &self,
+        ranking: &mut Ranking,
+        checkpoint: &mut Checkpoint,
+    ) -> Result<(), OptimizeError> {
+        let (r, s) = (self.request, &self.setup);
+        if ranking.link != Some(LinkArg::Sil) || r.refine == 0 {
+            return Ok(());
+        }
+        let from = ranking.best(false, s);
+        let label = ranking.pool[from].label.clone();
+        self.say(format!(
+            "  refining {label} through sil ({} runs)",
+            r.refine
+        ));
+        let refined = {
+            let at = Position::start(self.progress, "runs through sil", r.refine);
+            self.pool
+                .install(|| {
+                    refine(
+                        &s.problem,
+                        &s.encoding,
+                        &ranking.pool[from].chain,
+                        &RefineSettings {
+                            evaluations: r.refine,
+                            population: 12,
+                            sigma: 0.02,
+                            seed: s.settings.seed,
+                        },
+                        Some(checkpoint),
+                        &r.firmware,
+                        &|n, _, _| at.at(n),
+                    )
+                })
+                .map_err(OptimizeError::Internal)?
+        };
+        let run = run_through(
+            &LinkArg::Sil,
+            &s.problem.params,
+            s.problem.model,
+            &s.problem.table(&refined.chain),
+            &r.firmware,
+        )
+        .map_err(OptimizeError::Internal)?;
+        ranking.refine_runs = refined.evaluations;
+        ranking.pool.push(Candidate {
+            label: format!("refined through sil from {label}"),
+            kinematic: s.problem.evaluate(&refined.chain),
+            chain: refined.chain,
+            paper: None,
+        });
+        ranking.ranked.push(Some(run));
+        Ok(())
+    }
+
+    /// Stage 6: the answer and the paper's best (and the kinematic model's best, when the
+    /// controller made another stroke the answer) through every link asked.
+    fn verify(
+        &self,
+        ranking: &Ranking,
+        board: &dyn StrokeOnBoard,
+    ) -> Result<Verified, OptimizeError> {
+        let (answer_i, paper_i) = (
+            ranking.best(false, &self.setup),
+            ranking.best(true, &self.setup),
+        );
+        let result = |i: usize| self.result(ranking, i, board);
+        let answer = result(answer_i)?;
+        let paper_answer = result(paper_i)?;
+        let pool = &ranking.pool;
+        let kinematic_optimum = if answer_i == 0 || pool[0].chain == pool[paper_i].chain {
+            None
+        } else {
+            Some(result(0)?)
+        };
+        let basis = ranking.basis(&self.setup);
+        let verified = Verified {
+            answer_i,
+            paper_i,
+            answer,
+            paper_answer,
+            kinematic_optimum,
+            basis,
+        };
+        self.say(format!(
+            "  answer: {} ({:.2} mm on {})",
+            verified.answer.label,
+            1e3 * verified.height_on(&verified.answer),
+            verified.basis
+        ));
+        Ok(verified)
+    }
+
+    /// Candidate `i` of `ranking` as a result stroke: its table's jump, its ranking run and
+    /// its runs through the other links.
+    fn result(
+        &self,
+        ranking: &Ranking,
+        i: usize,
+        board: &dyn StrokeOnBoard,
+    ) -> Result<ResultStroke, OptimizeError> {
+        let (problem, r) = (&self.setup.problem, self.request);
+        let c = &ranking.pool[i];
+        let table = problem.table(&c.chain);
+        let table_stroke = table.kinematic_stroke().map_err(OptimizeError::Internal)?;
+        let table_jump =
+            simulate_stroke(&problem.params, problem.model, table_stroke, &problem.opts).map_err(
+                |e| OptimizeError::Internal(format!("the stroke table's jump failed: {e}")),
+            )?;
+        let mut links: Vec<LinkRun> = ranking.ranked[i].iter().cloned().collect();
+        for link in r
+            .verify
+            .iter()
+            .filter(|l| Some(*l) != ranking.link.as_ref())
+        {
+            links.push(if *link == LinkArg::F407 {
+                board.replay(r, &table)
+            } else {
+                run_through(link, &problem.params, problem.model, &table, &r.firmware)
+                    .map_err(OptimizeError::Internal)?
+            });
+        }
+        Ok(ResultStroke {
+            label: c.label.clone(),
+            chain: c.paper.is_none().then(|| c.chain.clone()),
+            controller_value: ranking.controller_value(i, &self.setup),
+            kinematic: c.kinematic.clone(),
+            table_jump_height_m: table_jump.summary.jump_height_m,
+            links,
+        })
+    }
+
+    /// The kinematic jump of `chain` with its time series, for the figure.
+    fn series(&self, chain: &MoveChain) -> Result<Vec<SeriesRow>, OptimizeError> {
+        let problem = &self.setup.problem;
+        let opts = SimOptions {
+            record_series: true,
+            ..problem.opts.clone()
+        };
+        simulate_stroke(&problem.params, problem.model, chain.stroke(), &opts)
+            .map(|o| o.series)
+            .map_err(|e| OptimizeError::Internal(format!("cannot record the jump: {e}")))
+    }
+
+    /// Stage 7: the outcome: the candidates in their order through the controller, the
+    /// answer's and the paper's tables and jumps, the counts and the times.
+    fn outcome(
+        &self,
+        paper: PaperStage,
+        searched: SearchStage,
+        ranking: Ranking,
+        verified: Verified,
+        started: Instant,
+    ) -> Result<OptimizeOutcome, OptimizeError> {
+        let s = &self.setup;
+        let answer_chain = &ranking.pool[verified.answer_i].chain;
+        let paper_chain = &ranking.pool[verified.paper_i].chain;
+        let answer_series = self.series(answer_chain)?;
+        let paper_series = self.series(paper_chain)?;
+        let search = &searched.outcome;
+        let fresh = paper.sweep.points.len() + search.evaluations - search.replayed;
+        let (h, hp) = (
+            verified.height_on(&verified.answer),
+            verified.height_on(&verified.paper_answer),
+        );
+        let (v, vp) = (
+            verified.value_on(&verified.answer),
+            verified.value_on(&verified.paper_answer),
+        );
+        Ok(OptimizeOutcome {
+            best_height_m: h,
+            best_paper_stroke_height_m: hp,
+            height_ratio: h / hp,
+            height_basis: verified.basis.clone(),
+            objective: s.problem.objective.name(),
+            objective_unit: s.problem.objective.unit(),
+            best_value: v,
+            best_paper_value: vp,
+            value_ratio: v / vp,
+            model: s.problem.model.as_str(),
+            phi: s.problem.params.sand.packing_fraction,
+            stroke: s.problem.table(answer_chain),
+            paper_stroke: s.problem.table(paper_chain),
+            candidates: ranking.rows(s),
+            answer: verified.answer,
+            paper_answer: verified.paper_answer,
+            kinematic_optimum: verified.kinematic_optimum,
+            paper_best_by_kind: paper
+                .sweep
+                .best_by_kind
+                .iter()
+                .map(|p| KindBest {
+                    stroke: p.stroke.describe(),
+                    kinematic_value: p.evaluation.value,
+                    kinematic_height_m: p.evaluation.jump_height_m,
+                })
+                .collect(),
+            candidates_ranked: ranking.pool.len(),
+            refine_runs: ranking.refine_runs,
+            paper_sweep_points: paper.sweep.points.len(),
+            paper_sweep_feasible: paper.feasible,
+            evaluations: search.evaluations,
+            evaluations_resumed: search.replayed,
+            evaluations_infeasible: search.infeasible,
+            evaluations_per_s: fresh as f64 / (paper.seconds + searched.seconds),
+            threads: self.threads,
+            wall_time_s: started.elapsed().as_secs_f64(),
+            limits: s.problem.limits,
+            encoding: s.encoding,
+            search: s.settings.clone(),
+            params: s.problem.params.clone(),
+            paper_sweep: paper.sweep.points,
+            history: searched.outcome.history,
+            answer_series,
+            paper_series,
+            dir: PathBuf::new(),
+        })
+    }
+}
+
+impl Ranking {
+    /// Candidate `i`'s objective value through the ranking link (None: not run, faulted).
+    fn controller_value(&self, i: usize, s: &Setup) -> Option<f64> {
+        let p = &s.problem;
+        self.ranked[i].as_ref().and_then(|r| {
+            r.value(
+                p.objective,
+                p.limits.min_height_m,
+                p.released_energy_j(&self.pool[i].chain),
+            )
+        })
+    }
+
+    /// The best candidate by its value through the controller, among the paper's strokes
+    /// only with `paper_only`; by the kinematic value when no run gave one (no link, or
+    /// every run faulted).
+    fn best(&self, paper_only: bool, s: &Setup) -> usize {
+        let eligible = |i: &usize| !paper_only || self.pool[*i].paper.is_some();
+        let by_controller = (0..self.pool.len())
+            .filter(eligible)
+            .filter_map(|i| self.controller_value(i, s).map(|v| (i, v)))
+            .fold(None::<(usize, f64)>, |best, (i, v)| match best {
+                Some((_, bv)) if bv >= v => best,
+                _ => Some((i, v)),
+            });
+        match by_controller {
+            Some((i, _)) => i,
+            None => (0..self.pool.len())
+                .filter(eligible)
+                .fold(None::<usize>, |best, i| match best {
+                    Some(b) if self.pool[b].kinematic.value >= self.pool[i].kinematic.value => {
+                        Some(b)
+                    }
+                    _ => Some(i),
+                })
+                .unwrap_or(0),
+        }
+    }
+
+    /// What the heights and values are measured on: the ranking link when any run through
+    /// it gave a value, else `kinematic`.
+    fn basis(&self, s: &Setup) -> String {
+        match &self.link {
+            Some(l) if (0..self.pool.len()).any(|i| self.controller_value(i, s).is_some()) => {
+                l.to_string()
+            }
+            _ => "kinematic".to_string(),
+        }
+    }
+
+    /// candidates.csv: best through the controller first, then by the kinematic value.
+    fn rows(&self, s: &Setup) -> Vec<CandidateRow> {
+        let mut order: Vec<usize> = (0..self.pool.len()).collect();
+        let key = |i: usize| self.controller_value(i, s).unwrap_or(f64::NEG_INFINITY);
+        order.sort_by(|&x, &y| {
+            key(y).total_cmp(&key(x)).then(
+                self.pool[y]
+                    .kinematic
+                    .value
+                    .total_cmp(&self.pool[x].kinematic.value),
+            )
+        });
+        order
+            .iter()
+            .enumerate()
+            .map(|(rank, &i)| {
+                let (c, run) = (&self.pool[i], self.ranked[i].as_ref());
+                CandidateRow {
+                    rank: rank + 1,
+                    label: c.label.clone(),
+                    controller_value: self.controller_value(i, s).unwrap_or(f64::NAN),
+                    controller_height_m: run.and_then(|r| r.jump_height_m).unwrap_or(f64::NAN),
+                    controller_faults: run.map(|r| r.faults.join(" ")).unwrap_or_default(),
+                    kinematic_value: c.kinematic.value,
+                    kinematic_height_m: c.kinematic.jump_height_m,
+                    kinematic_final_height_m: c.kinematic.final_jump_height_m,
+                    model_peak_force_n: c.kinematic.model_peak_force_n,
+                    table_peak_force_n: c.kinematic.table_peak_force_n,
+                    peak_power_w: c.kinematic.peak_power_w,
+                    work_j: c.kinematic.work_j,
+                    duration_s: c.kinematic.duration_s,
+                    stroke: chain_text(&c.chain),
+                }
+            })
+            .collect()
+    }
+}
+
+impl Verified {
+    /// A result's jump height on the basis, m (NaN when its ranking run gave none).
+    fn height_on(&self, r: &ResultStroke) -> f64 {
+        if self.basis == "kinematic" {
+            r.kinematic.jump_height_m
+        } else {
+            r.links
+                .first()
+                .and_then(|l| l.jump_height_m)
+                .unwrap_or(f64::NAN)
+        }
+    }
+
+    /// A result's objective value on the basis.
+    fn value_on(&self, r: &ResultStroke) -> f64 {
+        if self.basis == "kinematic" {
+            r.kinematic.value
+        } else {
+            r.controller_value.unwrap_or(f64::NAN)
+        }
+    }
+}
+
+/// The settings a checkpoint must agree on, as JSON.
+fn checkpoint_settings(s: &Setup, starts: &[Start]) -> Result<String, OptimizeError> {
+    let start_bits: Vec<Vec<String>> = starts
+        .iter()
+        .map(|s| {
+            s.x.iter()
+                .map(|v| format!("{:016x}", v.to_bits()))
+                .collect()
+        })
+        .collect();
+    let p = &s.problem;
+    serde_json::to_string(&serde_json::json!({
+        "objective": p.objective.name(),
+        "model": p.model.as_str(),
+        "params": p.params.to_toml(),
+        "rtol": p.opts.rtol,
+        "limits": p.limits,
+        "encoding": s.encoding,
+        "search": s.settings,
+        "starts": start_bits,
+    }))
+    .map_err(|e| OptimizeError::Internal(format!("cannot encode the checkpoint's settings: {e}")))
+}

@@ -1,0 +1,264 @@
+//! `sandjumper_optimize::run` in memory, on tiny budgets: the typed outcome, its folder, a
+//! checkpointed resume, the links and the request's refusals.
+
+use std::path::Path;
+use std::sync::Mutex;
+
+use sandjumper_optimize::{
+    NoBoard, OptimizeError, OptimizeOutcome, OptimizeRequest, StrokeOnBoard, checkpoint_path, run,
+    run_with_board,
+};
+use sandjumper_output::{Blame, Blamed, Progress, Silent};
+use sandjumper_rig::hil::open::LinkArg;
+
+/// A tiny kinematic search (no link): a coarse sweep, a few hundred evaluations.
+fn tiny(out: &Path) -> OptimizeRequest {
+    OptimizeRequest {
+        evaluations: 240,
+        population: 8,
+        random_starts: 1,
+        seed: 3,
+        sweep_freq_step_hz: 4.0,
+        sweep_tau_step_s: 0.25,
+        elites: 2,
+        paper_candidates: 1,
+        verify: Vec::new(),
+        threads: Some(2),
+        out: out.to_path_buf(),
+        ..OptimizeRequest::default()
+    }
+}
+
+/// The best feasible kinematic value of the paper sweep.
+fn paper_sweep_best(o: &OptimizeOutcome) -> f64 {
+    o.paper_sweep
+        .iter()
+        .filter(|p| p.evaluation.feasible())
+        .map(|p| p.evaluation.value)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+#[test]
+fn a_tiny_search_is_at_least_the_paper_sweeps_best_and_writes_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("opt");
+    let o = run(&tiny(&out), &Silent).unwrap();
+    assert_eq!(o.height_basis, "kinematic");
+    assert_eq!(o.objective, "height");
+    let paper = paper_sweep_best(&o);
+    assert!(paper > 0.01, "{paper}");
+    assert!(o.best_value >= paper, "{} < {paper}", o.best_value);
+    assert_eq!(o.best_paper_value, paper);
+    assert!(o.value_ratio >= 1.0 && o.height_ratio >= 1.0);
+    assert_eq!(o.paper_sweep_points, o.paper_sweep.len());
+    assert_eq!(o.evaluations_resumed, 0);
+    assert_eq!(o.refine_runs, 0);
+    assert_eq!(o.candidates.len(), o.candidates_ranked);
+    assert_eq!(o.candidates[0].label, o.answer.label);
+    assert!(o.answer.links.is_empty());
+    // The folder: the files, summary.json the serialised outcome, no checkpoint left.
+    assert_eq!(o.dir, out);
+    for f in sandjumper_optimize::outcome::FILES {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert_eq!(summary, format!("{}\n", o.json().unwrap()));
+    assert!(summary.starts_with("{\n  \"best_height_m\": "), "{summary}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("stroke.csv")).unwrap(),
+        o.stroke.to_csv()
+    );
+    assert!(!checkpoint_path(&out).exists());
+    let human = o.to_string();
+    assert!(
+        human.starts_with("best height on eq4 at phi 0.57 (kinematic): "),
+        "{human}"
+    );
+    assert!(
+        human.ends_with(&format!("wrote {}/\n", out.display())),
+        "{human}"
+    );
+}
+
+/// Keeps a copy of the checkpoint as the search left it (the note after the search).
+struct CopyCheckpoint<'a> {
+    from: &'a Path,
+    copy: Mutex<Option<String>>,
+}
+
+impl Progress for CopyCheckpoint<'_> {
+    fn note(&self, line: &str) {
+        if line.starts_with("  search:") {
+            *self.copy.lock().unwrap() = std::fs::read_to_string(self.from).ok();
+        }
+    }
+}
+
+#[test]
+fn a_checkpointed_resume_gives_the_same_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    let sink = CopyCheckpoint {
+        from: &checkpoint_path(&whole),
+        copy: Mutex::new(None),
+    };
+    let a = run(&tiny(&whole), &sink).unwrap();
+    let recorded = sink.copy.lock().unwrap().take().expect("a checkpoint");
+    // A search killed mid-way: the header and the first half of its evaluations.
+    let lines: Vec<&str> = recorded.lines().collect();
+    assert!(
+        lines.len() > 100 && lines.len() <= 1 + a.evaluations,
+        "{}",
+        lines.len()
+    );
+    let kept = (lines.len() - 1) / 2;
+    let half = lines[..1 + kept].join("\n") + "\n";
+    let resumed = dir.path().join("resumed");
+    std::fs::write(checkpoint_path(&resumed), half).unwrap();
+    let b = run(
+        &OptimizeRequest {
+            threads: Some(1),
+            ..tiny(&resumed)
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(
+        b.evaluations_resumed >= kept && b.evaluations_resumed < a.evaluations,
+        "{} resumed of {} ({kept} kept)",
+        b.evaluations_resumed,
+        a.evaluations
+    );
+    assert_eq!(b.evaluations, a.evaluations);
+    assert_eq!(b.stroke, a.stroke);
+    assert_eq!(b.history, a.history);
+    assert_eq!(b.answer.label, a.answer.label);
+    assert_eq!(b.best_value, a.best_value);
+    assert!(!checkpoint_path(&resumed).exists());
+    // A checkpoint of another search is refused (the caller's input), naming it.
+    std::fs::write(
+        checkpoint_path(&resumed),
+        "sandjumper-optimize-checkpoint 1 {\"seed\":99}\n",
+    )
+    .unwrap();
+    let e = run(&tiny(&resumed), &Silent).unwrap_err();
+    assert!(matches!(e, OptimizeError::Checkpoint(_)), "{e:?}");
+    assert_eq!(e.blame(), Blame::Input);
+    assert!(e.to_string().contains("other settings"), "{e}");
+}
+
+#[test]
+fn ranked_through_sil_refined_and_f407_through_the_board_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let request = OptimizeRequest {
+        verify: vec![LinkArg::Sil, LinkArg::F407],
+        refine: 24,
+        ..tiny(&dir.path().join("sil"))
+    };
+    let boards = Mutex::new(0);
+    let board = |r: &OptimizeRequest, t: &sandjumper_rig::stroke_table::StrokeTable| {
+        assert_eq!(r.table_rate_hz, t.rate_hz);
+        *boards.lock().unwrap() += 1;
+        sandjumper_optimize::LinkRun::skipped(&LinkArg::F407, "a test's board".into())
+    };
+    let o = run_with_board(&request, &Silent, &board).unwrap();
+    assert_eq!(o.height_basis, "sil");
+    assert_eq!(o.refine_runs, 24);
+    assert!(o.best_height_m > 0.01, "{}", o.best_height_m);
+    assert!(o.best_value >= o.best_paper_value);
+    assert_eq!(o.best_value, o.answer.controller_value.unwrap());
+    assert_eq!(o.best_height_m, o.answer.links[0].jump_height_m.unwrap());
+    for s in [&o.answer, &o.paper_answer] {
+        assert_eq!(s.links.len(), 2);
+        assert_eq!(s.links[0].link, "sil");
+        assert_eq!(s.links[1].skipped.as_deref(), Some("a test's board"));
+    }
+    let through_board = 2 + usize::from(o.kinematic_optimum.is_some());
+    assert_eq!(*boards.lock().unwrap(), through_board);
+    // The candidates rank through sil: the first is the answer, the values descend.
+    assert_eq!(o.candidates[0].controller_value, o.best_value);
+    let values: Vec<f64> = o
+        .candidates
+        .iter()
+        .map(|c| c.controller_value)
+        .filter(|v| v.is_finite())
+        .collect();
+    assert!(values.windows(2).all(|w| w[0] >= w[1]), "{values:?}");
+    // Without a board (`run`), an F407 run is skipped, saying why.
+    let why = NoBoard
+        .replay(&request, &o.stroke)
+        .skipped
+        .unwrap_or_default();
+    assert!(why.contains("no virtual board"), "{why}");
+}
+
+#[test]
+fn the_defaults_are_the_command_lines_and_bad_limits_are_refused() {
+    let d = OptimizeRequest::default();
+    assert_eq!((d.evaluations, d.population, d.moves), (192_000, 24, 4));
+    assert_eq!(d.verify, vec![LinkArg::Sil, LinkArg::Pil, LinkArg::F407]);
+    assert_eq!(d.params.sand.packing_fraction, 0.57);
+    let e = d.validate().unwrap_err();
+    assert!(e.to_string().contains("--out"), "{e}");
+    let ok = OptimizeRequest {
+        out: "o".into(),
+        ..d
+    };
+    ok.validate().unwrap();
+    let refused = |r: OptimizeRequest, words: &[&str]| {
+        let e = r.validate().unwrap_err();
+        assert_eq!(e.blame(), Blame::Input);
+        for w in words {
+            assert!(e.to_string().contains(w), "{e} lacks {w}");
+        }
+    };
+    refused(
+        OptimizeRequest {
+            max_duration_s: 5.0,
+            ..ok.clone()
+        },
+        &["--max-duration 5 s", "replay buffer"],
+    );
+    refused(
+        OptimizeRequest {
+            table_rate_hz: 3000,
+            ..ok.clone()
+        },
+        &["--table-rate 3000 Hz does not divide the 10000 Hz control rate"],
+    );
+    refused(
+        OptimizeRequest {
+            max_stroke_m: 0.03,
+            ..ok.clone()
+        },
+        &["--max-stroke", "0.025"],
+    );
+    refused(
+        OptimizeRequest {
+            moves: 1,
+            ..ok.clone()
+        },
+        &["--moves"],
+    );
+    refused(
+        OptimizeRequest {
+            verify: vec![LinkArg::Serial("/dev/ttyACM0".into())],
+            ..ok.clone()
+        },
+        &["serial:/dev/ttyACM0", "not allowed in --verify"],
+    );
+    // Refused before anything is written.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let e = run(
+        &OptimizeRequest {
+            max_duration_s: 5.0,
+            out: out.clone(),
+            ..ok
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert!(matches!(e, OptimizeError::Invalid(_)), "{e:?}");
+    assert!(!out.exists() && !checkpoint_path(&out).exists());
+}
