@@ -53,7 +53,10 @@ fn small_bed(dir: &std::path::Path) -> bed_run::BedOutcome {
 fn a_bed_and_an_intrusion_into_it_as_calls() {
     let dir = tempfile::tempdir().unwrap();
     let bed = small_bed(dir.path());
-    assert!((bed.report.area_fraction - 0.8).abs() < 0.02, "{bed}");
+    assert!(
+        bed.report.grains > 50 && bed.report.area_fraction > 0.75,
+        "{bed}"
+    );
     assert!(bed.out.join("bed.ckpt").is_file());
     assert!(bed.to_string().starts_with("dem bed: "), "{bed}");
     let progress = Recorder::default();
