@@ -6,13 +6,13 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::collide::{CollideRequest, CollisionResult};
-use super::intrude_run::Episode;
 use super::params::Model;
 use super::request::{ModelRequest, Sizes};
+use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
 use super::world::Integrator;
 use crate::command::args::{parse_number, parse_positive as positive};
 use crate::command::progress::Bars;
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
+use sandjumper_output::CliError;
 
 /// `sandjumper dem`.
 #[derive(Debug, Clone, Args)]
@@ -74,23 +74,6 @@ impl From<IntegratorChoice> for Integrator {
             IntegratorChoice::VelocityVerlet => Integrator::VelocityVerlet,
         }
     }
-}
-
-/// A share in 0..=1.
-pub(crate) fn parse_share(s: &str) -> Result<f64, String> {
-    let v = parse_number(s)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
-    }
-}
-
-/// `--episode`: a part of a jump's trajectory.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum EpisodeChoice {
-    /// The foot's last intrusion before the jump's flight.
-    PushOff,
 }
 
 /// Grain and contact choices shared by `bed` and `intrude`.
@@ -354,26 +337,6 @@ pub struct CollideArgs {
     pub json: bool,
 }
 
-/// A library error as the command line's error: its message, and exit status 2 for bad
-/// input, 1 otherwise.
-pub fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
-    }
-}
-
-/// Print `value` as pretty JSON on stdout.
-pub fn print_json(value: &impl serde::Serialize) -> Result<(), CliError> {
-    let text =
-        serde_json::to_string_pretty(value).map_err(|e| CliError::internal(e.to_string()))?;
-    println!("{text}");
-    Ok(())
-}
-
 /// Run `sandjumper dem`.
 pub fn run(a: &DemArgs) -> Result<(), CliError> {
     match &a.command {
@@ -478,14 +441,6 @@ impl IntrudeArgs {
             threads: self.threads,
             pin_threads: self.pin_threads,
             out: self.out.clone(),
-        }
-    }
-}
-
-impl From<EpisodeChoice> for Episode {
-    fn from(e: EpisodeChoice) -> Self {
-        match e {
-            EpisodeChoice::PushOff => Episode::PushOff,
         }
     }
 }

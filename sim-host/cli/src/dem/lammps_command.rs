@@ -9,7 +9,7 @@ use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest};
 use sandjumper_lammps::spec::Preset;
 use sandjumper_output::CliError;
 
-use super::command::{EpisodeChoice, cli_error, parse_share, print_json};
+use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
 use crate::command::args::parse_positive as positive;
 use crate::command::progress::Bars;
 

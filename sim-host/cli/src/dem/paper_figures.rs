@@ -58,7 +58,7 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         threads: a.threads,
     };
     let outcome = sandjumper_figures_dem::run(&request, &CliStages, &Bars::default())
-        .map_err(super::command::cli_error)?;
+        .map_err(super::shared::cli_error)?;
     println!("{outcome}");
     Ok(())
 }
