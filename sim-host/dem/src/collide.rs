@@ -266,3 +266,93 @@ mod tests {
         }
     }
 }
+
+/// `dem collide` as a request: one head-on collision with the paper's contact law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CollideRequest {
+    /// Diameter of disk 1 (the one that hits the wall), m (required; default 0).
+    pub d1_m: f64,
+    /// Diameter of disk 2, m (`None`: disk 1's).
+    pub d2_m: Option<f64>,
+    /// Disk 1 against a flat wall. Default false.
+    pub wall: bool,
+    /// Normal stiffness, N/m (required; default 0).
+    pub kn_n_per_m: f64,
+    /// Normal damping, N s/m (required; default 0).
+    pub damping_n_s_per_m: f64,
+    /// Impact speed, m/s (required; default 0).
+    pub speed_m_s: f64,
+    /// Grain density, kg/m^3. Default 1000.
+    pub density_kg_m3: f64,
+    /// Time step, s (`None`: t_c / 50).
+    pub dt_s: Option<f64>,
+    /// Allow a step above t_c / 10. Default false.
+    pub force_step: bool,
+    /// Integrator. Default velocity Verlet.
+    pub integrator: Integrator,
+}
+
+impl Default for CollideRequest {
+    fn default() -> Self {
+        Self {
+            d1_m: 0.0,
+            d2_m: None,
+            wall: false,
+            kn_n_per_m: 0.0,
+            damping_n_s_per_m: 0.0,
+            speed_m_s: 0.0,
+            density_kg_m3: 1000.0,
+            dt_s: None,
+            force_step: false,
+            integrator: Integrator::VelocityVerlet,
+        }
+    }
+}
+
+impl CollideRequest {
+    /// The collision this request names.
+    pub fn collision(&self) -> Collision {
+        Collision {
+            d1_m: self.d1_m,
+            d2_m: self.d2_m.unwrap_or(self.d1_m),
+            wall: self.wall,
+            kn_n_per_m: self.kn_n_per_m,
+            damping_n_s_per_m: self.damping_n_s_per_m,
+            speed_m_s: self.speed_m_s,
+            density_kg_m3: self.density_kg_m3,
+            dt_s: self.dt_s,
+            integrator: self.integrator,
+        }
+    }
+}
+
+/// Run the collision `request` names (bad input: the parameter and what is allowed).
+pub fn run(
+    request: &CollideRequest,
+    _progress: &dyn sandjumper_output::Progress,
+) -> Result<CollisionResult, crate::error::DemError> {
+    request
+        .collision()
+        .run(request.force_step)
+        .map_err(crate::error::DemError::Input)
+}
+
+impl std::fmt::Display for CollisionResult {
+    /// The line `dem collide` prints.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "restitution {:.6} (analytic {:.6}, error {:+.2e}), contact time {:.6e} s (analytic {:.6e} s, error {:+.2e}), effective mass {:.4e} kg, step {:.3e} s ({:.1} per contact), largest overlap {:.3e} m",
+            self.restitution,
+            self.restitution_analytic,
+            self.restitution_error,
+            self.contact_time_s,
+            self.contact_time_analytic_s,
+            self.contact_time_error,
+            self.effective_mass_kg,
+            self.dt_s,
+            self.steps_per_contact,
+            self.max_overlap_m
+        )
+    }
+}

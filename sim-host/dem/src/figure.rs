@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use super::grains::FREE;
 use super::render::SideCamera;
 use super::world::World;
-use sandjumper_output::CliError;
+use crate::error::DemError;
 use sandjumper_output::plot::{FONT, Figure, PlotResult, save_figure};
 
 /// Grains in a window, drawn as circles coloured by speed.
@@ -70,7 +70,7 @@ pub fn save_snapshot(
     title: &str,
     png: &Path,
     svg: &Path,
-) -> Result<(), CliError> {
+) -> Result<(), DemError> {
     let l = cam.left_m;
     let r = l + f64::from(cam.width_px) * cam.m_per_px;
     let t = cam.top_m;

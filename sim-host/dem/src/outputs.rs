@@ -9,8 +9,8 @@ use serde::Serialize;
 
 use super::intrude::{FlowRow, Run};
 use super::structure::{JammedRegion, hexatic_order, jammed_region};
+use crate::error::DemError;
 use sandjumper_flow::figure::MapFigure;
-use sandjumper_output::CliError;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel};
 use sandjumper_output::plot::{palette, save_figure};
 use sandjumper_output::{StagedDir, write_csv, write_npy};
@@ -133,8 +133,8 @@ fn strip_nulls(v: &mut serde_json::Value) {
     }
 }
 
-fn err(e: impl std::fmt::Display) -> CliError {
-    CliError::internal(e.to_string())
+fn err(e: impl std::fmt::Display) -> DemError {
+    DemError::internal(e.to_string())
 }
 
 /// The model's sand (eq. 4, preset at `phi`) under a foot of radius `r_m`: its
@@ -217,7 +217,7 @@ fn beyond_cone_share(flow: &[FlowRow]) -> f64 {
 }
 
 /// Write the finished run into `out` (from the work directory `work`, removed after).
-pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
+pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, DemError> {
     let staged = StagedDir::create(out)?;
     let spec = &run.spec;
     let grid = &run.grid;
@@ -359,11 +359,11 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     for k in 0..run.state.flow.len() {
         let p = work.join(format!("snapshots/{k:06}.png"));
         let img = image::open(&p)
-            .map_err(|e| CliError::internal(format!("cannot read {}: {e}", p.display())))?;
+            .map_err(|e| DemError::internal(format!("cannot read {}: {e}", p.display())))?;
         gif_frames.push(img.to_rgba8());
     }
     sandjumper_flow::figure::write_gif(&staged.file("animation.gif"), gif_frames, 100)
-        .map_err(CliError::internal)?;
+        .map_err(DemError::internal)?;
     // Structure and summary.
     let p = spec.params;
     let last = run
@@ -466,13 +466,13 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, CliError> {
     strip_nulls(&mut toml_rec);
     staged
         .write_text("dem.toml", &toml::to_string(&toml_rec).map_err(err)?)
-        .map_err(CliError::from)?;
+        .map_err(DemError::from)?;
     staged
         .write_text(
             "summary.json",
             &serde_json::to_string_pretty(&rec).map_err(err)?,
         )
-        .map_err(CliError::from)?;
+        .map_err(DemError::from)?;
     // Figures: force and added mass against depth, the last shear map, a snapshot.
     let force_fig = LineFigure {
         title: "DEM: force of the grains on the intruder".into(),

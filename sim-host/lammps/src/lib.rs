@@ -13,13 +13,19 @@
 //! - [`dump`]: LAMMPS text dumps, checked against the run that wrote them;
 //! - [`analysis`]: the column's momentum, the added mass against eq. 6, the force against
 //!   `F_p(z)` and the jammed cone;
-//! - [`figure`] and [`outputs`]: the run's folder.
+//! - [`figure`] and [`outputs`]: the run's folder;
+//! - [`run`]: `dem lammps` and `dem lammps-read` as calls (typed requests, the outcome,
+//!   [`LammpsError`]).
 pub mod analysis;
 pub mod bed;
 pub mod dump;
+pub mod error;
 pub mod figure;
 pub mod foot;
 pub mod lammps;
 pub mod outputs;
+pub mod run;
 pub mod script;
 pub mod spec;
+
+pub use error::LammpsError;

@@ -12,11 +12,12 @@ use serde::{Deserialize, Serialize};
 
 use sandjumper_dem::intruder::Trajectory;
 use sandjumper_dem::outputs::median;
-use sandjumper_output::{CliError, write_csv};
+use sandjumper_output::{Progress, write_csv};
 
 use crate::analysis::{self, FlowRow, Geometry, SideView};
 use crate::bed::{self, Atom, Settled};
 use crate::dump::{self, RunCheck};
+use crate::error::LammpsError;
 use crate::foot::foot_atoms;
 use crate::lammps::Lammps;
 use crate::script::{self, Piece};
@@ -174,12 +175,25 @@ pub struct Summary {
     pub run_id: String,
 }
 
-/// Progress of a run: a stage starts (with its steps), and LAMMPS reaches a step.
-pub trait Progress {
-    /// A stage (`settle`, `intrusion`, `read`) of `steps` steps (frames for `read`) starts.
-    fn stage(&mut self, name: &str, steps: u64);
-    /// The stage reached `step`.
-    fn step(&mut self, step: u64);
+/// A stage (`settle`, `intrusion`, `read`) of `steps` steps (frames for `read`) starts: a
+/// line for the user and a new stage of the progress sink.
+fn stage(progress: &dyn Progress, name: &str, steps: u64) {
+    let unit = if name == "read" {
+        "frames"
+    } else {
+        "steps at most"
+    };
+    progress.note(&format!("dem lammps: {name} ({steps} {unit})"));
+    progress.start(if name == "read" { "frames" } else { "steps" }, Some(steps));
+}
+
+/// The LAMMPS step reporter of a stage: `progress` advanced to each step it reports.
+fn stepper(progress: &dyn Progress) -> impl FnMut(u64) + '_ {
+    let mut at = 0u64;
+    move |s| {
+        progress.advance(s.saturating_sub(at));
+        at = at.max(s);
+    }
 }
 
 fn fnv(text: &str) -> String {
@@ -191,19 +205,19 @@ fn fnv(text: &str) -> String {
     format!("{h:016x}")
 }
 
-fn io(e: impl std::fmt::Display) -> CliError {
-    CliError::internal(e.to_string())
+fn io(e: impl std::fmt::Display) -> LammpsError {
+    LammpsError::internal(e.to_string())
 }
 
 /// Check `spec` and `trajectory` before anything runs: the values, a start at or above the
 /// surface, the foot kept above the floor (exit 2 with what and what is allowed).
-pub fn check_inputs(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<(), CliError> {
-    spec.check().map_err(CliError::input)?;
+pub fn check_inputs(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<(), LammpsError> {
+    spec.check().map_err(LammpsError::input)?;
     trajectory
         .check_starts_at_surface()
-        .map_err(CliError::input)?;
+        .map_err(LammpsError::input)?;
     spec.check_depth(max_depth(trajectory))
-        .map_err(CliError::input)
+        .map_err(LammpsError::input)
 }
 
 /// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
@@ -215,8 +229,8 @@ pub fn run(
     ranks: u32,
     min_speed_ratio: f64,
     out: &Path,
-    progress: &mut dyn Progress,
-) -> Result<Summary, CliError> {
+    progress: &dyn Progress,
+) -> Result<Summary, LammpsError> {
     check_inputs(spec, trajectory)?;
     let pieces = script::pieces(spec, trajectory);
     let spec_text = toml::to_string(spec).map_err(io)?;
@@ -234,7 +248,7 @@ pub fn run(
     .map_err(io)?;
     let fall_s = (2.0 * bed_box.top_m / g).sqrt();
     if fall_s >= spec.max_settle_s {
-        return Err(CliError::input(format!(
+        return Err(LammpsError::input(format!(
             "the grains take {fall_s:.2} s to fall from the loose start; the longest settle is \
              {} s (allowed: longer than the fall)",
             spec.max_settle_s
@@ -242,19 +256,24 @@ pub fn run(
     }
     std::fs::write(
         dir.join("in.settle"),
-        script::settle_script(spec, &run_id, fall_s).map_err(CliError::input)?,
+        script::settle_script(spec, &run_id, fall_s).map_err(LammpsError::input)?,
     )
     .map_err(io)?;
     let dt = spec.time_step_s();
     let settle_max = (spec.max_settle_s / dt).ceil() as u64;
-    progress.stage("settle", settle_max);
+    stage(progress, "settle", settle_max);
     let settle = lammps
-        .run(&dir, "in.settle", "log.settle", ranks, &mut |s| {
-            progress.step(s)
-        })
-        .map_err(CliError::internal)?;
-    let (_, mut grains) = bed::read_data(&dir.join("settled.data")).map_err(CliError::internal)?;
-    let settled = bed::settled(spec, &bed_box, &grains).map_err(CliError::internal)?;
+        .run(
+            &dir,
+            "in.settle",
+            "log.settle",
+            ranks,
+            &mut stepper(progress),
+        )
+        .map_err(LammpsError::internal)?;
+    let (_, mut grains) =
+        bed::read_data(&dir.join("settled.data")).map_err(LammpsError::internal)?;
+    let settled = bed::settled(spec, &bed_box, &grains).map_err(LammpsError::internal)?;
 
     // 2. The foot at the trajectory's start; grains it overlaps removed.
     let axis = (0.5 * bed_box.width_m, 0.5 * bed_box.width_m);
@@ -338,12 +357,16 @@ pub fn run(
     };
 
     // 3. The intrusion.
-    progress.stage("intrusion", intrusion_steps);
+    stage(progress, "intrusion", intrusion_steps);
     let intrusion = lammps
-        .run(&dir, "in.intrude", "log.intrude", ranks, &mut |s| {
-            progress.step(s)
-        })
-        .map_err(CliError::internal)?;
+        .run(
+            &dir,
+            "in.intrude",
+            "log.intrude",
+            ranks,
+            &mut stepper(progress),
+        )
+        .map_err(LammpsError::internal)?;
     manifest.intrusion_wall_s = intrusion.wall_s;
     std::fs::write(
         dir.join("run.toml"),
@@ -386,32 +409,32 @@ pub fn analyse(
     dir: &Path,
     out: &Path,
     min_speed_ratio: f64,
-    progress: &mut dyn Progress,
-) -> Result<Summary, CliError> {
+    progress: &dyn Progress,
+) -> Result<Summary, LammpsError> {
     if !(min_speed_ratio > 0.0 && min_speed_ratio < 1.0) {
-        return Err(CliError::input(format!(
+        return Err(LammpsError::input(format!(
             "the speed rule is {min_speed_ratio} of the fastest (allowed: between 0 and 1)"
         )));
     }
     let manifest_path = dir.join("run.toml");
     let text = std::fs::read_to_string(&manifest_path).map_err(|e| {
-        CliError::input(format!(
+        LammpsError::input(format!(
             "{}: {e} (a LAMMPS run of `sandjumper dem lammps` has it in its lammps/ folder)",
             manifest_path.display()
         ))
     })?;
     let m: Manifest = toml::from_str(&text)
-        .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
+        .map_err(|e| LammpsError::input(format!("{}: {e}", manifest_path.display())))?;
     m.spec
         .check()
         .and_then(|()| m.check())
-        .map_err(|e| CliError::input(format!("{}: {e}", manifest_path.display())))?;
+        .map_err(|e| LammpsError::input(format!("{}: {e}", manifest_path.display())))?;
     let data = dir.join("intrude.data");
-    let (bed_box, atoms) = bed::read_data(&data).map_err(CliError::input)?;
+    let (bed_box, atoms) = bed::read_data(&data).map_err(LammpsError::input)?;
     let first = std::fs::read_to_string(&data)
-        .map_err(|e| CliError::input(format!("{}: {e}", data.display())))?;
+        .map_err(|e| LammpsError::input(format!("{}: {e}", data.display())))?;
     if !first.lines().next().unwrap_or("").contains(&m.run_id) {
-        return Err(CliError::input(format!(
+        return Err(LammpsError::input(format!(
             "{}: not the data file of run {} (its run.toml)",
             data.display(),
             m.run_id
@@ -433,19 +456,19 @@ pub fn analyse(
         }
     };
     let steps = m.frame_steps();
-    progress.stage("read", steps.len() as u64);
+    stage(progress, "read", steps.len() as u64);
     let dumps = dir.join("dumps");
     let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
     let dt = m.geometry.time_step_s;
-    for (k, &s) in steps.iter().enumerate() {
-        let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
-        let row = analysis::frame_row(&f, &g).map_err(CliError::input)?;
+    for &s in &steps {
+        let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
+        let row = analysis::frame_row(&f, &g).map_err(LammpsError::input)?;
         // The foot where this run's pieces put it: a frame of the same bed on another
         // trajectory (or at another step) is not this run's.
         let expected = script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s);
         let got = g.surface_m - row.depth_m;
         if (got - expected).is_nan() || (got - expected).abs() > FOOT_TOLERANCE_M {
-            return Err(CliError::input(format!(
+            return Err(LammpsError::input(format!(
                 "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at step \
                  {s} (a dump of another run)",
                 dump::frame_path(&dumps, s).display(),
@@ -454,25 +477,25 @@ pub fn analyse(
             )));
         }
         rows.push(row);
-        progress.step(k as u64 + 1);
+        progress.advance(1);
     }
-    analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(CliError::internal)?;
+    analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(LammpsError::internal)?;
     // The cone over the frames with the paper's added mass (read again: one frame in
     // memory at a time, whatever the bed's size).
     let mut view = SideView::new(&g);
     for (row, &s) in rows.iter().zip(&steps) {
         if row.added_mass_kg.is_finite() {
-            let f = dump::read_frame(&dumps, s, &check).map_err(CliError::input)?;
+            let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
             view.add(&f, &g, row);
         }
     }
     let cone = view.cone(&g);
     let force_path = dir.join("force.txt");
-    let force = analysis::read_force(&force_path, &g, &fp).map_err(CliError::input)?;
+    let force = analysis::read_force(&force_path, &g, &fp).map_err(LammpsError::input)?;
     let fe = m.spec.force_every();
     let windows = m.intrusion_steps / fe;
     if force.len() as u64 != windows {
-        return Err(CliError::input(format!(
+        return Err(LammpsError::input(format!(
             "{}: {} force windows where the run has {windows} (the file is cut short, or not \
              of this run)",
             force_path.display(),
@@ -488,7 +511,7 @@ pub fn analyse(
                 + script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, b));
         let got = g.surface_m - f.depth_m;
         if (got - mid).is_nan() || (got - mid).abs() > FOOT_TOLERANCE_M {
-            return Err(CliError::input(format!(
+            return Err(LammpsError::input(format!(
                 "{}: window {} has the foot at {:.6} mm where this run put it at {:.6} mm (a \
                  force file of another run)",
                 force_path.display(),
@@ -608,16 +631,16 @@ fn write_outputs(
     force: &[analysis::ForceRow],
     cone: &Option<analysis::Cone>,
     summary: &Summary,
-) -> Result<(), CliError> {
-    write_csv(&out.join("flow.csv"), rows, &[]).map_err(CliError::internal)?;
-    write_csv(&out.join("force_depth.csv"), force, &[]).map_err(CliError::internal)?;
+) -> Result<(), LammpsError> {
+    write_csv(&out.join("flow.csv"), rows, &[]).map_err(LammpsError::internal)?;
+    write_csv(&out.join("force_depth.csv"), force, &[]).map_err(LammpsError::internal)?;
     let cone_rows = cone.as_ref().map_or(&[][..], |c| &c.rows[..]);
     write_csv(
         &out.join("cone.csv"),
         cone_rows,
         &["depth_below_foot_m", "left_m", "right_m", "contrast"],
     )
-    .map_err(CliError::internal)?;
+    .map_err(LammpsError::internal)?;
     std::fs::write(
         out.join("lammps.toml"),
         toml::to_string(&m.spec).map_err(io)?,
@@ -640,5 +663,5 @@ fn write_outputs(
         &summary.cone_note,
         m.spec.foot_radius_m(),
     )
-    .map_err(CliError::internal)
+    .map_err(LammpsError::internal)
 }

@@ -1,0 +1,52 @@
+//! What the `dem` subcommands share: `--episode`, a share's parser, a library error as the
+//! command line's, JSON on stdout.
+
+use sandjumper_dem::intrude_run::Episode;
+use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
+
+use crate::command::args::parse_number;
+
+/// A share in 0..=1.
+pub(crate) fn parse_share(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
+    }
+}
+
+/// `--episode`: a part of a jump's trajectory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EpisodeChoice {
+    /// The foot's last intrusion before the jump's flight.
+    PushOff,
+}
+
+impl From<EpisodeChoice> for Episode {
+    fn from(e: EpisodeChoice) -> Self {
+        match e {
+            EpisodeChoice::PushOff => Episode::PushOff,
+        }
+    }
+}
+
+/// A library error as the command line's error: its message, and exit status 2 for bad
+/// input, 1 otherwise.
+pub fn cli_error<E: Blamed>(e: E) -> CliError {
+    CliError {
+        message: e.to_string(),
+        exit: match e.blame() {
+            Blame::Input => EXIT_BAD_INPUT,
+            Blame::Internal => EXIT_INTERNAL,
+        },
+    }
+}
+
+/// Print `value` as pretty JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> Result<(), CliError> {
+    let text =
+        serde_json::to_string_pretty(value).map_err(|e| CliError::internal(e.to_string()))?;
+    println!("{text}");
+    Ok(())
+}

@@ -1,0 +1,447 @@
+//! `dem intrude` as one call: the intruder driven into a bed (or a stopped run resumed), with
+//! side-wall frames, speed snapshots and checkpoints on the way, and the finished run's
+//! folder written by [`crate::outputs::write`].
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::bed::{BedReport, BedSpec};
+use crate::checkpoint;
+use crate::error::DemError;
+use crate::intrude::{self, IntrudeSpec, Run, SampleOut};
+use crate::intruder::Trajectory;
+use crate::outputs::Summary;
+use crate::params::DemParams;
+use crate::render::SideCamera;
+use crate::request::{ModelRequest, with_threads};
+use sandjumper_output::{Progress, StagedDir};
+
+/// A part of a jump's trajectory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Episode {
+    /// The foot's last intrusion before the jump's flight.
+    PushOff,
+}
+
+/// An intrusion to run (or a stopped one to continue).
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntrudeRequest {
+    /// The bed (a `dem bed` output folder or its `bed.ckpt`); required unless
+    /// [`IntrudeRequest::resume`].
+    pub bed: Option<PathBuf>,
+    /// Trajectory CSV (`t_s` with `x_f_m`, as `jump --out` writes, or `depth_m`); it must
+    /// start at or above the bed's surface.
+    pub trajectory: Option<PathBuf>,
+    /// Take one episode of the trajectory, shifted to start at the surface.
+    pub episode: Option<Episode>,
+    /// Use the trajectory from this time, s.
+    pub from_s: Option<f64>,
+    /// Until this time, s.
+    pub to_s: Option<f64>,
+    /// Constant intrusion speed instead, m/s.
+    pub speed_m_s: Option<f64>,
+    /// Final depth at constant speed, m. Default 0.03.
+    pub depth_m: f64,
+    /// Foot width, m. Default 0.076.
+    pub foot_width_m: f64,
+    /// Grains and contacts of the intrusion (the bed's grains are kept).
+    pub model: ModelRequest,
+    /// Samples per second (fields, frames, snapshots), 1/s. Default 500.
+    pub fps: f64,
+    /// Force rows per second, Hz. Default 10000.
+    pub force_rate_hz: f64,
+    /// The added mass is taken while the foot moves down at least this share of its
+    /// fastest speed, 0..1. Default 0.3.
+    pub min_speed_ratio: f64,
+    /// Coarse-graining grid spacing, m (`None`: 2 grain diameters).
+    pub grid_m: Option<f64>,
+    /// Coarse-graining width, m (`None`: 1 grain diameter).
+    pub cg_width_m: Option<f64>,
+    /// Side-wall frames' scale, m/px (`None`: a tenth of a grain).
+    pub m_per_px: Option<f64>,
+    /// Render side-wall frames. Default true.
+    pub frames: bool,
+    /// Bed packing fraction for momentum (rho phi), 1. Default 0.6.
+    pub phi: f64,
+    /// Checkpoint every N steps (0: never). Default 20000.
+    pub checkpoint_every: u64,
+    /// Stop after this many steps (leaves the run resumable).
+    pub stop_after: Option<u64>,
+    /// Continue the stopped run of [`IntrudeRequest::out`]. Default false.
+    pub resume: bool,
+    /// Seed of the frames' grey levels. Default 1.
+    pub seed: u64,
+    /// Threads (0: all cores). Default 0.
+    pub threads: usize,
+    /// Pin each thread to a core of its own. Default false.
+    pub pin_threads: bool,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+impl Default for IntrudeRequest {
+    fn default() -> Self {
+        Self {
+            bed: None,
+            trajectory: None,
+            episode: None,
+            from_s: None,
+            to_s: None,
+            speed_m_s: None,
+            depth_m: 0.03,
+            foot_width_m: 0.076,
+            model: ModelRequest::default(),
+            fps: 500.0,
+            force_rate_hz: 10000.0,
+            min_speed_ratio: 0.3,
+            grid_m: None,
+            cg_width_m: None,
+            m_per_px: None,
+            frames: true,
+            phi: 0.6,
+            checkpoint_every: 20000,
+            stop_after: None,
+            resume: false,
+            seed: 1,
+            threads: 0,
+            pin_threads: false,
+            out: PathBuf::new(),
+        }
+    }
+}
+
+/// How an intrusion ended.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum IntrudeOutcome {
+    /// It ran to its end: its summary (what `--json` prints; `summary.json` holds it with
+    /// the spec, grid and camera).
+    Finished(Box<Summary>),
+    /// It stopped at [`IntrudeRequest::stop_after`], resumable.
+    Stopped {
+        /// Steps done.
+        steps: u64,
+        /// Steps of the whole run.
+        total_steps: u64,
+        /// The checkpoint a resume starts from, step.
+        resumes_from: u64,
+        /// The run's output folder (not written yet).
+        out: PathBuf,
+    },
+}
+
+impl fmt::Display for IntrudeOutcome {
+    /// The line `dem intrude` prints.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Finished(s) => f.write_str(&s.line()),
+            Self::Stopped {
+                steps,
+                total_steps,
+                resumes_from,
+                out,
+            } => write!(
+                f,
+                "dem intrude: stopped after {steps} of {total_steps} steps; `dem intrude --resume --out {}` continues from the checkpoint at step {resumes_from}",
+                out.display()
+            ),
+        }
+    }
+}
+
+impl IntrudeRequest {
+    /// The checks that need no file: a bed unless resuming, and the intruder's motion.
+    pub fn validate(&self) -> Result<(), DemError> {
+        if !self.resume && self.bed.is_none() {
+            return Err(DemError::input("--bed BED is required (or --resume)"));
+        }
+        if !self.resume && self.trajectory.is_none() && self.speed_m_s.is_none() {
+            return Err(DemError::input(
+                "give the intruder's motion: --trajectory CSV or --speed M_PER_S",
+            ));
+        }
+        self.model.resolve().map(|_| ())
+    }
+}
+
+/// The work folder of a run writing to `out`: checkpoints and frames until it finishes.
+pub fn work_dir(out: &Path) -> PathBuf {
+    let mut name = out.file_name().unwrap_or_default().to_os_string();
+    name.push(".incomplete");
+    out.with_file_name(name)
+}
+
+/// Run the intrusion `request` asks for on its threads: resumed from its checkpoint or
+/// started from a bed, advanced with frames, snapshots and checkpoints, then its folder
+/// written (unless it stopped early).
+pub fn run(request: &IntrudeRequest, progress: &dyn Progress) -> Result<IntrudeOutcome, DemError> {
+    with_threads(request.threads, request.pin_threads, || {
+        run_here(request, progress)
+    })
+}
+
+fn run_here(a: &IntrudeRequest, progress: &dyn Progress) -> Result<IntrudeOutcome, DemError> {
+    let work = work_dir(&a.out);
+    let ckpt = work.join("run.ckpt");
+    let mut run = if a.resume {
+        resume_intrusion(a, &ckpt)?
+    } else {
+        start_intrusion(a, &work, &ckpt, progress)?
+    };
+    std::fs::create_dir_all(work.join("frames"))
+        .and_then(|()| std::fs::create_dir_all(work.join("snapshots")))
+        .map_err(|e| DemError::input(format!("cannot create {}: {e}", work.display())))?;
+    let p = run.spec.params;
+    let dl = p.dimensionless(run.spec.trajectory().max_speed());
+    progress.note(&format!(
+        "dem intrude: {} grains, {} steps of {:.3e} s; contact time {:.3e} s: t_c v / d = {:.3e}, Froude v / sqrt(g d) = {:.2}",
+        run.world.g.len(),
+        run.total_steps,
+        p.dt_s,
+        dl.contact_time_s,
+        dl.contact_time_speed_over_d,
+        dl.froude
+    ));
+    advance_intrusion(a, &mut run, &work, &ckpt, progress)?;
+    if run.steps() < run.total_steps {
+        // Resuming from the last regular checkpoint (not from here) repeats the
+        // uninterrupted run bit for bit; the steps since are done again.
+        let every = run.spec.checkpoint_every;
+        return Ok(IntrudeOutcome::Stopped {
+            steps: run.steps(),
+            total_steps: run.total_steps,
+            resumes_from: run.steps().checked_div(every).map_or(0, |k| k * every),
+            out: a.out.clone(),
+        });
+    }
+    let summary = crate::outputs::write(&run, &work, &a.out)?;
+    Ok(IntrudeOutcome::Finished(Box::new(summary)))
+}
+
+/// A stopped run of `--out`, from its checkpoint.
+fn resume_intrusion(a: &IntrudeRequest, ckpt: &Path) -> Result<Run, DemError> {
+    let l = checkpoint::load(ckpt).map_err(|e| {
+        DemError::input(format!(
+            "--resume: {e} (a stopped `dem intrude --out {}` leaves it there)",
+            a.out.display()
+        ))
+    })?;
+    intrude::resume(l.world, &l.record, &l.extra)
+        .map_err(|e| DemError::input(format!("checkpoint {}: {e}", ckpt.display())))
+}
+
+/// A bed checkpoint written by `dem bed`: its world and what it was made with.
+struct Bed {
+    checkpoint: checkpoint::Loaded,
+    report: BedReport,
+    params: DemParams,
+    spec: BedSpec,
+}
+
+/// Read the bed `--bed` names (its folder or its checkpoint).
+fn read_bed(bed_path: &Path) -> Result<Bed, DemError> {
+    let bp = if bed_path.is_dir() {
+        bed_path.join("bed.ckpt")
+    } else {
+        bed_path.to_path_buf()
+    };
+    let checkpoint = checkpoint::load(&bp).map_err(DemError::Input)?;
+    let part = |key: &str| checkpoint.record["bed"][key].clone();
+    let not_a_bed = |e: serde_json::Error| {
+        DemError::input(format!("{}: not a bed checkpoint ({e})", bp.display()))
+    };
+    Ok(Bed {
+        report: serde_json::from_value(part("report")).map_err(not_a_bed)?,
+        params: serde_json::from_value(part("params")).map_err(not_a_bed)?,
+        spec: serde_json::from_value(part("spec")).map_err(not_a_bed)?,
+        checkpoint,
+    })
+}
+
+/// The intruder's motion: a trajectory file or a constant speed down to `--depth`.
+fn intruder_trajectory(
+    a: &IntrudeRequest,
+    params: &DemParams,
+    progress: &dyn Progress,
+) -> Result<Trajectory, DemError> {
+    let traj = match (&a.trajectory, a.speed_m_s) {
+        (Some(p), _) => {
+            let t = match a.episode {
+                Some(Episode::PushOff) => Trajectory::push_off_from_csv(p),
+                None => Trajectory::from_csv(p, (a.from_s, a.to_s)),
+            }
+            .map_err(DemError::Input)?;
+            t.check_starts_at_surface().map_err(DemError::Input)?;
+            t
+        }
+        (None, Some(v)) => Trajectory::Constant {
+            speed_m_s: v,
+            start_depth_m: -0.5 * params.diameter_m,
+            end_depth_m: a.depth_m,
+        },
+        (None, None) => {
+            return Err(DemError::input(
+                "give the intruder's motion: --trajectory CSV or --speed M_PER_S",
+            ));
+        }
+    };
+    let vmax = traj.max_speed();
+    if vmax > 1.5 * params.design_speed_m_s {
+        progress.note(&format!(
+            "dem intrude: warning: the intruder reaches {vmax:.3} m/s, above the {:.3} m/s the stiffness was chosen for (overlaps grow beyond --overlap; raise --design-speed)",
+            params.design_speed_m_s
+        ));
+    }
+    Ok(traj)
+}
+
+/// The intrusion `a` asks for into `bed`.
+fn intrude_spec(
+    a: &IntrudeRequest,
+    bed: &Bed,
+    progress: &dyn Progress,
+) -> Result<IntrudeSpec, DemError> {
+    let mut params = a.model.resolve()?;
+    // The bed's grains are what they are.
+    params.diameter_m = bed.params.diameter_m;
+    params.density_kg_m3 = bed.params.density_kg_m3;
+    params.sizes = bed.params.sizes;
+    let traj = intruder_trajectory(a, &params, progress)?;
+    let (t_s, depth_m) = match &traj {
+        Trajectory::Table { t_s, depth_m, .. } => (t_s.clone(), depth_m.clone()),
+        Trajectory::Constant { .. } => (
+            vec![0.0, traj.duration_s()],
+            vec![traj.depth(0.0), traj.depth(traj.duration_s())],
+        ),
+    };
+    let d = params.diameter_m;
+    Ok(IntrudeSpec {
+        params,
+        foot_width_m: a.foot_width_m,
+        t_s,
+        depth_m,
+        trajectory: a.trajectory.as_ref().map_or(
+            format!("constant {} m/s", a.speed_m_s.unwrap_or(0.0)),
+            |p| p.display().to_string(),
+        ),
+        fps: a.fps,
+        force_rate_hz: a.force_rate_hz,
+        grid_spacing_m: a.grid_m.unwrap_or(2.0 * d),
+        cg_width_m: a.cg_width_m.unwrap_or(d),
+        m_per_px: a.m_per_px.unwrap_or(0.1 * d),
+        frames: a.frames,
+        phi_bulk: a.phi,
+        checkpoint_every: a.checkpoint_every,
+        seed: a.seed,
+        surface_m: bed.report.surface_m,
+        bed_x_m: (0.0, bed.spec.width_m),
+        min_speed_ratio: a.min_speed_ratio,
+    })
+}
+
+/// Refuse an intrusion whose samples, frames or grid would not fit.
+fn check_spec(spec: &IntrudeSpec) -> Result<(), DemError> {
+    if spec.fps * spec.params.dt_s > 1.0 || spec.force_rate_hz * spec.params.dt_s > 1.0 {
+        return Err(DemError::input(format!(
+            "--fps {} / --force-rate {} Hz sample faster than the step {:.3e} s (allowed: at most one sample per step)",
+            spec.fps, spec.force_rate_hz, spec.params.dt_s
+        )));
+    }
+    let (grid, cam) = spec.views();
+    if spec.frames && u64::from(cam.width_px) * u64::from(cam.height_px) > 40_000_000 {
+        return Err(DemError::input(format!(
+            "side-wall frames of {}x{} px at --m-per-px {} (allowed: up to 40 Mpx; raise --m-per-px or --no-frames)",
+            cam.width_px, cam.height_px, spec.m_per_px
+        )));
+    }
+    if grid.nx * grid.ny > 4_000_000 {
+        return Err(DemError::input(format!(
+            "a coarse-graining grid of {}x{} nodes (allowed: up to 4 million; raise --grid)",
+            grid.nx, grid.ny
+        )));
+    }
+    Ok(())
+}
+
+/// A fresh intrusion into `--bed`: checked, its work folder cleared, its step-0 checkpoint
+/// written (a run stopped before its first regular checkpoint resumes from there).
+fn start_intrusion(
+    a: &IntrudeRequest,
+    work: &Path,
+    ckpt: &Path,
+    progress: &dyn Progress,
+) -> Result<Run, DemError> {
+    let Some(bed_path) = &a.bed else {
+        return Err(DemError::input("--bed BED is required (or --resume)"));
+    };
+    let bed = read_bed(bed_path)?;
+    let spec = intrude_spec(a, &bed, progress)?;
+    check_spec(&spec)?;
+    // A previous stopped run of the same --out is replaced by a fresh start.
+    if work.exists() {
+        std::fs::remove_dir_all(work)
+            .map_err(|e| DemError::input(format!("cannot clear {}: {e}", work.display())))?;
+    }
+    StagedDir::create(&a.out)?; // checks the target now, before hours of work
+    let mut run = intrude::start(spec, bed.checkpoint.world).map_err(DemError::Input)?;
+    std::fs::create_dir_all(work)
+        .map_err(|e| DemError::input(format!("cannot create {}: {e}", work.display())))?;
+    run.world.rebuild();
+    checkpoint::save(ckpt, &run.world, &intrude::record(&run), &run.fields_flat())
+        .map_err(DemError::Internal)?;
+    Ok(run)
+}
+
+/// Advance `run` to its end or to `--stop-after`: side-wall frames and speed snapshots at
+/// every sample, checkpoints as the spec says, progress in steps.
+fn advance_intrusion(
+    a: &IntrudeRequest,
+    run: &mut Run,
+    work: &Path,
+    ckpt: &Path,
+    progress: &dyn Progress,
+) -> Result<(), DemError> {
+    progress.start("steps", Some(run.total_steps));
+    let mut at = run.steps();
+    progress.advance(at);
+    let until = a.stop_after.unwrap_or(u64::MAX);
+    let vref = run.spec.trajectory().max_speed().max(1e-3);
+    let cam = run.camera;
+    let frames = run.spec.frames;
+    let seed = run.spec.seed;
+    let mut on_sample = |s: &SampleOut| -> Result<(), String> {
+        if frames {
+            crate::render::side_wall_frame(s.world, &cam, seed)
+                .save(work.join(format!("frames/frame_{:06}.png", s.k)))
+                .map_err(|e| format!("cannot write frame {}: {e}", s.k))?;
+        }
+        let snap_cam = snapshot_camera(&cam);
+        crate::render::speed_snapshot(s.world, &snap_cam, vref)
+            .save(work.join(format!("snapshots/{:06}.png", s.k)))
+            .map_err(|e| format!("cannot write snapshot {}: {e}", s.k))
+    };
+    let mut on_checkpoint = |r: &Run| -> Result<(), String> {
+        checkpoint::save(ckpt, &r.world, &intrude::record(r), &r.fields_flat())
+    };
+    let mut on_progress = |s: u64| {
+        progress.advance(s.saturating_sub(at));
+        at = at.max(s);
+    };
+    run.advance(until, &mut on_sample, &mut on_checkpoint, &mut on_progress)
+        .map_err(DemError::Internal)?;
+    progress.finish();
+    Ok(())
+}
+
+/// The snapshot camera: the side camera reduced to at most 640 px wide.
+pub fn snapshot_camera(cam: &SideCamera) -> SideCamera {
+    let f = (f64::from(cam.width_px) / 640.0).max(1.0);
+    SideCamera {
+        m_per_px: cam.m_per_px * f,
+        width_px: ((f64::from(cam.width_px) / f) as u32).max(1),
+        height_px: ((f64::from(cam.height_px) / f) as u32).max(1),
+        ..*cam
+    }
+}

@@ -1,0 +1,156 @@
+//! What `bed` and `intrude` requests share: the grains and contacts ([`ModelRequest`]) and
+//! the worker threads a run steps on ([`with_threads`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::DemError;
+use crate::grains::SizeDistribution;
+use crate::params::{Choice, DemParams, Model};
+use crate::world::Integrator;
+
+/// The grains' sizes as a request names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Sizes {
+    /// One size.
+    Mono,
+    /// Two sizes, 50:50, large over small [`ModelRequest::ratio`].
+    Bi,
+    /// Uniform spread [`ModelRequest::spread`] about the mean.
+    Poly,
+}
+
+/// Grains and contacts of a bed or an intrusion, as the command line's model options give
+/// them; [`ModelRequest::resolve`] turns them into [`DemParams`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelRequest {
+    /// Model: [`Model::Paper`] (Supplementary I) or [`Model::Full`] (gravity, walls,
+    /// friction, Verlet). Default paper.
+    pub model: Model,
+    /// Grain sizes. Default bi.
+    pub sizes: Sizes,
+    /// Large over small diameter (bi), 1. Default 1.4.
+    pub ratio: f64,
+    /// Spread of diameters about the mean (poly), share. Default 0.2.
+    pub spread: f64,
+    /// Small grain diameter, m. Default 1e-3.
+    pub diameter_m: f64,
+    /// Grain density, kg/m^3. Default 1000.
+    pub density_kg_m3: f64,
+    /// Intrusion speed the stiffness is chosen for, m/s. Default 0.5.
+    pub design_speed_m_s: f64,
+    /// Largest overlap at that speed, share of a diameter. Default 0.01.
+    pub overlap: f64,
+    /// Normal stiffness instead, N/m.
+    pub kn_n_per_m: Option<f64>,
+    /// Coefficient of restitution, 1. Default 0.5.
+    pub restitution: f64,
+    /// Dashpot instead, N s/m.
+    pub damping_n_s_per_m: Option<f64>,
+    /// Friction coefficient (full model), 1. Default 0.5.
+    pub mu: f64,
+    /// Per-grain drag rate, 1/s (`None`: paper 20, full 0).
+    pub drag_per_s: Option<f64>,
+    /// Integrator (`None`: paper forward Euler, full velocity Verlet).
+    pub integrator: Option<Integrator>,
+    /// Steps per shortest contact time, 1. Default 50.
+    pub steps_per_contact: f64,
+    /// Time step instead, s.
+    pub dt_s: Option<f64>,
+    /// Allow a step above `t_c / 10`. Default false.
+    pub force_step: bool,
+    /// Walls in the paper model (the full model always has them). Default false.
+    pub walls: bool,
+}
+
+impl Default for ModelRequest {
+    fn default() -> Self {
+        Self {
+            model: Model::Paper,
+            sizes: Sizes::Bi,
+            ratio: 1.4,
+            spread: 0.2,
+            diameter_m: 1e-3,
+            density_kg_m3: 1000.0,
+            design_speed_m_s: 0.5,
+            overlap: 0.01,
+            kn_n_per_m: None,
+            restitution: 0.5,
+            damping_n_s_per_m: None,
+            mu: 0.5,
+            drag_per_s: None,
+            integrator: None,
+            steps_per_contact: 50.0,
+            dt_s: None,
+            force_step: false,
+            walls: false,
+        }
+    }
+}
+
+impl ModelRequest {
+    /// The parameters these choices resolve to (bad input: what and what is allowed).
+    pub fn resolve(&self) -> Result<DemParams, DemError> {
+        let mut c = Choice::new(self.model);
+        c.sizes = match self.sizes {
+            Sizes::Mono => SizeDistribution::Mono,
+            Sizes::Bi => SizeDistribution::Bi {
+                ratio: self.ratio,
+                small_share: 0.5,
+            },
+            Sizes::Poly => SizeDistribution::Poly {
+                spread: self.spread,
+            },
+        };
+        c.diameter_m = self.diameter_m;
+        c.density_kg_m3 = self.density_kg_m3;
+        c.speed_m_s = self.design_speed_m_s;
+        c.overlap = self.overlap;
+        c.kn_n_per_m = self.kn_n_per_m;
+        c.restitution = self.restitution;
+        c.damping_n_s_per_m = self.damping_n_s_per_m;
+        c.mu = self.mu;
+        c.drag_per_s = self.drag_per_s;
+        c.integrator = self.integrator;
+        c.steps_per_contact = self.steps_per_contact;
+        c.dt_s = self.dt_s;
+        c.walls = self.walls;
+        c.resolve(self.force_step).map_err(DemError::Input)
+    }
+}
+
+/// Run `f` on a pool of `n` threads (0: as many as rayon's default, all cores), each pinned
+/// to a core of its own when `pin` (refused when this process may run on fewer cores).
+pub fn with_threads<T: Send>(
+    n: usize,
+    pin: bool,
+    f: impl FnOnce() -> Result<T, DemError> + Send,
+) -> Result<T, DemError> {
+    let cores = if pin {
+        core_affinity::get_core_ids().unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    let n = if n == 0 {
+        rayon::current_num_threads()
+    } else {
+        n
+    };
+    if pin && cores.len() < n {
+        return Err(DemError::input(format!(
+            "--pin-threads: {n} threads need {n} cores, and this process may run on {} \
+             (use --threads {} or fewer, or drop --pin-threads)",
+            cores.len(),
+            cores.len().max(1)
+        )));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .start_handler(move |k| {
+            if let Some(&core) = cores.get(k) {
+                core_affinity::set_for_current(core);
+            }
+        })
+        .build()
+        .map_err(|e| DemError::internal(format!("cannot start {n} threads: {e}")))?;
+    pool.install(f)
+}

@@ -1,0 +1,147 @@
+//! The commands as library calls: `dem bed`, `dem intrude` and `dem collide` through their
+//! typed requests, checked on their typed outcomes in memory.
+
+use std::sync::Mutex;
+
+use sandjumper_dem::bed_run::{self, BedRequest};
+use sandjumper_dem::collide::{self, CollideRequest};
+use sandjumper_dem::intrude_run::{self, IntrudeOutcome, IntrudeRequest};
+use sandjumper_dem::request::ModelRequest;
+use sandjumper_dem::world::Integrator;
+use sandjumper_output::{Blame, Blamed, Progress, Silent};
+
+/// Notes and steps a run reported.
+#[derive(Default)]
+struct Recorder {
+    notes: Mutex<Vec<String>>,
+    steps: Mutex<u64>,
+}
+
+impl Progress for Recorder {
+    fn advance(&self, n: u64) {
+        *self.steps.lock().unwrap() += n;
+    }
+    fn note(&self, line: &str) {
+        self.notes.lock().unwrap().push(line.to_string());
+    }
+}
+
+fn model() -> ModelRequest {
+    ModelRequest {
+        overlap: 0.02,
+        ..ModelRequest::default()
+    }
+}
+
+fn small_bed(dir: &std::path::Path) -> bed_run::BedOutcome {
+    bed_run::run(
+        &BedRequest {
+            model: model(),
+            width_m: 0.016,
+            height_m: 0.008,
+            pack: Some(0.8),
+            threads: 1,
+            out: dir.join("bed"),
+            ..BedRequest::default()
+        },
+        &Silent,
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_bed_and_an_intrusion_into_it_as_calls() {
+    let dir = tempfile::tempdir().unwrap();
+    let bed = small_bed(dir.path());
+    assert!(
+        bed.report.grains > 50 && bed.report.area_fraction > 0.75,
+        "{bed}"
+    );
+    assert!(bed.out.join("bed.ckpt").is_file());
+    assert!(bed.to_string().starts_with("dem bed: "), "{bed}");
+    let progress = Recorder::default();
+    let request = IntrudeRequest {
+        bed: Some(bed.out.clone()),
+        speed_m_s: Some(0.3),
+        depth_m: 0.002,
+        foot_width_m: 0.006,
+        model: ModelRequest {
+            walls: true,
+            ..model()
+        },
+        frames: false,
+        threads: 1,
+        out: dir.path().join("run"),
+        ..IntrudeRequest::default()
+    };
+    let IntrudeOutcome::Finished(s) = intrude_run::run(&request, &progress).unwrap() else {
+        panic!("the run stopped early");
+    };
+    assert!(s.max_force_n > 0.0, "{}", s.line());
+    assert!((s.max_depth_m - 0.002).abs() < 1e-9, "{}", s.max_depth_m);
+    assert_eq!(*progress.steps.lock().unwrap(), s.steps);
+    assert!(progress.notes.lock().unwrap()[0].starts_with("dem intrude: "));
+    assert!(dir.path().join("run/summary.json").is_file());
+    // Stopped early: resumable, and the outcome says from where.
+    let stopped = intrude_run::run(
+        &IntrudeRequest {
+            stop_after: Some(10),
+            checkpoint_every: 4,
+            out: dir.path().join("stopped"),
+            ..request
+        },
+        &Silent,
+    )
+    .unwrap();
+    match stopped {
+        IntrudeOutcome::Stopped {
+            steps,
+            resumes_from,
+            ..
+        } => assert_eq!((steps, resumes_from), (10, 8)),
+        IntrudeOutcome::Finished(_) => panic!("ran past --stop-after"),
+    }
+}
+
+#[test]
+fn an_intrusion_without_a_bed_or_a_motion_is_the_callers_fault() {
+    let none = IntrudeRequest::default();
+    let e = none.validate().unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert_eq!(e.to_string(), "--bed BED is required (or --resume)");
+    let e = intrude_run::run(&none, &Silent).unwrap_err();
+    assert_eq!(e.to_string(), "--bed BED is required (or --resume)");
+}
+
+#[test]
+fn a_collision_matches_the_analytic_restitution() {
+    let r = collide::run(
+        &CollideRequest {
+            d1_m: 1e-3,
+            d2_m: Some(1e-3),
+            kn_n_per_m: 1e4,
+            damping_n_s_per_m: 1e-3,
+            speed_m_s: 0.3,
+            integrator: Integrator::VelocityVerlet,
+            ..CollideRequest::default()
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(r.restitution_error.abs() < 1e-2, "{r}");
+    assert!(r.to_string().starts_with("restitution "), "{r}");
+    // A step above t_c / 10 is refused unless forced.
+    let e = collide::run(
+        &CollideRequest {
+            d1_m: 1e-3,
+            kn_n_per_m: 1e4,
+            damping_n_s_per_m: 1e-3,
+            speed_m_s: 0.3,
+            dt_s: Some(1e-3),
+            ..CollideRequest::default()
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+}

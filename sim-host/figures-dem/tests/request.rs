@@ -1,0 +1,70 @@
+//! `figures dem` as a call: bad requests refused before anything is written, a failing
+//! stage's error named by its command line with its blame kept.
+
+use sandjumper_figures_dem::{
+    FiguresDemError, FiguresDemRequest, JumpStage, PivStage, Stages, run,
+};
+use sandjumper_output::{Blame, Blamed, Silent};
+
+/// Stages whose jump fails as bad input.
+struct FailingJump;
+
+impl Stages for FailingJump {
+    fn jump(&self, stage: &JumpStage) -> Result<f64, FiguresDemError> {
+        Err(FiguresDemError::input(format!(
+            "no jump into {}",
+            stage.out.display()
+        )))
+    }
+    fn piv(&self, _: &PivStage) -> Result<(), FiguresDemError> {
+        unreachable!("no PIV before the jumps")
+    }
+}
+
+#[test]
+fn a_foot_or_a_frequency_out_of_range_is_refused_and_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("dem");
+    for (request, allowed) in [
+        (
+            FiguresDemRequest {
+                foot_width_m: 0.5,
+                out: out.clone(),
+                ..FiguresDemRequest::default()
+            },
+            "0.005..=0.2",
+        ),
+        (
+            FiguresDemRequest {
+                freq_hz: 100.0,
+                out: out.clone(),
+                ..FiguresDemRequest::default()
+            },
+            "0.5..=40",
+        ),
+    ] {
+        let e = run(&request, &FailingJump, &Silent).unwrap_err();
+        assert_eq!(e.blame(), Blame::Input);
+        assert!(e.to_string().contains(allowed), "{e}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn a_failing_stage_is_named_by_its_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("dem");
+    let request = FiguresDemRequest {
+        out: out.clone(),
+        ..FiguresDemRequest::default()
+    };
+    let e = run(&request, &FailingJump, &Silent).unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    let m = e.to_string();
+    assert!(
+        m.starts_with("sandjumper jump --kind single --freq 10 --phi 0.57 --out "),
+        "{m}"
+    );
+    assert!(m.contains(": no jump into "), "{m}");
+    assert!(!out.exists());
+}

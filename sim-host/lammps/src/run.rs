@@ -1,0 +1,343 @@
+//! `dem lammps` and `dem lammps-read` as calls: a typed request, `run`/`read` with a
+//! progress sink, and the run's summary as the outcome. LAMMPS itself stays a process
+//! (`mpiexec -n N lmp`); a failed run keeps its LAMMPS files in `OUT.failed/`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use sandjumper_dem::intrude_run::Episode;
+use sandjumper_dem::intruder::Trajectory;
+use sandjumper_output::{Progress, StagedDir};
+
+use crate::error::LammpsError;
+use crate::lammps::Lammps;
+use crate::outputs::{self, Summary};
+use crate::spec::{LammpsSpec, Preset};
+
+/// A 3-D intrusion to run with LAMMPS: a preset scale with single values changed, and the
+/// foot's motion.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LammpsRequest {
+    /// The scale to start from. Default [`Preset::Paper`].
+    pub preset: Preset,
+    /// Trajectory CSV (`t_s` with `x_f_m`, or `depth_m`); it must start at or above the
+    /// bed's surface.
+    pub trajectory: Option<PathBuf>,
+    /// Take one episode of the trajectory, shifted to start at the surface.
+    pub episode: Option<Episode>,
+    /// Constant intrusion speed instead, m/s (from the surface).
+    pub speed_m_s: Option<f64>,
+    /// Final depth at constant speed, m. Default 0.02.
+    pub depth_m: f64,
+    /// Foot diameter, m (`None`: the preset's).
+    pub foot_diameter_m: Option<f64>,
+    /// Mean grain diameter, m (`None`: the preset's).
+    pub grain_diameter_m: Option<f64>,
+    /// Bed width (square, periodic sides), m (`None`: the preset's).
+    pub bed_width_m: Option<f64>,
+    /// Bed depth, m (`None`: the preset's).
+    pub bed_depth_m: Option<f64>,
+    /// Target packing fraction of the poured bed, 1 (`None`: the preset's).
+    pub phi: Option<f64>,
+    /// Young's modulus of the grains, Pa (`None`: the preset's).
+    pub youngs_modulus_pa: Option<f64>,
+    /// Sliding friction coefficient (`None`: the preset's).
+    pub friction: Option<f64>,
+    /// Normal restitution coefficient (`None`: the preset's).
+    pub restitution: Option<f64>,
+    /// Dump rate, frames/s (`None`: the preset's).
+    pub fps: Option<f64>,
+    /// Seed of the grains' sizes and start (`None`: the preset's).
+    pub seed: Option<u64>,
+    /// The added mass is taken while the foot moves down at least this share of its
+    /// fastest speed, 1. Default 0.3.
+    pub min_speed_ratio: f64,
+    /// MPI ranks. Default 2.
+    pub ranks: u32,
+    /// The LAMMPS executable (`None`: $SANDJUMPER_LMP, else lmp on PATH).
+    pub lmp: Option<PathBuf>,
+    /// The MPI launcher (`None`: the mpiexec beside lmp, else on PATH).
+    pub mpiexec: Option<PathBuf>,
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+impl Default for LammpsRequest {
+    fn default() -> Self {
+        Self {
+            preset: Preset::Paper,
+            trajectory: None,
+            episode: None,
+            speed_m_s: None,
+            depth_m: 0.02,
+            foot_diameter_m: None,
+            grain_diameter_m: None,
+            bed_width_m: None,
+            bed_depth_m: None,
+            phi: None,
+            youngs_modulus_pa: None,
+            friction: None,
+            restitution: None,
+            fps: None,
+            seed: None,
+            min_speed_ratio: 0.3,
+            ranks: 2,
+            lmp: None,
+            mpiexec: None,
+            out: PathBuf::new(),
+        }
+    }
+}
+
+/// A finished run read back: its summary (`summary.json`, what `--json` prints) and its
+/// folder.
+#[derive(Clone, Debug, Serialize)]
+pub struct LammpsOutcome {
+    /// The summary.
+    #[serde(flatten)]
+    pub summary: Summary,
+    /// The folder written.
+    #[serde(skip)]
+    pub out: PathBuf,
+}
+
+impl fmt::Display for LammpsOutcome {
+    /// The two-part summary `dem lammps` prints on stdout.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.summary;
+        writeln!(
+            f,
+            "3-D DEM ({}): {} grains, settled phi {:.3} (target {:.3}), {} frames at {:.0} fps to {:.1} mm",
+            s.lammps_version,
+            s.grains,
+            s.settled_packing_fraction,
+            s.target_packing_fraction,
+            s.frames,
+            s.fps,
+            1e3 * s.max_depth_m
+        )?;
+        write!(
+            f,
+            "  added mass / eq. 6 (median)  {:.2}\n  column momentum (peak)       {:.3} g m/s\n  force / F_p(z) (median)      {:.2}\n  peak force                   {:.2} N (overlap ~{:.2} % of a grain)\n  jammed cone                  {}\n  cost                         {:.0} core-s ({:.2e} grain-steps per core-s)",
+            s.added_mass_vs_eq6_median,
+            1e3 * s.grain_momentum_under_foot_kg_m_s,
+            s.force_vs_penetration_force_median,
+            s.peak_force_n,
+            100.0 * s.peak_overlap_ratio,
+            match s.cone_angle_deg {
+                Some(a) => format!("{a:.0} deg to the horizontal"),
+                None => format!("none ({})", s.cone_note),
+            },
+            s.core_seconds,
+            s.grain_steps_per_core_second
+        )
+    }
+}
+
+impl LammpsRequest {
+    /// The run this request asks for: the preset with its single values changed.
+    pub fn spec(&self) -> LammpsSpec {
+        let mut s = LammpsSpec::preset(self.preset);
+        let set = |v: Option<f64>, into: &mut f64| {
+            if let Some(v) = v {
+                *into = v;
+            }
+        };
+        set(self.foot_diameter_m, &mut s.foot_diameter_m);
+        set(self.grain_diameter_m, &mut s.grain_diameter_m);
+        set(self.bed_width_m, &mut s.bed_width_m);
+        set(self.bed_depth_m, &mut s.bed_depth_m);
+        set(self.phi, &mut s.packing_fraction);
+        set(self.youngs_modulus_pa, &mut s.youngs_modulus_pa);
+        set(self.friction, &mut s.friction);
+        set(self.restitution, &mut s.restitution);
+        set(self.fps, &mut s.fps);
+        if let Some(seed) = self.seed {
+            s.seed = seed;
+        }
+        s
+    }
+
+    /// The foot's motion: the trajectory file (or its episode) or a constant speed.
+    pub fn trajectory(&self) -> Result<Trajectory, LammpsError> {
+        let t = match (&self.trajectory, self.speed_m_s) {
+            (Some(p), _) => match self.episode {
+                Some(Episode::PushOff) => Trajectory::push_off_from_csv(p),
+                None => Trajectory::from_csv(p, (None, None)),
+            }
+            .map_err(LammpsError::Input)?,
+            (None, Some(v)) => Trajectory::Constant {
+                speed_m_s: v,
+                start_depth_m: 0.0,
+                end_depth_m: self.depth_m,
+            },
+            (None, None) => {
+                return Err(LammpsError::input(
+                    "give the foot's motion: --trajectory CSV [--episode push-off] or --speed M_PER_S",
+                ));
+            }
+        };
+        t.check_starts_at_surface().map_err(LammpsError::Input)?;
+        Ok(t)
+    }
+
+    /// Check the request before anything runs: the motion, the values, the foot kept above
+    /// the floor.
+    pub fn validate(&self) -> Result<(), LammpsError> {
+        outputs::check_inputs(&self.spec(), &self.trajectory()?)
+    }
+
+    /// The LAMMPS (and MPI launcher) this request names or finds.
+    pub fn lammps(&self) -> Result<Lammps, LammpsError> {
+        crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref())
+            .map_err(LammpsError::Input)
+    }
+}
+
+/// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write
+/// its folder (a failed run keeps its LAMMPS files in `OUT.failed/`).
+pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
+    let spec = request.spec();
+    let traj = request.trajectory()?;
+    outputs::check_inputs(&spec, &traj)?;
+    let lammps = request.lammps()?;
+    // What this run will cost, before it starts (the paper preset is a cluster's job): the
+    // settle at most its longest, at the small preset's measured 4 million grain-steps per
+    // core-second.
+    let grains = spec.grain_count() as f64;
+    let steps = spec.max_settle_s / spec.time_step_s()
+        + crate::script::pieces(&spec, &traj)
+            .iter()
+            .map(|p| p.steps as f64)
+            .sum::<f64>();
+    progress.note(&format!(
+        "dem lammps: {:.0} grains, up to {:.0} steps: up to ~{:.1} core-hours (~{:.1} h on {} \
+         rank(s))",
+        grains,
+        steps,
+        grains * steps / 4e6 / 3600.0,
+        grains * steps / 4e6 / 3600.0 / f64::from(request.ranks),
+        request.ranks
+    ));
+    let staged = StagedDir::create(&request.out)?;
+    let result = outputs::run(
+        &spec,
+        &traj,
+        &lammps,
+        request.ranks,
+        request.min_speed_ratio,
+        staged.path(),
+        progress,
+    );
+    progress.finish();
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => return Err(keep_failed_run(staged.path(), &request.out, e)),
+    };
+    let out = staged.commit()?;
+    Ok(LammpsOutcome { summary, out })
+}
+
+/// A run that failed keeps its LAMMPS files (inputs, logs, dumps: hours of a cluster) in
+/// `OUT.failed/`, beside where its output would have been, and the error says so; the
+/// output folder itself is not written.
+fn keep_failed_run(staged: &Path, out: &Path, e: LammpsError) -> LammpsError {
+    let files = staged.join("lammps");
+    if !files.join("in.settle").is_file() {
+        return e;
+    }
+    let mut name = out
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(".failed");
+    let kept = out.with_file_name(name);
+    // Only an earlier failed run of ours is replaced.
+    if kept.join("in.settle").is_file() {
+        let _ = std::fs::remove_dir_all(&kept);
+    }
+    if !kept.exists() && std::fs::rename(&files, &kept).is_ok() {
+        return e.map_message(|mut message| {
+            message += &format!(
+                "\nthe run's LAMMPS files (inputs, logs, data, dumps) are kept in {}",
+                kept.display()
+            );
+            // The log the message names moved with them.
+            message.replace(&files.display().to_string(), &kept.display().to_string())
+        });
+    }
+    e
+}
+
+/// A finished `dem lammps` run to read back again (another speed rule, or a run made
+/// elsewhere).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LammpsReadRequest {
+    /// A run's folder (`dem lammps --out`), or its `lammps/` folder.
+    pub run: PathBuf,
+    /// The speed rule of the added mass, 1. Default 0.3.
+    pub min_speed_ratio: f64,
+    /// Output directory (apart from the run).
+    pub out: PathBuf,
+}
+
+impl Default for LammpsReadRequest {
+    fn default() -> Self {
+        Self {
+            run: PathBuf::new(),
+            min_speed_ratio: 0.3,
+            out: PathBuf::new(),
+        }
+    }
+}
+
+impl LammpsReadRequest {
+    /// Refuse an output that is the run, holds it or lies in it (writing it would replace
+    /// the run's dumps).
+    pub fn validate(&self) -> Result<(), LammpsError> {
+        // A path that does not exist yet: its parent's real path and its name (a link in the
+        // path must not hide that it points into the run).
+        let canon = |p: &Path| {
+            std::fs::canonicalize(p).unwrap_or_else(|_| {
+                let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+                match (abs.parent(), abs.file_name()) {
+                    (Some(d), Some(n)) => std::fs::canonicalize(d)
+                        .map(|d| d.join(n))
+                        .unwrap_or(abs.clone()),
+                    _ => abs.clone(),
+                }
+            })
+        };
+        let (run, out) = (canon(&self.run), canon(&self.out));
+        if run.starts_with(&out) || out.starts_with(&run) {
+            return Err(LammpsError::input(format!(
+                "--out {} is the run {} or holds it or lies in it (allowed: a folder apart from the \
+                 run: writing it would replace the run's files)",
+                self.out.display(),
+                self.run.display()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Read a finished run's dumps back into a new folder.
+pub fn read(
+    request: &LammpsReadRequest,
+    progress: &dyn Progress,
+) -> Result<LammpsOutcome, LammpsError> {
+    let dir = if request.run.join("run.toml").is_file() {
+        request.run.clone()
+    } else {
+        request.run.join("lammps")
+    };
+    request.validate()?;
+    let staged = StagedDir::create(&request.out)?;
+    let summary = outputs::analyse(&dir, staged.path(), request.min_speed_ratio, progress);
+    progress.finish();
+    let summary = summary?;
+    let out = staged.commit()?;
+    Ok(LammpsOutcome { summary, out })
+}

@@ -1,0 +1,108 @@
+//! `dem lammps` and `dem lammps-read` as library calls: their refusals before anything runs,
+//! a LAMMPS that fails keeping its files, a read-back that refuses its own run as output.
+
+use sandjumper_lammps::run::{self, LammpsReadRequest, LammpsRequest};
+use sandjumper_lammps::spec::Preset;
+use sandjumper_output::{Blame, Blamed, Silent};
+
+fn small(out: &std::path::Path) -> LammpsRequest {
+    LammpsRequest {
+        preset: Preset::Small,
+        speed_m_s: Some(0.1),
+        out: out.to_path_buf(),
+        ..LammpsRequest::default()
+    }
+}
+
+#[test]
+fn bad_values_and_a_missing_lammps_are_refused_before_anything_runs() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("run");
+    let cases = [
+        (
+            LammpsRequest {
+                lmp: Some("/nonexistent/lmp".into()),
+                ..small(&out)
+            },
+            "pip install",
+        ),
+        (
+            LammpsRequest {
+                phi: Some(0.7),
+                ..small(&out)
+            },
+            "0.7",
+        ),
+        (
+            LammpsRequest {
+                speed_m_s: None,
+                ..small(&out)
+            },
+            "--speed",
+        ),
+        (
+            LammpsRequest {
+                depth_m: 0.04,
+                ..small(&out)
+            },
+            "5 grain diameters above the floor",
+        ),
+    ];
+    for (request, why) in cases {
+        let e = run::run(&request, &Silent).unwrap_err();
+        assert_eq!(e.blame(), Blame::Input, "{e}");
+        assert!(e.to_string().contains(why), "{e}");
+        assert!(!out.exists());
+    }
+    assert!(small(&out).validate().is_ok());
+}
+
+#[test]
+fn a_failed_lammps_keeps_its_files_beside_the_output() {
+    let work = tempfile::tempdir().unwrap();
+    let fake = work.path().join("lmp");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\nif [ \"$1\" = \"-h\" ]; then\n  printf '\\nLarge-scale Atomic/Molecular \
+         Massively Parallel Simulator - 1 Jan 2099 - fake\\n\\nInstalled packages:\\n\\nGRANULAR\\n\\n\
+         List of individual style options\\n'\n  exit 0\nfi\necho 'ERROR: this LAMMPS fails every \
+         run (fake.cpp:1)'\nexit 1\n",
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let out = work.path().join("run");
+    let e = run::run(
+        &LammpsRequest {
+            ranks: 1,
+            lmp: Some(fake),
+            ..small(&out)
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Internal, "{e}");
+    assert!(e.to_string().contains("run.failed"), "{e}");
+    assert!(work.path().join("run.failed/in.settle").is_file());
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_read_back_refuses_an_output_inside_its_run_and_a_folder_without_one() {
+    let work = tempfile::tempdir().unwrap();
+    let inside = LammpsReadRequest {
+        run: work.path().to_path_buf(),
+        out: work.path().join("again"),
+        ..LammpsReadRequest::default()
+    };
+    let e = run::read(&inside, &Silent).unwrap_err();
+    assert!(e.to_string().contains("or holds it or lies in it"), "{e}");
+    let nothing = LammpsReadRequest {
+        run: work.path().join("empty"),
+        out: work.path().join("out"),
+        ..LammpsReadRequest::default()
+    };
+    let e = run::read(&nothing, &Silent).unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert!(e.to_string().contains("run.toml"), "{e}");
+}
