@@ -4,6 +4,7 @@
 pub use sandjumper_output::error::*;
 
 pub mod args;
+pub mod progress;
 pub mod resolve;
 pub mod stroke;
 
