@@ -10,6 +10,7 @@ use clap::{Args, ValueEnum};
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
 use super::piv_synthetic::SyntheticRequest;
+pub use super::piv_synthetic::cone_displacement;
 use super::preprocess::Preprocess;
 use super::run::PivRequest;
 use crate::command::args::{parse_number, parse_positive};
