@@ -2,7 +2,7 @@
 //! and added mass; `sandjumper piv-synthetic`: grain images with a known motion. The runs are
 //! `sandjumper_flow::run` and `sandjumper_flow::piv_synthetic`; this is their face.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use clap::{Args, ValueEnum};
@@ -340,14 +340,32 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 pub fn analyse(a: &PivArgs) -> Result<Analysed, CliError> {
     let progress = HeldNotes::default();
     let outcome = super::run::run(&a.request()?, &progress).map_err(cli_error)?;
-    if let Some(dir) = &a.out {
-        let dir = outcome.write(dir).map_err(cli_error)?;
+    finish(
+        &progress,
+        a.out.as_deref(),
+        |dir| outcome.write(dir),
+        || outcome.summary_json(),
+        outcome.to_string(),
+    )
+}
+
+/// An analysis as the command line ends it: `--out` written (then `wrote DIR`), the held
+/// notes printed, and its JSON and human summary returned.
+pub fn finish<E: Blamed>(
+    progress: &HeldNotes,
+    out: Option<&Path>,
+    write: impl FnOnce(&Path) -> Result<PathBuf, E>,
+    json: impl FnOnce() -> Result<String, E>,
+    human: String,
+) -> Result<Analysed, CliError> {
+    if let Some(dir) = out {
+        let dir = write(dir).map_err(cli_error)?;
         eprintln!("wrote {}", dir.display());
     }
     progress.release();
     Ok(Analysed {
-        json: outcome.summary_json().map_err(cli_error)?,
-        human: outcome.to_string(),
+        json: json().map_err(cli_error)?,
+        human,
     })
 }
 

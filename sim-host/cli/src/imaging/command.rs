@@ -11,7 +11,7 @@ use super::camera_scale::ScaleRequest;
 use super::frame::Roi;
 use super::run::TrackRequest;
 use crate::command::args::parse_positive_as;
-use crate::flow::command::{HeldNotes, cli_error};
+use crate::flow::command::{HeldNotes, cli_error, finish};
 use sandjumper_output::{Analysed, CliError};
 
 fn parse_m_per_px(s: &str) -> Result<f64, String> {
@@ -147,15 +147,13 @@ pub fn run(a: &TrackArgs) -> Result<(), CliError> {
 pub fn analyse(a: &TrackArgs) -> Result<Analysed, CliError> {
     let progress = HeldNotes::default();
     let outcome = super::run::run(&a.request(), &progress).map_err(cli_error)?;
-    if let Some(dir) = &a.out {
-        let dir = outcome.write(dir).map_err(cli_error)?;
-        eprintln!("wrote {}", dir.display());
-    }
-    progress.release();
-    Ok(Analysed {
-        json: outcome.summary_json().map_err(cli_error)?,
-        human: outcome.to_string(),
-    })
+    finish(
+        &progress,
+        a.out.as_deref(),
+        |dir| outcome.write(dir),
+        || outcome.summary_json(),
+        outcome.to_string(),
+    )
 }
 
 /// Run `sandjumper camera-scale`.
