@@ -264,6 +264,19 @@ pub fn foot_depth_m(poly: &[(f64, f64)], cal: &Calibration) -> f64 {
     -cal.h_m(lowest)
 }
 
+/// The model's added mass (the paper's eq. 6, preset at packing fraction `phi`) for a foot of
+/// radius `r_m` (m) at depth `depth_m` (m), kg: the preset's `C` (the 38 mm foot's) scaled with
+/// the foot's area, as the stiffnesses are. What the PIV added mass is drawn beside.
+pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
+    use sandjumper_model::ground::{GroundLaw, Sand};
+    use sandjumper_model::params::{ModelName, Params};
+    let mut params = Params::preset(phi).map_err(|e| e.to_string())?;
+    params.sand.added_mass_c_m2 *= (r_m / params.sand.reference_foot_radius_m).powi(2);
+    params.robot.foot_radius_m = r_m;
+    let law = GroundLaw::resolve(ModelName::Eq4, &params.model);
+    Ok(Sand::new(&params, law).added_mass(depth_m))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
