@@ -10,7 +10,7 @@ use clap::Parser;
 use hil_common::{params, sil};
 use sandjumper_acqlog::{AcqLog, Column, LogMetadata, LogRow, ReadOptions};
 use sandjumper_cli::cli::{Cli, EXIT_BAD_INPUT, execute};
-use sandjumper_cli::imaging::command::log_clock;
+use sandjumper_imaging::track::log_clock;
 use sandjumper_core::trajectory::JumpKind;
 use sandjumper_imaging::render::{CameraModel, write_png};
 use sandjumper_imaging::sequence::ImageSequence;
@@ -223,8 +223,8 @@ fn the_scale_comes_back_from_a_simulated_slow_move_against_the_encoder() {
     let log_path = dir.path().join("move.csv");
     log.write_file(&log_path).unwrap();
     let seq = ImageSequence::open(frames.to_str().unwrap()).unwrap();
-    let (fit, n, flagged) =
-        sandjumper_cli::imaging::command::scale_from(&seq, &log, 79.0, None).unwrap();
+    let scaled = sandjumper_imaging::camera_scale::scale_from(&seq, &log, 79.0, None).unwrap();
+    let (fit, n, flagged) = (scaled.fit, scaled.frames, scaled.frames_flagged);
     assert_eq!((n, flagged), (300, 0));
     assert!(fit.direction_ok);
     assert!(fit.r_squared > 0.999_999, "{fit:?}");
