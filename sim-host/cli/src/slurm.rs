@@ -9,9 +9,10 @@ use std::path::Path;
 
 use clap::Args;
 
+use crate::command::progress::Bars;
 use crate::study::cli_error;
 use sandjumper_output::CliError;
-use sandjumper_slurm::{self as slurm, JobScript, QueueOptions, quote};
+use sandjumper_slurm::{self as slurm, QueueOptions};
 
 /// The queue options every submitting command has (each requires its `--slurm`).
 #[derive(Debug, Clone, Args)]
@@ -56,9 +57,8 @@ pub struct JobArgs {
 }
 
 /// Submit this very command (the words `command`, its arguments without the Slurm options,
-/// `--out` and `--ranks`) as one job of `tasks` tasks writing `out`; wait for it (unless
-/// told not to) and check that it succeeded and wrote `expect` into `out`. A job that
-/// failed, timed out or was cancelled is reported with the tail of its log, exit status 1.
+/// `--out` and `--ranks`) as one job of `tasks` tasks writing `out`
+/// ([`sandjumper_slurm::submit_command`]); without waiting, print the job's id.
 pub fn submit_job(
     name: &str,
     command: &[&str],
@@ -67,55 +67,19 @@ pub fn submit_job(
     expect: &[&str],
     s: &JobArgs,
 ) -> Result<(), CliError> {
-    slurm::tool("sbatch", "--slurm").map_err(cli_error)?;
-    let dir = slurm::fresh_job_dir(out).map_err(cli_error)?;
-    let (exe, cwd) = slurm::program_and_cwd().map_err(cli_error)?;
-    let argv = slurm::arguments().map_err(cli_error)?;
-    let args = slurm::passed_on(
-        &argv,
+    let job = slurm::CommandJob {
+        name,
         command,
-        &["--out", "--ranks", "--slurm-partition", "--slurm-time"],
-        &["--slurm", "--slurm-no-wait"],
-    );
-    let out_abs = std::path::absolute(out)
-        .map_err(|e| CliError::internal(format!("{}: {e}", out.display())))?;
-    let script = JobScript {
-        name: name.to_string(),
-        shape: vec![format!("--ntasks={tasks}")],
-        log: dir.join("logs").join("job.out"),
-        cwd,
+        tasks,
+        out,
+        expect,
         queue: s.queue.options(),
-        command: format!(
-            "exec {} {} {} --ranks \"${{SLURM_NTASKS:-{tasks}}}\" --out {}\n",
-            quote(&exe.to_string_lossy()),
-            command.join(" "),
-            args.iter().map(|a| quote(a)).collect::<Vec<_>>().join(" "),
-            quote(&out_abs.to_string_lossy())
-        ),
     };
-    let job = slurm::submit(&dir, &script).map_err(cli_error)?;
-    eprintln!(
-        "submitted Slurm job {} ({tasks} task(s)); script and log in {}",
-        job.id,
-        dir.display()
-    );
-    if s.queue.slurm_no_wait {
-        println!("{}", job.id);
+    if let slurm::CommandJobOutcome::Queued { id } =
+        slurm::submit_command(&job, &Bars::new()).map_err(cli_error)?
+    {
+        println!("{id}");
         eprintln!("when it is done its output is in {}", out.display());
-        return Ok(());
     }
-    job.wait().map_err(cli_error)?;
-    let complete = expect.iter().all(|f| out.join(f).is_file());
-    if let Some((st, code)) = job.unsuccessful(None, complete) {
-        let log = dir.join("logs").join("job.out");
-        return Err(CliError::internal(format!(
-            "Slurm job {}: {st}, exit code {code}, output {}; log {}:\n    {}",
-            job.id,
-            if complete { "written" } else { "missing" },
-            log.display(),
-            slurm::log_tail(&log, 8)
-        )));
-    }
-    eprintln!("Slurm job {} done: {}", job.id, out.display());
     Ok(())
 }

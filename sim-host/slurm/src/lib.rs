@@ -410,3 +410,101 @@ mod tests {
         );
     }
 }
+
+/// One job that runs this very program's command again on the cluster: the words
+/// [`CommandJob::command`] (e.g. `["dem", "lammps"]`), this process's own arguments without
+/// the Slurm options, `--out` and `--ranks`, then `--ranks` and `--out`.
+#[derive(Debug, Clone)]
+pub struct CommandJob<'a> {
+    /// The job's name in the queue.
+    pub name: &'a str,
+    /// The command's words.
+    pub command: &'a [&'a str],
+    /// Tasks (MPI ranks) of the job.
+    pub tasks: u32,
+    /// The output folder the job writes.
+    pub out: &'a Path,
+    /// Files the job must have written into `out` for it to count as done.
+    pub expect: &'a [&'a str],
+    /// Partition, time limit, waiting.
+    pub queue: QueueOptions,
+}
+
+/// What a submitted [`CommandJob`] came to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CommandJobOutcome {
+    /// Submitted without waiting ([`QueueOptions::no_wait`]): the job's id.
+    Queued {
+        /// Slurm's job id.
+        id: String,
+    },
+    /// The job ran and wrote what was expected.
+    Done {
+        /// Slurm's job id.
+        id: String,
+    },
+}
+
+/// Submit `job` (see [`CommandJob`]), wait for it unless told not to, and check that it
+/// succeeded and wrote every expected file. A job that failed, timed out or was cancelled is
+/// an internal error with the tail of its log. Where the job's script and log are, and when
+/// it is done, are `progress` notes.
+pub fn submit_command(
+    job: &CommandJob,
+    progress: &dyn sandjumper_output::Progress,
+) -> Result<CommandJobOutcome, SlurmError> {
+    tool("sbatch", "--slurm")?;
+    let dir = fresh_job_dir(job.out)?;
+    let (exe, cwd) = program_and_cwd()?;
+    let argv = arguments()?;
+    let args = passed_on(
+        &argv,
+        job.command,
+        &["--out", "--ranks", "--slurm-partition", "--slurm-time"],
+        &["--slurm", "--slurm-no-wait"],
+    );
+    let out_abs = std::path::absolute(job.out)
+        .map_err(|e| SlurmError::Internal(format!("{}: {e}", job.out.display())))?;
+    let tasks = job.tasks;
+    let script = JobScript {
+        name: job.name.to_string(),
+        shape: vec![format!("--ntasks={tasks}")],
+        log: dir.join("logs").join("job.out"),
+        cwd,
+        queue: job.queue.clone(),
+        command: format!(
+            "exec {} {} {} --ranks \"${{SLURM_NTASKS:-{tasks}}}\" --out {}\n",
+            quote(&exe.to_string_lossy()),
+            job.command.join(" "),
+            args.iter().map(|a| quote(a)).collect::<Vec<_>>().join(" "),
+            quote(&out_abs.to_string_lossy())
+        ),
+    };
+    let submitted = submit(&dir, &script)?;
+    progress.note(&format!(
+        "submitted Slurm job {} ({tasks} task(s)); script and log in {}",
+        submitted.id,
+        dir.display()
+    ));
+    if job.queue.no_wait {
+        return Ok(CommandJobOutcome::Queued { id: submitted.id });
+    }
+    submitted.wait()?;
+    let complete = job.expect.iter().all(|f| job.out.join(f).is_file());
+    if let Some((st, code)) = submitted.unsuccessful(None, complete) {
+        let log = dir.join("logs").join("job.out");
+        return Err(SlurmError::Internal(format!(
+            "Slurm job {}: {st}, exit code {code}, output {}; log {}:\n    {}",
+            submitted.id,
+            if complete { "written" } else { "missing" },
+            log.display(),
+            log_tail(&log, 8)
+        )));
+    }
+    progress.note(&format!(
+        "Slurm job {} done: {}",
+        submitted.id,
+        job.out.display()
+    ));
+    Ok(CommandJobOutcome::Done { id: submitted.id })
+}

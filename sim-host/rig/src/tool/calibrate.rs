@@ -10,44 +10,17 @@
 //! `codes_per_newton = 6.48` (DAC codes per newton of force command).
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use sandjumper_core::reset::ResetCause;
 use sandjumper_core::{Command, DriveCalibration};
 use sandjumper_output::Progress;
 
+pub use super::drive_calibration::{read_calibration, send_calibration};
 use super::target::Target;
 use crate::error::RigError;
 use crate::hil::rig_model::RigModelConfig;
-use crate::protocol::link::RigLink;
 use crate::protocol::query_status;
-
-/// Read and check a calibration file: the file, the key and what is allowed on error.
-pub fn read_calibration(path: &Path) -> Result<DriveCalibration, RigError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        RigError::input(format!(
-            "cannot read the drive calibration `{}`: {e}",
-            path.display()
-        ))
-    })?;
-    let cal: DriveCalibration = toml::from_str(&text).map_err(|e| {
-        RigError::input(format!(
-            "drive calibration `{}`: {e} (allowed: zero_code = CODE, codes_per_newton = X)",
-            path.display()
-        ))
-    })?;
-    cal.validate()
-        .map_err(|e| RigError::input(format!("drive calibration `{}`: {e}", path.display())))?;
-    Ok(cal)
-}
-
-/// Send `cal` to the controller (it refuses while the drive is enabled).
-pub fn send_calibration(link: &mut dyn RigLink, cal: DriveCalibration) -> Result<(), RigError> {
-    let name = link.name();
-    link.command(&Command::SetDriveCalibration(cal))
-        .map_err(|e| RigError::link(&name, "setting the drive calibration", e))?;
-    Ok(())
-}
 
 /// `rig calibrate-drive`: the codes to send (and save).
 #[derive(Clone, Debug, PartialEq)]

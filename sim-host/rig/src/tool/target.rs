@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::calibrate::{read_calibration, send_calibration};
+use super::drive_calibration::{read_calibration, send_calibration};
 use crate::error::RigError;
 use crate::firmware_image::EMULATED_ELF;
 use crate::hil::open::{LinkArg, open_link};

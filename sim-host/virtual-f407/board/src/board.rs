@@ -121,7 +121,7 @@ impl F407 {
 
     /// Counts a change of PE8's level since the last look (see [`F407::heartbeat_edges`]).
     pub fn note_heartbeat(&mut self) {
-        let high = crate::rig::high(&mut self.part, crate::rig::PORT_E, 8);
+        let high = crate::pins::high(&mut self.part, crate::pins::PORT_E, 8);
         if high != self.heartbeat_high {
             self.heartbeat_high = high;
             self.heartbeat_edges += 1;

@@ -2,6 +2,7 @@
 pub mod board;
 pub mod encoder;
 pub mod models;
+pub mod pins;
 pub mod rig;
 pub mod rtt;
 pub mod run;

@@ -21,16 +21,7 @@ use sandjumper_model::plant::{Plant, PlantState};
 use crate::board::F407;
 use crate::models::dac::VDDA_V;
 
-/// Port indices (rigless's `PORTS` order).
-pub const PORT_A: usize = 0;
-/// Port B.
-pub const PORT_B: usize = 1;
-/// Port C.
-pub const PORT_C: usize = 2;
-/// Port D.
-pub const PORT_D: usize = 3;
-/// Port E.
-pub const PORT_E: usize = 4;
+pub use crate::pins::{PORT_A, PORT_B, PORT_C, PORT_D, PORT_E, high};
 
 /// The enable gate's monostable period, ns (docs/firmware.md: a 74HC123 with ~1 ms).
 pub const MONOSTABLE_NS: u64 = 1_000_000;
@@ -118,12 +109,6 @@ impl Outputs {
             && self.blower_dac_v < 0.01
             && self.shaker_duty == 0.0
     }
-}
-
-/// `pin` of port `port` reads high (its electrical level: driven, or its pull).
-pub fn high(part: &mut Stm32f427, port: usize, pin: u8) -> bool {
-    let (gpio, regs) = part.port(port);
-    gpio.level(Pin::new(pin).expect("pin 0..15"), regs) == Level::High
 }
 
 /// TIM3 channel 1's PWM duty (the shaker), read off the timer as a scope would see its pin.
