@@ -2,7 +2,7 @@
 //! command line's, JSON on stdout.
 
 use sandjumper_dem::intrude_run::Episode;
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
+use sandjumper_output::CliError;
 
 use crate::command::args::parse_number;
 
@@ -31,17 +31,7 @@ impl From<EpisodeChoice> for Episode {
     }
 }
 
-/// A library error as the command line's error: its message, and exit status 2 for bad
-/// input, 1 otherwise.
-pub fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
-    }
-}
+pub use crate::command::progress::cli_error;
 
 /// Print `value` as pretty JSON on stdout.
 pub fn print_json(value: &impl serde::Serialize) -> Result<(), CliError> {

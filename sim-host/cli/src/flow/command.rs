@@ -15,21 +15,9 @@ use super::preprocess::Preprocess;
 use super::run::PivRequest;
 use crate::command::args::{parse_number, parse_positive};
 use crate::command::progress::Bars;
-use sandjumper_output::{
-    Analysed, Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL, Progress,
-};
+use sandjumper_output::{Analysed, Blamed, CliError, Progress};
 
-/// A library error as the command line reports it: its message, exit status 2 when it is the
-/// input's fault and 1 otherwise.
-pub fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
-    }
-}
+pub use crate::command::progress::cli_error;
 
 /// The command line's bars, with the run's notes held back until [`HeldNotes::release`]: the
 /// analyses print `wrote DIR` (or their result) before their notes, as they always did.
