@@ -9,10 +9,10 @@
 //! [`figure`] (the stroke and the jump beside the paper's best).
 //!
 //! The whole command is one call: an [`OptimizeRequest`] (its `Default` holds the command
-//! line's defaults), [`run`] (or [`run_with_board`], with the F407 board's runs), an
-//! [`OptimizeOutcome`] (`summary.json` when serialised, the human summary when displayed,
-//! the folder it writes) or an [`OptimizeError`]. `examples/stroke_search.rs` is a small
-//! search.
+//! line's defaults), [`run`] (the F407 link on the virtual board; or [`run_with_board`],
+//! with another board's runs), an [`OptimizeOutcome`] (`summary.json` when serialised, the
+//! human summary when displayed, the folder it writes) or an [`OptimizeError`].
+//! `examples/stroke_search.rs` is a small search.
 
 pub mod checkpoint;
 pub mod error;
@@ -31,4 +31,4 @@ pub use error::OptimizeError;
 pub use outcome::OptimizeOutcome;
 pub use request::{OptimizeRequest, checkpoint_path};
 pub use stages::{run, run_with_board};
-pub use verify::{LinkRun, NoBoard, StrokeOnBoard};
+pub use verify::{LinkRun, NoBoard, StrokeOnBoard, VirtualBoard};

@@ -22,17 +22,18 @@ use crate::paper_sweep::{PaperGrid, PaperStroke, PaperSweep, SweptPoint, sweep};
 use crate::refine::{RefineSettings, refine};
 use crate::request::{OptimizeRequest, Setup, checkpoint_path};
 use crate::search::{SearchOutcome, SearchSettings, Start, search};
-use crate::verify::{LinkRun, NoBoard, StrokeOnBoard, run_through};
+use crate::verify::{LinkRun, StrokeOnBoard, VirtualBoard, run_through};
 
 /// Run the search `request` asks for, reporting to `progress`, and write its folder
-/// (`request.out`). The F407 link, if asked, is skipped ([`NoBoard`]); give a board with
-/// [`run_with_board`]. A search killed mid-way leaves its checkpoint beside the folder
+/// (`request.out`). The F407 link, if asked, runs on the virtual F407 board
+/// ([`VirtualBoard`]; skipped, with the reason, when it is not there); give another board
+/// with [`run_with_board`]. A search killed mid-way leaves its checkpoint beside the folder
 /// ([`checkpoint_path`]): the same request again resumes it to the same answer.
 pub fn run(
     request: &OptimizeRequest,
     progress: &dyn Progress,
 ) -> Result<OptimizeOutcome, OptimizeError> {
-    run_with_board(request, progress, &NoBoard)
+    run_with_board(request, progress, &VirtualBoard)
 }
 
 /// [`run`], with the F407 link's runs made by `board`.

@@ -9,10 +9,13 @@ use std::path::Path;
 use serde::Serialize;
 
 use sandjumper_model::params::{ModelName, Params};
+use sandjumper_output::Silent;
 use sandjumper_rig::hil::open::{LinkArg, open_link};
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::hil::run::{HilSpec, run_jump};
 use sandjumper_rig::stroke_table::StrokeTable;
+use sandjumper_rig::tool::replay::{ReplayOutcome, ReplayRequest, run as replay_run};
+use sandjumper_rig::tool::target::Target;
 
 use crate::evaluate::Objective;
 use crate::request::OptimizeRequest;
@@ -130,7 +133,8 @@ pub fn run_through(
     })
 }
 
-/// The F407 release binary on the virtual board, as [`crate::run_with_board`] reaches it:
+/// The F407 release binary on the virtual board, as [`crate::run`] ([`VirtualBoard`]) and
+/// [`crate::run_with_board`] reach it:
 /// `table` replayed there (free-running on the board's own tick, not in lockstep) for the
 /// request's model and parameters, its run as a [`LinkRun`] (skipped, with the reason, when
 /// the board or the binary is not there).
@@ -145,7 +149,47 @@ impl<F: Fn(&OptimizeRequest, &StrokeTable) -> LinkRun> StrokeOnBoard for F {
     }
 }
 
-/// No board: every F407 run is skipped, saying so ([`crate::run`] without a board).
+/// The virtual F407 board ([`crate::run`]'s): `table` replayed on the F407 release binary as
+/// `rig replay --stroke --link f407` replays it (the board runs free on its own tick, not in
+/// lockstep), for the request's model and parameters. The board's program and the firmware
+/// are the rig's defaults, relative to the current directory
+/// (sim-host/virtual-f407/target/release/virtual-f407 and the F407 release ELF). Skipped, with
+/// the reason, when the board or the binary is not there, or the replay fails.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VirtualBoard;
+
+impl StrokeOnBoard for VirtualBoard {
+    fn replay(&self, request: &OptimizeRequest, table: &StrokeTable) -> LinkRun {
+        let replay = ReplayRequest {
+            model: request.model,
+            params: request.params.clone(),
+            ..ReplayRequest::stroke(Target::on(LinkArg::F407), table.clone(), "stroke.csv")
+        };
+        match replay_run(&replay, &Silent) {
+            Ok(o) => board_run(&o),
+            Err(e) => LinkRun::skipped(&LinkArg::F407, e.to_string()),
+        }
+    }
+}
+
+/// A replay on the virtual board as a [`LinkRun`].
+fn board_run(o: &ReplayOutcome) -> LinkRun {
+    LinkRun {
+        link: LinkArg::F407.to_string(),
+        skipped: None,
+        jump_height_m: o.simulated_jump_height_m,
+        final_jump_height_m: None,
+        faults: o.fault_names().into_iter().map(str::to_string).collect(),
+        tracking_error_max_m: Some(o.tracking_error_max_m),
+        saturated_periods: None,
+        lifted_off: o.simulated_jump_height_m.is_some_and(|h| h > 0.0),
+        peak_power_w: None,
+        work_j: None,
+    }
+}
+
+/// No board: every F407 run is skipped, saying so (a run given it with
+/// [`crate::run_with_board`], as tests do).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoBoard;
 
@@ -153,7 +197,7 @@ impl StrokeOnBoard for NoBoard {
     fn replay(&self, _: &OptimizeRequest, _: &StrokeTable) -> LinkRun {
         LinkRun::skipped(
             &LinkArg::F407,
-            "no virtual board was given to this run (sandjumper_optimize::run_with_board)".into(),
+            "no virtual board was given to this run (sandjumper_optimize::NoBoard)".into(),
         )
     }
 }

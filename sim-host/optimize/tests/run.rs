@@ -184,7 +184,7 @@ fn ranked_through_sil_refined_and_f407_through_the_board_given() {
         .filter(|v| v.is_finite())
         .collect();
     assert!(values.windows(2).all(|w| w[0] >= w[1]), "{values:?}");
-    // Without a board (`run`), an F407 run is skipped, saying why.
+    // Without a board (`NoBoard`), an F407 run is skipped, saying why.
     let why = NoBoard
         .replay(&request, &o.stroke)
         .skipped

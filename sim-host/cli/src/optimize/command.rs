@@ -1,8 +1,9 @@
 //! `sandjumper optimize`: search for the stroke that makes the robot jump highest (or best by
 //! another objective) within the rig's limits, compare it with the best of the paper's
 //! strokes, re-run both through the real controller, and write stroke.csv for `jump`, `hil`
-//! and `rig replay --stroke`. The search is [`sandjumper_optimize::run_with_board`]; this
-//! module maps the arguments to its request, prints its outcome and supplies the F407 board.
+//! and `rig replay --stroke`. The search is [`sandjumper_optimize::run`] (its F407 runs on the
+//! library's virtual board); this module maps the arguments to its request and prints its
+//! outcome.
 
 use std::path::PathBuf;
 
@@ -11,12 +12,10 @@ use clap::{Args, ValueEnum};
 use crate::command::args::{ModelArg, ParamSource, parse_phi};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use sandjumper_model::params::ModelName;
+use sandjumper_optimize::OptimizeRequest;
 use sandjumper_optimize::evaluate::Objective;
-use sandjumper_optimize::{LinkRun, OptimizeRequest};
 use sandjumper_output::{Blame, Blamed, CliError};
 use sandjumper_rig::hil::open::LinkArg;
-use sandjumper_rig::stroke_table::StrokeTable;
 
 /// The objective on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -223,83 +222,12 @@ fn cli_error<E: Blamed>(e: E) -> CliError {
 /// Run `optimize`: the search, then its summary on stdout (JSON with `--json`).
 pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
     let request = request(a)?;
-    let board = |_: &OptimizeRequest, table: &StrokeTable| run_on_the_virtual_board(a, table);
     let bars = Bars::new().with_notes(!a.json);
-    let outcome =
-        sandjumper_optimize::run_with_board(&request, &bars, &board).map_err(cli_error)?;
+    let outcome = sandjumper_optimize::run(&request, &bars).map_err(cli_error)?;
     if a.json {
         println!("{}", outcome.json().map_err(cli_error)?);
     } else {
         print!("{outcome}");
     }
     Ok(())
-}
-
-/// `table` through the F407 release binary on the virtual board: `rig replay --stroke
-/// --link f407` run as its own process (the board runs free on its own tick, not in
-/// lockstep), its summary read back. Skipped, with the reason, when the board or the binary
-/// is not there.
-fn run_on_the_virtual_board(a: &OptimizeArgs, table: &StrokeTable) -> LinkRun {
-    let skipped = |why: String| LinkRun::skipped(&LinkArg::F407, why);
-    let scratch = match tempfile::tempdir() {
-        Ok(d) => d,
-        Err(e) => return skipped(format!("no scratch directory: {e}")),
-    };
-    let stroke = scratch.path().join("stroke.csv");
-    if let Err(e) = std::fs::write(&stroke, table.to_csv()) {
-        return skipped(format!("cannot write {}: {e}", stroke.display()));
-    }
-    let out = scratch.path().join("f407");
-    let exe = match std::env::current_exe() {
-        Ok(p) => p,
-        Err(e) => return skipped(format!("cannot find this program: {e}")),
-    };
-    let mut cmd = std::process::Command::new(exe);
-    cmd.args(["rig", "replay", "--link", "f407", "--json", "--stroke"])
-        .arg(&stroke)
-        .arg("--out")
-        .arg(&out)
-        .args(["--model", ModelName::from(a.model).as_str()])
-        .args(["--phi", &a.phi.to_string()]);
-    if let Some(p) = &a.source.params {
-        cmd.arg("--params").arg(p);
-    }
-    let output = match cmd.output() {
-        Ok(o) => o,
-        Err(e) => return skipped(format!("cannot run rig replay: {e}")),
-    };
-    let summary: Option<serde_json::Value> = std::fs::read_to_string(out.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok());
-    let Some(s) = summary else {
-        let err = String::from_utf8_lossy(&output.stderr);
-        return skipped(
-            err.lines()
-                .find(|l| l.starts_with("error"))
-                .unwrap_or("rig replay --link f407 wrote no summary")
-                .trim_start_matches("error: ")
-                .to_string(),
-        );
-    };
-    LinkRun {
-        link: "f407".into(),
-        skipped: None,
-        jump_height_m: s["simulated_jump_height_m"].as_f64(),
-        final_jump_height_m: None,
-        faults: s["faults"]
-            .as_array()
-            .map(|f| {
-                f.iter()
-                    .filter_map(|x| x["name"].as_str().map(str::to_string))
-                    .collect()
-            })
-            .unwrap_or_default(),
-        tracking_error_max_m: s["tracking_error_max_m"].as_f64(),
-        saturated_periods: None,
-        lifted_off: s["simulated_jump_height_m"]
-            .as_f64()
-            .is_some_and(|h| h > 0.0),
-        peak_power_w: None,
-        work_j: None,
-    }
 }
