@@ -137,10 +137,9 @@ fn err(e: impl std::fmt::Display) -> DemError {
     DemError::internal(e.to_string())
 }
 
-/// The model's sand (eq. 4, preset at `phi`) under a foot of radius `r_m`: its
-/// stiffnesses scale with the foot's area, as the model's do for any foot, and so does eq.
-/// 6's `C` (an area calibrated for the paper's 38 mm foot, so a small foot is not compared
-/// with the big foot's `pi C s`).
+/// The model's sand (eq. 4, preset at `phi`) under a foot of radius `r_m`, for its
+/// penetration force: its stiffnesses scale with the foot's area, as the model's do for any
+/// foot, and so does eq. 6's `C` (as [`model_added_mass`] scales it).
 fn model_sand(phi: f64, r_m: f64) -> Result<sandjumper_model::ground::Sand, String> {
     let mut params = sandjumper_model::params::Params::preset(phi).map_err(|e| e.to_string())?;
     let reference = params.sand.reference_foot_radius_m;
@@ -156,10 +155,9 @@ fn model_sand(phi: f64, r_m: f64) -> Result<sandjumper_model::ground::Sand, Stri
 }
 
 /// The model's added mass (eq. 6 preset at `phi`) for a foot of radius `r_m` at the episode
-/// depth `depth_m`, kg (`C` scaled with the foot's area, as the stiffnesses are).
-pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String> {
-    Ok(model_sand(phi, r_m)?.added_mass(depth_m))
-}
+/// depth `depth_m`, kg (`C` scaled with the foot's area, as the stiffnesses are): the flow
+/// crate's, which PIV's added mass is drawn beside.
+pub use sandjumper_flow::momentum::model_added_mass;
 
 /// The model's penetration force `F_p(z)` (eq. 4's cone law, preset at `phi`) for a foot of
 /// radius `r_m` at depth `depth_m`, N.

@@ -1,5 +1,5 @@
-//! The comparison's rows: one per DEM run (from its typed summary), PIV's added mass against
-//! the DEM's, and the flow tables the figures draw.
+//! The comparison's rows: one per DEM run (from its typed summary), PIV's added mass (its
+//! typed flow rows) against the DEM's, and the DEM's flow tables the figures draw.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use crate::error::FiguresDemError;
 use sandjumper_dem::outputs::Summary;
+use sandjumper_flow::analysis::FlowRow;
 
 /// One DEM run of the comparison (a row of `dem_runs.csv`).
 #[derive(Clone, Debug, Serialize)]
@@ -196,10 +197,10 @@ pub struct PivPoint {
     pub piv_added_mass_kg: f64,
 }
 
-/// Compare the flow tables of a DEM run (`dem`) and of PIV on its frames (`piv`).
-pub fn compare_piv(dem: &Path, piv: &Path) -> Result<PivComparison, FiguresDemError> {
+/// Compare the flow table of a DEM run (the `flow.csv` in `dem`) with PIV's on its frames
+/// (`piv`, PIV's outcome's rows).
+pub fn compare_piv(dem: &Path, piv: &[FlowRow]) -> Result<PivComparison, FiguresDemError> {
     let d = read_table(&dem.join("flow.csv"))?;
-    let p = read_table(&piv.join("flow.csv"))?;
     let at = |t: f64, key: &str| {
         // Linear between the DEM's samples around t (a PIV pair sits between two frames).
         d.windows(2)
@@ -209,14 +210,14 @@ pub fn compare_piv(dem: &Path, piv: &Path) -> Result<PivComparison, FiguresDemEr
                 val(&w[0], key) + f * (val(&w[1], key) - val(&w[0], key))
             })
     };
-    let points: Vec<PivPoint> = p
+    let points: Vec<PivPoint> = piv
         .iter()
-        .filter(|r| val(r, "added_mass_kg").is_finite())
+        .filter(|r| r.added_mass_kg.is_finite())
         .map(|r| PivPoint {
-            t_s: val(r, "t_s"),
-            depth_m: at(val(r, "t_s"), "depth_m"),
-            dem_added_mass_kg: at(val(r, "t_s"), "added_mass_kg"),
-            piv_added_mass_kg: val(r, "added_mass_kg"),
+            t_s: r.t_s,
+            depth_m: at(r.t_s, "depth_m"),
+            dem_added_mass_kg: at(r.t_s, "added_mass_kg"),
+            piv_added_mass_kg: r.added_mass_kg,
         })
         .filter(|q| q.dem_added_mass_kg.is_finite())
         .collect();

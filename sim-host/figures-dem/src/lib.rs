@@ -7,9 +7,11 @@
 //! sensitivity rows. Every run keeps its own folder under `runs/`; the comparison is written
 //! beside them.
 //!
-//! The DEM stages are [`sandjumper_dem`]'s calls, made here in the process with typed
-//! requests; the jumps and PIV come from the caller through [`Stages`] (the command line
-//! supplies its own for now).
+//! Every stage is a library call made here in the process with a typed request: the jumps
+//! ([`sandjumper_study::jump`]), the beds and intrusions ([`sandjumper_dem`]) and PIV
+//! ([`sandjumper_flow::run`]). The deepest point of the jumps and PIV's flow rows are taken
+//! from their typed outcomes; the intrusions' `flow.csv` and `camera.toml` are read back from
+//! their folders.
 
 pub mod compare;
 pub mod error;
@@ -17,4 +19,4 @@ pub mod plots;
 mod run;
 
 pub use error::FiguresDemError;
-pub use run::{FiguresDemOutcome, FiguresDemRequest, JumpStage, PivStage, Stages, run};
+pub use run::{FiguresDemOutcome, FiguresDemRequest, JumpRunner, run, run_with_jump};

@@ -97,7 +97,7 @@ pub fn figures(
     let eq6: Vec<(f64, f64)> = (0..=60)
         .filter_map(|i| {
             let z = zmax * f64::from(i) / 60.0;
-            sandjumper_dem::outputs::model_added_mass(phi, radius_m, z)
+            sandjumper_flow::momentum::model_added_mass(phi, radius_m, z)
                 .ok()
                 .map(|m| (1e3 * z, m))
         })

@@ -15,8 +15,12 @@ use sandjumper_dem::intrude_run::{Episode, IntrudeOutcome, IntrudeRequest};
 use sandjumper_dem::outputs::Summary;
 use sandjumper_dem::params::Model;
 use sandjumper_dem::request::ModelRequest;
+use sandjumper_flow::analysis::FlowRow;
 use sandjumper_flow::cone::ShearBandCone;
+use sandjumper_flow::run::PivRequest;
 use sandjumper_output::{Progress, StagedDir, write_csv};
+use sandjumper_study::StudyError;
+use sandjumper_study::jump::{JumpOutcome, JumpRequest};
 
 /// `figures dem`'s request.
 #[derive(Clone, Debug, PartialEq)]
@@ -71,49 +75,10 @@ impl FiguresDemRequest {
     }
 }
 
-/// A jump whose push-off drives the DEM: `jump --kind K --freq F --phi PHI [--tau T] --out
-/// DIR` (its folder holds `trajectory.csv`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct JumpStage {
-    /// The jump.
-    pub kind: JumpKind,
-    /// Forcing frequency, Hz.
-    pub freq_hz: f64,
-    /// Packing fraction, 1.
-    pub phi: f64,
-    /// Delay of the delayed stutter, s.
-    pub tau_s: Option<f64>,
-    /// Its folder.
-    pub out: PathBuf,
-}
-
-/// PIV on an intrusion's side-wall frames, as its `camera.toml` says.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PivStage {
-    /// The frames' folder.
-    pub frames: PathBuf,
-    /// Scale, m/px.
-    pub m_per_px: f64,
-    /// Frame rate, frames/s.
-    pub fps: f64,
-    /// The foot's axis at the surface, px (to 3 decimals).
-    pub origin_px: (f64, f64),
-    /// The foot's outline per frame (`foot.csv`).
-    pub foot: PathBuf,
-    /// Packing fraction, 1.
-    pub phi: f64,
-    /// PIV's folder (its `flow.csv` is compared with the DEM's).
-    pub out: PathBuf,
-}
-
-/// The stages `figures dem` takes from its caller: a jump with its folder, and PIV with its
-/// folder. Errors keep their blame; the message is prefixed with the stage's command line.
-pub trait Stages {
-    /// Run `stage`; return the jump's deepest intrusion, m.
-    fn jump(&self, stage: &JumpStage) -> Result<f64, FiguresDemError>;
-    /// Run `stage`.
-    fn piv(&self, stage: &PivStage) -> Result<(), FiguresDemError>;
-}
+/// How a jump is simulated: [`sandjumper_study::jump::run`] of the request, whose outcome
+/// is then written into the folder (the second argument). [`run`] uses that; a test may put a
+/// failing one in its place ([`run_with_jump`]).
+pub type JumpRunner<'a> = &'a dyn Fn(&JumpRequest, &Path) -> Result<JumpOutcome, StudyError>;
 
 /// What `figures dem` found (`summary.json`).
 #[derive(Clone, Debug, Serialize)]
@@ -203,11 +168,26 @@ impl Log<'_> {
     }
 }
 
-/// Run `figures dem`: the jumps and PIV through `stages`, the DEM runs here, and the
-/// comparison written into `request.out`.
+/// Run `figures dem`: the jumps ([`sandjumper_study::jump`]), the DEM runs
+/// ([`sandjumper_dem`]) and PIV ([`sandjumper_flow::run`]) in this process, each into its folder
+/// under `runs/`, and the comparison written into `request.out`.
 pub fn run(
     request: &FiguresDemRequest,
-    stages: &dyn Stages,
+    progress: &dyn Progress,
+) -> Result<FiguresDemOutcome, FiguresDemError> {
+    run_with_jump(
+        request,
+        &|jump, _| sandjumper_study::jump::run(jump, progress),
+        progress,
+    )
+}
+
+/// [`run`] with the jumps simulated by `jump` (a test's failing stage; [`run`] passes
+/// [`sandjumper_study::jump::run`]).
+#[doc(hidden)]
+pub fn run_with_jump(
+    request: &FiguresDemRequest,
+    jump: JumpRunner<'_>,
     progress: &dyn Progress,
 ) -> Result<FiguresDemOutcome, FiguresDemError> {
     request.validate()?;
@@ -232,26 +212,7 @@ pub fn run(
         (JumpKind::Stutter, "stutter"),
         (JumpKind::DelayedStutter, "delayed"),
     ] {
-        let stage = JumpStage {
-            kind,
-            freq_hz: request.freq_hz,
-            phi: request.phi,
-            tau_s: (kind == JumpKind::DelayedStutter).then_some(request.tau_s),
-            out: runs.join(format!("jump-{name}")),
-        };
-        let command = format!(
-            "sandjumper jump --kind {name} --freq {} --phi {}{} --out {}",
-            request.freq_hz,
-            request.phi,
-            stage.tau_s.map_or(String::new(), |t| format!(" --tau {t}")),
-            stage.out.display()
-        );
-        let label = command.clone();
-        let depth = log.stage(&format!("the {name} jump"), command, &stage.out, || {
-            stages
-                .jump(&stage)
-                .map_err(|e| FiguresDemError::of_stage(&label, &e))
-        })?;
+        let depth = jump_stage(&mut log, jump, request, kind, name, &runs)?;
         deepest = deepest.max(depth);
     }
     // Four foot widths by 1.6, as the supplement's bed; deeper if the push-off and the cone
@@ -280,19 +241,7 @@ pub fn run(
         let s = plan.intrude(&mut log, &what, kind, "bed-0.70", kind, Model::Paper)?;
         summaries.insert(kind.into(), s);
     }
-    let piv = plan.piv_stage(&runs.join("stutter"), &runs.join("piv-stutter"))?;
-    let command = piv.command();
-    let label = command.clone();
-    log.stage(
-        "PIV on the stutter's side-wall frames",
-        command,
-        &piv.out,
-        || {
-            stages
-                .piv(&piv)
-                .map_err(|e| FiguresDemError::of_stage(&label, &e))
-        },
-    )?;
+    let piv_flow = plan.piv(&mut log, &runs.join("stutter"), &runs.join("piv-stutter"))?;
     plan.bed(
         &mut log,
         "the near-jammed bed at 0.80",
@@ -359,7 +308,7 @@ pub fn run(
             Some((Row::of(s, name, what, wall), s.shear_band_cone.clone()))
         })
         .collect();
-    let piv = compare_piv(&runs.join("stutter"), &runs.join("piv-stutter"))?;
+    let piv = compare_piv(&runs.join("stutter"), &piv_flow)?;
     let resolved = Resolved {
         phi: request.phi,
         freq_hz: request.freq_hz,
@@ -399,6 +348,50 @@ pub fn run(
     outcome.out = staged.commit()?;
     outcome.wall_s = started.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// The `name` jump of `kind` (`jump --kind NAME --freq F --phi PHI [--tau T] --out
+/// runs/jump-NAME`, its folder holding `trajectory.csv`) simulated by `jump` and written; its
+/// deepest intrusion, m.
+fn jump_stage(
+    log: &mut Log<'_>,
+    jump: JumpRunner<'_>,
+    request: &FiguresDemRequest,
+    kind: JumpKind,
+    name: &str,
+    runs: &Path,
+) -> Result<f64, FiguresDemError> {
+    // `jump`'s command line: the eq. 4 model, no parameter overrides, rtol 1e-8.
+    let jump_request = JumpRequest {
+        kind,
+        freq_hz: request.freq_hz,
+        tau_s: (kind == JumpKind::DelayedStutter).then_some(request.tau_s),
+        phi: request.phi,
+        record_series: true,
+        ..JumpRequest::default()
+    };
+    let out = runs.join(format!("jump-{name}"));
+    let command = format!(
+        "sandjumper jump --kind {name} --freq {} --phi {}{} --out {}",
+        request.freq_hz,
+        request.phi,
+        jump_request
+            .tau_s
+            .map_or(String::new(), |t| format!(" --tau {t}")),
+        out.display()
+    );
+    let progress = log.progress;
+    log.stage(&format!("the {name} jump"), command.clone(), &out, || {
+        let failed = |e: StudyError| FiguresDemError::of_stage(&command, &e);
+        jump_request.validate().map_err(failed)?;
+        let outcome = jump(&jump_request, &out).map_err(failed)?;
+        outcome.write(&out).map_err(failed)?;
+        progress.note(outcome.to_string().trim_end());
+        for w in &outcome.simulated.warnings {
+            progress.note(&format!("warning: {w}"));
+        }
+        Ok(outcome.simulated.summary.max_depth_m)
+    })
 }
 
 /// The comparison's files: `dem_runs.csv`, `piv_vs_dem.csv`, the figures,
@@ -559,8 +552,14 @@ impl Plan<'_> {
         )
     }
 
-    /// PIV on the intrusion in `run`, as its camera.toml says, into `out`.
-    fn piv_stage(&self, run: &Path, out: &Path) -> Result<PivStage, FiguresDemError> {
+    /// PIV on the intrusion in `run`'s side-wall frames, as its `camera.toml` says, with
+    /// `sandjumper piv`'s other defaults, written into `out`; its flow table.
+    fn piv(
+        &self,
+        log: &mut Log<'_>,
+        run: &Path,
+        out: &Path,
+    ) -> Result<Vec<FlowRow>, FiguresDemError> {
         let path = run.join("camera.toml");
         let text = std::fs::read_to_string(&path)
             .map_err(|e| FiguresDemError::internal(format!("{}: {e}", path.display())))?;
@@ -573,33 +572,46 @@ impl Plan<'_> {
         let cam: Camera = toml::from_str(&text)
             .map_err(|e| FiguresDemError::internal(format!("{}: {e}", path.display())))?;
         let three = |v: f64| format!("{v:.3}").parse().unwrap_or(v);
-        Ok(PivStage {
-            frames: run.join("frames"),
-            m_per_px: cam.m_per_px,
-            fps: cam.fps,
-            origin_px: (three(cam.origin_px.0), three(cam.origin_px.1)),
-            foot: run.join("foot.csv"),
+        let request = PivRequest {
+            frames: run.join("frames").display().to_string(),
+            foot: Some(run.join("foot.csv")),
+            m_per_px: Some(cam.m_per_px),
+            fps: Some(cam.fps),
+            origin_px: Some((three(cam.origin_px.0), three(cam.origin_px.1))),
             phi: self.request.phi,
-            out: out.to_path_buf(),
-        })
+            ..PivRequest::default()
+        };
+        let command = piv_command(&request, out);
+        let progress = log.progress;
+        log.stage(
+            "PIV on the stutter's side-wall frames",
+            command.clone(),
+            out,
+            || {
+                let failed =
+                    |e: sandjumper_flow::FlowError| FiguresDemError::of_stage(&command, &e);
+                request.validate().map_err(failed)?;
+                let outcome = sandjumper_flow::run::run(&request, progress).map_err(failed)?;
+                outcome.write(out).map_err(failed)?;
+                progress.note(outcome.to_string().trim_end());
+                Ok(outcome.flow)
+            },
+        )
     }
 }
 
-impl PivStage {
-    /// The stage as a `sandjumper piv` command line (for the record).
-    pub fn command(&self) -> String {
-        format!(
-            "sandjumper piv {} --m-per-px {} --fps {} --origin {:.3},{:.3} --foot {} --phi {} --out {}",
-            self.frames.display(),
-            self.m_per_px,
-            self.fps,
-            self.origin_px.0,
-            self.origin_px.1,
-            self.foot.display(),
-            self.phi,
-            self.out.display()
-        )
-    }
+/// PIV's `request` into `out` as a `sandjumper piv` command line (for the record).
+fn piv_command(request: &PivRequest, out: &Path) -> String {
+    let (ox, oy) = request.origin_px.unwrap_or((f64::NAN, f64::NAN));
+    format!(
+        "sandjumper piv {} --m-per-px {} --fps {} --origin {ox:.3},{oy:.3} --foot {} --phi {} --out {}",
+        request.frames,
+        request.m_per_px.unwrap_or(f64::NAN),
+        request.fps.unwrap_or(f64::NAN),
+        request.foot.as_deref().unwrap_or(Path::new("")).display(),
+        request.phi,
+        out.display()
+    )
 }
 
 /// Replace `from` by `to` in the JSON and TOML files of every run folder under `runs`.

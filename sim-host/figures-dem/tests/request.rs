@@ -1,24 +1,21 @@
 //! `figures dem` as a call: bad requests refused before anything is written, a failing
 //! stage's error named by its command line with its blame kept.
 
-use sandjumper_figures_dem::{
-    FiguresDemError, FiguresDemRequest, JumpStage, PivStage, Stages, run,
-};
+use std::path::Path;
+
+use sandjumper_figures_dem::{FiguresDemError, FiguresDemRequest, run_with_jump};
 use sandjumper_output::{Blame, Blamed, Silent};
+use sandjumper_study::StudyError;
+use sandjumper_study::jump::{JumpOutcome, JumpRequest};
 
-/// Stages whose jump fails as bad input.
-struct FailingJump;
+/// A jump that fails as bad input.
+fn failing_jump(_: &JumpRequest, out: &Path) -> Result<JumpOutcome, StudyError> {
+    Err(StudyError::input(format!("no jump into {}", out.display())))
+}
 
-impl Stages for FailingJump {
-    fn jump(&self, stage: &JumpStage) -> Result<f64, FiguresDemError> {
-        Err(FiguresDemError::input(format!(
-            "no jump into {}",
-            stage.out.display()
-        )))
-    }
-    fn piv(&self, _: &PivStage) -> Result<(), FiguresDemError> {
-        unreachable!("no PIV before the jumps")
-    }
+/// `figures dem` with [`failing_jump`] in place of the jumps.
+fn run(request: &FiguresDemRequest) -> Result<(), FiguresDemError> {
+    run_with_jump(request, &failing_jump, &Silent).map(drop)
 }
 
 #[test]
@@ -43,7 +40,7 @@ fn a_foot_or_a_frequency_out_of_range_is_refused_and_nothing_written() {
             "0.5..=40",
         ),
     ] {
-        let e = run(&request, &FailingJump, &Silent).unwrap_err();
+        let e = run(&request).unwrap_err();
         assert_eq!(e.blame(), Blame::Input);
         assert!(e.to_string().contains(allowed), "{e}");
         assert!(!out.exists());
@@ -58,7 +55,7 @@ fn a_failing_stage_is_named_by_its_command_line() {
         out: out.clone(),
         ..FiguresDemRequest::default()
     };
-    let e = run(&request, &FailingJump, &Silent).unwrap_err();
+    let e = run(&request).unwrap_err();
     assert_eq!(e.blame(), Blame::Input);
     let m = e.to_string();
     assert!(

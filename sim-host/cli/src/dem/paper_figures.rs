@@ -10,12 +10,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::command::args::{KindArg, ModelArg, ParamSource, parse_number};
+use crate::command::args::parse_number;
 use crate::command::progress::Bars;
-use crate::flow::command::{PairingArg, PivArgs, SubPixelArg};
-use crate::study::jump_command::JumpArgs;
-use sandjumper_core::trajectory::JumpKind;
-use sandjumper_figures_dem::{FiguresDemError, FiguresDemRequest, JumpStage, PivStage, Stages};
+use sandjumper_figures_dem::FiguresDemRequest;
 use sandjumper_output::CliError;
 
 /// `sandjumper figures dem`.
@@ -46,7 +43,7 @@ pub struct DemFiguresArgs {
     pub threads: usize,
 }
 
-/// Run `figures dem`.
+/// Run `figures dem`: the arguments as a request, the library's run, its summary printed.
 pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
     let request = FiguresDemRequest {
         out: a.out.clone(),
@@ -57,83 +54,8 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         full_model: !a.no_full_model,
         threads: a.threads,
     };
-    let outcome = sandjumper_figures_dem::run(&request, &CliStages, &Bars::default())
+    let outcome = sandjumper_figures_dem::run(&request, &Bars::default())
         .map_err(super::shared::cli_error)?;
     println!("{outcome}");
     Ok(())
-}
-
-/// The stages `figures dem` still takes from the command line: `jump` and `piv`, called as
-/// typed Rust functions (until they are library calls of their own crates).
-struct CliStages;
-
-/// A command-line error as a stage's error, blamed as its exit status says.
-fn stage_error(e: CliError) -> FiguresDemError {
-    if e.exit == sandjumper_output::EXIT_BAD_INPUT {
-        FiguresDemError::Input(e.message)
-    } else {
-        FiguresDemError::Internal(e.message)
-    }
-}
-
-impl Stages for CliStages {
-    fn jump(&self, stage: &JumpStage) -> Result<f64, FiguresDemError> {
-        let args = JumpArgs {
-            kind: Some(match stage.kind {
-                JumpKind::Single => KindArg::Single,
-                JumpKind::Stutter => KindArg::Stutter,
-                _ => KindArg::Delayed,
-            }),
-            freq: Some(stage.freq_hz),
-            stroke: None,
-            tau: stage.tau_s,
-            model: ModelArg::Eq4,
-            phi: stage.phi,
-            source: ParamSource {
-                params: None,
-                rtol: 1e-8,
-            },
-            out: Some(stage.out.clone()),
-            json: false,
-        };
-        crate::study::jump_command::run(&args).map_err(stage_error)?;
-        // Until `jump` is a library call with a typed outcome: its summary's deepest point.
-        let path = stage.out.join("summary.json");
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| FiguresDemError::internal(format!("{}: {e}", path.display())))?;
-        let j: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| FiguresDemError::internal(format!("{}: {e}", path.display())))?;
-        Ok(j["max_depth_m"].as_f64().unwrap_or(0.0))
-    }
-
-    fn piv(&self, stage: &PivStage) -> Result<(), FiguresDemError> {
-        let args = PivArgs {
-            frames: stage.frames.display().to_string(),
-            pairs: PairingArg::Consecutive,
-            every: 1,
-            windows: "64,32,16".into(),
-            overlap: 0.5,
-            no_deform: false,
-            subpixel: SubPixelArg::Gaussian,
-            median_threshold: 2.0,
-            min_peak_ratio: 1.2,
-            local_contrast: 4.0,
-            clahe_tile: 0,
-            clahe_clip: 0.01,
-            subtract_background: false,
-            cap_sigma: 0.0,
-            mask: None,
-            foot: Some(stage.foot.clone()),
-            m_per_px: Some(stage.m_per_px),
-            fps: Some(stage.fps),
-            log: None,
-            origin: Some(stage.origin_px),
-            phi: stage.phi,
-            grain_density: 1000.0,
-            min_speed_ratio: 0.3,
-            out: Some(stage.out.clone()),
-            json: false,
-        };
-        crate::flow::command::run(&args).map_err(stage_error)
-    }
 }
