@@ -3,8 +3,8 @@
 //! period put on the bus and, for a simulated link, paced at real time (or `--pace`), then
 //! the page kept up after the run until Ctrl-C or `--linger` passes.
 
+use crate::command::CliError;
 use sandjumper_live::{Event, LiveBus};
-use sandjumper_output::CliError;
 use sandjumper_rig::hil::PeriodView;
 use sandjumper_rig::tool::session::ProgramView;
 

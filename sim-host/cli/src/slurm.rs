@@ -9,9 +9,9 @@ use std::path::Path;
 
 use clap::Args;
 
+use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::study::cli_error;
-use sandjumper_output::CliError;
 use sandjumper_slurm::{self as slurm, QueueOptions};
 
 /// The queue options every submitting command has (each requires its `--slurm`).

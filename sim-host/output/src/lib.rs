@@ -1,19 +1,15 @@
 //! `sandjumper-output`: what every command of the project shares below the command line.
 //!
-//! - [`error`]: the one error a command returns ([`CliError`]: a message and an exit status,
-//!   2 for bad input) and [`Analysed`], an analysis's JSON and human summaries;
 //! - [`parse`]: number parsers and range checks that name what they check;
 //! - [`folder`]: atomically written output folders, CSV and `.npy` files;
 //! - [`plot`]: figures (PNG + SVG) in the project's style;
 //! - [`progress`]: the sink a long call reports to ([`Progress`]) and whose fault a failure
 //!   is ([`Blame`]).
 
-pub mod error;
 pub mod folder;
 pub mod parse;
 pub mod plot;
 pub mod progress;
 
-pub use error::*;
 pub use folder::*;
 pub use progress::{Blame, Blamed, Progress, Silent, set_note_sink};

@@ -8,7 +8,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use sandjumper_cli::cli::Cli;
 use sandjumper_cli::cli::args::Command;
-use sandjumper_output::CliError;
+use sandjumper_cli::command::CliError;
 
 /// An argument list under construction, and which Python argument each flag came from.
 pub struct Argv {

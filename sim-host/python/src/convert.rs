@@ -5,7 +5,7 @@ use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use sandjumper_cli::command::resolve::ParamsFile;
-use sandjumper_output::{CliError, EXIT_BAD_INPUT};
+use sandjumper_cli::command::{CliError, EXIT_BAD_INPUT};
 
 /// The CLI's error as a Python exception: bad input (exit 2) is `ValueError`, anything else
 /// `RuntimeError`; the message is the CLI's.

@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand};
 
 use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
+use crate::command::CliError;
 use crate::command::progress::cli_error;
-use sandjumper_output::{CliError, Silent};
+use sandjumper_output::Silent;
 
 /// `sandjumper log`.
 #[derive(Debug, Clone, Args)]

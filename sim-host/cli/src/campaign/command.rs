@@ -7,8 +7,8 @@ use clap::{Args, Subcommand};
 
 use super::point::Connect;
 use super::session::{self, Hooks, ResumeRequest, RunRequest, SessionOutcome, StatusRequest};
+use crate::command::CliError;
 use crate::command::progress::{Bars, cli_error};
-use sandjumper_output::CliError;
 
 /// `campaign`.
 #[derive(Args, Debug)]

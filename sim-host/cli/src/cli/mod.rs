@@ -20,8 +20,8 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
+pub use crate::command::{CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
 pub use args::Cli;
-pub use sandjumper_output::{CliError, EXIT_BAD_INPUT, EXIT_INTERNAL};
 
 /// Parse `args` (including the program name), run the command, return the exit status.
 pub fn run<I, T>(args: I) -> ExitCode

@@ -1,8 +1,8 @@
 //! `sandjumper params`: the resolved parameters as TOML on stdout.
 
 use super::args::ParamsArgs;
+use crate::command::CliError;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use sandjumper_output::CliError;
 
 /// Print the parameters for `--phi` with `--params` applied.
 pub fn run(a: &ParamsArgs) -> Result<(), CliError> {

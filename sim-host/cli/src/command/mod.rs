@@ -1,9 +1,10 @@
 //! What every subcommand shares: the error and exit statuses (from `sandjumper_output`) and
 //! the argument vocabulary ([`args`]).
 
-pub use sandjumper_output::error::*;
+pub use error::*;
 
 pub mod args;
+pub mod error;
 pub mod progress;
 pub mod resolve;
 pub mod stroke;

@@ -4,7 +4,7 @@
 
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
-use sandjumper_output::{Blame, Blamed, CliError, EXIT_BAD_INPUT, EXIT_INTERNAL, Progress};
+use sandjumper_output::Progress;
 
 use super::{progress_bar, progress_counter};
 
@@ -85,14 +85,4 @@ impl Progress for Bars {
     }
 }
 
-/// A library error as the command line's: its message, exit status 2 for bad input and 1
-/// for an internal failure.
-pub fn cli_error<E: Blamed>(e: E) -> CliError {
-    CliError {
-        message: e.to_string(),
-        exit: match e.blame() {
-            Blame::Input => EXIT_BAD_INPUT,
-            Blame::Internal => EXIT_INTERNAL,
-        },
-    }
-}
+pub use super::error::cli_error;

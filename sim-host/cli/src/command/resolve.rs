@@ -3,9 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::command::CliError;
 use sandjumper_model::params::Params;
 use sandjumper_model::resolve as lib;
-use sandjumper_output::CliError;
 
 /// A user's parameter override file, read once.
 #[derive(Debug, Clone, PartialEq)]

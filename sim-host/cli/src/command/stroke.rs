@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
+use crate::command::CliError;
 use sandjumper_model::params::Params;
-use sandjumper_output::CliError;
 use sandjumper_rig::stroke_table::StrokeTable;
 
 /// The stroke file `path`, checked by the rig's feasibility check for `params`' robot. Every

@@ -10,9 +10,9 @@ use super::params::Model;
 use super::request::{ModelRequest, Sizes};
 use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
 use super::world::Integrator;
+use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive as positive};
 use crate::command::progress::Bars;
-use sandjumper_output::CliError;
 
 /// `sandjumper dem`.
 #[derive(Debug, Clone, Args)]

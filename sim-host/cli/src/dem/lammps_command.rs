@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::command::CliError;
 use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest};
 use sandjumper_lammps::spec::Preset;
-use sandjumper_output::CliError;
 
 use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
 use crate::command::args::parse_positive as positive;

@@ -10,10 +10,10 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::command::CliError;
 use crate::command::args::parse_number;
 use crate::command::progress::Bars;
 use sandjumper_figures_dem::FiguresDemRequest;
-use sandjumper_output::CliError;
 
 /// `sandjumper figures dem`.
 #[derive(Debug, Clone, Args)]

@@ -1,8 +1,8 @@
 //! What the `dem` subcommands share: `--episode`, a share's parser, a library error as the
 //! command line's, JSON on stdout.
 
+use crate::command::CliError;
 use sandjumper_dem::intrude_run::Episode;
-use sandjumper_output::CliError;
 
 use crate::command::args::parse_number;
 

@@ -15,7 +15,8 @@ use super::preprocess::Preprocess;
 use super::run::PivRequest;
 use crate::command::args::{parse_number, parse_positive};
 use crate::command::progress::Bars;
-use sandjumper_output::{Analysed, Blamed, CliError, Progress};
+use crate::command::{Analysed, CliError};
+use sandjumper_output::{Blamed, Progress};
 
 pub use crate::command::progress::cli_error;
 

@@ -11,8 +11,8 @@ use super::camera_scale::ScaleRequest;
 use super::frame::Roi;
 use super::run::TrackRequest;
 use crate::command::args::parse_positive_as;
+use crate::command::{Analysed, CliError};
 use crate::flow::command::{HeldNotes, cli_error, finish};
-use sandjumper_output::{Analysed, CliError};
 
 fn parse_m_per_px(s: &str) -> Result<f64, String> {
     parse_positive_as(s, "a scale in metres per pixel")

@@ -9,12 +9,13 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use crate::command::CliError;
 use crate::command::args::{ModelArg, ParamSource, parse_phi};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_optimize::OptimizeRequest;
 use sandjumper_optimize::evaluate::Objective;
-use sandjumper_output::{Blame, Blamed, CliError};
+use sandjumper_output::{Blame, Blamed};
 use sandjumper_rig::hil::open::LinkArg;
 
 /// The objective on the command line.

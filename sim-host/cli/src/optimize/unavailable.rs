@@ -3,7 +3,7 @@
 
 /// The command in a build without it.
 pub mod command {
-    use sandjumper_output::CliError;
+    use crate::command::CliError;
 
     /// Whatever was given.
     #[derive(Debug, Clone, clap::Args)]

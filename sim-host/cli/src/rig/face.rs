@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use sandjumper_output::CliError;
+use crate::command::CliError;
 
 use sandjumper_rig::hil::PeriodView;
 use sandjumper_rig::hil::open::FaultEntry;

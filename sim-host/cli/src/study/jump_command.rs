@@ -1,12 +1,12 @@
 //! `sandjumper jump`: one jump, a summary or JSON, and with `--out` its files and figure.
 
+use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
 use crate::command::progress::Bars;
 use crate::command::resolve::ParamsFile;
 use crate::study::cli_error;
 use clap::Args;
 use sandjumper_model::jump::{JumpOutcome, JumpSpec};
-use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
 use sandjumper_study::jump::{self, JumpRequest};
 use std::path::PathBuf;

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::command::CliError;
 use crate::command::args::{
     KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
 };
@@ -16,7 +17,7 @@ use crate::rig::face::{cli_error, watch};
 use crate::rig::tool::{jump, replay};
 use sandjumper_imaging::render::CameraModel;
 use sandjumper_model::params::Params;
-use sandjumper_output::{CliError, Progress, Silent, StagedDir};
+use sandjumper_output::{Progress, Silent, StagedDir};
 use sandjumper_rig::hil::camera::read_camera;
 pub use sandjumper_rig::hil::open::{FaultEntry, LinkArg, open_link, parse_link};
 use sandjumper_rig::hil_command::{

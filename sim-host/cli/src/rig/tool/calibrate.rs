@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::TargetArgs;
+use crate::command::CliError;
 use crate::rig::face::cli_error;
-use sandjumper_output::{CliError, Silent};
+use sandjumper_output::Silent;
 use sandjumper_rig::tool::calibrate::{self as lib, CalibrateRequest};
 
 /// `rig calibrate-drive`.

@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{RigParamArgs, TargetArgs};
+use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, conclude, start_live, watch};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
-use sandjumper_output::{CliError, StagedDir};
+use sandjumper_output::StagedDir;
 use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest};
 
 fn metres(

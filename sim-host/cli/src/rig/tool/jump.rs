@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{RigParamArgs, TargetArgs};
+use crate::command::CliError;
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, conclude, start_live, watch};
-use sandjumper_output::{CliError, StagedDir};
+use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::camera::read_camera;
 use sandjumper_rig::tool::jump::{self as lib, JumpOutcome, JumpRequest};
 

@@ -31,10 +31,10 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
+use crate::command::CliError;
 use crate::command::args::ModelArg;
 use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_model::params::{ModelName, Params};
-use sandjumper_output::CliError;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::tool::target::Target;
 

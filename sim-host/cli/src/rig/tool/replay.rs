@@ -8,9 +8,10 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::{RigParamArgs, TargetArgs};
+use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, conclude, start_live, watch};
-use sandjumper_output::{CliError, StagedDir};
+use sandjumper_output::StagedDir;
 use sandjumper_rig::RigError;
 use sandjumper_rig::tool::replay::{self as lib, ReplayOutcome, ReplayRequest, ReplaySource};
 pub use sandjumper_rig::tool::replay::{Clip, ReplayPlan};

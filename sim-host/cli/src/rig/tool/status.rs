@@ -4,9 +4,10 @@
 use clap::Args;
 
 use super::TargetArgs;
+use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, watch as live_watch};
-use sandjumper_output::{CliError, Silent};
+use sandjumper_output::Silent;
 use sandjumper_rig::RigError;
 use sandjumper_rig::error::to_json;
 use sandjumper_rig::tool::status::{self as lib, WatchLine, WatchRequest};

@@ -6,9 +6,9 @@ use std::time::Instant;
 use clap::Args;
 
 use super::FiguresRequest;
+use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::study::cli_error;
-use sandjumper_output::CliError;
 
 /// `sandjumper figures`: the jump model's figures, or `figures dem` (Supplementary I).
 #[derive(Debug, Clone, Args)]

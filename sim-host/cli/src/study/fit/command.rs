@@ -9,10 +9,11 @@ use super::data::HeightColumn;
 use super::intrusion::CurveKind;
 use super::jumps::DragParam;
 use super::{FitKind, FitReport, FitRequest, check_rtol, write_params_files};
+use crate::command::CliError;
 use crate::command::args::{ModelArg, check_phi};
 use crate::command::resolve::ParamsFile;
 use crate::study::cli_error;
-use sandjumper_output::{CliError, Silent};
+use sandjumper_output::Silent;
 
 /// `sandjumper fit`.
 #[derive(Debug, Clone, Args)]

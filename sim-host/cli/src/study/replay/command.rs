@@ -6,12 +6,13 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use crate::command::CliError;
 use crate::command::args::{ModelArg, ParamSource};
 use crate::command::progress::Bars;
 use crate::command::resolve::ParamsFile;
 use crate::study::cli_error;
 use sandjumper_acqlog::AcqLog;
-use sandjumper_output::{CliError, Silent, StagedDir};
+use sandjumper_output::{Silent, StagedDir};
 use sandjumper_study::replay::{self, DEFAULT_WINDOW_S, ReplayRequest};
 
 /// `sandjumper replay`.

@@ -2,13 +2,13 @@
 
 use std::collections::HashMap;
 
+use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
 use crate::command::progress::Bars;
 use crate::command::resolve::ParamsFile;
 use crate::study::cli_error;
 use clap::Args;
 use sandjumper_model::params::Params;
-use sandjumper_output::CliError;
 use sandjumper_output::StagedDir;
 use sandjumper_study::sweep::{
     self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange,

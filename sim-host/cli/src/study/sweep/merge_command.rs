@@ -1,7 +1,8 @@
 //! `sandjumper merge`: join the shard directories of one sweep ([`sandjumper_study::sweep::merge`]).
 
+use crate::command::CliError;
 use clap::Args;
-use sandjumper_output::{CliError, Silent};
+use sandjumper_output::Silent;
 use sandjumper_study::sweep::{MergeRequest, merge};
 use std::path::PathBuf;
 

@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use crate::command::CliError;
 use crate::study::cli_error;
-use sandjumper_output::CliError;
 use sandjumper_slurm::{self as slurm, JobScript, quote};
 
 /// The Slurm options of `sweep`.

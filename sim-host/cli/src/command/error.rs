@@ -1,7 +1,9 @@
-//! The error every command returns (one message and an exit status) and an analysis's two
-//! summaries.
+//! The error every command returns (one message and an exit status), an analysis's two
+//! summaries, and a library error as the command line's ([`cli_error`]).
 
 use std::fmt;
+
+use sandjumper_output::{Blame, Blamed};
 
 /// Exit status for bad input (the same as clap's usage errors).
 pub const EXIT_BAD_INPUT: u8 = 2;
@@ -54,14 +56,26 @@ impl fmt::Display for CliError {
 
 impl std::error::Error for CliError {}
 
-impl From<crate::OutputError> for CliError {
-    fn from(e: crate::OutputError) -> Self {
+impl From<sandjumper_output::OutputError> for CliError {
+    fn from(e: sandjumper_output::OutputError) -> Self {
         Self::input(e.to_string())
     }
 }
 
-impl From<crate::plot::PlotError> for CliError {
-    fn from(e: crate::plot::PlotError) -> Self {
+impl From<sandjumper_output::plot::PlotError> for CliError {
+    fn from(e: sandjumper_output::plot::PlotError) -> Self {
         Self::internal(e.to_string())
+    }
+}
+
+/// A library error as the command line's: its message, exit status 2 for bad input and 1
+/// for an internal failure.
+pub fn cli_error<E: Blamed>(e: E) -> CliError {
+    CliError {
+        message: e.to_string(),
+        exit: match e.blame() {
+            Blame::Input => EXIT_BAD_INPUT,
+            Blame::Internal => EXIT_INTERNAL,
+        },
     }
 }
