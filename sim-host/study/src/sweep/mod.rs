@@ -1,7 +1,7 @@
 //! Parameter sweeps: every combination of jump kind, model, packing fraction, delay and
 //! forcing frequency, run in parallel, in a deterministic order, optionally one shard of it.
 //!
-//! - [`range`]: `A:B:STEP` ranges; [`shard`]: `--shard I/N` slices; [`merge`]: joining shards;
+//! - [`range`]: `A:B:STEP` ranges; [`shard`]: `--shard I/N` slices; [`mod@merge`]: joining shards;
 //!   [`plot`]: height against frequency and delay. The `sweep` and `merge` subcommands live in
 //!   the CLI crate.
 //! - [`SweepSpec::combinations`] fixes the row order: kind, model, phi, tau, then frequency

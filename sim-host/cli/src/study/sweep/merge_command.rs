@@ -1,4 +1,4 @@
-//! `sandjumper merge`: join the shard directories of one sweep ([`sandjumper_study::sweep::merge`]).
+//! `sandjumper merge`: join the shard directories of one sweep ([`sandjumper_study::sweep::merge()`]).
 
 use crate::command::CliError;
 use clap::Args;
