@@ -11,7 +11,6 @@ use clap::Args;
 
 use crate::command::CliError;
 use crate::command::progress::Bars;
-use crate::study::cli_error;
 use sandjumper_slurm::{self as slurm, QueueOptions};
 
 /// The queue options every submitting command has (each requires its `--slurm`).
@@ -75,9 +74,7 @@ pub fn submit_job(
         expect,
         queue: s.queue.options(),
     };
-    if let slurm::CommandJobOutcome::Queued { id } =
-        slurm::submit_command(&job, &Bars::new()).map_err(cli_error)?
-    {
+    if let slurm::CommandJobOutcome::Queued { id } = slurm::submit_command(&job, &Bars::new())? {
         println!("{id}");
         eprintln!("when it is done its output is in {}", out.display());
     }

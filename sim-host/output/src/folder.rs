@@ -31,6 +31,14 @@ pub struct OutputError {
     pub reason: String,
 }
 
+/// An output folder that cannot be prepared or written is the user's to mend (exit 2): a
+/// path given where a folder cannot go, a folder that is not ours, a full disk.
+impl crate::Blamed for OutputError {
+    fn blame(&self) -> crate::Blame {
+        crate::Blame::Input
+    }
+}
+
 impl fmt::Display for OutputError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(

@@ -6,7 +6,6 @@ use clap::{Args, Subcommand};
 
 use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
 use crate::command::CliError;
-use crate::command::progress::cli_error;
 use sandjumper_output::Silent;
 
 /// `sandjumper log`.
@@ -89,8 +88,8 @@ pub fn load_checked(path: &Path, allow_gaps: bool) -> Result<(AcqLog, String), C
         file: path.to_path_buf(),
         allow_gaps,
     };
-    let outcome = super::check::run(&request, &Silent).map_err(cli_error)?;
-    let json = outcome.json().map_err(cli_error)?;
+    let outcome = super::check::run(&request, &Silent)?;
+    let json = outcome.json()?;
     Ok((outcome.log, json))
 }
 
@@ -99,9 +98,9 @@ fn check(a: &CheckArgs) -> Result<(), CliError> {
         file: a.file.clone(),
         allow_gaps: a.allow_gaps,
     };
-    let outcome = super::check::run(&request, &Silent).map_err(cli_error)?;
+    let outcome = super::check::run(&request, &Silent)?;
     if a.json {
-        println!("{}", outcome.json().map_err(cli_error)?);
+        println!("{}", outcome.json()?);
     } else {
         print!("{outcome}");
     }
@@ -119,7 +118,7 @@ fn convert(a: &ConvertArgs) -> Result<(), CliError> {
         allow_gaps: a.allow_gaps,
         force: a.force,
     };
-    let outcome = super::convert::run(&request, &Silent).map_err(cli_error)?;
+    let outcome = super::convert::run(&request, &Silent)?;
     eprint!("{outcome}");
     Ok(())
 }

@@ -105,7 +105,7 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
         out: a.out.clone(),
         stop_after: a.stop_after,
     };
-    request.validate().map_err(cli_error)?;
+    request.validate()?;
     refuse_pace(&a.live)?;
     let mut live = crate::live::LiveView::start(&a.live, &[])?;
     let bars = Bars::default();
@@ -215,7 +215,7 @@ pub fn resume_on_board(
 }
 
 fn status(a: &StatusArgs) -> Result<(), CliError> {
-    let report = session::status(&StatusRequest { dir: a.dir.clone() }).map_err(cli_error)?;
+    let report = session::status(&StatusRequest { dir: a.dir.clone() })?;
     if a.json {
         println!(
             "{}",

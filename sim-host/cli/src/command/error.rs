@@ -56,15 +56,10 @@ impl fmt::Display for CliError {
 
 impl std::error::Error for CliError {}
 
-impl From<sandjumper_output::OutputError> for CliError {
-    fn from(e: sandjumper_output::OutputError) -> Self {
-        Self::input(e.to_string())
-    }
-}
-
-impl From<sandjumper_output::plot::PlotError> for CliError {
-    fn from(e: sandjumper_output::plot::PlotError) -> Self {
-        Self::internal(e.to_string())
+/// A library error as the command line's (so `?` converts it): see [`cli_error`].
+impl<E: Blamed> From<E> for CliError {
+    fn from(e: E) -> Self {
+        cli_error(e)
     }
 }
 

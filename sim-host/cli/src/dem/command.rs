@@ -350,13 +350,12 @@ pub fn run(a: &DemArgs) -> Result<(), CliError> {
             }
         }
         DemCommand::Bed(b) => {
-            let outcome = super::bed_run::run(&b.request(), &Bars::default()).map_err(cli_error)?;
+            let outcome = super::bed_run::run(&b.request(), &Bars::default())?;
             println!("{outcome}");
             Ok(())
         }
         DemCommand::Intrude(i) => {
-            let outcome =
-                super::intrude_run::run(&i.request(), &Bars::default()).map_err(cli_error)?;
+            let outcome = super::intrude_run::run(&i.request(), &Bars::default())?;
             match &outcome {
                 super::intrude_run::IntrudeOutcome::Finished(s) if i.json => print_json(s),
                 _ => {

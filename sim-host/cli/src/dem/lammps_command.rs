@@ -9,7 +9,7 @@ use crate::command::CliError;
 use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest};
 use sandjumper_lammps::spec::Preset;
 
-use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
+use super::shared::{EpisodeChoice, parse_share, print_json};
 use crate::command::args::parse_positive as positive;
 use crate::command::progress::Bars;
 
@@ -163,13 +163,13 @@ fn report(outcome: &LammpsOutcome, json: bool) -> Result<(), CliError> {
 pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
     let request = a.request();
     if !a.slurm.slurm {
-        let outcome = sandjumper_lammps::run::run(&request, &Bars::default()).map_err(cli_error)?;
+        let outcome = sandjumper_lammps::run::run(&request, &Bars::default())?;
         return report(&outcome, a.json);
     }
     // LAMMPS is looked for here also before a job is submitted (a cluster's login node sees
     // the shared file system its nodes do): a missing one is refused now, not after the queue.
-    request.validate().map_err(cli_error)?;
-    request.lammps().map_err(cli_error)?;
+    request.validate()?;
+    request.lammps()?;
     crate::slurm::submit_job(
         "dem-lammps",
         &["dem", "lammps"],
@@ -194,6 +194,6 @@ pub fn run_read(a: &LammpsReadArgs) -> Result<(), CliError> {
         min_speed_ratio: a.min_speed_ratio,
         out: a.out.clone(),
     };
-    let outcome = sandjumper_lammps::run::read(&request, &Bars::default()).map_err(cli_error)?;
+    let outcome = sandjumper_lammps::run::read(&request, &Bars::default())?;
     report(&outcome, a.json)
 }

@@ -328,7 +328,7 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 /// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
 pub fn analyse(a: &PivArgs) -> Result<Analysed, CliError> {
     let progress = HeldNotes::default();
-    let outcome = super::run::run(&a.request()?, &progress).map_err(cli_error)?;
+    let outcome = super::run::run(&a.request()?, &progress)?;
     finish(
         &progress,
         a.out.as_deref(),
@@ -348,12 +348,12 @@ pub fn finish<E: Blamed>(
     human: String,
 ) -> Result<Analysed, CliError> {
     if let Some(dir) = out {
-        let dir = write(dir).map_err(cli_error)?;
+        let dir = write(dir)?;
         eprintln!("wrote {}", dir.display());
     }
     progress.release();
     Ok(Analysed {
-        json: json().map_err(cli_error)?,
+        json: json()?,
         human,
     })
 }
@@ -382,8 +382,8 @@ pub fn run_synthetic(a: &SyntheticArgs) -> Result<(), CliError> {
         image: a.image.clone(),
         shift_px: a.shift,
     };
-    let outcome = super::piv_synthetic::run(&request, &Bars::new()).map_err(cli_error)?;
-    let dir = outcome.write(&a.out).map_err(cli_error)?;
+    let outcome = super::piv_synthetic::run(&request, &Bars::new())?;
+    let dir = outcome.write(&a.out)?;
     eprintln!("wrote {}", dir.display());
     Ok(())
 }

@@ -12,7 +12,7 @@ use super::frame::Roi;
 use super::run::TrackRequest;
 use crate::command::args::parse_positive_as;
 use crate::command::{Analysed, CliError};
-use crate::flow::command::{HeldNotes, cli_error, finish};
+use crate::flow::command::{HeldNotes, finish};
 
 fn parse_m_per_px(s: &str) -> Result<f64, String> {
     parse_positive_as(s, "a scale in metres per pixel")
@@ -146,7 +146,7 @@ pub fn run(a: &TrackArgs) -> Result<(), CliError> {
 /// Track the frames `a` names (writing `--out` if given) without printing the summary.
 pub fn analyse(a: &TrackArgs) -> Result<Analysed, CliError> {
     let progress = HeldNotes::default();
-    let outcome = super::run::run(&a.request(), &progress).map_err(cli_error)?;
+    let outcome = super::run::run(&a.request(), &progress)?;
     finish(
         &progress,
         a.out.as_deref(),
@@ -165,9 +165,9 @@ pub fn run_scale(a: &CameraScaleArgs) -> Result<(), CliError> {
         roi: a.roi,
     };
     let progress = HeldNotes::default();
-    let outcome = super::camera_scale::run(&request, &progress).map_err(cli_error)?;
+    let outcome = super::camera_scale::run(&request, &progress)?;
     if a.json {
-        println!("{}", outcome.summary_json().map_err(cli_error)?);
+        println!("{}", outcome.summary_json()?);
     } else {
         print!("{outcome}");
     }

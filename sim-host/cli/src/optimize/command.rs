@@ -15,7 +15,6 @@ use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_optimize::OptimizeRequest;
 use sandjumper_optimize::evaluate::Objective;
-use sandjumper_output::{Blame, Blamed};
 use sandjumper_rig::hil::open::LinkArg;
 
 /// The objective on the command line.
@@ -212,21 +211,13 @@ fn request(a: &OptimizeArgs) -> Result<OptimizeRequest, CliError> {
     })
 }
 
-/// A library error as the command line reports it (exit 2 for the caller's input, 1 else).
-fn cli_error<E: Blamed>(e: E) -> CliError {
-    match e.blame() {
-        Blame::Input => CliError::input(e.to_string()),
-        Blame::Internal => CliError::internal(e.to_string()),
-    }
-}
-
 /// Run `optimize`: the search, then its summary on stdout (JSON with `--json`).
 pub fn run(a: &OptimizeArgs) -> Result<(), CliError> {
     let request = request(a)?;
     let bars = Bars::new().with_notes(!a.json);
-    let outcome = sandjumper_optimize::run(&request, &bars).map_err(cli_error)?;
+    let outcome = sandjumper_optimize::run(&request, &bars)?;
     if a.json {
-        println!("{}", outcome.json().map_err(cli_error)?);
+        println!("{}", outcome.json()?);
     } else {
         print!("{outcome}");
     }

@@ -4,7 +4,6 @@ use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
 use crate::command::progress::Bars;
 use crate::command::resolve::ParamsFile;
-use crate::study::cli_error;
 use clap::Args;
 use sandjumper_model::jump::{JumpOutcome, JumpSpec};
 use sandjumper_output::StagedDir;
@@ -86,10 +85,9 @@ pub fn simulate_run(
     record_series: bool,
 ) -> Result<JumpRun, CliError> {
     let request = a.request(None, record_series);
-    let out =
-        jump::run_with_params(&request, params, &sandjumper_output::Silent).map_err(cli_error)?;
+    let out = jump::run_with_params(&request, params, &sandjumper_output::Silent)?;
     Ok(JumpRun {
-        json: out.json().map_err(cli_error)?,
+        json: out.json()?,
         params: out.params,
         spec: out.spec,
         outcome: out.simulated,
@@ -101,12 +99,12 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
     let request = a.request(file.as_ref(), a.out.is_some());
     // Bad parameters are refused before an output directory is touched.
-    request.validate().map_err(cli_error)?;
+    request.validate()?;
     // Fail on an unwritable output directory before spending time on the simulation.
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let outcome = jump::run(&request, &Bars::default()).map_err(cli_error)?;
+    let outcome = jump::run(&request, &Bars::default())?;
     if let Some(staged) = staged {
-        outcome.write_into(&staged).map_err(cli_error)?;
+        outcome.write_into(&staged)?;
         let dir = staged.commit()?;
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
@@ -114,7 +112,7 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
         );
     }
     if a.json {
-        println!("{}", outcome.json().map_err(cli_error)?);
+        println!("{}", outcome.json()?);
     } else {
         print!("{outcome}");
     }

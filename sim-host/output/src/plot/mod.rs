@@ -33,6 +33,13 @@ pub struct PlotError {
     pub reason: String,
 }
 
+/// A figure that cannot be drawn is our failure (exit 1).
+impl crate::Blamed for PlotError {
+    fn blame(&self) -> crate::Blame {
+        crate::Blame::Internal
+    }
+}
+
 impl fmt::Display for PlotError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.path {

@@ -206,9 +206,9 @@ impl HilRun {
 /// overrides by [`resolve_params`]; `a.params` is not read here).
 pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
     let request = a.request(params)?;
-    request.validate().map_err(cli_error)?;
-    let jump = lib::run_checked(&request, &Silent, None).map_err(cli_error)?;
-    let json = jump.json().map_err(cli_error)?;
+    request.validate()?;
+    let jump = lib::run_checked(&request, &Silent, None)?;
+    let json = jump.json()?;
     Ok(HilRun { jump, json })
 }
 
@@ -224,12 +224,12 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     }
     let progress = Bars::new();
     let mut request = a.request(a.resolve()?)?;
-    request.check(&progress).map_err(cli_error)?;
+    request.check(&progress)?;
     if let Some(n) = a.bench {
-        print!("{}", lib::bench(&request, n, &progress).map_err(cli_error)?);
+        print!("{}", lib::bench(&request, n, &progress)?);
         return Ok(());
     }
-    request.camera = read_camera(a.camera.as_deref()).map_err(cli_error)?;
+    request.camera = read_camera(a.camera.as_deref())?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
     let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
     if let (Some(v), LinkArg::Serial(_)) = (live.as_mut(), &a.link) {
@@ -261,13 +261,13 @@ fn finish_loop(
     live: Option<crate::live::LiveView>,
 ) -> Result<(), CliError> {
     if let Some(staged) = staged {
-        let dir = run.write(staged, a.mcap).map_err(cli_error)?;
+        let dir = run.write(staged, a.mcap)?;
         eprintln!("wrote {}", dir.display());
     }
     if a.json {
         println!(
             "{}",
-            sandjumper_rig::error::to_json(&run.report, "the summary").map_err(cli_error)?
+            sandjumper_rig::error::to_json(&run.report, "the summary")?
         );
     } else {
         print!("{run}");
@@ -301,7 +301,7 @@ fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
         gain_lowering: a.gain_lowering,
         ..HilRequest::default()
     };
-    flags.refuse_lockstep_only().map_err(cli_error)?;
+    flags.refuse_lockstep_only()?;
     let scratch = match &a.out {
         Some(_) => None,
         None => Some(
@@ -330,7 +330,7 @@ fn on_the_board(
     progress: &dyn Progress,
 ) -> Result<(), CliError> {
     let request = a.request(a.resolve()?)?;
-    request.check(progress).map_err(cli_error)?;
+    request.check(progress)?;
     let outputs = (out, a.mcap, a.json);
     match lib::board_request(&request) {
         BoardRequest::Jump(j) => {

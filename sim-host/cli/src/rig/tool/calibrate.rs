@@ -7,7 +7,6 @@ use clap::Args;
 
 use super::TargetArgs;
 use crate::command::CliError;
-use crate::rig::face::cli_error;
 use sandjumper_output::Silent;
 use sandjumper_rig::tool::calibrate::{self as lib, CalibrateRequest};
 
@@ -36,7 +35,7 @@ pub fn run(a: &CalibrateDriveArgs) -> Result<(), CliError> {
         codes_per_newton: a.codes_per_newton,
         save: a.save.clone(),
     };
-    print!("{}", lib::calibrate(&request, &Silent).map_err(cli_error)?);
+    print!("{}", lib::calibrate(&request, &Silent)?);
     Ok(())
 }
 
@@ -51,7 +50,7 @@ pub struct AcknowledgeResetArgs {
 /// Run `rig acknowledge-reset`: after a reset other than power-on the board refuses `Arm`
 /// until the carriage's position has been checked and this is sent.
 pub fn acknowledge_reset(a: &AcknowledgeResetArgs) -> Result<(), CliError> {
-    let done = lib::acknowledge_reset(&a.target.target(), &Silent).map_err(cli_error)?;
+    let done = lib::acknowledge_reset(&a.target.target(), &Silent)?;
     print!("{done}");
     Ok(())
 }

@@ -7,7 +7,6 @@ use clap::Args;
 
 use super::TargetArgs;
 use crate::command::CliError;
-use crate::rig::face::cli_error;
 use sandjumper_output::Silent;
 use sandjumper_rig::tool::flash::{FlashRequest, flash};
 
@@ -28,6 +27,6 @@ pub fn run(a: &FlashArgs) -> Result<(), CliError> {
         target: a.target.target(),
         probe_rs: a.probe_rs.clone(),
     };
-    print!("{}", flash(&request, &Silent).map_err(cli_error)?);
+    print!("{}", flash(&request, &Silent)?);
     Ok(())
 }

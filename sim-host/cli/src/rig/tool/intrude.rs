@@ -8,7 +8,7 @@ use clap::Args;
 use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
 use crate::command::progress::Bars;
-use crate::rig::face::{cli_error, conclude, start_live, watch};
+use crate::rig::face::{conclude, start_live, watch};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_output::StagedDir;
 use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest};
@@ -87,12 +87,12 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         model: a.rig.model(),
         params: a.rig.resolve()?,
     };
-    request.validate().map_err(cli_error)?;
+    request.validate()?;
     let mut view = start_live(&a.live)?;
     let staged = StagedDir::create(&a.out)?;
-    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view)).map_err(cli_error)?;
-    let dir = outcome.write(staged, a.mcap).map_err(cli_error)?;
-    let text = (outcome.json().map_err(cli_error)?, outcome.to_string());
+    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
+    let dir = outcome.write(staged, a.mcap)?;
+    let text = (outcome.json()?, outcome.to_string());
     let result = conclude(text, &outcome.faults, &dir, a.json, outcome.check(&dir));
     crate::live::finish(view, &result);
     result

@@ -9,7 +9,7 @@ use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
 use crate::command::args::{KindArg, parse_freq, parse_tau};
 use crate::command::progress::Bars;
-use crate::rig::face::{cli_error, conclude, start_live, watch};
+use crate::rig::face::{conclude, start_live, watch};
 use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::camera::read_camera;
 use sandjumper_rig::tool::jump::{self as lib, JumpOutcome, JumpRequest};
@@ -77,13 +77,13 @@ pub fn run_request(
     (out, mcap, json): (&std::path::Path, bool, bool),
     json_of: &dyn Fn(&JumpOutcome) -> Result<String, sandjumper_rig::RigError>,
 ) -> Result<(), CliError> {
-    request.validate().map_err(cli_error)?;
-    request.camera = read_camera(camera).map_err(cli_error)?;
+    request.validate()?;
+    request.camera = read_camera(camera)?;
     let mut view = start_live(live)?;
     let staged = StagedDir::create(out)?;
-    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view)).map_err(cli_error)?;
-    let dir = outcome.write(staged, mcap).map_err(cli_error)?;
-    let text = (json_of(&outcome).map_err(cli_error)?, outcome.to_string());
+    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
+    let dir = outcome.write(staged, mcap)?;
+    let text = (json_of(&outcome)?, outcome.to_string());
     let result = conclude(text, &outcome.faults, &dir, json, outcome.check(&dir));
     crate::live::finish(view, &result);
     result

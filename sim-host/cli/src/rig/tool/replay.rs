@@ -129,8 +129,7 @@ impl ReplayArgs {
             (None, None) => Err(RigError::input(
                 "rig replay needs a LOG.csv or --stroke FILE",
             )),
-        }
-        .map_err(cli_error)?;
+        }?;
         Ok(ReplayRequest {
             target: self.target.target(),
             source,
@@ -153,13 +152,12 @@ pub fn run_request(
     (out, mcap, json): (&Path, bool, bool),
     json_of: &dyn Fn(&ReplayOutcome) -> Result<String, RigError>,
 ) -> Result<(), CliError> {
-    let plan = request.plan().map_err(cli_error)?;
+    let plan = request.plan()?;
     let mut view = start_live(live)?;
     let staged = StagedDir::create(out)?;
-    let outcome =
-        lib::run_planned(&request, plan, &Bars::new(), watch(&mut view)).map_err(cli_error)?;
-    let dir = outcome.write(staged, mcap).map_err(cli_error)?;
-    let text = (json_of(&outcome).map_err(cli_error)?, outcome.to_string());
+    let outcome = lib::run_planned(&request, plan, &Bars::new(), watch(&mut view))?;
+    let dir = outcome.write(staged, mcap)?;
+    let text = (json_of(&outcome)?, outcome.to_string());
     let result = conclude(text, &outcome.faults, &dir, json, outcome.check(&dir));
     crate::live::finish(view, &result);
     result

@@ -47,9 +47,9 @@ pub fn run(a: &StatusArgs) -> Result<(), CliError> {
     if a.watch || a.watch_for.is_some() || a.live.live.is_some() {
         return watch(a);
     }
-    let report = lib::status(&a.target.target(), &Silent).map_err(cli_error)?;
+    let report = lib::status(&a.target.target(), &Silent)?;
     if a.json {
-        println!("{}", to_json(&report, "the status").map_err(cli_error)?);
+        println!("{}", to_json(&report, "the status")?);
     } else {
         print!("{report}");
     }
@@ -80,7 +80,7 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
         target: a.target.target(),
         watch_for_s: a.watch_for,
     };
-    let session = lib::StatusWatch::open(&request).map_err(cli_error)?;
+    let session = lib::StatusWatch::open(&request)?;
     let result = session
         .run(
             &Bars::new(),

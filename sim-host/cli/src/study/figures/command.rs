@@ -8,7 +8,6 @@ use clap::Args;
 use super::FiguresRequest;
 use crate::command::CliError;
 use crate::command::progress::Bars;
-use crate::study::cli_error;
 
 /// `sandjumper figures`: the jump model's figures, or `figures dem` (Supplementary I).
 #[derive(Debug, Clone, Args)]
@@ -53,7 +52,7 @@ pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
         threads: a.threads.map(|t| t as usize),
         ..FiguresRequest::default()
     };
-    let report = super::run(&request, &Bars::default()).map_err(cli_error)?;
+    let report = super::run(&request, &Bars::default())?;
     println!(
         "wrote {} files to {} ({} jumps, {} failed, {:.1} s)",
         report.files.len(),

@@ -12,7 +12,6 @@ use super::{FitKind, FitReport, FitRequest, check_rtol, write_params_files};
 use crate::command::CliError;
 use crate::command::args::{ModelArg, check_phi};
 use crate::command::resolve::ParamsFile;
-use crate::study::cli_error;
 use sandjumper_output::Silent;
 
 /// `sandjumper fit`.
@@ -175,7 +174,7 @@ impl FitCommand {
 
 impl JumpFitArgs {
     fn kind(&self, param: DragParam) -> Result<FitKind, CliError> {
-        check_rtol(self.rtol).map_err(cli_error)?;
+        check_rtol(self.rtol)?;
         Ok(FitKind::Jumps {
             param,
             model: self.model.map(Into::into),
@@ -191,7 +190,7 @@ impl JumpFitArgs {
 /// Run `fit ...`.
 pub fn run(a: &FitArgs) -> Result<(), CliError> {
     let (request, output) = a.what.request()?;
-    let report = super::run(&request, &Silent).map_err(cli_error)?;
+    let report = super::run(&request, &Silent)?;
     emit(&report, output)
 }
 

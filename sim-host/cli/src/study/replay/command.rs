@@ -102,9 +102,9 @@ pub fn replay_run(
     file: Option<&ParamsFile>,
     record_series: bool,
 ) -> Result<ReplayRun, CliError> {
-    let out = replay::run_log(&a.request(file, record_series), log, &Silent).map_err(cli_error)?;
+    let out = replay::run_log(&a.request(file, record_series), log, &Silent)?;
     Ok(ReplayRun {
-        json: out.json().map_err(cli_error)?,
+        json: out.json()?,
         params: out.params,
         replayed: out.replayed,
         title: out.title,
@@ -116,11 +116,11 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
     let request = a.request(file.as_ref(), a.out.is_some());
     // The log is checked before an output directory is touched.
-    let log = request.read_log().map_err(cli_error)?;
+    let log = request.read_log()?;
     let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let outcome = replay::run_log(&request, &log, &Bars::default()).map_err(cli_error)?;
+    let outcome = replay::run_log(&request, &log, &Bars::default())?;
     if let Some(staged) = staged {
-        outcome.write_into(&staged).map_err(cli_error)?;
+        outcome.write_into(&staged)?;
         let dir = staged.commit()?;
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
@@ -128,7 +128,7 @@ pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
         );
     }
     if a.json {
-        println!("{}", outcome.json().map_err(cli_error)?);
+        println!("{}", outcome.json()?);
     } else {
         print!("{outcome}");
     }

@@ -144,14 +144,14 @@ impl SweepArgs {
 pub fn run(a: &SweepArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
     let request = a.request(file.as_ref());
-    request.validate().map_err(cli_error)?;
+    request.validate()?;
     if a.slurm.slurm.is_some() {
         if a.shard.is_some() {
             return Err(CliError::input(
                 "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
             ));
         }
-        let argv = sandjumper_slurm::arguments().map_err(cli_error)?;
+        let argv = sandjumper_slurm::arguments()?;
         return match super::slurm::submit(&argv, &a.out, &a.slurm)? {
             Some(dirs) => super::merge_command::merge_into(&MergeRequest {
                 dirs,
@@ -161,8 +161,8 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         };
     }
     let staged = StagedDir::create(&a.out)?;
-    let swept = sweep::run(&request, &Bars::default()).map_err(cli_error)?;
-    let plots = swept.write_into(&staged).map_err(cli_error)?;
+    let swept = sweep::run(&request, &Bars::default())?;
+    let plots = swept.write_into(&staged)?;
     let dir = staged.commit()?;
     let shard = request.shard.unwrap_or(ShardSpec::WHOLE);
     let n = swept.meta.shard.end - swept.meta.shard.first;

@@ -6,8 +6,6 @@ use sandjumper_output::Silent;
 use sandjumper_study::sweep::{MergeRequest, merge};
 use std::path::PathBuf;
 
-use crate::study::cli_error;
-
 /// `sandjumper merge`.
 #[derive(Debug, Clone, Args)]
 pub struct MergeArgs {
@@ -30,8 +28,8 @@ pub fn run(a: &MergeArgs) -> Result<(), CliError> {
 /// Merge the shards `request` names into its `out` and tell the user (also `sweep --slurm`'s
 /// last step).
 pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
-    let merged = merge(request, &Silent).map_err(cli_error)?;
-    let written = merged.write(&request.out).map_err(cli_error)?;
+    let merged = merge(request, &Silent)?;
+    let written = merged.write(&request.out)?;
     let (rows, failures) = (merged.outcome.rows.len(), merged.outcome.failures.len());
     eprintln!(
         "merged {} shard(s): {rows} rows, {failures} failures; wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{})",

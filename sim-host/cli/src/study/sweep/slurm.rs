@@ -17,7 +17,6 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::command::CliError;
-use crate::study::cli_error;
 use sandjumper_slurm::{self as slurm, JobScript, quote};
 
 /// The Slurm options of `sweep`.
@@ -64,9 +63,9 @@ pub fn submit(
     s: &SlurmArgs,
 ) -> Result<Option<Vec<PathBuf>>, CliError> {
     let tasks = s.slurm.unwrap_or(1);
-    slurm::tool("sbatch", "--slurm").map_err(cli_error)?;
-    let dir = slurm::fresh_job_dir(out).map_err(cli_error)?;
-    let (exe, cwd) = slurm::program_and_cwd().map_err(cli_error)?;
+    slurm::tool("sbatch", "--slurm")?;
+    let dir = slurm::fresh_job_dir(out)?;
+    let (exe, cwd) = slurm::program_and_cwd()?;
     let script = JobScript {
         name: "sweep".into(),
         shape: vec![
@@ -88,7 +87,7 @@ pub fn submit(
             quote(&dir.to_string_lossy())
         ),
     };
-    let job = slurm::submit(&dir, &script).map_err(cli_error)?;
+    let job = slurm::submit(&dir, &script)?;
     eprintln!(
         "submitted Slurm job {} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
         job.id,
@@ -104,7 +103,7 @@ pub fn submit(
         );
         return Ok(None);
     }
-    job.wait().map_err(cli_error)?;
+    job.wait()?;
     let shards: Vec<PathBuf> = (1..=tasks)
         .map(|i| dir.join(format!("shard-{i}")))
         .collect();
