@@ -4,20 +4,9 @@
 //! the page kept up after the run until Ctrl-C or `--linger` passes.
 
 use crate::command::CliError;
-use sandjumper_live::{Event, LiveBus};
-use sandjumper_rig::hil::PeriodView;
-use sandjumper_rig::tool::session::ProgramView;
-
-/// The jump view's channels: commanded and measured motor position, rod height, foot
-/// position, the drive's force command and the spring force.
-pub const JUMP_CHANNELS: [&str; 6] = [
-    "p_cmd_mm",
-    "p_mm",
-    "rod_height_mm",
-    "foot_mm",
-    "drive_force_n",
-    "spring_force_n",
-];
+use sandjumper_live::LiveBus;
+pub use sandjumper_rig::live::JUMP_CHANNELS;
+use sandjumper_rig::live::{RigLiveView, parse_linger, parse_pace};
 
 /// The options every `--live` command shares.
 #[derive(Debug, Clone, clap::Args)]
@@ -40,29 +29,9 @@ pub struct LiveArgs {
     pub linger: Option<f64>,
 }
 
-fn parse_pace(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v == 0.0 || (0.01..=1000.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a pace (allowed: 0, as fast as possible, or 0.01..=1000 times real time)"
-        )),
-    }
-}
-
-fn parse_linger(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if (0.0..=86_400.0).contains(&v) => Ok(v),
-        _ => Err(format!("`{s}` is not a linger time (allowed: 0..=86400 s)")),
-    }
-}
-
-/// A live view for one command: [`sandjumper_live::LiveView`] (its bus, server and pacing)
-/// and the rig's state as last shown.
-pub struct LiveView {
-    view: sandjumper_live::LiveView,
-    last_state: Option<sandjumper_core::RigState>,
-    fault_sent: bool,
-}
+/// A live view for one command: [`RigLiveView`] (its bus, server, pacing, and the rig runs
+/// it shows).
+pub struct LiveView(pub RigLiveView);
 
 impl LiveArgs {
     /// The view these options ask for (`None` without `--live`).
@@ -97,166 +66,48 @@ impl LiveView {
             for line in view.addresses() {
                 eprintln!("{line}");
             }
-            Ok(Some(Self {
-                view,
-                last_state: None,
-                fault_sent: false,
-            }))
+            Ok(Some(Self(RigLiveView::new(view))))
         }
     }
 
     /// Do not pace this run (a real board keeps its own time).
     pub fn unpaced(&mut self) {
-        self.view.unpaced();
+        self.0.view_mut().unpaced();
     }
 
     /// The bus, for events of the command's own.
     pub fn bus(&mut self) -> &mut LiveBus {
-        self.view.bus()
-    }
-
-    /// One control period of a jump through the loop.
-    pub fn period(&mut self, v: &PeriodView) {
-        let r = &v.row;
-        let t = r.t_s;
-        if v.started {
-            self.bus().event(Event::Jump {
-                t_s: t,
-                phase: "start".into(),
-            });
-        }
-        if let Some(st) = v.state {
-            self.state_and_fault(t, st, v.fault);
-        }
-        self.bus().sample(
-            t,
-            &[
-                1e3 * v.p_ref_m,
-                1e3 * r.p_m,
-                1e3 * r.rod_height_m,
-                -1e3 * r.depth_m,
-                r.drive_command_n,
-                r.spring_force_n,
-            ],
-        );
-        self.keep_pace(t);
-    }
-
-    /// One step of a `rig` program: a lockstep period (samples: the commanded position when
-    /// the host knows it, the plant when simulated, else the encoder; the drive's command)
-    /// or a free-running board's status poll (its state and faults, and the samples it
-    /// streamed since the previous poll: commanded position, encoder, drive force).
-    pub fn program(&mut self, v: &ProgramView<'_>, p_cmd_m: Option<f64>, metres_per_count: f64) {
-        let t = v.t_s;
-        if v.started {
-            self.bus().event(Event::Jump {
-                t_s: t,
-                phase: "start".into(),
-            });
-        }
-        self.state_and_fault(t, v.state, v.fault);
-        let nan = f64::NAN;
-        for (ts, r) in v.board_samples {
-            self.bus().sample(
-                *ts,
-                &[
-                    1e3 * f64::from(r.commanded_position_m),
-                    1e3 * r.encoder_count as f64 * metres_per_count,
-                    nan,
-                    nan,
-                    f64::from(r.force_n),
-                    nan,
-                ],
-            );
-        }
-        let Some(a) = v.actuator else {
-            return;
-        };
-        let encoder_m = v.sensor.map_or(nan, |s| {
-            f64::from(s.encoder_count as i32) * metres_per_count
-        });
-        let (p, rod, foot, spring) = v.plant.map_or((encoder_m, nan, nan, nan), |pl| {
-            (pl.p_m, pl.rod_height_m, -pl.depth_m, pl.spring_force_n)
-        });
-        self.bus().sample(
-            t,
-            &[
-                1e3 * p_cmd_m.unwrap_or(nan),
-                1e3 * p,
-                1e3 * rod,
-                1e3 * foot,
-                f64::from(a.force_n),
-                spring,
-            ],
-        );
-        self.keep_pace(t);
-    }
-
-    /// Events for a state (on change) and the first fault; names are formatted only then,
-    /// not every control period.
-    fn state_and_fault(
-        &mut self,
-        t: f64,
-        state: sandjumper_core::RigState,
-        fault: Option<sandjumper_core::fault::FaultCode>,
-    ) {
-        if self.last_state != Some(state) {
-            if state == sandjumper_core::RigState::Done {
-                self.bus().event(Event::Jump {
-                    t_s: t,
-                    phase: "end".into(),
-                });
-            }
-            self.bus().event(Event::State {
-                t_s: t,
-                state: format!("{state:?}"),
-            });
-            self.last_state = Some(state);
-        }
-        if let Some(f) = fault
-            && !self.fault_sent
-        {
-            self.fault_sent = true;
-            self.bus().event(Event::Fault {
-                t_s: t,
-                fault: format!("{f:?}"),
-            });
-        }
-    }
-
-    /// Sleep so that rig time `t_s` is not ahead of the wall clock times the pace.
-    pub fn keep_pace(&mut self, t_s: f64) {
-        self.view.keep_pace(t_s);
+        self.0.bus()
     }
 
     /// The run is over: say how, send what is left, keep the page up until Ctrl-C or the
     /// linger time; returns whether Ctrl-C ended it.
     pub fn finish(mut self, t_s: f64, outcome: String, ok: bool) -> bool {
-        self.view.end(t_s, outcome, ok);
+        self.0.end(t_s, outcome, ok);
         self.wait_on_the_page()
     }
 
     /// The run is over and the command ends now (the user stopped it): say how and send what
     /// is left, without keeping the page up.
     pub fn end_now(mut self, t_s: f64, outcome: String, ok: bool) {
-        self.view.end(t_s, outcome, ok);
+        self.0.end(t_s, outcome, ok);
     }
 
     /// Keep the page up until Ctrl-C or the linger; whether Ctrl-C ended it.
     #[cfg(feature = "live")]
     fn wait_on_the_page(&self) -> bool {
         // The page's state has the end before the command says so.
-        self.view.wait_until_shown();
+        self.0.view().wait_until_shown();
         // Ctrl-C is caught before the page says it may be used: one sent right after the
         // message ends the wait, never the process.
         crate::interrupt::catch();
-        match self.view.linger() {
+        match self.0.view().linger() {
             Some(s) => eprintln!(
                 "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
             ),
             None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
         }
-        self.view.linger_until(&crate::interrupt::interrupted)
+        self.0.view().linger_until(&crate::interrupt::interrupted)
     }
 
     #[cfg(not(feature = "live"))]

@@ -509,12 +509,21 @@ pub fn hil(
     };
     let file = params_source("params", params)?;
     let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
+    let request = a.request(params).map_err(|e| argv.error(e))?;
     let run = py
-        .detach(|| sandjumper_cli::rig::hil::command::simulate_run(&a, params))
-        .map_err(|e| argv.error(e))?;
-    let log = run.acquisition_log();
+        .detach(|| {
+            request.validate()?;
+            let jump = sandjumper_rig::hil_command::run_checked(
+                &request,
+                &sandjumper_output::Silent,
+                None,
+            )?;
+            Ok((jump.json()?, jump.acquisition_log()))
+        })
+        .map_err(|e: sandjumper_rig::RigError| argv.error(e.into()))?;
+    let (json, log) = run;
     Ok(HilResult {
-        summary: json_to_py(py, &run.json)?.unbind(),
+        summary: json_to_py(py, &json)?.unbind(),
         log: log_columns(py, &log)?.into_any().unbind(),
         log_metadata: log_metadata(py, &log)?.into_any().unbind(),
     })

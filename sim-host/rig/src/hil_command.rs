@@ -16,6 +16,7 @@ use sandjumper_imaging::render::CameraModel;
 use sandjumper_model::params::{ModelName, Params};
 use sandjumper_model::record::JumpSummary;
 use sandjumper_model::trajectory::kind_name;
+use sandjumper_output::parse::parse_number;
 use sandjumper_output::plot::save_figure;
 use sandjumper_output::{Progress, StagedDir};
 
@@ -27,6 +28,7 @@ use crate::hil::run::{HilOutcome, HilSpec, run_jump_observed, trajectory};
 use crate::hil::{camera, log};
 use crate::stroke_table::{RigLimits, StrokeTable};
 use crate::tool::jump::{JumpOutcome, JumpRequest};
+use crate::tool::output::ProgramOutcome;
 use crate::tool::replay::{ReplayOutcome, ReplayRequest};
 use crate::tool::target::Target;
 use crate::watch::RunWatch;
@@ -91,6 +93,91 @@ impl Default for HilRequest {
             camera: CameraModel::default(),
         }
     }
+}
+
+/// `--gain-lowering FACTOR`: the position gain's factor during the delay (0 < FACTOR <= 1).
+pub fn parse_gain_lowering(s: &str) -> Result<f32, String> {
+    sandjumper_output::parse::parse_gain_lowering(s).map(|v| v as f32)
+}
+
+/// `--encoder-noise COUNTS`: the encoder noise's standard deviation, counts (0..=1000).
+pub fn parse_encoder_noise(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if (0.0..=1000.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "encoder noise {v} counts out of range (allowed: 0..=1000)"
+        ))
+    }
+}
+
+/// `--rtol X`: the plant's relative tolerance inside each control period (1e-12..=1e-3).
+pub fn parse_rtol(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if (1e-12..=1e-3).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "plant rtol {v} out of range (allowed: 1e-12..=1e-3)"
+        ))
+    }
+}
+
+/// `--camera-fps FPS`: the camera's frame rate, frames/s (0..=5000, half the 10 kHz tick).
+pub fn parse_camera_fps(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if v <= 5000 => Ok(v),
+        _ => Err(format!(
+            "camera rate `{s}` not allowed (allowed: 0..=5000 frames/s, at most half the 10 kHz tick)"
+        )),
+    }
+}
+
+/// `--bench N`: how many runs to time (1..=1000).
+pub fn parse_bench_runs(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (1..=1000).contains(&v) => Ok(v),
+        _ => Err(format!("repetitions `{s}` not allowed (allowed: 1..=1000)")),
+    }
+}
+
+/// Refuse, before any file is read, what cannot be asked together: a live view (`live`) of
+/// a timing run (`bench`: its number of runs), and on the virtual board a timing run and the
+/// lockstep-only settings of `request` ([`HilRequest::refuse_lockstep_only`]).
+pub fn refuse_early(request: &HilRequest, live: bool, bench: Option<u32>) -> Result<(), RigError> {
+    if live && bench.is_some() {
+        return Err(RigError::input(
+            "--live shows one jump; --bench repeats it for timing (allowed: one of them)",
+        ));
+    }
+    if request.link == LinkArg::F407 && bench.is_some() {
+        return Err(lockstep_only("--bench"));
+    }
+    request.refuse_lockstep_only()
+}
+
+/// What `hil` says when it removes the virtual board's scratch folder (no `--out` given).
+pub const SCRATCH_NOTE: &str =
+    "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)";
+
+/// Where a run's folder goes: `out` when given; else, on the virtual board (whose program
+/// always writes one), `jump` in a scratch folder removed when the returned guard drops
+/// (then say [`SCRATCH_NOTE`]); else nowhere.
+pub fn output_dir(
+    request: &HilRequest,
+    out: Option<&std::path::Path>,
+) -> Result<(Option<StagedDir>, Option<tempfile::TempDir>), RigError> {
+    if let Some(out) = out {
+        return Ok((Some(StagedDir::create(out)?), None));
+    }
+    if request.link != LinkArg::F407 {
+        return Ok((None, None));
+    }
+    let scratch = tempfile::tempdir()
+        .map_err(|e| RigError::internal(format!("cannot make a scratch directory: {e}")))?;
+    let staged = StagedDir::create(&scratch.path().join("jump"))?;
+    Ok((Some(staged), Some(scratch)))
 }
 
 /// The refusal of a flag only a lockstep link has, on the virtual board.
@@ -173,6 +260,23 @@ impl HilRequest {
             progress.note("warning: --gain-lowering only acts during a delayed stutter's delay");
         }
         Ok(())
+    }
+
+    /// Whether the run reads the rod camera's model (not a stroke on the virtual board).
+    pub fn uses_camera(&self) -> bool {
+        self.link != LinkArg::F407 || self.stroke.is_none()
+    }
+
+    /// Whether the run keeps its own time (a board on a serial port): a live view does not
+    /// pace it.
+    pub fn keeps_own_time(&self) -> bool {
+        matches!(self.link, LinkArg::Serial(_))
+    }
+
+    /// Whether a live view shows a failed run's error and stays up (a lockstep link; the
+    /// virtual board's program ends its view with the command).
+    pub fn shows_errors_live(&self) -> bool {
+        self.link != LinkArg::F407
     }
 
     /// What runs, in words: `stutter at 10 Hz` or `stroke NAME`.
@@ -399,6 +503,80 @@ impl HilJump {
     /// `hil --json`'s text (pretty JSON, no newline).
     pub fn json(&self) -> Result<String, RigError> {
         to_json(self, "the summary")
+    }
+
+    /// The acquisition log of the run (what `hil --out` writes as acquisition.csv).
+    pub fn acquisition_log(&self) -> AcqLog {
+        match self {
+            Self::Loop(run) => run.acquisition_log(),
+            Self::Board(BoardRecord::Jump(j)) => j.log.clone(),
+            Self::Board(BoardRecord::Replay(r)) => r.log.clone(),
+        }
+    }
+
+    /// How a live view of the run ends: the rig time of its end, s, the line it shows and
+    /// whether it went well (`error`: the command's error after the run, if any; `None`: the
+    /// view closes with the command, as a lockstep run's does after an error).
+    pub fn live_end(&self, error: Option<&str>) -> Option<(f64, String, bool)> {
+        let Self::Loop(run) = self else {
+            return Some(match error {
+                None => (f64::NAN, "completed".to_string(), true),
+                Some(e) => (f64::NAN, e.to_string(), false),
+            });
+        };
+        if error.is_some() {
+            return None;
+        }
+        let t_end = run.outcome.trace.last().map_or(0.0, |r| r.t_s);
+        let faults = run.outcome.faults.len();
+        let line = format!(
+            "jump height {:.2} mm, {} fault{}",
+            1e3 * run.outcome.summary.jump_height_m,
+            faults,
+            if faults == 1 { "" } else { "s" }
+        );
+        Some((t_end, line, faults == 0))
+    }
+}
+
+impl fmt::Display for HilJump {
+    /// The summary `hil` prints without `--json`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Loop(run) => run.fmt(f),
+            Self::Board(BoardRecord::Jump(j)) => j.fmt(f),
+            Self::Board(BoardRecord::Replay(r)) => r.fmt(f),
+        }
+    }
+}
+
+impl ProgramOutcome for HilJump {
+    fn json(&self) -> Result<String, RigError> {
+        HilJump::json(self)
+    }
+    fn faults(&self) -> &[FaultEntry] {
+        HilJump::faults(self)
+    }
+    fn write(&self, staged: StagedDir, mcap: bool) -> Result<PathBuf, RigError> {
+        match self {
+            Self::Loop(run) => run.write(staged, mcap),
+            Self::Board(BoardRecord::Jump(j)) => j.write(staged, mcap),
+            Self::Board(BoardRecord::Replay(r)) => r.write(staged, mcap),
+        }
+    }
+    fn check(&self, dir: &std::path::Path) -> Result<(), RigError> {
+        match self {
+            Self::Loop(_) => Ok(()),
+            Self::Board(BoardRecord::Jump(j)) => j.check(dir),
+            Self::Board(BoardRecord::Replay(r)) => r.check(dir),
+        }
+    }
+    /// A lockstep run's summary lists its faults itself.
+    fn printed(&self, as_json: bool) -> Result<String, RigError> {
+        match self {
+            Self::Loop(run) if !as_json => Ok(run.to_string()),
+            _ => crate::tool::output::printed(self, as_json),
+        }
     }
 }
 

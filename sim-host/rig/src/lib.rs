@@ -7,12 +7,13 @@
 //! Every command is one typed call: [`hil_command::run`] (`sandjumper hil`, every link) and
 //! the rig tool's [`tool::status`], [`tool::jump`], [`tool::intrude`], [`tool::replay`],
 //! [`tool::calibrate`] and [`tool::flash`]. Errors are [`RigError`]; a run shows its steps to a
-//! [`watch::RunWatch`].
+//! [`watch::RunWatch`]; [`live::RigLiveView`] is the one that shows it on a live view.
 
 pub mod error;
 pub mod firmware_image;
 pub mod hil;
 pub mod hil_command;
+pub mod live;
 pub mod protocol;
 pub mod stroke_table;
 pub mod tool;

@@ -475,3 +475,18 @@ pub fn run_watching(
         params: params.clone(),
     })
 }
+
+crate::tool::output::program_outcome!(IntrudeOutcome);
+
+/// The value parser of one of the program's lengths, speeds or times: a finite number in
+/// `lo..=hi` (its unit `what`'s); `what` names it in the message.
+pub fn parse_bounded(
+    what: &'static str,
+    lo: f64,
+    hi: f64,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |s: &str| match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("{what} `{s}` not allowed (allowed: {lo}..={hi})")),
+    }
+}

@@ -290,3 +290,5 @@ pub fn run_watching(
         camera_fps: request.camera_fps,
     })
 }
+
+crate::tool::output::program_outcome!(JumpOutcome);

@@ -8,6 +8,7 @@ use sandjumper_core::SampleRecord;
 use sandjumper_core::sample::flags;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::palette;
+use std::path::{Path, PathBuf};
 
 /// The acquisition log of `samples` at `tick_hz` and `metres_per_count`, with `source` (the
 /// command) and `firmware` (who ran it) in its metadata; `fill` adds the rest.
@@ -173,3 +174,68 @@ pub fn robot_fixture(
         .map(Some)
         .map_err(|e| RigError::input(e.to_string()))
 }
+
+/// What a rig program's outcome (a [`crate::tool::jump::JumpOutcome`], a
+/// [`crate::tool::replay::ReplayOutcome`], a [`crate::tool::intrude::IntrudeOutcome`], or
+/// `hil`'s [`crate::hil_command::HilJump`]) gives the command that ran it: its folder, what
+/// it prints and whether the run went cleanly.
+pub trait ProgramOutcome: std::fmt::Display {
+    /// `summary.json`'s text (pretty JSON, no newline).
+    fn json(&self) -> Result<String, RigError>;
+    /// The faults the controller reported, in order.
+    fn faults(&self) -> &[FaultEntry];
+    /// Write the program's files into `staged` (acquisition.mcap too with `mcap`) and commit
+    /// it; returns the folder.
+    fn write(&self, staged: sandjumper_output::StagedDir, mcap: bool) -> Result<PathBuf, RigError>;
+    /// Whether the controller completed the program cleanly, once its folder `dir` is written
+    /// (an internal error, exit 1, naming the folder, when it did not).
+    fn check(&self, dir: &Path) -> Result<(), RigError>;
+
+    /// What the command prints on stdout: the JSON (`as_json`) or the summary and one line
+    /// per fault, each ending in a newline.
+    fn printed(&self, as_json: bool) -> Result<String, RigError> {
+        printed(self, as_json)
+    }
+}
+
+/// [`ProgramOutcome::printed`]'s own text: the JSON (`as_json`) or the summary and one line
+/// per fault, each ending in a newline.
+pub fn printed<O: ProgramOutcome + ?Sized>(outcome: &O, as_json: bool) -> Result<String, RigError> {
+    if as_json {
+        return Ok(format!("{}\n", outcome.json()?));
+    }
+    let mut text = outcome.to_string();
+    for f in outcome.faults() {
+        text.push_str(&format!(
+            "  fault {} {} at tick {}\n",
+            f.code, f.name, f.tick
+        ));
+    }
+    Ok(text)
+}
+
+/// [`ProgramOutcome`] for an outcome whose inherent `json`, `write` and `check` and field
+/// `faults` it delegates to.
+macro_rules! program_outcome {
+    ($t:ty) => {
+        impl $crate::tool::output::ProgramOutcome for $t {
+            fn json(&self) -> Result<String, RigError> {
+                <$t>::json(self)
+            }
+            fn faults(&self) -> &[$crate::hil::open::FaultEntry] {
+                &self.faults
+            }
+            fn write(
+                &self,
+                staged: sandjumper_output::StagedDir,
+                mcap: bool,
+            ) -> Result<std::path::PathBuf, RigError> {
+                <$t>::write(self, staged, mcap)
+            }
+            fn check(&self, dir: &std::path::Path) -> Result<(), RigError> {
+                <$t>::check(self, dir)
+            }
+        }
+    };
+}
+pub(crate) use program_outcome;

@@ -552,3 +552,30 @@ pub fn run_planned(
         params: params.clone(),
     })
 }
+
+crate::tool::output::program_outcome!(ReplayOutcome);
+
+/// The value parser of a positive factor (`--scale`, `--time-stretch`): 0 < X <= 10; `what`
+/// names it in the message.
+pub fn parse_factor(
+    what: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |s: &str| match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 10.0 => Ok(v),
+        _ => Err(format!("{what} `{s}` not allowed (allowed: 0 < X <= 10)")),
+    }
+}
+
+/// `--clip START:END`: seconds from the log's first sample, 0 <= START < END.
+pub fn parse_clip(s: &str) -> Result<Clip, String> {
+    let bad =
+        || format!("clip `{s}` not allowed (allowed: START:END in seconds, 0 <= START < END)");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    match (num(a), num(b)) {
+        (Some(start_s), Some(end_s)) if start_s >= 0.0 && end_s > start_s => {
+            Ok(Clip { start_s, end_s })
+        }
+        _ => Err(bad()),
+    }
+}

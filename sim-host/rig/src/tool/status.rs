@@ -348,3 +348,24 @@ fn poll(
         polls,
     })
 }
+
+/// `--watch-for S`: how long to watch, s (more than 0, up to 30 days).
+pub fn parse_watch_for(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 30.0 * 86_400.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a watch time (allowed: more than 0 s, up to 30 days)"
+        )),
+    }
+}
+
+impl WatchLine {
+    /// The line `rig status --watch` prints (no newline): its JSON (`json`) or its text.
+    pub fn printed(&self, json: bool) -> Result<String, RigError> {
+        if !json {
+            return Ok(self.to_string());
+        }
+        serde_json::to_string(self)
+            .map_err(|e| RigError::internal(format!("cannot encode the status as JSON: {e}")))
+    }
+}

@@ -114,3 +114,15 @@ impl Target {
         }
     }
 }
+
+/// `--board-pace X`: the virtual board's pace, times real time (its program's range,
+/// 0.001..=1).
+pub fn parse_board_pace(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.001..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a board pace (allowed: 0.001..=1 times real time: a board run faster \
+             than real time would see the host's 50 ms polls spread past its watchdogs)"
+        )),
+    }
+}

@@ -8,61 +8,21 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::command::CliError;
-use crate::command::args::{
-    KindArg, ModelArg, parse_freq, parse_gain_lowering, parse_number, parse_phi, parse_tau,
-};
+use crate::command::args::{KindArg, ModelArg, parse_freq, parse_phi, parse_tau};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::rig::face::{cli_error, watch};
-use crate::rig::tool::{jump, replay};
+use crate::rig::face::{conclude, start_live, watch};
 use sandjumper_imaging::render::CameraModel;
 use sandjumper_model::params::Params;
-use sandjumper_output::{Progress, Silent, StagedDir};
 use sandjumper_rig::hil::camera::read_camera;
 pub use sandjumper_rig::hil::open::{FaultEntry, LinkArg, open_link, parse_link};
 use sandjumper_rig::hil_command::{
-    self as lib, BoardRecord, BoardRequest, HilJump, HilRequest, LoopRun, NamedStroke,
-    with_jump_height,
+    self as lib, HilRequest, NamedStroke, parse_bench_runs as parse_repeats,
+    parse_camera_fps as parse_fps, parse_encoder_noise as parse_noise,
+    parse_gain_lowering as parse_factor, parse_rtol,
 };
 use sandjumper_rig::stroke_table::StrokeTable;
-
-fn parse_factor(s: &str) -> Result<f32, String> {
-    parse_gain_lowering(s).map(|v| v as f32)
-}
-fn parse_noise(s: &str) -> Result<f64, String> {
-    let v = parse_number(s)?;
-    if (0.0..=1000.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!(
-            "encoder noise {v} counts out of range (allowed: 0..=1000)"
-        ))
-    }
-}
-fn parse_rtol(s: &str) -> Result<f64, String> {
-    let v = parse_number(s)?;
-    if (1e-12..=1e-3).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!(
-            "plant rtol {v} out of range (allowed: 1e-12..=1e-3)"
-        ))
-    }
-}
-fn parse_fps(s: &str) -> Result<u32, String> {
-    match s.trim().parse::<u32>() {
-        Ok(v) if v <= 5000 => Ok(v),
-        _ => Err(format!(
-            "camera rate `{s}` not allowed (allowed: 0..=5000 frames/s, at most half the 10 kHz tick)"
-        )),
-    }
-}
-fn parse_repeats(s: &str) -> Result<u32, String> {
-    match s.trim().parse::<u32>() {
-        Ok(v) if (1..=1000).contains(&v) => Ok(v),
-        _ => Err(format!("repetitions `{s}` not allowed (allowed: 1..=1000)")),
-    }
-}
+use sandjumper_rig::tool::output::ProgramOutcome;
 
 /// `sandjumper hil`.
 #[derive(Debug, Clone, Args)]
@@ -146,32 +106,39 @@ impl HilArgs {
     /// The library's request with `params` (resolved from `phi` and the overrides by
     /// [`resolve_params`]); the stroke file read, the camera the default.
     pub fn request(&self, params: Params) -> Result<HilRequest, CliError> {
-        let stroke = self
-            .stroke
-            .as_ref()
-            .map(|path| {
-                StrokeTable::read_csv(path).map(|table| NamedStroke {
-                    name: path.display().to_string(),
-                    table,
-                })
-            })
-            .transpose()
-            .map_err(CliError::input)?;
         Ok(HilRequest {
+            params,
+            stroke: self.read_stroke()?,
+            ..self.flags()
+        })
+    }
+
+    /// The request as the flags give it, no file read (the parameters the default).
+    fn flags(&self) -> HilRequest {
+        HilRequest {
             link: self.link.clone(),
             kind: self.kind.unwrap_or(KindArg::Single).into(),
             freq_hz: self.freq.unwrap_or(0.0),
             tau_s: self.tau,
-            stroke,
+            stroke: None,
             gain_lowering: self.gain_lowering,
             model: self.model.into(),
-            params,
+            params: Params::default(),
             rtol: self.rtol,
             camera_fps: self.camera_fps,
             encoder_noise_counts: self.encoder_noise,
             firmware: self.firmware.clone(),
             camera: CameraModel::default(),
-        })
+        }
+    }
+
+    fn read_stroke(&self) -> Result<Option<NamedStroke>, CliError> {
+        let Some(path) = &self.stroke else {
+            return Ok(None);
+        };
+        let table = StrokeTable::read_csv(path).map_err(CliError::input)?;
+        let name = path.display().to_string();
+        Ok(Some(NamedStroke { name, table }))
     }
 
     fn resolve(&self) -> Result<Params, CliError> {
@@ -180,48 +147,9 @@ impl HilArgs {
     }
 }
 
-/// One jump as `sandjumper hil` runs it (the Python module's entry): the outcome and the
-/// JSON object `hil --json` prints.
-pub struct HilRun {
-    /// What the run did.
-    pub jump: HilJump,
-    /// `hil --json`'s object, pretty-printed.
-    pub json: String,
-}
-
-impl HilRun {
-    /// The acquisition log of the run (what `hil --out` writes as acquisition.csv).
-    pub fn acquisition_log(&self) -> sandjumper_acqlog::AcqLog {
-        match &self.jump {
-            HilJump::Loop(run) => run.acquisition_log(),
-            HilJump::Board(b) => match b {
-                BoardRecord::Jump(j) => j.log.clone(),
-                BoardRecord::Replay(r) => r.log.clone(),
-            },
-        }
-    }
-}
-
-/// Run the jump `a` asks for through its link with `params` (resolved from `a.phi` and the
-/// overrides by [`resolve_params`]; `a.params` is not read here).
-pub fn simulate_run(a: &HilArgs, params: Params) -> Result<HilRun, CliError> {
-    let request = a.request(params)?;
-    request.validate()?;
-    let jump = lib::run_checked(&request, &Silent, None)?;
-    let json = jump.json()?;
-    Ok(HilRun { jump, json })
-}
-
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
-    if a.live.live.is_some() && a.bench.is_some() {
-        return Err(CliError::input(
-            "--live shows one jump; --bench repeats it for timing (allowed: one of them)",
-        ));
-    }
-    if a.link == LinkArg::F407 {
-        return run_on_the_virtual_board(a);
-    }
+    lib::refuse_early(&a.flags(), a.live.live.is_some(), a.bench)?;
     let progress = Bars::new();
     let mut request = a.request(a.resolve()?)?;
     request.check(&progress)?;
@@ -229,117 +157,38 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
         print!("{}", lib::bench(&request, n, &progress)?);
         return Ok(());
     }
-    request.camera = read_camera(a.camera.as_deref())?;
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let mut live = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
-    if let (Some(v), LinkArg::Serial(_)) = (live.as_mut(), &a.link) {
-        // A board runs at its own pace.
+    if request.uses_camera() {
+        request.camera = read_camera(a.camera.as_deref())?;
+    }
+    let mut live = start_live(&a.live)?;
+    if let Some(v) = live.as_mut().filter(|_| request.keeps_own_time()) {
         v.unpaced();
     }
-    let run = match lib::run_checked(&request, &progress, watch(&mut live)) {
-        Ok(HilJump::Loop(run)) => run,
-        Ok(HilJump::Board(_)) => {
-            return Err(CliError::internal("a board's run on a lockstep link"));
-        }
+    let (staged, scratch) = lib::output_dir(&request, a.out.as_deref())?;
+    let jump = match lib::run_checked(&request, &progress, watch(&mut live)) {
+        Ok(jump) => jump,
         Err(e) => {
-            let e = cli_error(e);
-            if let Some(v) = live {
+            let e = CliError::from(e);
+            if let Some(v) = live.filter(|_| request.shows_errors_live()) {
                 eprintln!("error: {}", e.message);
                 v.finish(0.0, e.message.clone(), false);
             }
             return Err(e);
         }
     };
-    finish_loop(a, &run, staged, live)
-}
-
-/// Write, print and end the live view of a lockstep run.
-fn finish_loop(
-    a: &HilArgs,
-    run: &LoopRun,
-    staged: Option<StagedDir>,
-    live: Option<crate::live::LiveView>,
-) -> Result<(), CliError> {
-    if let Some(staged) = staged {
-        let dir = run.write(staged, a.mcap)?;
-        eprintln!("wrote {}", dir.display());
-    }
-    if a.json {
-        println!(
-            "{}",
-            sandjumper_rig::error::to_json(&run.report, "the summary")?
-        );
-    } else {
-        print!("{run}");
-    }
-    if let Some(v) = live {
-        let t_end = run.outcome.trace.last().map_or(0.0, |r| r.t_s);
-        let faults = run.outcome.faults.len();
-        let line = format!(
-            "jump height {:.2} mm, {} fault{}",
-            1e3 * run.outcome.summary.jump_height_m,
-            faults,
-            if faults == 1 { "" } else { "s" }
-        );
-        v.finish(t_end, line, faults == 0);
-    }
-    Ok(())
-}
-
-/// `hil --link f407`: the F407 release binary on the virtual board runs the jump free on its own
-/// tick, the robot coupled through its peripherals, so the jump goes the way `rig jump` runs it
-/// on a board (the same program, log, summary and figure; `--out` optional here; `--json`
-/// adds `jump_height_m`). What only a lockstep link can do is refused.
-fn run_on_the_virtual_board(a: &HilArgs) -> Result<(), CliError> {
-    if a.bench.is_some() {
-        return Err(cli_error(lib::lockstep_only("--bench")));
-    }
-    let flags = HilRequest {
-        link: LinkArg::F407,
-        encoder_noise_counts: a.encoder_noise,
-        rtol: a.rtol,
-        gain_lowering: a.gain_lowering,
-        ..HilRequest::default()
+    let result = match staged {
+        Some(staged) => conclude(&jump, staged, a.mcap, a.json),
+        None => jump
+            .printed(a.json)
+            .map(|text| print!("{text}"))
+            .map_err(CliError::from),
     };
-    flags.refuse_lockstep_only()?;
-    let scratch = match &a.out {
-        Some(_) => None,
-        None => Some(
-            tempfile::tempdir()
-                .map_err(|e| CliError::internal(format!("cannot make a scratch directory: {e}")))?,
-        ),
-    };
-    let out = a
-        .out
-        .clone()
-        .or_else(|| scratch.as_ref().map(|d| d.path().join("jump")))
-        .ok_or_else(|| CliError::internal("no output directory"))?;
-    let result = on_the_board(a, &out, &Bars::new());
+    let error = result.as_ref().err().map(|e| e.message.as_str());
+    if let (Some(v), Some((t_end, line, ok))) = (live, jump.live_end(error)) {
+        v.finish(t_end, line, ok);
+    }
     if scratch.is_some() {
-        eprintln!(
-            "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)"
-        );
+        eprintln!("{}", lib::SCRATCH_NOTE);
     }
     result
-}
-
-/// The jump (or the stroke's replay) on the virtual board, as the rig tool runs it.
-fn on_the_board(
-    a: &HilArgs,
-    out: &std::path::Path,
-    progress: &dyn Progress,
-) -> Result<(), CliError> {
-    let request = a.request(a.resolve()?)?;
-    request.check(progress)?;
-    let outputs = (out, a.mcap, a.json);
-    match lib::board_request(&request) {
-        BoardRequest::Jump(j) => {
-            jump::run_request(j, &a.live, a.camera.as_deref(), outputs, &|o| {
-                with_jump_height(o, o.simulated_jump_height_m)
-            })
-        }
-        BoardRequest::Replay(r) => replay::run_request(r, &a.live, outputs, &|o| {
-            with_jump_height(o, o.simulated_jump_height_m)
-        }),
-    }
 }

@@ -11,18 +11,7 @@ use crate::command::progress::Bars;
 use crate::rig::face::{conclude, start_live, watch};
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
 use sandjumper_output::StagedDir;
-use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest};
-
-fn metres(
-    what: &'static str,
-    lo: f64,
-    hi: f64,
-) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
-        _ => Err(format!("{what} `{s}` not allowed (allowed: {lo}..={hi})")),
-    }
-}
+use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest, parse_bounded};
 
 /// `rig intrude`.
 #[derive(Debug, Clone, Args)]
@@ -36,26 +25,26 @@ pub struct IntrudeArgs {
     /// Motor position p where the foot touches the free surface (the program starts and ends
     /// here), m.
     #[arg(long, value_name = "M", default_value = "-0.02", allow_hyphen_values = true,
-          value_parser = metres("start position (m)", -0.025, 0.025))]
+          value_parser = parse_bounded("start position (m)", -0.025, 0.025))]
     pub start: f64,
     /// First intrusion depth below the surface, m.
-    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.02", value_parser = metres("depth (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.02", value_parser = parse_bounded("depth (m)", 0.0, 0.05))]
     pub depth: f64,
     /// How far the rod is pulled back up after the first hold, m.
-    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.005", value_parser = metres("withdrawal (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.005", value_parser = parse_bounded("withdrawal (m)", 0.0, 0.05))]
     pub withdraw: f64,
     /// Depth the re-intrusion goes to, m.
-    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.03", value_parser = metres("re-intrusion depth (m)", 0.0, 0.05))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.03", value_parser = parse_bounded("re-intrusion depth (m)", 0.0, 0.05))]
     pub reintrusion_depth: f64,
     /// Intrusion speed, m/s.
     #[arg(long, value_name = "M/S", allow_negative_numbers = true, default_value = "0.01",
-          value_parser = metres("speed (m/s)", 0.0, MAX_INTRUSION_SPEED_M_S))]
+          value_parser = parse_bounded("speed (m/s)", 0.0, MAX_INTRUSION_SPEED_M_S))]
     pub speed: f64,
     /// Each hold, s.
-    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value = "0.5", value_parser = metres("hold (s)", 0.0, MAX_HOLD_S))]
+    #[arg(long, value_name = "S", allow_negative_numbers = true, default_value = "0.5", value_parser = parse_bounded("hold (s)", 0.0, MAX_HOLD_S))]
     pub hold: f64,
     /// Depth bin of the force-vs-depth curves, m.
-    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.00025", value_parser = metres("bin (m)", 1e-6, 0.005))]
+    #[arg(long, value_name = "M", allow_negative_numbers = true, default_value = "0.00025", value_parser = parse_bounded("bin (m)", 1e-6, 0.005))]
     pub bin: f64,
     /// Simulated rig and parameters (masses and force constant to interpret the current).
     #[command(flatten)]
@@ -91,9 +80,7 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
     let mut view = start_live(&a.live)?;
     let staged = StagedDir::create(&a.out)?;
     let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
-    let dir = outcome.write(staged, a.mcap)?;
-    let text = (outcome.json()?, outcome.to_string());
-    let result = conclude(text, &outcome.faults, &dir, a.json, outcome.check(&dir));
+    let result = conclude(&outcome, staged, a.mcap, a.json);
     crate::live::finish(view, &result);
     result
 }

@@ -12,7 +12,7 @@ use crate::command::progress::Bars;
 use crate::rig::face::{conclude, start_live, watch};
 use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::camera::read_camera;
-use sandjumper_rig::tool::jump::{self as lib, JumpOutcome, JumpRequest};
+use sandjumper_rig::tool::jump::{self as lib, JumpRequest};
 
 /// `rig jump`.
 #[derive(Debug, Clone, Args)]
@@ -68,34 +68,15 @@ impl JumpArgs {
     }
 }
 
-/// Run `request` as `rig jump` does, into `out` (its live view `live`, the camera `camera`),
-/// printing `json_of(outcome)` with `--json`; the outcome's end through [`conclude`].
-pub fn run_request(
-    mut request: JumpRequest,
-    live: &crate::live::LiveArgs,
-    camera: Option<&std::path::Path>,
-    (out, mcap, json): (&std::path::Path, bool, bool),
-    json_of: &dyn Fn(&JumpOutcome) -> Result<String, sandjumper_rig::RigError>,
-) -> Result<(), CliError> {
-    request.validate()?;
-    request.camera = read_camera(camera)?;
-    let mut view = start_live(live)?;
-    let staged = StagedDir::create(out)?;
-    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
-    let dir = outcome.write(staged, mcap)?;
-    let text = (json_of(&outcome)?, outcome.to_string());
-    let result = conclude(text, &outcome.faults, &dir, json, outcome.check(&dir));
-    crate::live::finish(view, &result);
-    result
-}
-
 /// Run `rig jump`.
 pub fn run(a: &JumpArgs) -> Result<(), CliError> {
-    run_request(
-        a.request()?,
-        &a.live,
-        a.camera.as_deref(),
-        (&a.out, a.mcap, a.json),
-        &JumpOutcome::json,
-    )
+    let mut request = a.request()?;
+    request.validate()?;
+    request.camera = read_camera(a.camera.as_deref())?;
+    let mut view = start_live(&a.live)?;
+    let staged = StagedDir::create(&a.out)?;
+    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
+    let result = conclude(&outcome, staged, a.mcap, a.json);
+    crate::live::finish(view, &result);
+    result
 }

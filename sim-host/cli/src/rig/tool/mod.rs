@@ -36,7 +36,7 @@ use crate::command::args::ModelArg;
 use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_model::params::{ModelName, Params};
 use sandjumper_rig::hil::open::LinkArg;
-use sandjumper_rig::tool::target::Target;
+use sandjumper_rig::tool::target::{Target, parse_board_pace};
 
 /// `sandjumper rig`.
 #[derive(Debug, Clone, Args)]
@@ -116,17 +116,6 @@ pub struct TargetArgs {
     /// Drive calibration saved by `rig calibrate-drive --save`: sent when the session opens.
     #[arg(long, value_name = "FILE.toml")]
     pub drive_calibration: Option<PathBuf>,
-}
-
-/// `--board-pace X`: the virtual board's pace, times real time (its program's range).
-fn parse_board_pace(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if (0.001..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a board pace (allowed: 0.001..=1 times real time: a board run faster \
-             than real time would see the host's 50 ms polls spread past its watchdogs)"
-        )),
-    }
 }
 
 impl TargetArgs {

@@ -13,30 +13,10 @@ use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, conclude, start_live, watch};
 use sandjumper_output::StagedDir;
 use sandjumper_rig::RigError;
-use sandjumper_rig::tool::replay::{self as lib, ReplayOutcome, ReplayRequest, ReplaySource};
+use sandjumper_rig::tool::replay::{
+    self as lib, ReplayRequest, ReplaySource, parse_clip, parse_factor,
+};
 pub use sandjumper_rig::tool::replay::{Clip, ReplayPlan};
-
-fn factor(
-    what: &'static str,
-) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v <= 10.0 => Ok(v),
-        _ => Err(format!("{what} `{s}` not allowed (allowed: 0 < X <= 10)")),
-    }
-}
-
-fn parse_clip(s: &str) -> Result<Clip, String> {
-    let bad =
-        || format!("clip `{s}` not allowed (allowed: START:END in seconds, 0 <= START < END)");
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-    match (num(a), num(b)) {
-        (Some(start_s), Some(end_s)) if start_s >= 0.0 && end_s > start_s => {
-            Ok(Clip { start_s, end_s })
-        }
-        _ => Err(bad()),
-    }
-}
 
 /// `rig replay`.
 #[derive(Debug, Clone, Args)]
@@ -59,10 +39,10 @@ pub struct ReplayArgs {
     #[command(flatten)]
     pub target: TargetArgs,
     /// Multiply the positions by X (about mid-stroke p = 0).
-    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = factor("scale"))]
+    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = parse_factor("scale"))]
     pub scale: f64,
     /// Stretch time by X (above 1: slower).
-    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = factor("time stretch"))]
+    #[arg(long, value_name = "X", allow_negative_numbers = true, default_value = "1", value_parser = parse_factor("time stretch"))]
     pub time_stretch: f64,
     /// Replay only START:END, seconds from the log's first sample (before stretching).
     #[arg(long, value_name = "START:END", value_parser = parse_clip)]
@@ -144,31 +124,14 @@ impl ReplayArgs {
     }
 }
 
-/// Run `request` as `rig replay` does, into `out` (its live view `live`), printing
-/// `json_of(outcome)` with `--json`; the outcome's end through [`conclude`].
-pub fn run_request(
-    request: ReplayRequest,
-    live: &crate::live::LiveArgs,
-    (out, mcap, json): (&Path, bool, bool),
-    json_of: &dyn Fn(&ReplayOutcome) -> Result<String, RigError>,
-) -> Result<(), CliError> {
-    let plan = request.plan()?;
-    let mut view = start_live(live)?;
-    let staged = StagedDir::create(out)?;
-    let outcome = lib::run_planned(&request, plan, &Bars::new(), watch(&mut view))?;
-    let dir = outcome.write(staged, mcap)?;
-    let text = (json_of(&outcome)?, outcome.to_string());
-    let result = conclude(text, &outcome.faults, &dir, json, outcome.check(&dir));
-    crate::live::finish(view, &result);
-    result
-}
-
 /// Run `rig replay`.
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
-    run_request(
-        a.request()?,
-        &a.live,
-        (&a.out, a.mcap, a.json),
-        &ReplayOutcome::json,
-    )
+    let request = a.request()?;
+    let plan = request.plan()?;
+    let mut view = start_live(&a.live)?;
+    let staged = StagedDir::create(&a.out)?;
+    let outcome = lib::run_planned(&request, plan, &Bars::new(), watch(&mut view))?;
+    let result = conclude(&outcome, staged, a.mcap, a.json);
+    crate::live::finish(view, &result);
+    result
 }

@@ -8,9 +8,8 @@ use crate::command::CliError;
 use crate::command::progress::Bars;
 use crate::rig::face::{cli_error, watch as live_watch};
 use sandjumper_output::Silent;
-use sandjumper_rig::RigError;
 use sandjumper_rig::error::to_json;
-use sandjumper_rig::tool::status::{self as lib, WatchLine, WatchRequest};
+use sandjumper_rig::tool::status::{self as lib, WatchRequest, parse_watch_for};
 
 /// `rig status`.
 #[derive(Debug, Clone, Args)]
@@ -33,15 +32,6 @@ pub struct StatusArgs {
     pub live: crate::live::LiveArgs,
 }
 
-fn parse_watch_for(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= 30.0 * 86_400.0 => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a watch time (allowed: more than 0 s, up to 30 days)"
-        )),
-    }
-}
-
 /// Run `rig status`.
 pub fn run(a: &StatusArgs) -> Result<(), CliError> {
     if a.watch || a.watch_for.is_some() || a.live.live.is_some() {
@@ -52,18 +42,6 @@ pub fn run(a: &StatusArgs) -> Result<(), CliError> {
         println!("{}", to_json(&report, "the status")?);
     } else {
         print!("{report}");
-    }
-    Ok(())
-}
-
-/// One change while watching, on stdout.
-fn print_change(line: &WatchLine, json: bool) -> Result<(), RigError> {
-    if json {
-        let text = serde_json::to_string(line)
-            .map_err(|e| RigError::internal(format!("cannot encode the status as JSON: {e}")))?;
-        println!("{text}");
-    } else {
-        println!("{line}");
     }
     Ok(())
 }
@@ -84,7 +62,7 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
     let result = session
         .run(
             &Bars::new(),
-            &mut |line| print_change(line, a.json),
+            &mut |line| line.printed(a.json).map(|text| println!("{text}")),
             live_watch(&mut view),
         )
         .map(|_| ())
