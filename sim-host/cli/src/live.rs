@@ -51,23 +51,11 @@ impl LiveView {
         let Some(config) = a.config() else {
             return Ok(None);
         };
-        #[cfg(not(feature = "live"))]
-        {
-            let _ = channels;
-            Err(CliError::input(format!(
-                "--live {}: this build has no live view (built with --no-default-features; build sandjumper-cli with its default features)",
-                config.addr
-            )))
+        let view = sandjumper_live::LiveView::start(&config, channels).map_err(CliError::input)?;
+        for line in view.addresses() {
+            eprintln!("{line}");
         }
-        #[cfg(feature = "live")]
-        {
-            let view =
-                sandjumper_live::LiveView::start(&config, channels).map_err(CliError::input)?;
-            for line in view.addresses() {
-                eprintln!("{line}");
-            }
-            Ok(Some(Self(RigLiveView::new(view))))
-        }
+        Ok(Some(Self(RigLiveView::new(view))))
     }
 
     /// Do not pace this run (a real board keeps its own time).
@@ -87,42 +75,30 @@ impl LiveView {
         self.wait_on_the_page()
     }
 
-    /// The run is over and the command ends now (the user stopped it): say how and send what
-    /// is left, without keeping the page up.
-    pub fn end_now(mut self, t_s: f64, outcome: String, ok: bool) {
-        self.0.end(t_s, outcome, ok);
-    }
-
     /// Keep the page up until Ctrl-C or the linger; whether Ctrl-C ended it.
-    #[cfg(feature = "live")]
     fn wait_on_the_page(&self) -> bool {
         // The page's state has the end before the command says so.
         self.0.view().wait_until_shown();
         // Ctrl-C is caught before the page says it may be used: one sent right after the
         // message ends the wait, never the process.
         crate::interrupt::catch();
-        match self.0.view().linger() {
-            Some(s) => eprintln!(
-                "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
-            ),
-            None => eprintln!("live view: the run has ended; the page stays up until Ctrl-C"),
-        }
+        eprintln!("{}", self.0.view().lingering());
         self.0.view().linger_until(&crate::interrupt::interrupted)
-    }
-
-    #[cfg(not(feature = "live"))]
-    fn wait_on_the_page(&self) -> bool {
-        false // no page to keep up
     }
 }
 
-/// End `live` (if any) with how the command ended: the summary line or the error.
-pub fn finish(live: Option<LiveView>, result: &Result<(), CliError>) {
-    if let Some(v) = live {
+/// End `live` (if any) with how the command ended: `done` or the error; after Ctrl-C
+/// (caught by a command that runs until stopped) the page closes with the command.
+pub fn finish_as(live: Option<LiveView>, result: &Result<(), CliError>, done: &str) {
+    if let Some(mut v) = live {
         let (outcome, ok) = match result {
-            Ok(()) => ("completed".to_string(), true),
+            Ok(()) => (done.to_string(), true),
             Err(e) => (e.message.clone(), false),
         };
-        v.finish(f64::NAN, outcome, ok);
+        if crate::interrupt::interrupted() {
+            v.0.end(f64::NAN, outcome, ok);
+        } else {
+            v.finish(f64::NAN, outcome, ok);
+        }
     }
 }

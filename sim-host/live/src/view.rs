@@ -60,6 +60,16 @@ impl LiveView {
         })
     }
 
+    /// Without the `server` feature there is no page: the refusal of `--live ADDR`.
+    #[cfg(not(feature = "server"))]
+    pub fn start(config: &LiveConfig, channels: &[&str]) -> Result<Self, String> {
+        let _ = channels;
+        Err(format!(
+            "--live {}: this build has no live view (built with --no-default-features; build sandjumper-cli with its default features)",
+            config.addr
+        ))
+    }
+
     /// Where the page and its streams are, one line each, for the user to read.
     #[cfg(feature = "server")]
     pub fn addresses(&self) -> Vec<String> {
@@ -72,6 +82,22 @@ impl LiveView {
             ));
         }
         lines
+    }
+
+    /// Without the `server` feature: no page, no address.
+    #[cfg(not(feature = "server"))]
+    pub fn addresses(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// What to tell the user once the run has ended and the page stays up.
+    pub fn lingering(&self) -> String {
+        match self.linger {
+            Some(s) => format!(
+                "live view: the run has ended; the page stays up for {s} s (Ctrl-C ends it sooner)"
+            ),
+            None => "live view: the run has ended; the page stays up until Ctrl-C".to_string(),
+        }
     }
 
     /// Do not pace this run (a real board keeps its own time).
@@ -119,6 +145,10 @@ impl LiveView {
             std::thread::sleep(Duration::from_millis(5));
         }
     }
+
+    /// Without the `server` feature there is no page to wait for.
+    #[cfg(not(feature = "server"))]
+    pub fn wait_until_shown(&self) {}
 
     /// Keep the page up for the linger time, or until `stop` says so when there is none (or
     /// sooner); whether `stop` ended it.

@@ -43,6 +43,15 @@ pub struct NamedStroke {
     pub table: StrokeTable,
 }
 
+impl NamedStroke {
+    /// The stroke file at `path`, named by the path as given.
+    pub fn read(path: &std::path::Path) -> Result<Self, RigError> {
+        let table = StrokeTable::read_csv(path).map_err(RigError::Input)?;
+        let name = path.display().to_string();
+        Ok(Self { name, table })
+    }
+}
+
 /// `sandjumper hil`: the jump, the link and the rig model.
 #[derive(Clone, Debug)]
 pub struct HilRequest {

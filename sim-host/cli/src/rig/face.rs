@@ -2,22 +2,34 @@
 //! end of every rig program's output.
 
 use crate::command::CliError;
-use crate::live::LiveView;
-use sandjumper_output::StagedDir;
-use sandjumper_rig::tool::output::ProgramOutcome;
-use sandjumper_rig::watch::RunWatch;
+use std::path::Path;
 
-pub use crate::command::progress::cli_error;
+use crate::command::progress::Bars;
+use crate::live::{JUMP_CHANNELS, LiveArgs, LiveView};
+use sandjumper_output::StagedDir;
+use sandjumper_rig::tool::output::{ProgramOutcome, ProgramRequest};
+use sandjumper_rig::watch::RunWatch;
 
 /// The live view as the watch a library run reports to.
 pub fn watch(live: &mut Option<LiveView>) -> Option<&mut dyn RunWatch> {
     live.as_mut().map(|v| &mut v.0 as &mut dyn RunWatch)
 }
 
-/// The live view `live` asks for, started before anything else of the command (its URL
+/// Run a rig program's `request` into `out` (`mcap`: also acquisition.mcap; `json`: print
+/// JSON) with the live view `live` asks for, started once the request is checked (its URL
 /// printed first; a bad address refused before a board or a virtual board is opened).
-pub fn start_live(live: &crate::live::LiveArgs) -> Result<Option<LiveView>, CliError> {
-    LiveView::start(live, &crate::live::JUMP_CHANNELS)
+pub fn run_program<R: ProgramRequest>(
+    request: &R,
+    live: &LiveArgs,
+    (out, mcap, json): (&Path, bool, bool),
+) -> Result<(), CliError> {
+    let checked = request.check()?;
+    let mut view = LiveView::start(live, &JUMP_CHANNELS)?;
+    let staged = StagedDir::create(out)?;
+    let outcome = request.run_checked(checked, &Bars::new(), watch(&mut view))?;
+    let result = conclude(&outcome, staged, mcap, json);
+    crate::live::finish_as(view, &result, "completed");
+    result
 }
 
 /// The end of every program: write its folder into `staged`, print its JSON (`json`) or its

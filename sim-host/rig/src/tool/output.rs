@@ -239,3 +239,69 @@ macro_rules! program_outcome {
     };
 }
 pub(crate) use program_outcome;
+
+/// A rig program's request as a command runs it: checked before anything opens (a live
+/// view, the output folder, the link), then run.
+pub trait ProgramRequest {
+    /// What the check found that the run needs (the replay's plan).
+    type Checked;
+    /// What the run gives.
+    type Outcome: ProgramOutcome;
+    /// Refuse, before anything runs, what the program cannot do.
+    fn check(&self) -> Result<Self::Checked, RigError>;
+    /// Run the checked program, `watch` shown every step.
+    fn run_checked(
+        &self,
+        checked: Self::Checked,
+        progress: &dyn sandjumper_output::Progress,
+        watch: Option<&mut dyn crate::watch::RunWatch>,
+    ) -> Result<Self::Outcome, RigError>;
+}
+
+impl ProgramRequest for crate::tool::jump::JumpRequest {
+    type Checked = ();
+    type Outcome = crate::tool::jump::JumpOutcome;
+    fn check(&self) -> Result<(), RigError> {
+        self.validate()
+    }
+    fn run_checked(
+        &self,
+        (): (),
+        progress: &dyn sandjumper_output::Progress,
+        watch: Option<&mut dyn crate::watch::RunWatch>,
+    ) -> Result<Self::Outcome, RigError> {
+        crate::tool::jump::run_watching(self, progress, watch)
+    }
+}
+
+impl ProgramRequest for crate::tool::intrude::IntrudeRequest {
+    type Checked = ();
+    type Outcome = crate::tool::intrude::IntrudeOutcome;
+    fn check(&self) -> Result<(), RigError> {
+        self.validate()
+    }
+    fn run_checked(
+        &self,
+        (): (),
+        progress: &dyn sandjumper_output::Progress,
+        watch: Option<&mut dyn crate::watch::RunWatch>,
+    ) -> Result<Self::Outcome, RigError> {
+        crate::tool::intrude::run_watching(self, progress, watch)
+    }
+}
+
+impl ProgramRequest for crate::tool::replay::ReplayRequest {
+    type Checked = crate::tool::replay::ReplayPlan;
+    type Outcome = crate::tool::replay::ReplayOutcome;
+    fn check(&self) -> Result<Self::Checked, RigError> {
+        self.plan()
+    }
+    fn run_checked(
+        &self,
+        plan: Self::Checked,
+        progress: &dyn sandjumper_output::Progress,
+        watch: Option<&mut dyn crate::watch::RunWatch>,
+    ) -> Result<Self::Outcome, RigError> {
+        crate::tool::replay::run_planned(self, plan, progress, watch)
+    }
+}

@@ -98,6 +98,25 @@ impl ReplaySource {
         .map_err(|e| RigError::input(format!("{}: {e}", path.display())))
     }
 
+    /// What `rig replay` replays: the stroke file `stroke` if given, else the log `log`
+    /// (`allow_gaps`: accept gaps, interpolated); with the name messages and the summary give
+    /// it (the path as given).
+    pub fn read(
+        log: Option<&Path>,
+        stroke: Option<&Path>,
+        allow_gaps: bool,
+    ) -> Result<(Self, String), RigError> {
+        let source = match (log, stroke) {
+            (_, Some(path)) => Self::read_stroke(path),
+            (Some(path), None) => Self::read_log(path, allow_gaps),
+            (None, None) => Err(RigError::input(
+                "rig replay needs a LOG.csv or --stroke FILE",
+            )),
+        }?;
+        let name = stroke.or(log).unwrap_or(Path::new("-"));
+        Ok((source, name.display().to_string()))
+    }
+
     /// The stroke file at `path` (`t_s,p_m` at a fixed rate).
     pub fn read_stroke(path: &Path) -> Result<Self, RigError> {
         StrokeTable::read_csv(path)

@@ -359,6 +359,16 @@ pub fn parse_watch_for(s: &str) -> Result<f64, String> {
     }
 }
 
+impl StatusReport {
+    /// What `rig status` prints: its JSON and a newline (`json`) or its text.
+    pub fn printed(&self, json: bool) -> Result<String, RigError> {
+        if json {
+            return Ok(format!("{}\n", crate::error::to_json(self, "the status")?));
+        }
+        Ok(self.to_string())
+    }
+}
+
 impl WatchLine {
     /// The line `rig status --watch` prints (no newline): its JSON (`json`) or its text.
     pub fn printed(&self, json: bool) -> Result<String, RigError> {

@@ -11,17 +11,16 @@ use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, parse_freq, parse_phi, parse_tau};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use crate::rig::face::{conclude, start_live, watch};
-use sandjumper_imaging::render::CameraModel;
+use crate::live::{JUMP_CHANNELS, LiveView};
+use crate::rig::face::{conclude, watch};
 use sandjumper_model::params::Params;
 use sandjumper_rig::hil::camera::read_camera;
-pub use sandjumper_rig::hil::open::{FaultEntry, LinkArg, open_link, parse_link};
+use sandjumper_rig::hil::open::{LinkArg, parse_link};
 use sandjumper_rig::hil_command::{
     self as lib, HilRequest, NamedStroke, parse_bench_runs as parse_repeats,
     parse_camera_fps as parse_fps, parse_encoder_noise as parse_noise,
     parse_gain_lowering as parse_factor, parse_rtol,
 };
-use sandjumper_rig::stroke_table::StrokeTable;
 use sandjumper_rig::tool::output::ProgramOutcome;
 
 /// `sandjumper hil`.
@@ -108,7 +107,7 @@ impl HilArgs {
     pub fn request(&self, params: Params) -> Result<HilRequest, CliError> {
         Ok(HilRequest {
             params,
-            stroke: self.read_stroke()?,
+            stroke: self.stroke.as_deref().map(NamedStroke::read).transpose()?,
             ..self.flags()
         })
     }
@@ -120,30 +119,14 @@ impl HilArgs {
             kind: self.kind.unwrap_or(KindArg::Single).into(),
             freq_hz: self.freq.unwrap_or(0.0),
             tau_s: self.tau,
-            stroke: None,
             gain_lowering: self.gain_lowering,
             model: self.model.into(),
-            params: Params::default(),
             rtol: self.rtol,
             camera_fps: self.camera_fps,
             encoder_noise_counts: self.encoder_noise,
             firmware: self.firmware.clone(),
-            camera: CameraModel::default(),
+            ..HilRequest::default()
         }
-    }
-
-    fn read_stroke(&self) -> Result<Option<NamedStroke>, CliError> {
-        let Some(path) = &self.stroke else {
-            return Ok(None);
-        };
-        let table = StrokeTable::read_csv(path).map_err(CliError::input)?;
-        let name = path.display().to_string();
-        Ok(Some(NamedStroke { name, table }))
-    }
-
-    fn resolve(&self) -> Result<Params, CliError> {
-        let file = ParamsFile::read_opt(self.params.as_deref())?;
-        resolve_params(self.phi, file.as_ref())
     }
 }
 
@@ -151,7 +134,8 @@ impl HilArgs {
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
     lib::refuse_early(&a.flags(), a.live.live.is_some(), a.bench)?;
     let progress = Bars::new();
-    let mut request = a.request(a.resolve()?)?;
+    let file = ParamsFile::read_opt(a.params.as_deref())?;
+    let mut request = a.request(resolve_params(a.phi, file.as_ref())?)?;
     request.check(&progress)?;
     if let Some(n) = a.bench {
         print!("{}", lib::bench(&request, n, &progress)?);
@@ -160,7 +144,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     if request.uses_camera() {
         request.camera = read_camera(a.camera.as_deref())?;
     }
-    let mut live = start_live(&a.live)?;
+    let mut live = LiveView::start(&a.live, &JUMP_CHANNELS)?;
     if let Some(v) = live.as_mut().filter(|_| request.keeps_own_time()) {
         v.unpaced();
     }

@@ -50,7 +50,6 @@ pub struct AcknowledgeResetArgs {
 /// Run `rig acknowledge-reset`: after a reset other than power-on the board refuses `Arm`
 /// until the carriage's position has been checked and this is sent.
 pub fn acknowledge_reset(a: &AcknowledgeResetArgs) -> Result<(), CliError> {
-    let done = lib::acknowledge_reset(&a.target.target(), &Silent)?;
-    print!("{done}");
+    print!("{}", lib::acknowledge_reset(&a.target.target(), &Silent)?);
     Ok(())
 }

@@ -7,11 +7,9 @@ use clap::Args;
 
 use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
-use crate::command::progress::Bars;
-use crate::rig::face::{conclude, start_live, watch};
+use crate::rig::face::run_program;
 use sandjumper_core::intrusion::{MAX_HOLD_S, MAX_INTRUSION_SPEED_M_S};
-use sandjumper_output::StagedDir;
-use sandjumper_rig::tool::intrude::{self as lib, IntrudeRequest, parse_bounded};
+use sandjumper_rig::tool::intrude::{IntrudeRequest, parse_bounded};
 
 /// `rig intrude`.
 #[derive(Debug, Clone, Args)]
@@ -76,11 +74,5 @@ pub fn run(a: &IntrudeArgs) -> Result<(), CliError> {
         model: a.rig.model(),
         params: a.rig.resolve()?,
     };
-    request.validate()?;
-    let mut view = start_live(&a.live)?;
-    let staged = StagedDir::create(&a.out)?;
-    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, staged, a.mcap, a.json);
-    crate::live::finish(view, &result);
-    result
+    run_program(&request, &a.live, (&a.out, a.mcap, a.json))
 }

@@ -8,11 +8,9 @@ use clap::Args;
 use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
 use crate::command::args::{KindArg, parse_freq, parse_tau};
-use crate::command::progress::Bars;
-use crate::rig::face::{conclude, start_live, watch};
-use sandjumper_output::StagedDir;
+use crate::rig::face::run_program;
 use sandjumper_rig::hil::camera::read_camera;
-use sandjumper_rig::tool::jump::{self as lib, JumpRequest};
+use sandjumper_rig::tool::jump::JumpRequest;
 
 /// `rig jump`.
 #[derive(Debug, Clone, Args)]
@@ -73,10 +71,5 @@ pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let mut request = a.request()?;
     request.validate()?;
     request.camera = read_camera(a.camera.as_deref())?;
-    let mut view = start_live(&a.live)?;
-    let staged = StagedDir::create(&a.out)?;
-    let outcome = lib::run_watching(&request, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, staged, a.mcap, a.json);
-    crate::live::finish(view, &result);
-    result
+    run_program(&request, &a.live, (&a.out, a.mcap, a.json))
 }

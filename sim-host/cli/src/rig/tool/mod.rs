@@ -1,22 +1,6 @@
-//! `sandjumper rig`: the host tool for the rig's board, over its USB serial port
-//! (`--port PATH`), or against the controller in this process (`--link sil`) or the real
-//! firmware in QEMU (`--link pil`), where the host plays the rig in lockstep.
-//!
-//! - `flash`: write the firmware with the probe-rs CLI (no-op for sil/pil).
-//! - `status`: state, phase, fault and counters.
-//! - `jump`: configure, arm, run one sine jump; its acquisition log and a figure.
-//! - `intrude`: the slow-intrusion program; the force-vs-depth curves `depth_m,force_n` (the
-//!   input of `sandjumper fit intrusion`) and a figure: the paper's `F_p(z)` measurement.
-//! - `replay LOG`: upload an (edited) encoder record as the core's replay table, verify its
-//!   checksum, run it, record the new log; refused before anything moves when it would leave
-//!   the stroke, exceed the drive's force or not fit the firmware's buffer.
-//!
-//! - `calibrate-drive`: send (and save) the DAC codes of the drive's force command measured at
-//!   bring-up; `--drive-calibration FILE` sends saved codes at the start of any command.
-//! - `acknowledge-reset`: allow `Arm` again after a reset other than power-on.
-//!
-//! Each is a face over its typed call in `sandjumper_rig::tool`; all programs run through
-//! [`session::run_program`], the one code path for the links.
+//! `sandjumper rig`: the host tool for the rig's board (`--port PATH`) or a simulated
+//! controller (`--link sil|pil|f407`); each subcommand is a face over its typed call in
+//! [`sandjumper_rig::tool`], where the programs are described.
 
 pub mod calibrate;
 pub mod flash;
@@ -24,8 +8,6 @@ pub mod intrude;
 pub mod jump;
 pub mod replay;
 pub mod status;
-
-pub use sandjumper_rig::tool::{intrusion_fixture, output, session};
 
 use std::path::PathBuf;
 
@@ -119,20 +101,16 @@ pub struct TargetArgs {
 }
 
 impl TargetArgs {
-    /// The link this target is (`Serial` for `--port`).
-    pub fn link_arg(&self) -> LinkArg {
-        match (&self.controller.port, self.controller.link) {
+    /// The library's target (its link `Serial` for `--port`).
+    pub fn target(&self) -> Target {
+        let link = match (&self.controller.port, self.controller.link) {
             (Some(p), _) => LinkArg::Serial(p.clone()),
             (None, Some(SimLink::Pil)) => LinkArg::Pil,
             (None, Some(SimLink::F407)) => LinkArg::F407,
             _ => LinkArg::Sil,
-        }
-    }
-
-    /// The library's target.
-    pub fn target(&self) -> Target {
+        };
         Target {
-            link: self.link_arg(),
+            link,
             firmware: self.firmware.clone(),
             virtual_board: self.virtual_board.clone(),
             board_pace: self.board_pace,

@@ -3,16 +3,13 @@
 //! [`sandjumper_rig::tool::replay`], where the editing, the feasibility check and the upload
 //! are described.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 
 use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
-use crate::command::progress::Bars;
-use crate::rig::face::{cli_error, conclude, start_live, watch};
-use sandjumper_output::StagedDir;
-use sandjumper_rig::RigError;
+use crate::rig::face::run_program;
 use sandjumper_rig::tool::replay::{
     self as lib, ReplayRequest, ReplaySource, parse_clip, parse_factor,
 };
@@ -80,40 +77,20 @@ pub fn plan(
     gravity: f64,
     peak_force_n: f64,
 ) -> Result<ReplayPlan, CliError> {
-    lib::plan(
-        record,
-        rate_hz,
-        tick_hz,
-        motor_mass_kg,
-        gravity,
-        peak_force_n,
-    )
-    .map_err(cli_error)
+    let (m, g, peak) = (motor_mass_kg, gravity, peak_force_n);
+    Ok(lib::plan(record, rate_hz, tick_hz, m, g, peak)?)
 }
 
 impl ReplayArgs {
-    /// The path of the replayed file.
-    fn source_path(&self) -> &Path {
-        self.stroke
-            .as_deref()
-            .or(self.log.as_deref())
-            .unwrap_or(Path::new("-"))
-    }
-
     /// The library's request: the parameters resolved, the source read.
     pub fn request(&self) -> Result<ReplayRequest, CliError> {
         let params = self.rig.resolve()?;
-        let source = match (&self.log, &self.stroke) {
-            (_, Some(path)) => ReplaySource::read_stroke(path),
-            (Some(path), None) => ReplaySource::read_log(path, self.allow_gaps),
-            (None, None) => Err(RigError::input(
-                "rig replay needs a LOG.csv or --stroke FILE",
-            )),
-        }?;
+        let (source, source_name) =
+            ReplaySource::read(self.log.as_deref(), self.stroke.as_deref(), self.allow_gaps)?;
         Ok(ReplayRequest {
             target: self.target.target(),
             source,
-            source_name: self.source_path().display().to_string(),
+            source_name,
             scale: self.scale,
             time_stretch: self.time_stretch,
             clip: self.clip,
@@ -126,12 +103,5 @@ impl ReplayArgs {
 
 /// Run `rig replay`.
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
-    let request = a.request()?;
-    let plan = request.plan()?;
-    let mut view = start_live(&a.live)?;
-    let staged = StagedDir::create(&a.out)?;
-    let outcome = lib::run_planned(&request, plan, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, staged, a.mcap, a.json);
-    crate::live::finish(view, &result);
-    result
+    run_program(&a.request()?, &a.live, (&a.out, a.mcap, a.json))
 }

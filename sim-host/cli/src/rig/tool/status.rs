@@ -6,9 +6,9 @@ use clap::Args;
 use super::TargetArgs;
 use crate::command::CliError;
 use crate::command::progress::Bars;
-use crate::rig::face::{cli_error, watch as live_watch};
+use crate::live::{JUMP_CHANNELS, LiveView};
+use crate::rig::face::watch as live_watch;
 use sandjumper_output::Silent;
-use sandjumper_rig::error::to_json;
 use sandjumper_rig::tool::status::{self as lib, WatchRequest, parse_watch_for};
 
 /// `rig status`.
@@ -38,18 +38,14 @@ pub fn run(a: &StatusArgs) -> Result<(), CliError> {
         return watch(a);
     }
     let report = lib::status(&a.target.target(), &Silent)?;
-    if a.json {
-        println!("{}", to_json(&report, "the status")?);
-    } else {
-        print!("{report}");
-    }
+    print!("{}", report.printed(a.json)?);
     Ok(())
 }
 
 /// `rig status --watch`: poll until Ctrl-C or `--watch-for`, a line per change, the live view
 /// fed with every poll.
 fn watch(a: &StatusArgs) -> Result<(), CliError> {
-    let mut view = crate::live::LiveView::start(&a.live, &crate::live::JUMP_CHANNELS)?;
+    let mut view = LiveView::start(&a.live, &JUMP_CHANNELS)?;
     crate::interrupt::catch();
     if let Some(v) = view.as_mut() {
         v.unpaced();
@@ -66,18 +62,7 @@ fn watch(a: &StatusArgs) -> Result<(), CliError> {
             live_watch(&mut view),
         )
         .map(|_| ())
-        .map_err(cli_error);
-    if let Some(v) = view {
-        let (outcome, ok) = match &result {
-            Ok(()) => ("stopped watching".to_string(), true),
-            Err(e) => (e.message.clone(), false),
-        };
-        // Ctrl-C has ended the watch: the page closes with the command.
-        if crate::interrupt::interrupted() {
-            v.end_now(f64::NAN, outcome, ok);
-        } else {
-            v.finish(f64::NAN, outcome, ok);
-        }
-    }
+        .map_err(CliError::from);
+    crate::live::finish_as(view, &result, "stopped watching");
     result
 }
