@@ -170,23 +170,28 @@ pub fn refuse_early(request: &HilRequest, live: bool, bench: Option<u32>) -> Res
 pub const SCRATCH_NOTE: &str =
     "(a scratch copy, removed now: give --out DIR to keep the log, summary and figure)";
 
-/// Where a run's folder goes: `out` when given; else, on the virtual board (whose program
-/// always writes one), `jump` in a scratch folder removed when the returned guard drops
-/// (then say [`SCRATCH_NOTE`]); else nowhere.
-pub fn output_dir(
+/// The scratch folder of a run on the virtual board (whose program always writes a folder)
+/// when no `out` is given, removed when it drops (then say [`SCRATCH_NOTE`]); else `None`.
+pub fn scratch_dir(
     request: &HilRequest,
     out: Option<&std::path::Path>,
-) -> Result<(Option<StagedDir>, Option<tempfile::TempDir>), RigError> {
-    if let Some(out) = out {
-        return Ok((Some(StagedDir::create(out)?), None));
+) -> Result<Option<tempfile::TempDir>, RigError> {
+    if out.is_some() || request.link != LinkArg::F407 {
+        return Ok(None);
     }
-    if request.link != LinkArg::F407 {
-        return Ok((None, None));
-    }
-    let scratch = tempfile::tempdir()
-        .map_err(|e| RigError::internal(format!("cannot make a scratch directory: {e}")))?;
-    let staged = StagedDir::create(&scratch.path().join("jump"))?;
-    Ok((Some(staged), Some(scratch)))
+    tempfile::tempdir()
+        .map(Some)
+        .map_err(|e| RigError::internal(format!("cannot make a scratch directory: {e}")))
+}
+
+/// Where a run's folder goes: `out` when given, else `jump` in the `scratch` folder of
+/// [`scratch_dir`], else nowhere.
+pub fn run_dir(
+    out: Option<&std::path::Path>,
+    scratch: Option<&tempfile::TempDir>,
+) -> Option<PathBuf> {
+    out.map(std::path::Path::to_path_buf)
+        .or_else(|| scratch.map(|d| d.path().join("jump")))
 }
 
 /// The refusal of a flag only a lockstep link has, on the virtual board.

@@ -5,8 +5,8 @@ use sandjumper_core::trajectory::JumpKind;
 use sandjumper_output::Silent;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::hil_command::{
-    self as hil, HilRequest, output_dir, parse_bench_runs, parse_camera_fps, parse_encoder_noise,
-    parse_gain_lowering, parse_rtol, refuse_early,
+    self as hil, HilRequest, parse_bench_runs, parse_camera_fps, parse_encoder_noise,
+    parse_gain_lowering, parse_rtol, refuse_early, run_dir, scratch_dir,
 };
 use sandjumper_rig::tool::jump::JumpRequest;
 use sandjumper_rig::tool::output::{ProgramOutcome, ProgramRequest};
@@ -69,10 +69,16 @@ fn early_refusals_and_the_scratch_folder_of_the_virtual_board() {
     let e = refuse_early(&noisy, false, None).unwrap_err().to_string();
     assert!(e.starts_with("--encoder-noise is not available"), "{e}");
     // Without --out: nothing on a lockstep link, a scratch folder on the board.
-    let (staged, scratch) = output_dir(&sil, None).unwrap();
-    assert!(staged.is_none() && scratch.is_none());
-    let (staged, scratch) = output_dir(&board, None).unwrap();
-    assert!(staged.is_some() && scratch.is_some());
+    assert!(scratch_dir(&sil, None).unwrap().is_none());
+    assert!(run_dir(None, None).is_none());
+    let scratch = scratch_dir(&board, None)
+        .unwrap()
+        .expect("a scratch folder");
+    let dir = run_dir(None, Some(&scratch)).unwrap();
+    assert_eq!(dir, scratch.path().join("jump"));
+    let out = std::path::Path::new("out");
+    assert!(scratch_dir(&board, Some(out)).unwrap().is_none());
+    assert_eq!(run_dir(Some(out), Some(&scratch)).unwrap(), out);
     assert!(!board.keeps_own_time() && !board.shows_errors_live() && board.uses_camera());
 }
 
@@ -94,8 +100,8 @@ fn a_hil_jump_prints_writes_and_ends_its_live_view() {
     assert!(jump.live_end(Some("no room")).is_none());
     assert!(!jump.acquisition_log().rows.is_empty());
     let dir = tempfile::tempdir().unwrap();
-    let (staged, _) = output_dir(&request, Some(&dir.path().join("hil"))).unwrap();
-    let written = ProgramOutcome::write(&jump, staged.unwrap(), false).unwrap();
+    let staged = sandjumper_output::StagedDir::create(&dir.path().join("hil")).unwrap();
+    let written = ProgramOutcome::write(&jump, staged, false).unwrap();
     assert!(written.join("summary.json").is_file());
     ProgramOutcome::check(&jump, &written).unwrap();
 }

@@ -27,22 +27,23 @@ pub fn run_program<R: ProgramRequest>(
     let mut view = LiveView::start(live, &JUMP_CHANNELS)?;
     let staged = StagedDir::create(out)?;
     let outcome = request.run_checked(checked, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, staged, mcap, json);
+    let result = conclude(&outcome, Some(staged), mcap, json);
     crate::live::finish_as(view, &result, "completed");
     result
 }
 
-/// The end of every program: write its folder into `staged`, print its JSON (`json`) or its
-/// summary and faults, say where the files went, and fail (exit 1) when the controller did
-/// not complete the program cleanly.
+/// The end of every program: write its folder into `staged` (if any), print its JSON
+/// (`json`) or its summary and faults, say where the files went, and fail (exit 1) when the
+/// controller did not complete the program cleanly.
 pub fn conclude(
     outcome: &dyn ProgramOutcome,
-    staged: StagedDir,
+    staged: Option<StagedDir>,
     mcap: bool,
     json: bool,
 ) -> Result<(), CliError> {
-    let dir = outcome.write(staged, mcap)?;
+    let dir = staged.map(|s| outcome.write(s, mcap)).transpose()?;
     print!("{}", outcome.printed(json)?);
+    let Some(dir) = dir else { return Ok(()) };
     eprintln!("wrote {}", dir.display());
     Ok(outcome.check(&dir)?)
 }

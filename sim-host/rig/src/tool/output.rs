@@ -258,37 +258,29 @@ pub trait ProgramRequest {
     ) -> Result<Self::Outcome, RigError>;
 }
 
-impl ProgramRequest for crate::tool::jump::JumpRequest {
-    type Checked = ();
-    type Outcome = crate::tool::jump::JumpOutcome;
-    fn check(&self) -> Result<(), RigError> {
-        self.validate()
-    }
-    fn run_checked(
-        &self,
-        (): (),
-        progress: &dyn sandjumper_output::Progress,
-        watch: Option<&mut dyn crate::watch::RunWatch>,
-    ) -> Result<Self::Outcome, RigError> {
-        crate::tool::jump::run_watching(self, progress, watch)
-    }
+/// [`ProgramRequest`] for a request checked by its `validate` and run by its module's
+/// `run_watching`.
+macro_rules! validated_program {
+    ($module:ident, $request:ident, $outcome:ident) => {
+        impl ProgramRequest for crate::tool::$module::$request {
+            type Checked = ();
+            type Outcome = crate::tool::$module::$outcome;
+            fn check(&self) -> Result<(), RigError> {
+                self.validate()
+            }
+            fn run_checked(
+                &self,
+                (): (),
+                progress: &dyn sandjumper_output::Progress,
+                watch: Option<&mut dyn crate::watch::RunWatch>,
+            ) -> Result<Self::Outcome, RigError> {
+                crate::tool::$module::run_watching(self, progress, watch)
+            }
+        }
+    };
 }
-
-impl ProgramRequest for crate::tool::intrude::IntrudeRequest {
-    type Checked = ();
-    type Outcome = crate::tool::intrude::IntrudeOutcome;
-    fn check(&self) -> Result<(), RigError> {
-        self.validate()
-    }
-    fn run_checked(
-        &self,
-        (): (),
-        progress: &dyn sandjumper_output::Progress,
-        watch: Option<&mut dyn crate::watch::RunWatch>,
-    ) -> Result<Self::Outcome, RigError> {
-        crate::tool::intrude::run_watching(self, progress, watch)
-    }
-}
+validated_program!(jump, JumpRequest, JumpOutcome);
+validated_program!(intrude, IntrudeRequest, IntrudeOutcome);
 
 impl ProgramRequest for crate::tool::replay::ReplayRequest {
     type Checked = crate::tool::replay::ReplayPlan;

@@ -14,6 +14,7 @@ use crate::command::resolve::{ParamsFile, resolve_params};
 use crate::live::{JUMP_CHANNELS, LiveView};
 use crate::rig::face::{conclude, watch};
 use sandjumper_model::params::Params;
+use sandjumper_output::StagedDir;
 use sandjumper_rig::hil::camera::read_camera;
 use sandjumper_rig::hil::open::{LinkArg, parse_link};
 use sandjumper_rig::hil_command::{
@@ -21,7 +22,6 @@ use sandjumper_rig::hil_command::{
     parse_camera_fps as parse_fps, parse_encoder_noise as parse_noise,
     parse_gain_lowering as parse_factor, parse_rtol,
 };
-use sandjumper_rig::tool::output::ProgramOutcome;
 
 /// `sandjumper hil`.
 #[derive(Debug, Clone, Args)]
@@ -132,7 +132,18 @@ impl HilArgs {
 
 /// Run `hil`.
 pub fn run(a: &HilArgs) -> Result<(), CliError> {
-    lib::refuse_early(&a.flags(), a.live.live.is_some(), a.bench)?;
+    let flags = a.flags();
+    lib::refuse_early(&flags, a.live.live.is_some(), a.bench)?;
+    let scratch = lib::scratch_dir(&flags, a.out.as_deref())?;
+    let result = jump(a, lib::run_dir(a.out.as_deref(), scratch.as_ref()));
+    if scratch.is_some() {
+        eprintln!("{}", lib::SCRATCH_NOTE);
+    }
+    result
+}
+
+/// The jump `a` asks for, its folder written into `out` (if any).
+fn jump(a: &HilArgs, out: Option<PathBuf>) -> Result<(), CliError> {
     let progress = Bars::new();
     let file = ParamsFile::read_opt(a.params.as_deref())?;
     let mut request = a.request(resolve_params(a.phi, file.as_ref())?)?;
@@ -148,7 +159,7 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
     if let Some(v) = live.as_mut().filter(|_| request.keeps_own_time()) {
         v.unpaced();
     }
-    let (staged, scratch) = lib::output_dir(&request, a.out.as_deref())?;
+    let staged = out.as_deref().map(StagedDir::create).transpose()?;
     let jump = match lib::run_checked(&request, &progress, watch(&mut live)) {
         Ok(jump) => jump,
         Err(e) => {
@@ -160,19 +171,10 @@ pub fn run(a: &HilArgs) -> Result<(), CliError> {
             return Err(e);
         }
     };
-    let result = match staged {
-        Some(staged) => conclude(&jump, staged, a.mcap, a.json),
-        None => jump
-            .printed(a.json)
-            .map(|text| print!("{text}"))
-            .map_err(CliError::from),
-    };
+    let result = conclude(&jump, staged, a.mcap, a.json);
     let error = result.as_ref().err().map(|e| e.message.as_str());
     if let (Some(v), Some((t_end, line, ok))) = (live, jump.live_end(error)) {
         v.finish(t_end, line, ok);
-    }
-    if scratch.is_some() {
-        eprintln!("{}", lib::SCRATCH_NOTE);
     }
     result
 }
