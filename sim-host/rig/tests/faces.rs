@@ -112,8 +112,8 @@ fn a_rig_program_is_checked_then_run_and_prints_its_summary() {
         camera_fps: 0,
         ..JumpRequest::new(Target::on(LinkArg::Sil), JumpKind::Single, 10.0)
     };
-    let checked = request.check().expect("a valid jump");
-    let outcome = request.run_checked(checked, &Silent, None).expect("runs");
+    request.check().expect("a valid jump");
+    let outcome = request.run_checked((), &Silent, None).expect("runs");
     assert_eq!(outcome.printed(false).unwrap(), outcome.to_string());
     assert!(outcome.printed(true).unwrap().ends_with("}\n"));
     let bad = JumpRequest::new(Target::on(LinkArg::Sil), JumpKind::Single, 1000.0);

@@ -490,3 +490,4 @@ pub fn parse_bounded(
         _ => Err(format!("{what} `{s}` not allowed (allowed: {lo}..={hi})")),
     }
 }
+crate::tool::output::validated_program!(IntrudeRequest, IntrudeOutcome, run_watching);

@@ -292,3 +292,4 @@ pub fn run_watching(
 }
 
 crate::tool::output::program_outcome!(JumpOutcome);
+crate::tool::output::validated_program!(JumpRequest, JumpOutcome, run_watching);

@@ -175,9 +175,8 @@ pub fn robot_fixture(
         .map_err(|e| RigError::input(e.to_string()))
 }
 
-/// What a rig program's outcome (a [`crate::tool::jump::JumpOutcome`], a
-/// [`crate::tool::replay::ReplayOutcome`], a [`crate::tool::intrude::IntrudeOutcome`], or
-/// `hil`'s [`crate::hil_command::HilJump`]) gives the command that ran it: its folder, what
+/// What a rig program's outcome (a `JumpOutcome`, a `ReplayOutcome`, an `IntrudeOutcome`, or
+/// `hil`'s `HilJump`) gives the command that ran it: its folder, what
 /// it prints and whether the run went cleanly.
 pub trait ProgramOutcome: std::fmt::Display {
     /// `summary.json`'s text (pretty JSON, no newline).
@@ -258,13 +257,13 @@ pub trait ProgramRequest {
     ) -> Result<Self::Outcome, RigError>;
 }
 
-/// [`ProgramRequest`] for a request checked by its `validate` and run by its module's
-/// `run_watching`.
+/// [`ProgramRequest`] for a request checked by its `validate` and run by `$run` (its
+/// module's `run_watching`), invoked in that module.
 macro_rules! validated_program {
-    ($module:ident, $request:ident, $outcome:ident) => {
-        impl ProgramRequest for crate::tool::$module::$request {
+    ($request:ident, $outcome:ident, $run:ident) => {
+        impl $crate::tool::output::ProgramRequest for $request {
             type Checked = ();
-            type Outcome = crate::tool::$module::$outcome;
+            type Outcome = $outcome;
             fn check(&self) -> Result<(), RigError> {
                 self.validate()
             }
@@ -274,26 +273,9 @@ macro_rules! validated_program {
                 progress: &dyn sandjumper_output::Progress,
                 watch: Option<&mut dyn crate::watch::RunWatch>,
             ) -> Result<Self::Outcome, RigError> {
-                crate::tool::$module::run_watching(self, progress, watch)
+                $run(self, progress, watch)
             }
         }
     };
 }
-validated_program!(jump, JumpRequest, JumpOutcome);
-validated_program!(intrude, IntrudeRequest, IntrudeOutcome);
-
-impl ProgramRequest for crate::tool::replay::ReplayRequest {
-    type Checked = crate::tool::replay::ReplayPlan;
-    type Outcome = crate::tool::replay::ReplayOutcome;
-    fn check(&self) -> Result<Self::Checked, RigError> {
-        self.plan()
-    }
-    fn run_checked(
-        &self,
-        plan: Self::Checked,
-        progress: &dyn sandjumper_output::Progress,
-        watch: Option<&mut dyn crate::watch::RunWatch>,
-    ) -> Result<Self::Outcome, RigError> {
-        crate::tool::replay::run_planned(self, plan, progress, watch)
-    }
-}
+pub(crate) use validated_program;

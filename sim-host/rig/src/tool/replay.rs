@@ -598,3 +598,19 @@ pub fn parse_clip(s: &str) -> Result<Clip, String> {
         _ => Err(bad()),
     }
 }
+
+impl super::output::ProgramRequest for ReplayRequest {
+    type Checked = ReplayPlan;
+    type Outcome = ReplayOutcome;
+    fn check(&self) -> Result<Self::Checked, RigError> {
+        self.plan()
+    }
+    fn run_checked(
+        &self,
+        plan: Self::Checked,
+        progress: &dyn sandjumper_output::Progress,
+        watch: Option<&mut dyn crate::watch::RunWatch>,
+    ) -> Result<Self::Outcome, RigError> {
+        run_planned(self, plan, progress, watch)
+    }
+}
