@@ -737,6 +737,17 @@ impl std::fmt::Display for StatusReport {
     }
 }
 
+/// Refuse a live view's pace (`--pace`, a speed factor): a campaign's points are not paced,
+/// each is shown when it is done.
+pub fn check_pace(pace: Option<f64>) -> Result<(), CampaignError> {
+    match pace {
+        Some(p) => Err(CampaignError::input(format!(
+            "--pace {p}: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Where the campaign in `request.dir` stands, read without disturbing a session that runs it.
 pub fn status(request: &StatusRequest) -> Result<StatusReport, CampaignError> {
     let work = work_dir(&request.dir);

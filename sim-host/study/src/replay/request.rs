@@ -52,6 +52,17 @@ impl Default for ReplayRequest {
     }
 }
 
+/// Value parser: the Savitzky-Golay window in milliseconds, 0 < ms <= 1000 (the command
+/// line's `--window-ms`; [`ReplayRequest::window_s`] is this / 1000).
+pub fn parse_window_ms(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1000.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a window length: a number of milliseconds in (0, 1000]"
+        )),
+    }
+}
+
 impl ReplayRequest {
     /// Read the log; errors name the file and line (the caller's input).
     pub fn read_log(&self) -> Result<AcqLog, StudyError> {

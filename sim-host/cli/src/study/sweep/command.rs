@@ -1,17 +1,15 @@
 //! `sandjumper sweep`: every combination, in parallel, into one output directory.
 
-use std::collections::HashMap;
-
 use crate::command::CliError;
-use crate::command::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
+use crate::command::args::{KindArg, ModelArg, ParamSource};
 use crate::command::progress::Bars;
-use crate::command::resolve::ParamsFile;
-use crate::study::cli_error;
 use clap::Args;
-use sandjumper_model::params::Params;
+use sandjumper_model::resolve::ParamsFile;
 use sandjumper_output::StagedDir;
+use sandjumper_study::StudyError;
 use sandjumper_study::sweep::{
     self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange,
+    parse_freq_range, parse_phi_range, parse_shard, parse_tau_range,
 };
 use std::path::PathBuf;
 
@@ -66,57 +64,9 @@ pub enum SweepLinkArg {
     Sil,
 }
 
-/// Parse a range and check each of its values with `check`.
-pub fn parse_range_checked(
-    s: &str,
-    check: fn(f64) -> Result<f64, String>,
-) -> Result<ValueRange, String> {
-    let r = ValueRange::parse(s).map_err(|e| e.to_string())?;
-    for &v in &r.values {
-        check(v).map_err(|e| format!("range `{s}`: {e}"))?;
-    }
-    Ok(r)
-}
-
-/// clap value parser: a frequency range `A:B:STEP`, every value checked.
-pub fn parse_freq_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_freq)
-}
-
-/// clap value parser: a delay range `A:B:STEP`, every value checked.
-pub fn parse_tau_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_tau)
-}
-
-/// clap value parser: a packing-fraction range `A:B:STEP`, every value checked.
-pub fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_phi)
-}
-
-/// clap value parser: a shard `I/N` (1-based).
-pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
-    ShardSpec::parse(s).map_err(|e| e.to_string())
-}
-
-pub use sandjumper_study::sweep::params_file_name;
-
-/// The parameters of each packing fraction of `spec` (keyed by `phi.to_bits()`), with the
-/// overrides `file` on top of each preset, and their TOML text (what the sweep's hash covers).
-pub fn resolve_sweep_params(
-    spec: &SweepSpec,
-    file: Option<&ParamsFile>,
-) -> Result<(HashMap<u64, Params>, String), CliError> {
-    let request = SweepRequest {
-        spec: spec.clone(),
-        params: file.map(ParamsFile::to_library),
-        ..SweepRequest::default()
-    };
-    request.resolved_params().map_err(cli_error)
-}
-
 impl SweepArgs {
     /// The library's request for these arguments (`params`: the `--params` file, read).
-    pub fn request(&self, params: Option<&ParamsFile>) -> SweepRequest {
+    pub fn request(&self, params: Option<ParamsFile>) -> SweepRequest {
         let spec = SweepSpec {
             kinds: self.kind.iter().map(|&k| k.into()).collect(),
             models: self.model.iter().map(|&m| m.into()).collect(),
@@ -133,7 +83,7 @@ impl SweepArgs {
         };
         SweepRequest {
             spec,
-            params: params.map(ParamsFile::to_library),
+            params,
             threads: self.threads.map(|t| t as usize),
             shard: self.shard,
         }
@@ -142,8 +92,8 @@ impl SweepArgs {
 
 /// Run `sweep`.
 pub fn run(a: &SweepArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    let request = a.request(file.as_ref());
+    let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
+    let request = a.request(file);
     request.validate()?;
     if a.slurm.slurm.is_some() {
         if a.shard.is_some() {
@@ -151,8 +101,7 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
                 "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
             ));
         }
-        let argv = sandjumper_slurm::arguments()?;
-        return match super::slurm::submit(&argv, &a.out, &a.slurm)? {
+        return match super::slurm::submit(&a.out, &a.slurm)? {
             Some(dirs) => super::merge_command::merge_into(&MergeRequest {
                 dirs,
                 out: a.out.clone(),
@@ -164,28 +113,7 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
     let swept = sweep::run(&request, &Bars::default())?;
     let plots = swept.write_into(&staged)?;
     let dir = staged.commit()?;
-    let shard = request.shard.unwrap_or(ShardSpec::WHOLE);
-    let n = swept.meta.shard.end - swept.meta.shard.first;
-    let what = if shard.is_whole() {
-        format!("{n} jumps")
-    } else {
-        format!(
-            "shard {shard}: {n} of {} jumps",
-            swept.meta.total_combinations
-        )
-    };
-    eprintln!(
-        "swept {what} in {:.2} s on {} thread(s); wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{}{})",
-        swept.elapsed_s,
-        swept.threads,
-        dir.display(),
-        if swept.phis.len() > 1 {
-            "-phi-*.toml"
-        } else {
-            ".toml"
-        },
-        plots.iter().map(|p| format!(", {p}")).collect::<String>()
-    );
+    eprintln!("{}", swept.report(&dir, &plots));
     for line in swept.warnings() {
         eprintln!("{line}");
     }

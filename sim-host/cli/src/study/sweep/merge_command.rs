@@ -30,19 +30,8 @@ pub fn run(a: &MergeArgs) -> Result<(), CliError> {
 pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
     let merged = merge(request, &Silent)?;
     let written = merged.write(&request.out)?;
-    let (rows, failures) = (merged.outcome.rows.len(), merged.outcome.failures.len());
-    eprintln!(
-        "merged {} shard(s): {rows} rows, {failures} failures; wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{})",
-        merged.shards,
-        written.dir.display(),
-        written
-            .plots
-            .iter()
-            .map(|p| format!(", {p}"))
-            .collect::<String>()
-    );
-    if failures > 0 {
-        eprintln!("warning: {failures} jump(s) of the sweep failed; see failures.csv");
+    for line in merged.report(&written) {
+        eprintln!("{line}");
     }
     Ok(())
 }
