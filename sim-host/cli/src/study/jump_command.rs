@@ -5,7 +5,6 @@ use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi
 use crate::command::progress::Bars;
 use clap::Args;
 use sandjumper_model::resolve::ParamsFile;
-use sandjumper_output::StagedDir;
 use sandjumper_study::StudyError;
 use sandjumper_study::jump::{self, JumpRequest};
 use std::path::PathBuf;
@@ -67,13 +66,8 @@ impl JumpArgs {
 pub fn run(a: &JumpArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
     let request = a.request(file, a.out.is_some());
-    // Bad parameters are refused before an output directory is touched.
-    request.validate()?;
-    // Fail on an unwritable output directory before spending time on the simulation.
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let outcome = jump::run(&request, &Bars::default())?;
-    let write = |s: &StagedDir| outcome.write_into(s);
-    super::print_jump(staged, write, a.json, &outcome.json()?, &outcome)?;
-    super::warn(&outcome.simulated.warnings);
+    let (outcome, dir) = jump::run_into(&request, a.out.as_deref(), &Bars::default())?;
+    let warnings = &outcome.simulated.warnings;
+    super::print_jump(dir, a.json, &outcome.json()?, &outcome, warnings);
     Ok(())
 }

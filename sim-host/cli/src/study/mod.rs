@@ -1,8 +1,5 @@
 //! The subcommands `sandjumper jump`, `sweep`, `merge`, `replay`, `fit`, `figures`: faces over
-//! `sandjumper_study`'s calls.
-//!
-//! The library items are re-exported from `sandjumper_study`, so a subcommand reads them as its
-//! neighbours.
+//! `sandjumper_study`'s calls (re-exported here).
 
 pub use sandjumper_study::*;
 
@@ -14,18 +11,16 @@ pub mod sweep;
 
 pub use crate::command::progress::cli_error;
 
-/// Write a jump's folder (when `staged`, with `write`) and say so on stderr, then print the
-/// outcome: its `json` with `--json`, else its human summary (`jump` and `replay`).
+/// Say where a jump's folder went (when `dir`), print the outcome (`text` with `--json`,
+/// else `human`), then each of its `warnings` on stderr (`jump` and `replay`).
 fn print_jump(
-    staged: Option<sandjumper_output::StagedDir>,
-    write: impl FnOnce(&sandjumper_output::StagedDir) -> Result<(), StudyError>,
+    dir: Option<std::path::PathBuf>,
     json: bool,
     text: &str,
     human: &impl std::fmt::Display,
-) -> Result<(), crate::command::CliError> {
-    if let Some(staged) = staged {
-        write(&staged)?;
-        let dir = staged.commit()?;
+    warnings: &[String],
+) {
+    if let Some(dir) = dir {
         eprintln!(
             "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
             dir.display()
@@ -36,11 +31,6 @@ fn print_jump(
     } else {
         print!("{human}");
     }
-    Ok(())
-}
-
-/// Each of `warnings` on stderr as `warning: ...`.
-fn warn(warnings: &[String]) {
     for w in warnings {
         eprintln!("warning: {w}");
     }

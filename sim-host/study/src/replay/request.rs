@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::{DEFAULT_WINDOW_S, MeasuredComparison, ReplayInfo, Replayed, replay_log};
 use crate::StudyError;
-use crate::jump::{human_summary, to_json, write_jump_files};
+use crate::jump::{commit_into, human_summary, to_json, write_jump_files};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::{ModelName, Params};
@@ -110,6 +110,21 @@ pub struct ReplayOutcome {
 /// Read the log `request` names and replay it.
 pub fn run(request: &ReplayRequest, progress: &dyn Progress) -> Result<ReplayOutcome, StudyError> {
     run_log(request, &request.read_log()?, progress)
+}
+
+/// [`run`], writing the replay's folder into `out` when given (as
+/// [`ReplayOutcome::write`]; set [`ReplayRequest::record_series`] for its series): the log is
+/// checked before `out` is touched. The outcome and the folder written.
+pub fn run_into(
+    request: &ReplayRequest,
+    out: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(ReplayOutcome, Option<PathBuf>), StudyError> {
+    let log = request.read_log()?;
+    let staged = out.map(StagedDir::create).transpose()?;
+    let outcome = run_log(request, &log, progress)?;
+    let dir = commit_into(staged, |s| outcome.write_into(s))?;
+    Ok((outcome, dir))
 }
 
 /// Replay `log` (read from `request.log`) as `request` asks.

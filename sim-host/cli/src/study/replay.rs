@@ -10,7 +10,6 @@ use crate::command::CliError;
 use crate::command::args::{ModelArg, ParamSource};
 use crate::command::progress::Bars;
 use sandjumper_model::resolve::ParamsFile;
-use sandjumper_output::StagedDir;
 use sandjumper_study::StudyError;
 use sandjumper_study::replay::{self, DEFAULT_WINDOW_S, ReplayRequest, parse_window_ms};
 
@@ -64,12 +63,7 @@ impl ReplayArgs {
 pub fn run(a: &ReplayArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
     let request = a.request(file, a.out.is_some());
-    // The log is checked before an output directory is touched.
-    let log = request.read_log()?;
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let outcome = replay::run_log(&request, &log, &Bars::default())?;
-    let write = |s: &StagedDir| outcome.write_into(s);
-    crate::study::print_jump(staged, write, a.json, &outcome.json()?, &outcome)?;
-    crate::study::warn(&outcome.warnings);
+    let (outcome, dir) = replay::run_into(&request, a.out.as_deref(), &Bars::default())?;
+    super::print_jump(dir, a.json, &outcome.json()?, &outcome, &outcome.warnings);
     Ok(())
 }

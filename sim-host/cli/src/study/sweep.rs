@@ -1,17 +1,22 @@
-//! `sandjumper sweep`: every combination, in parallel, into one output directory.
+//! `sandjumper sweep` (on this machine or, with `--slurm N`, as a Slurm job array, one shard
+//! per task: [`sandjumper_slurm::submit_sharded`]) and `merge` (join the shard directories of
+//! one sweep: [`sandjumper_study::sweep::merge()`]).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
 
 use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource};
 use crate::command::progress::Bars;
-use clap::Args;
 use sandjumper_model::resolve::ParamsFile;
-use sandjumper_output::StagedDir;
+use sandjumper_output::{Silent, StagedDir};
+use sandjumper_slurm::{self as slurm, ShardedJob, ShardedJobOutcome};
 use sandjumper_study::StudyError;
 use sandjumper_study::sweep::{
-    self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange,
+    self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange, merge,
     parse_freq_range, parse_phi_range, parse_shard, parse_tau_range,
 };
-use std::path::PathBuf;
 
 /// `sandjumper sweep`.
 #[derive(Debug, Clone, Args)]
@@ -54,7 +59,7 @@ pub struct SweepArgs {
     pub gain_lowering: Option<f64>,
     /// Run on a Slurm cluster as a job array.
     #[command(flatten)]
-    pub slurm: super::slurm::SlurmArgs,
+    pub slurm: SlurmArgs,
 }
 
 /// The loop a sweep's jumps run through instead of the imposed stroke.
@@ -101,8 +106,8 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
                 "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
             ));
         }
-        return match super::slurm::submit(&a.out, &a.slurm)? {
-            Some(dirs) => super::merge_command::merge_into(&MergeRequest {
+        return match submit(&a.out, &a.slurm)? {
+            Some(dirs) => merge_into(&MergeRequest {
                 dirs,
                 out: a.out.clone(),
             }),
@@ -118,4 +123,80 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
         eprintln!("{line}");
     }
     Ok(())
+}
+
+/// `sandjumper merge`.
+#[derive(Debug, Clone, Args)]
+pub struct MergeArgs {
+    /// Shard directories written by `sandjumper sweep --shard I/N` (all N of them, any order).
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory for the merged sweep.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+/// Run `merge`.
+pub fn run_merge(a: &MergeArgs) -> Result<(), CliError> {
+    merge_into(&MergeRequest {
+        dirs: a.dirs.clone(),
+        out: a.out.clone(),
+    })
+}
+
+/// Merge the shards `request` names into its `out` and tell the user (also `sweep --slurm`'s
+/// last step).
+pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
+    let merged = merge(request, &Silent)?;
+    let written = merged.write(&request.out)?;
+    for line in merged.report(&written) {
+        eprintln!("{line}");
+    }
+    Ok(())
+}
+
+/// The Slurm options of `sweep`.
+#[derive(Debug, Clone, Args)]
+pub struct SlurmArgs {
+    /// Submit the sweep to Slurm as a job array of N tasks (one shard each), wait for it and
+    /// merge the shards into --out.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub slurm: Option<u32>,
+    /// CPUs of each task (its sweep's threads).
+    #[arg(long, value_name = "N", default_value = "1", requires = "slurm",
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub slurm_cpus: u32,
+    /// Partition, time limit of each task, waiting (merge the shards later with the printed
+    /// `sandjumper merge` command).
+    #[command(flatten)]
+    pub queue: crate::slurm::QueueArgs,
+}
+
+/// Submit this sweep as a job array of `--slurm` tasks writing shards for `out`; unless told
+/// not to, wait for it: the shard directories to merge into `out` (None: not waited for).
+pub fn submit(out: &Path, s: &SlurmArgs) -> Result<Option<Vec<PathBuf>>, CliError> {
+    let job = ShardedJob {
+        name: "sweep",
+        command: &["sweep"],
+        tasks: s.slurm.unwrap_or(1),
+        cpus: s.slurm_cpus,
+        out,
+        expect: "sweep.toml",
+        queue: s.queue.options(),
+    };
+    match slurm::submit_sharded(&job, &Bars::new())? {
+        ShardedJobOutcome::Queued { id, dir } => {
+            println!("{id}");
+            eprintln!(
+                "when it is done: sandjumper merge {}/shard-* --out {}",
+                dir.display(),
+                out.display()
+            );
+            Ok(None)
+        }
+        ShardedJobOutcome::Done { id, shards } => {
+            eprintln!("all {} task(s) of job {id} done; merging", shards.len());
+            Ok(Some(shards))
+        }
+    }
 }

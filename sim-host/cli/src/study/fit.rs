@@ -4,16 +4,18 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use super::added_mass::DEFAULT_EXCLUDE_DEEPEST;
-use super::data::HeightColumn;
-use super::intrusion::CurveKind;
-use super::jumps::DragParam;
-use super::{FitKind, FitReport, FitRequest, check_rtol, parse_phi, write_params_files};
 use crate::command::CliError;
 use crate::command::args::ModelArg;
 use sandjumper_model::resolve::ParamsFile;
 use sandjumper_output::Silent;
 use sandjumper_study::StudyError;
+use sandjumper_study::fit::added_mass::DEFAULT_EXCLUDE_DEEPEST;
+use sandjumper_study::fit::data::HeightColumn;
+use sandjumper_study::fit::intrusion::CurveKind;
+use sandjumper_study::fit::jumps::DragParam;
+use sandjumper_study::fit::{
+    self, FitKind, FitReport, FitRequest, check_rtol, parse_phi, write_params_files,
+};
 
 /// `sandjumper fit`.
 #[derive(Debug, Clone, Args)]
@@ -183,7 +185,7 @@ impl JumpFitArgs {
 /// Run `fit ...`.
 pub fn run(a: &FitArgs) -> Result<(), CliError> {
     let (request, output) = a.what.request()?;
-    let report = super::run(&request, &Silent)?;
+    let report = fit::run(&request, &Silent)?;
     emit(&report, output)
 }
 
