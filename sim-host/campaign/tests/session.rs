@@ -138,4 +138,11 @@ fn a_live_views_pace_is_refused_with_the_command_lines_words() {
         e.to_string(),
         "--pace 2: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
     );
+    assert!(matches!(
+        session::stop_event(1, "why".into()),
+        sandjumper_live::Event::Campaign(sandjumper_live::CampaignRecord::Stop {
+            exit_status: 1,
+            ..
+        })
+    ));
 }

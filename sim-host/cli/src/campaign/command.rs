@@ -121,7 +121,7 @@ fn resume(a: &ResumeArgs) -> Result<(), CliError> {
     })
 }
 
-/// Run `session` with the live view `args` asks for and progress bars; print its last line
+/// Run `call` (a session) with the live view `args` asks for and progress bars; print its last line
 /// and tell the live view how it ended.
 fn with_live(
     args: &crate::live::LiveArgs,
@@ -157,12 +157,8 @@ fn finish_live(live: Option<crate::live::LiveView>, result: &Result<(), CliError
         Ok(()) => (0, "the session ended".to_string()),
         Err(e) => (i32::from(e.exit), e.message.clone()),
     };
-    v.bus().event(sandjumper_live::Event::Campaign(
-        sandjumper_live::CampaignRecord::Stop {
-            exit_status,
-            message: message.clone(),
-        },
-    ));
+    v.bus()
+        .event(session::stop_event(exit_status, message.clone()));
     v.finish(0.0, message, exit_status == 0);
 }
 
@@ -190,10 +186,7 @@ pub fn run_on_board(
 fn status(a: &StatusArgs) -> Result<(), CliError> {
     let report = session::status(&StatusRequest { dir: a.dir.clone() })?;
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| CliError::internal(e.to_string()))?
-        );
+        println!("{}", report.json()?);
     } else {
         println!("{report}");
     }
