@@ -737,6 +737,32 @@ impl std::fmt::Display for StatusReport {
     }
 }
 
+/// Refuse a live view's pace (`--pace`, a speed factor): a campaign's points are not paced,
+/// each is shown when it is done.
+pub fn check_pace(pace: Option<f64>) -> Result<(), CampaignError> {
+    match pace {
+        Some(p) => Err(CampaignError::input(format!(
+            "--pace {p}: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The live view's last event of a session: how it ended (exit status 0: normally) and why.
+pub fn stop_event(exit_status: i32, message: String) -> sandjumper_live::Event {
+    sandjumper_live::Event::Campaign(CampaignRecord::Stop {
+        exit_status,
+        message,
+    })
+}
+
+impl StatusReport {
+    /// What `campaign status --json` prints (pretty-printed JSON).
+    pub fn json(&self) -> Result<String, CampaignError> {
+        serde_json::to_string_pretty(self).map_err(CampaignError::internal)
+    }
+}
+
 /// Where the campaign in `request.dir` stands, read without disturbing a session that runs it.
 pub fn status(request: &StatusRequest) -> Result<StatusReport, CampaignError> {
     let work = work_dir(&request.dir);

@@ -128,3 +128,21 @@ fn a_link_other_than_sil_and_pil_is_refused_before_anything_is_written() {
     .unwrap_err();
     assert!(e.to_string().contains("no campaign here"), "{e}");
 }
+
+#[test]
+fn a_live_views_pace_is_refused_with_the_command_lines_words() {
+    assert!(session::check_pace(None).is_ok());
+    let e = session::check_pace(Some(2.0)).unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert_eq!(
+        e.to_string(),
+        "--pace 2: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
+    );
+    assert!(matches!(
+        session::stop_event(1, "why".into()),
+        sandjumper_live::Event::Campaign(sandjumper_live::CampaignRecord::Stop {
+            exit_status: 1,
+            ..
+        })
+    ));
+}

@@ -2,7 +2,7 @@
 //! [`sandjumper_slurm`] (the job's folder, its script, `sbatch`, `squeue`, `scontrol`).
 //!
 //! Two commands submit: `sweep --slurm N` (a job array, one shard per task:
-//! `crate::study::sweep::slurm`) and `dem lammps --slurm` (one job of `--ranks` MPI tasks:
+//! `crate::study::sweep`) and `dem lammps --slurm` (one job of `--ranks` MPI tasks:
 //! [`submit_job`]).
 
 use std::path::Path;

@@ -130,9 +130,7 @@ fn within(flag: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Optimi
     if v.is_finite() && v > lo && v <= hi {
         Ok(())
     } else {
-        Err(OptimizeError::Invalid(format!(
-            "{flag} `{v}` out of range (allowed: {lo} < X <= {hi} {unit})"
-        )))
+        Err(OptimizeError::Invalid(out_of_range(flag, v, lo, hi, unit)))
     }
 }
 
@@ -145,6 +143,49 @@ fn counted(flag: &str, v: usize, lo: usize, hi: usize) -> Result<(), OptimizeErr
             "{flag} {v} out of range (allowed: {lo}..={hi})"
         )))
     }
+}
+
+/// A value parser for a number `what` (a flag's name, e.g. `--max-stroke`) with `lo < X <=
+/// hi` in `unit`; the refusal names the flag, the value and the range.
+pub fn ranged(
+    what: &'static str,
+    lo: f64,
+    hi: f64,
+    unit: &'static str,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |s: &str| match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > lo && v <= hi => Ok(v),
+        _ => Err(out_of_range(what, s, lo, hi, unit)),
+    }
+}
+
+/// The refusal of `shown` (a value of `flag`) outside `lo < X <= hi` in `unit`.
+fn out_of_range(flag: &str, shown: impl std::fmt::Display, lo: f64, hi: f64, unit: &str) -> String {
+    format!("{flag} `{shown}` out of range (allowed: {lo} < X <= {hi} {unit})")
+}
+
+/// The refusal of a link `--verify` does not take.
+fn not_verifiable(link: impl std::fmt::Display) -> String {
+    format!(
+        "link `{link}` not allowed in --verify (allowed: sil, pil, f407, a comma-separated list \
+         of them, or none)"
+    )
+}
+
+/// The links of [`OptimizeRequest::verify`] from their names: `sil`, `pil`, `f407`, a
+/// comma-separated list of them, or `none` (no link).
+pub fn parse_verify(s: &str) -> Result<Vec<LinkArg>, String> {
+    if s.trim() == "none" {
+        return Ok(Vec::new());
+    }
+    s.split(',')
+        .map(|l| match l.trim() {
+            "sil" => Ok(LinkArg::Sil),
+            "pil" => Ok(LinkArg::Pil),
+            "f407" => Ok(LinkArg::F407),
+            other => Err(not_verifiable(other)),
+        })
+        .collect()
 }
 
 impl OptimizeRequest {
@@ -185,10 +226,7 @@ impl OptimizeRequest {
             counted("--threads", t, 1, 1024)?;
         }
         if let Some(l) = self.verify.iter().find(|l| matches!(l, LinkArg::Serial(_))) {
-            return Err(OptimizeError::Invalid(format!(
-                "link `{l}` not allowed in --verify (allowed: sil, pil, f407, a \
-                 comma-separated list of them, or none)"
-            )));
+            return Err(OptimizeError::Invalid(not_verifiable(l)));
         }
         Ok(())
     }

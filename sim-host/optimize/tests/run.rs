@@ -262,3 +262,26 @@ fn the_defaults_are_the_command_lines_and_bad_limits_are_refused() {
     assert!(matches!(e, OptimizeError::Invalid(_)), "{e:?}");
     assert!(!out.exists() && !checkpoint_path(&out).exists());
 }
+
+#[test]
+fn the_value_parsers_name_the_flag_and_what_is_allowed() {
+    let max_stroke = sandjumper_optimize::ranged("--max-stroke", 0.0, 0.025, "m");
+    assert_eq!(max_stroke(" 0.02 "), Ok(0.02));
+    assert_eq!(
+        max_stroke("0.03"),
+        Err("--max-stroke `0.03` out of range (allowed: 0 < X <= 0.025 m)".to_string())
+    );
+    assert_eq!(
+        sandjumper_optimize::parse_verify("sil, f407"),
+        Ok(vec![LinkArg::Sil, LinkArg::F407])
+    );
+    assert_eq!(sandjumper_optimize::parse_verify("none"), Ok(Vec::new()));
+    assert_eq!(
+        sandjumper_optimize::parse_verify("sil,serial"),
+        Err(
+            "link `serial` not allowed in --verify (allowed: sil, pil, f407, a comma-separated \
+             list of them, or none)"
+                .to_string()
+        )
+    );
+}

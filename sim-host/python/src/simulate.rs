@@ -10,11 +10,11 @@ use sandjumper_cli::command::args::{
     KindArg, ModelArg, check_freq, check_phi, check_tau, parse_gain_lowering, parse_rtol,
 };
 use sandjumper_cli::command::resolve::resolve_params;
-use sandjumper_cli::study::sweep::command::resolve_sweep_params;
 use sandjumper_model::SeriesRow;
+use sandjumper_output::Silent;
 use sandjumper_study::series::SERIES_HEADER;
 use sandjumper_study::sweep::drive::run_driven;
-use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
+use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepRequest, SweepSpec, ValueRange};
 
 use crate::argv::Argv;
 use crate::convert::{f64_array, i64_array, json_to_py, params_source, py_err, str_array};
@@ -255,13 +255,13 @@ pub fn jump(
         unreachable!("`sandjumper jump` parses as Command::Jump")
     };
     let file = params_source("params", params)?;
-    let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
-    let run = py
-        .detach(|| sandjumper_cli::study::jump_command::simulate_run(&a, params, true))
-        .map_err(|e| argv.error(e))?;
+    let request = a.request(file.as_ref().map(|f| f.to_library()), true);
+    let out = py
+        .detach(|| sandjumper_study::jump::run(&request, &Silent))
+        .map_err(|e| argv.error(e.into()))?;
     Ok(JumpResult {
-        summary: json_to_py(py, &run.json)?.unbind(),
-        series: series_dict(py, &run.outcome.series)?.into_any().unbind(),
+        summary: json_to_py(py, &out.json().map_err(|e| argv.error(e.into()))?)?.unbind(),
+        series: series_dict(py, &out.simulated.series)?.into_any().unbind(),
     })
 }
 
@@ -415,8 +415,12 @@ pub fn sweep(
         rtol,
         drive,
     };
-    let file = params_source("params", params)?;
-    let (params_by_phi, _) = resolve_sweep_params(&spec, file.as_ref()).map_err(py_err)?;
+    let request = SweepRequest {
+        spec: spec.clone(),
+        params: params_source("params", params)?.map(|f| f.to_library()),
+        ..SweepRequest::default()
+    };
+    let (params_by_phi, _) = request.resolved_params().map_err(|e| py_err(e.into()))?;
     let combos = spec.combinations();
     let outcome = py
         .detach(|| {
@@ -557,16 +561,14 @@ pub fn replay(
         unreachable!("`sandjumper replay` parses as Command::Replay")
     };
     let file = params_source("params", params)?;
-    let log = sandjumper_cli::study::replay::command::read_log_file(&a.log, a.allow_gaps)
-        .map_err(|e| argv.error(e))?;
-    let run = py
-        .detach(|| {
-            sandjumper_cli::study::replay::command::replay_run(&a, &log, file.as_ref(), true)
-        })
-        .map_err(|e| argv.error(e))?;
+    let request = a.request(file.as_ref().map(|f| f.to_library()), true);
+    let log = request.read_log().map_err(|e| argv.error(e.into()))?;
+    let out = py
+        .detach(|| sandjumper_study::replay::run_log(&request, &log, &Silent))
+        .map_err(|e| argv.error(e.into()))?;
     Ok(JumpResult {
-        summary: json_to_py(py, &run.json)?.unbind(),
-        series: series_dict(py, &run.replayed.outcome.series)?
+        summary: json_to_py(py, &out.json().map_err(|e| argv.error(e.into()))?)?.unbind(),
+        series: series_dict(py, &out.replayed.outcome.series)?
             .into_any()
             .unbind(),
     })

@@ -390,6 +390,38 @@ mod tests {
     }
 
     #[test]
+    fn each_task_gets_the_sweeps_arguments_without_the_ones_it_sets() {
+        let argv: Vec<String> = [
+            "sandjumper",
+            "sweep",
+            "--kind",
+            "single",
+            "--out",
+            "x",
+            "--slurm",
+            "3",
+            "--slurm-time=5",
+            "--freq",
+            "8:12:1",
+            "--threads",
+            "2",
+            "--slurm-no-wait",
+            "--shard=1/2",
+            "--slurm-cpus",
+            "2",
+            "--phi",
+            "0.57",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        assert_eq!(
+            shard_task_arguments(&argv, &["sweep"]),
+            ["--kind", "single", "--freq", "8:12:1", "--phi", "0.57"]
+        );
+    }
+
+    #[test]
     fn a_script_quotes_its_log_folder_and_keeps_the_file_names_patterns() {
         let s = JobScript {
             name: "sweep".into(),
@@ -507,4 +539,144 @@ pub fn submit_command(
         job.out.display()
     ));
     Ok(CommandJobOutcome::Done { id: submitted.id })
+}
+
+/// A command run as a Slurm job array of shards: task `I` of [`ShardedJob::tasks`] runs this
+/// very program's command again (the words [`ShardedJob::command`], then this process's own
+/// arguments without the Slurm options, `--out`, `--shard` and `--threads`) with `--shard
+/// I/N --threads CPUS --out DIR.slurm/shard-I`; each task's log is `DIR.slurm/logs/task-I.out`.
+#[derive(Debug, Clone)]
+pub struct ShardedJob<'a> {
+    /// The job's name in the queue.
+    pub name: &'a str,
+    /// The command's words (e.g. `["sweep"]`).
+    pub command: &'a [&'a str],
+    /// Array tasks, one shard each.
+    pub tasks: u32,
+    /// CPUs of each task (its `--threads`).
+    pub cpus: u32,
+    /// The output folder the shards are merged into (the job's folder is `DIR.slurm` beside it).
+    pub out: &'a Path,
+    /// The file a task must have written into its shard folder for it to count as done.
+    pub expect: &'a str,
+    /// Partition, time limit, waiting.
+    pub queue: QueueOptions,
+}
+
+/// What a submitted [`ShardedJob`] came to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ShardedJobOutcome {
+    /// Submitted without waiting ([`QueueOptions::no_wait`]).
+    Queued {
+        /// Slurm's job id.
+        id: String,
+        /// The job's folder (`DIR.slurm`), where the shards will be.
+        dir: PathBuf,
+    },
+    /// Every task succeeded.
+    Done {
+        /// Slurm's job id.
+        id: String,
+        /// The shard folders, in task order.
+        shards: Vec<PathBuf>,
+    },
+}
+
+/// The command's own arguments in `argv` (after the words `command`) without the ones each
+/// task of a [`ShardedJob`] sets itself: `--out`, `--shard`, `--threads` and every `--slurm*`.
+pub fn shard_task_arguments(argv: &[String], command: &[&str]) -> Vec<String> {
+    passed_on(
+        argv,
+        command,
+        &[
+            "--out",
+            "--shard",
+            "--threads",
+            "--slurm",
+            "--slurm-partition",
+            "--slurm-time",
+            "--slurm-cpus",
+        ],
+        &["--slurm-no-wait"],
+    )
+}
+
+/// Submit `job` as a job array (see [`ShardedJob`]); unless told not to, wait for it and check
+/// every task: its shard folder complete, its final state and exit code. A task that failed,
+/// was cancelled or timed out is an internal error with the tail of its log. Where the job's
+/// script and logs are is a `progress` note.
+pub fn submit_sharded(
+    job: &ShardedJob,
+    progress: &dyn sandjumper_output::Progress,
+) -> Result<ShardedJobOutcome, SlurmError> {
+    let argv = arguments()?;
+    let tasks = job.tasks;
+    tool("sbatch", "--slurm")?;
+    let dir = fresh_job_dir(job.out)?;
+    let (exe, cwd) = program_and_cwd()?;
+    let script = JobScript {
+        name: job.name.to_string(),
+        shape: vec![
+            format!("--array=1-{tasks}"),
+            format!("--cpus-per-task={}", job.cpus),
+        ],
+        log: dir.join("logs").join("task-%a.out"),
+        cwd,
+        queue: job.queue.clone(),
+        command: format!(
+            "exec {} {} {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
+             \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
+            quote(&exe.to_string_lossy()),
+            job.command.join(" "),
+            shard_task_arguments(&argv, job.command)
+                .iter()
+                .map(|a| quote(a))
+                .collect::<Vec<_>>()
+                .join(" "),
+            quote(&dir.to_string_lossy())
+        ),
+    };
+    let submitted = submit(&dir, &script)?;
+    progress.note(&format!(
+        "submitted Slurm job {} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
+        submitted.id,
+        job.cpus,
+        dir.display()
+    ));
+    if job.queue.no_wait {
+        return Ok(ShardedJobOutcome::Queued {
+            id: submitted.id,
+            dir,
+        });
+    }
+    submitted.wait()?;
+    let shards: Vec<PathBuf> = (1..=tasks)
+        .map(|i| dir.join(format!("shard-{i}")))
+        .collect();
+    let mut failed = Vec::new();
+    for (i, shard) in (1..=tasks).zip(&shards) {
+        let complete = shard.join(job.expect).is_file();
+        if let Some((st, code)) = submitted.unsuccessful(Some(i), complete) {
+            let log = dir.join("logs").join(format!("task-{i}.out"));
+            failed.push(format!(
+                "task {i}: {st}, exit code {code}, shard {}; log {}:\n    {}",
+                if complete { "written" } else { "missing" },
+                log.display(),
+                log_tail(&log, 5)
+            ));
+        }
+    }
+    if !failed.is_empty() {
+        return Err(SlurmError::Internal(format!(
+            "Slurm job {}: {} of {tasks} task(s) did not succeed; nothing merged (fix and \
+             resubmit, or merge the good shards by hand)\n{}",
+            submitted.id,
+            failed.len(),
+            failed.join("\n")
+        )));
+    }
+    Ok(ShardedJobOutcome::Done {
+        id: submitted.id,
+        shards,
+    })
 }

@@ -126,6 +126,34 @@ pub fn run(request: &JumpRequest, progress: &dyn Progress) -> Result<JumpOutcome
     run_with_params(request, request.resolved_params()?, progress)
 }
 
+/// [`run`], writing the jump's folder into `out` when given (created, or replacing an earlier
+/// sandjumper output; set [`JumpRequest::record_series`] for its series): bad parameters are
+/// refused before `out` is touched, an unwritable `out` before the jump runs. The outcome and
+/// the folder written.
+pub fn run_into(
+    request: &JumpRequest,
+    out: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(JumpOutcome, Option<PathBuf>), StudyError> {
+    request.validate()?;
+    let staged = out.map(StagedDir::create).transpose()?;
+    let outcome = run(request, progress)?;
+    let dir = commit_into(staged, |s| outcome.write_into(s))?;
+    Ok((outcome, dir))
+}
+
+/// Write a folder being staged (when there is one) with `write`, then give it its name.
+pub(crate) fn commit_into(
+    staged: Option<StagedDir>,
+    write: impl FnOnce(&StagedDir) -> Result<(), StudyError>,
+) -> Result<Option<PathBuf>, StudyError> {
+    let Some(staged) = staged else {
+        return Ok(None);
+    };
+    write(&staged)?;
+    Ok(Some(staged.commit()?))
+}
+
 /// [`run`] with parameters resolved by the caller (`request.phi` and `request.params` are not
 /// read).
 pub fn run_with_params(

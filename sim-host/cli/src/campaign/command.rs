@@ -8,7 +8,8 @@ use clap::{Args, Subcommand};
 use super::point::Connect;
 use super::session::{self, Hooks, ResumeRequest, RunRequest, SessionOutcome, StatusRequest};
 use crate::command::CliError;
-use crate::command::progress::{Bars, cli_error};
+use crate::command::progress::Bars;
+use sandjumper_campaign::CampaignError;
 
 /// `campaign`.
 #[derive(Args, Debug)]
@@ -106,24 +107,34 @@ fn run_new(a: &RunArgs) -> Result<(), CliError> {
         stop_after: a.stop_after,
     };
     request.validate()?;
-    refuse_pace(&a.live)?;
-    let mut live = crate::live::LiveView::start(&a.live, &[])?;
-    let bars = Bars::default();
-    let result = session::run(&request, hooks(&mut live, &bars), &bars);
-    conclude(live, result)
+    with_live(&a.live, |hooks, bars| session::run(&request, hooks, bars))
 }
 
 fn resume(a: &ResumeArgs) -> Result<(), CliError> {
-    refuse_pace(&a.live)?;
-    let mut live = crate::live::LiveView::start(&a.live, &[])?;
     let request = ResumeRequest {
         dir: a.dir.clone(),
         firmware: a.firmware.clone(),
         stop_after: a.stop_after,
     };
+    with_live(&a.live, |hooks, bars| {
+        session::resume(&request, hooks, bars)
+    })
+}
+
+/// Run `call` (a session) with the live view `args` asks for and progress bars; print its last line
+/// and tell the live view how it ended.
+fn with_live(
+    args: &crate::live::LiveArgs,
+    call: impl FnOnce(Hooks<'_>, &Bars) -> Result<SessionOutcome, CampaignError>,
+) -> Result<(), CliError> {
+    session::check_pace(args.pace)?;
+    let mut live = crate::live::LiveView::start(args, &[])?;
     let bars = Bars::default();
-    let result = session::resume(&request, hooks(&mut live, &bars), &bars);
-    conclude(live, result)
+    let result = call(hooks(&mut live, &bars), &bars)
+        .map(|o| println!("{o}"))
+        .map_err(CliError::from);
+    finish_live(live, &result);
+    result
 }
 
 /// What a session reports to besides `bars`: the live view's bus, and each point's line
@@ -137,26 +148,6 @@ fn hooks<'a>(live: &'a mut Option<crate::live::LiveView>, bars: &'a Bars) -> Hoo
     }
 }
 
-/// Print the session's last line; tell the live view how it ended.
-fn conclude(
-    live: Option<crate::live::LiveView>,
-    result: Result<SessionOutcome, sandjumper_campaign::CampaignError>,
-) -> Result<(), CliError> {
-    let result = result.map(|o| println!("{o}")).map_err(cli_error);
-    finish_live(live, &result);
-    result
-}
-
-/// A campaign's points are not paced (each arrives when it is done): `--pace` is refused.
-fn refuse_pace(live: &crate::live::LiveArgs) -> Result<(), CliError> {
-    match live.pace {
-        Some(p) => Err(CliError::input(format!(
-            "--pace {p}: a campaign's points are not paced, each is shown when it is done (allowed: --live and --linger only)"
-        ))),
-        None => Ok(()),
-    }
-}
-
 /// Tell the live view how the campaign ended, and keep its page up.
 fn finish_live(live: Option<crate::live::LiveView>, result: &Result<(), CliError>) {
     let Some(mut v) = live else {
@@ -166,17 +157,14 @@ fn finish_live(live: Option<crate::live::LiveView>, result: &Result<(), CliError
         Ok(()) => (0, "the session ended".to_string()),
         Err(e) => (i32::from(e.exit), e.message.clone()),
     };
-    v.bus().event(sandjumper_live::Event::Campaign(
-        sandjumper_live::CampaignRecord::Stop {
-            exit_status,
-            message: message.clone(),
-        },
-    ));
+    v.bus()
+        .event(session::stop_event(exit_status, message.clone()));
     v.finish(0.0, message, exit_status == 0);
 }
 
 /// Run the campaign file `file` on a board reached by `connect` (a fresh link per point),
-/// into `out` (the library entry for boards that are not serial ports, e.g. a stand-in).
+/// into `out` (the library entry for boards that are not serial ports, e.g. a stand-in:
+/// [`session::run_on_board`]).
 pub fn run_on_board(
     file: &Path,
     out: &Path,
@@ -190,37 +178,15 @@ pub fn run_on_board(
         ..RunRequest::default()
     };
     let bars = Bars::default();
-    let no_live = &mut None;
-    session::run_on_board(&request, connect, hooks(no_live, &bars), &bars)
-        .map(|o| println!("{o}"))
-        .map_err(cli_error)
-}
-
-/// Resume the campaign in `dir` on a board reached by `connect`.
-pub fn resume_on_board(
-    dir: &Path,
-    connect: Box<Connect<'_>>,
-    stop_after: Option<usize>,
-) -> Result<(), CliError> {
-    let request = ResumeRequest {
-        dir: dir.to_path_buf(),
-        stop_after,
-        ..ResumeRequest::default()
-    };
-    let bars = Bars::default();
-    let no_live = &mut None;
-    session::resume_on_board(&request, connect, hooks(no_live, &bars), &bars)
-        .map(|o| println!("{o}"))
-        .map_err(cli_error)
+    let outcome = session::run_on_board(&request, connect, hooks(&mut None, &bars), &bars)?;
+    println!("{outcome}");
+    Ok(())
 }
 
 fn status(a: &StatusArgs) -> Result<(), CliError> {
     let report = session::status(&StatusRequest { dir: a.dir.clone() })?;
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| CliError::internal(e.to_string()))?
-        );
+        println!("{}", report.json()?);
     } else {
         println!("{report}");
     }

@@ -1,7 +1,5 @@
-//! The subcommands `sandjumper campaign`: run, resume, status.
-//!
-//! The library items are re-exported from `sandjumper_campaign`, so a subcommand reads them as its
-//! neighbours.
+//! The subcommands `sandjumper campaign`: run, resume, status (over `sandjumper_campaign`,
+//! re-exported here).
 
 pub use sandjumper_campaign::*;
 

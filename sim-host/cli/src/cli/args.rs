@@ -11,12 +11,11 @@ use crate::flow::command::{PivArgs, SyntheticArgs};
 use crate::imaging::command::{CameraScaleArgs, TrackArgs};
 use crate::rig::hil::command::HilArgs;
 use crate::rig::tool::RigArgs;
-use crate::study::figures::command::FiguresArgs;
-use crate::study::fit::command::FitArgs;
+use crate::study::figures::FiguresArgs;
+use crate::study::fit::FitArgs;
 use crate::study::jump_command::JumpArgs;
-use crate::study::replay::command::ReplayArgs;
-use crate::study::sweep::command::SweepArgs;
-use crate::study::sweep::merge_command::MergeArgs;
+use crate::study::replay::ReplayArgs;
+use crate::study::sweep::{MergeArgs, SweepArgs};
 
 /// Simulate the spring-mass jumping robot on granular media (Aguilar & Goldman, Nature
 /// Physics 2016). Exit status: 0 success, 2 bad input, 1 internal failure.

@@ -13,8 +13,8 @@ use crate::command::CliError;
 use crate::command::args::{ModelArg, ParamSource, parse_phi};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
-use sandjumper_optimize::OptimizeRequest;
 use sandjumper_optimize::evaluate::Objective;
+use sandjumper_optimize::{OptimizeRequest, parse_verify, ranged};
 use sandjumper_rig::hil::open::LinkArg;
 
 /// The objective on the command line.
@@ -41,40 +41,12 @@ impl From<ObjectiveArg> for Objective {
     }
 }
 
-fn ranged(
-    what: &'static str,
-    lo: f64,
-    hi: f64,
-    unit: &'static str,
-) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > lo && v <= hi => Ok(v),
-        _ => Err(format!(
-            "{what} `{s}` out of range (allowed: {lo} < X <= {hi} {unit})"
-        )),
-    }
-}
-
 /// The links of `--verify`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VerifyLinks(pub Vec<LinkArg>);
 
 fn parse_links(s: &str) -> Result<VerifyLinks, String> {
-    if s.trim() == "none" {
-        return Ok(VerifyLinks(Vec::new()));
-    }
-    s.split(',')
-        .map(|l| match l.trim() {
-            "sil" => Ok(LinkArg::Sil),
-            "pil" => Ok(LinkArg::Pil),
-            "f407" => Ok(LinkArg::F407),
-            other => Err(format!(
-                "link `{other}` not allowed in --verify (allowed: sil, pil, f407, a \
-                 comma-separated list of them, or none)"
-            )),
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map(VerifyLinks)
+    parse_verify(s).map(VerifyLinks)
 }
 
 /// `sandjumper optimize`.

@@ -3,10 +3,9 @@
 use crate::command::CliError;
 use crate::command::args::{KindArg, ModelArg, ParamSource, parse_freq, parse_phi, parse_tau};
 use crate::command::progress::Bars;
-use crate::command::resolve::ParamsFile;
 use clap::Args;
-use sandjumper_model::jump::{JumpOutcome, JumpSpec};
-use sandjumper_output::StagedDir;
+use sandjumper_model::resolve::ParamsFile;
+use sandjumper_study::StudyError;
 use sandjumper_study::jump::{self, JumpRequest};
 use std::path::PathBuf;
 
@@ -48,7 +47,7 @@ pub struct JumpArgs {
 
 impl JumpArgs {
     /// The library's request for these arguments (`params`: the `--params` file, read).
-    pub fn request(&self, params: Option<&ParamsFile>, record_series: bool) -> JumpRequest {
+    pub fn request(&self, params: Option<ParamsFile>, record_series: bool) -> JumpRequest {
         JumpRequest {
             kind: self.kind.unwrap_or(KindArg::Single).into(),
             freq_hz: self.freq.unwrap_or(0.0),
@@ -56,68 +55,19 @@ impl JumpArgs {
             stroke: self.stroke.clone(),
             model: self.model.into(),
             phi: self.phi,
-            params: params.map(ParamsFile::to_library),
+            params,
             rtol: self.source.rtol,
             record_series,
         }
     }
 }
 
-/// One jump as `sandjumper jump` runs it: the resolved parameters, the request, the outcome
-/// and the JSON object `jump --json` prints.
-pub struct JumpRun {
-    /// Parameters after the preset and the overrides.
-    pub params: sandjumper_model::params::Params,
-    /// Kind, frequency, delay and model.
-    pub spec: JumpSpec,
-    /// The simulation's outcome (with its series when asked for).
-    pub outcome: JumpOutcome,
-    /// `jump --json`'s object, pretty-printed.
-    pub json: String,
-}
-
-/// Simulate the jump `a` asks for with `params` (resolved by the caller; `a.source.params` is
-/// not read here); `record_series` keeps every output step (`trajectory.csv`). Errors are the
-/// CLI's.
-pub fn simulate_run(
-    a: &JumpArgs,
-    params: sandjumper_model::params::Params,
-    record_series: bool,
-) -> Result<JumpRun, CliError> {
-    let request = a.request(None, record_series);
-    let out = jump::run_with_params(&request, params, &sandjumper_output::Silent)?;
-    Ok(JumpRun {
-        json: out.json()?,
-        params: out.params,
-        spec: out.spec,
-        outcome: out.simulated,
-    })
-}
-
 /// Run `jump`.
 pub fn run(a: &JumpArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    let request = a.request(file.as_ref(), a.out.is_some());
-    // Bad parameters are refused before an output directory is touched.
-    request.validate()?;
-    // Fail on an unwritable output directory before spending time on the simulation.
-    let staged = a.out.as_deref().map(StagedDir::create).transpose()?;
-    let outcome = jump::run(&request, &Bars::default())?;
-    if let Some(staged) = staged {
-        outcome.write_into(&staged)?;
-        let dir = staged.commit()?;
-        eprintln!(
-            "wrote {}/ (trajectory.csv, params.toml, summary.json, jump.png, jump.svg)",
-            dir.display()
-        );
-    }
-    if a.json {
-        println!("{}", outcome.json()?);
-    } else {
-        print!("{outcome}");
-    }
-    for w in &outcome.simulated.warnings {
-        eprintln!("warning: {w}");
-    }
+    let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
+    let request = a.request(file, a.out.is_some());
+    let (outcome, dir) = jump::run_into(&request, a.out.as_deref(), &Bars::default())?;
+    let warnings = &outcome.simulated.warnings;
+    super::print_jump(dir, a.json, &outcome.json()?, &outcome, warnings);
     Ok(())
 }

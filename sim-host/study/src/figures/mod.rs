@@ -99,6 +99,28 @@ pub struct FiguresReport {
     pub failures: usize,
     /// The numbers of `summary.txt`, as (name, value) pairs.
     pub findings: Vec<(String, String)>,
+    /// Wall time of the whole call, s.
+    pub elapsed_s: f64,
+}
+
+impl std::fmt::Display for FiguresReport {
+    /// What `sandjumper figures` prints: the files written, the jumps, the time, then each
+    /// finding on its own line.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "wrote {} files to {} ({} jumps, {} failed, {:.1} s)",
+            self.files.len(),
+            self.dir.display(),
+            self.jumps,
+            self.failures,
+            self.elapsed_s
+        )?;
+        for (k, v) in &self.findings {
+            writeln!(f, "  {k} = {v}")?;
+        }
+        Ok(())
+    }
 }
 
 /// Writes files into the staging directory and remembers their names.
@@ -189,6 +211,7 @@ impl sandjumper_output::Blamed for FiguresError {
 
 /// Simulate and write every figure into `out`.
 pub fn write_figures(out: &Path, opts: &FiguresOptions<'_>) -> Result<FiguresReport, FiguresError> {
+    let started = std::time::Instant::now();
     let mut w = Writer {
         dir: StagedDir::create(out)?,
         files: Vec::new(),
@@ -407,6 +430,7 @@ pub fn write_figures(out: &Path, opts: &FiguresOptions<'_>) -> Result<FiguresRep
         jumps,
         failures: failures.len(),
         findings,
+        elapsed_s: started.elapsed().as_secs_f64(),
     })
 }
 

@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 pub use data::DataError;
 pub use least_squares::LeastSquaresError;
 pub use report::{FitReport, FittedValue, Override};
-pub use request::{FitKind, FitRequest, check_rtol, run};
+pub use request::{FitKind, FitRequest, check_rtol, parse_phi, run};
 
 use sandjumper_model::params::ParamsError;
 
@@ -60,6 +60,13 @@ impl fmt::Display for FitError {
 }
 
 impl std::error::Error for FitError {}
+
+/// Every fit error is the caller's input (exit status 2 on the command line).
+impl sandjumper_output::Blamed for FitError {
+    fn blame(&self) -> sandjumper_output::Blame {
+        sandjumper_output::Blame::Input
+    }
+}
 
 impl From<DataError> for FitError {
     fn from(e: DataError) -> Self {

@@ -71,6 +71,16 @@ impl Default for FitRequest {
     }
 }
 
+/// Value parser: a packing fraction for a fit's base parameters (a number, then
+/// [`sandjumper_output::parse::check_phi`]).
+pub fn parse_phi(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    sandjumper_output::parse::check_phi(v)
+}
+
 /// Refuse an inner simulations' tolerance outside 1e-14 <= rtol < 1.
 pub fn check_rtol(rtol: f64) -> Result<(), StudyError> {
     if !(1e-14..1.0).contains(&rtol) {

@@ -23,7 +23,7 @@
 pub mod differentiate;
 mod request;
 
-pub use request::{ReplayOutcome, ReplayRequest, run, run_log};
+pub use request::{ReplayOutcome, ReplayRequest, parse_window_ms, run, run_into, run_log};
 
 use crate::replay::differentiate::SavitzkyGolay;
 use sandjumper_acqlog::AcqLog;

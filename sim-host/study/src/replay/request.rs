@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::{DEFAULT_WINDOW_S, MeasuredComparison, ReplayInfo, Replayed, replay_log};
 use crate::StudyError;
-use crate::jump::{human_summary, to_json, write_jump_files};
+use crate::jump::{commit_into, human_summary, to_json, write_jump_files};
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::{ModelName, Params};
@@ -49,6 +49,17 @@ impl Default for ReplayRequest {
             allow_gaps: false,
             record_series: false,
         }
+    }
+}
+
+/// Value parser: the Savitzky-Golay window in milliseconds, 0 < ms <= 1000 (the command
+/// line's `--window-ms`; [`ReplayRequest::window_s`] is this / 1000).
+pub fn parse_window_ms(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1000.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a window length: a number of milliseconds in (0, 1000]"
+        )),
     }
 }
 
@@ -99,6 +110,21 @@ pub struct ReplayOutcome {
 /// Read the log `request` names and replay it.
 pub fn run(request: &ReplayRequest, progress: &dyn Progress) -> Result<ReplayOutcome, StudyError> {
     run_log(request, &request.read_log()?, progress)
+}
+
+/// [`run`], writing the replay's folder into `out` when given (as
+/// [`ReplayOutcome::write`]; set [`ReplayRequest::record_series`] for its series): the log is
+/// checked before `out` is touched. The outcome and the folder written.
+pub fn run_into(
+    request: &ReplayRequest,
+    out: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(ReplayOutcome, Option<PathBuf>), StudyError> {
+    let log = request.read_log()?;
+    let staged = out.map(StagedDir::create).transpose()?;
+    let outcome = run_log(request, &log, progress)?;
+    let dir = commit_into(staged, |s| outcome.write_into(s))?;
+    Ok((outcome, dir))
 }
 
 /// Replay `log` (read from `request.log`) as `request` asks.

@@ -25,13 +25,15 @@ use rayon::prelude::*;
 use sandjumper_core::trajectory::JumpKind;
 use serde::{Deserialize, Serialize};
 
-pub use range::{RangeError, ValueRange};
+pub use range::{
+    RangeError, ValueRange, parse_freq_range, parse_phi_range, parse_range_checked, parse_tau_range,
+};
 pub use request::{
     MergeOutcome, MergeRequest, SweepRequest, SweepRunOutcome, WrittenSweep, merge,
     params_file_name, run,
 };
 use sandjumper_model::params::ModelName;
-pub use shard::{ShardSpec, ShardSpecError};
+pub use shard::{ShardSpec, ShardSpecError, parse_shard};
 
 use sandjumper_model::trajectory::kind_name;
 

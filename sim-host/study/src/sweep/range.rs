@@ -184,6 +184,36 @@ impl fmt::Display for ValueRange {
     }
 }
 
+/// Parse a range and check each of its values with `check` (the message names the range).
+pub fn parse_range_checked(
+    s: &str,
+    check: fn(f64) -> Result<f64, String>,
+) -> Result<ValueRange, String> {
+    let r = ValueRange::parse(s).map_err(|e| e.to_string())?;
+    for &v in &r.values {
+        check(v).map_err(|e| format!("range `{s}`: {e}"))?;
+    }
+    Ok(r)
+}
+
+/// Value parser: a frequency range `A:B:STEP` in Hz, every value checked
+/// ([`sandjumper_output::parse::check_freq`]).
+pub fn parse_freq_range(s: &str) -> Result<ValueRange, String> {
+    parse_range_checked(s, sandjumper_output::parse::check_freq)
+}
+
+/// Value parser: a delay range `A:B:STEP` in s, every value checked
+/// ([`sandjumper_output::parse::check_tau`]).
+pub fn parse_tau_range(s: &str) -> Result<ValueRange, String> {
+    parse_range_checked(s, sandjumper_output::parse::check_tau)
+}
+
+/// Value parser: a packing-fraction range `A:B:STEP`, every value checked
+/// ([`sandjumper_output::parse::check_phi`]).
+pub fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
+    parse_range_checked(s, sandjumper_output::parse::check_phi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

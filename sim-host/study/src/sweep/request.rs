@@ -210,6 +210,31 @@ impl SweepRunOutcome {
         }
     }
 
+    /// The line the command line prints when the folder `dir` is written with the figures
+    /// `plots`: how many jumps (of which shard), how long, on how many threads, what was written.
+    pub fn report(&self, dir: &Path, plots: &[String]) -> String {
+        let n = self.meta.shard.end - self.meta.shard.first;
+        let what = if self.is_whole() {
+            format!("{n} jumps")
+        } else {
+            let (index, count) = (self.meta.shard.index, self.meta.shard.count);
+            let total = self.meta.total_combinations;
+            format!("shard {index}/{count}: {n} of {total} jumps")
+        };
+        let params = if self.phis.len() > 1 {
+            "-phi-*.toml"
+        } else {
+            ".toml"
+        };
+        format!(
+            "swept {what} in {:.2} s on {} thread(s); wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{params}{})",
+            self.elapsed_s,
+            self.threads,
+            dir.display(),
+            plots.iter().map(|p| format!(", {p}")).collect::<String>()
+        )
+    }
+
     /// What the user should know after the sweep: how many jumps failed, how many ask more
     /// force than the motor has (one line each, `warning: ...` / `note: ...`).
     pub fn warnings(&self) -> Vec<String> {
@@ -355,6 +380,28 @@ pub fn merge(request: &MergeRequest, _progress: &dyn Progress) -> Result<MergeOu
 }
 
 impl MergeOutcome {
+    /// The lines the command line prints once the merged folder is `written`: what was merged
+    /// and written, and a warning when jumps failed.
+    pub fn report(&self, written: &WrittenSweep) -> Vec<String> {
+        let (rows, failures) = (self.outcome.rows.len(), self.outcome.failures.len());
+        let mut lines = vec![format!(
+            "merged {} shard(s): {rows} rows, {failures} failures; wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{})",
+            self.shards,
+            written.dir.display(),
+            written
+                .plots
+                .iter()
+                .map(|p| format!(", {p}"))
+                .collect::<String>()
+        )];
+        if failures > 0 {
+            lines.push(format!(
+                "warning: {failures} jump(s) of the sweep failed; see failures.csv"
+            ));
+        }
+        lines
+    }
+
     /// Write the merged sweep's folder `dir` (created, or replacing an earlier sandjumper
     /// output), figures included.
     pub fn write(&self, dir: &Path) -> Result<WrittenSweep, StudyError> {

@@ -98,6 +98,11 @@ impl fmt::Display for ShardSpec {
     }
 }
 
+/// Value parser: a shard `I/N` (1-based), the refusal as text.
+pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+    ShardSpec::parse(s).map_err(|e| e.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

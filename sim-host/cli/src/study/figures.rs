@@ -1,13 +1,12 @@
 //! `sandjumper figures --out DIR [--quick] [--threads N]`.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use clap::Args;
 
-use super::FiguresRequest;
 use crate::command::CliError;
 use crate::command::progress::Bars;
+use sandjumper_study::figures::{self, FiguresRequest};
 
 /// `sandjumper figures`: the jump model's figures, or `figures dem` (Supplementary I).
 #[derive(Debug, Clone, Args)]
@@ -45,25 +44,14 @@ pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
     let Some(out) = &a.out else {
         return Err(CliError::input("figures: --out DIR is required"));
     };
-    let started = Instant::now();
     let request = FiguresRequest {
         out: out.clone(),
         quick: a.quick,
         threads: a.threads.map(|t| t as usize),
         ..FiguresRequest::default()
     };
-    let report = super::run(&request, &Bars::default())?;
-    println!(
-        "wrote {} files to {} ({} jumps, {} failed, {:.1} s)",
-        report.files.len(),
-        report.dir.display(),
-        report.jumps,
-        report.failures,
-        started.elapsed().as_secs_f64()
-    );
-    for (k, v) in &report.findings {
-        println!("  {k} = {v}");
-    }
+    let report = figures::run(&request, &Bars::default())?;
+    print!("{report}");
     if report.failures > 0 {
         eprintln!(
             "warning: {} jumps failed; see failures.csv",

@@ -1,19 +1,22 @@
-//! `sandjumper sweep`: every combination, in parallel, into one output directory.
+//! `sandjumper sweep` (on this machine or, with `--slurm N`, as a Slurm job array, one shard
+//! per task: [`sandjumper_slurm::submit_sharded`]) and `merge` (join the shard directories of
+//! one sweep: [`sandjumper_study::sweep::merge()`]).
 
-use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
 
 use crate::command::CliError;
-use crate::command::args::{KindArg, ModelArg, ParamSource, check_freq, check_phi, check_tau};
+use crate::command::args::{KindArg, ModelArg, ParamSource};
 use crate::command::progress::Bars;
-use crate::command::resolve::ParamsFile;
-use crate::study::cli_error;
-use clap::Args;
-use sandjumper_model::params::Params;
-use sandjumper_output::StagedDir;
+use sandjumper_model::resolve::ParamsFile;
+use sandjumper_output::{Silent, StagedDir};
+use sandjumper_slurm::{self as slurm, ShardedJob, ShardedJobOutcome};
+use sandjumper_study::StudyError;
 use sandjumper_study::sweep::{
-    self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange,
+    self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange, merge,
+    parse_freq_range, parse_phi_range, parse_shard, parse_tau_range,
 };
-use std::path::PathBuf;
 
 /// `sandjumper sweep`.
 #[derive(Debug, Clone, Args)]
@@ -56,7 +59,7 @@ pub struct SweepArgs {
     pub gain_lowering: Option<f64>,
     /// Run on a Slurm cluster as a job array.
     #[command(flatten)]
-    pub slurm: super::slurm::SlurmArgs,
+    pub slurm: SlurmArgs,
 }
 
 /// The loop a sweep's jumps run through instead of the imposed stroke.
@@ -66,57 +69,9 @@ pub enum SweepLinkArg {
     Sil,
 }
 
-/// Parse a range and check each of its values with `check`.
-pub fn parse_range_checked(
-    s: &str,
-    check: fn(f64) -> Result<f64, String>,
-) -> Result<ValueRange, String> {
-    let r = ValueRange::parse(s).map_err(|e| e.to_string())?;
-    for &v in &r.values {
-        check(v).map_err(|e| format!("range `{s}`: {e}"))?;
-    }
-    Ok(r)
-}
-
-/// clap value parser: a frequency range `A:B:STEP`, every value checked.
-pub fn parse_freq_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_freq)
-}
-
-/// clap value parser: a delay range `A:B:STEP`, every value checked.
-pub fn parse_tau_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_tau)
-}
-
-/// clap value parser: a packing-fraction range `A:B:STEP`, every value checked.
-pub fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
-    parse_range_checked(s, check_phi)
-}
-
-/// clap value parser: a shard `I/N` (1-based).
-pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
-    ShardSpec::parse(s).map_err(|e| e.to_string())
-}
-
-pub use sandjumper_study::sweep::params_file_name;
-
-/// The parameters of each packing fraction of `spec` (keyed by `phi.to_bits()`), with the
-/// overrides `file` on top of each preset, and their TOML text (what the sweep's hash covers).
-pub fn resolve_sweep_params(
-    spec: &SweepSpec,
-    file: Option<&ParamsFile>,
-) -> Result<(HashMap<u64, Params>, String), CliError> {
-    let request = SweepRequest {
-        spec: spec.clone(),
-        params: file.map(ParamsFile::to_library),
-        ..SweepRequest::default()
-    };
-    request.resolved_params().map_err(cli_error)
-}
-
 impl SweepArgs {
     /// The library's request for these arguments (`params`: the `--params` file, read).
-    pub fn request(&self, params: Option<&ParamsFile>) -> SweepRequest {
+    pub fn request(&self, params: Option<ParamsFile>) -> SweepRequest {
         let spec = SweepSpec {
             kinds: self.kind.iter().map(|&k| k.into()).collect(),
             models: self.model.iter().map(|&m| m.into()).collect(),
@@ -133,7 +88,7 @@ impl SweepArgs {
         };
         SweepRequest {
             spec,
-            params: params.map(ParamsFile::to_library),
+            params,
             threads: self.threads.map(|t| t as usize),
             shard: self.shard,
         }
@@ -142,8 +97,8 @@ impl SweepArgs {
 
 /// Run `sweep`.
 pub fn run(a: &SweepArgs) -> Result<(), CliError> {
-    let file = ParamsFile::read_opt(a.source.params.as_deref())?;
-    let request = a.request(file.as_ref());
+    let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
+    let request = a.request(file);
     request.validate()?;
     if a.slurm.slurm.is_some() {
         if a.shard.is_some() {
@@ -151,9 +106,8 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
                 "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
             ));
         }
-        let argv = sandjumper_slurm::arguments()?;
-        return match super::slurm::submit(&argv, &a.out, &a.slurm)? {
-            Some(dirs) => super::merge_command::merge_into(&MergeRequest {
+        return match submit(&a.out, &a.slurm)? {
+            Some(dirs) => merge_into(&MergeRequest {
                 dirs,
                 out: a.out.clone(),
             }),
@@ -164,30 +118,85 @@ pub fn run(a: &SweepArgs) -> Result<(), CliError> {
     let swept = sweep::run(&request, &Bars::default())?;
     let plots = swept.write_into(&staged)?;
     let dir = staged.commit()?;
-    let shard = request.shard.unwrap_or(ShardSpec::WHOLE);
-    let n = swept.meta.shard.end - swept.meta.shard.first;
-    let what = if shard.is_whole() {
-        format!("{n} jumps")
-    } else {
-        format!(
-            "shard {shard}: {n} of {} jumps",
-            swept.meta.total_combinations
-        )
-    };
-    eprintln!(
-        "swept {what} in {:.2} s on {} thread(s); wrote {}/ (sweep.csv, failures.csv, sweep.toml, params{}{})",
-        swept.elapsed_s,
-        swept.threads,
-        dir.display(),
-        if swept.phis.len() > 1 {
-            "-phi-*.toml"
-        } else {
-            ".toml"
-        },
-        plots.iter().map(|p| format!(", {p}")).collect::<String>()
-    );
+    eprintln!("{}", swept.report(&dir, &plots));
     for line in swept.warnings() {
         eprintln!("{line}");
     }
     Ok(())
+}
+
+/// `sandjumper merge`.
+#[derive(Debug, Clone, Args)]
+pub struct MergeArgs {
+    /// Shard directories written by `sandjumper sweep --shard I/N` (all N of them, any order).
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory for the merged sweep.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+/// Run `merge`.
+pub fn run_merge(a: &MergeArgs) -> Result<(), CliError> {
+    merge_into(&MergeRequest {
+        dirs: a.dirs.clone(),
+        out: a.out.clone(),
+    })
+}
+
+/// Merge the shards `request` names into its `out` and tell the user (also `sweep --slurm`'s
+/// last step).
+pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
+    let merged = merge(request, &Silent)?;
+    let written = merged.write(&request.out)?;
+    for line in merged.report(&written) {
+        eprintln!("{line}");
+    }
+    Ok(())
+}
+
+/// The Slurm options of `sweep`.
+#[derive(Debug, Clone, Args)]
+pub struct SlurmArgs {
+    /// Submit the sweep to Slurm as a job array of N tasks (one shard each), wait for it and
+    /// merge the shards into --out.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub slurm: Option<u32>,
+    /// CPUs of each task (its sweep's threads).
+    #[arg(long, value_name = "N", default_value = "1", requires = "slurm",
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub slurm_cpus: u32,
+    /// Partition, time limit of each task, waiting (merge the shards later with the printed
+    /// `sandjumper merge` command).
+    #[command(flatten)]
+    pub queue: crate::slurm::QueueArgs,
+}
+
+/// Submit this sweep as a job array of `--slurm` tasks writing shards for `out`; unless told
+/// not to, wait for it: the shard directories to merge into `out` (None: not waited for).
+pub fn submit(out: &Path, s: &SlurmArgs) -> Result<Option<Vec<PathBuf>>, CliError> {
+    let job = ShardedJob {
+        name: "sweep",
+        command: &["sweep"],
+        tasks: s.slurm.unwrap_or(1),
+        cpus: s.slurm_cpus,
+        out,
+        expect: "sweep.toml",
+        queue: s.queue.options(),
+    };
+    match slurm::submit_sharded(&job, &Bars::new())? {
+        ShardedJobOutcome::Queued { id, dir } => {
+            println!("{id}");
+            eprintln!(
+                "when it is done: sandjumper merge {}/shard-* --out {}",
+                dir.display(),
+                out.display()
+            );
+            Ok(None)
+        }
+        ShardedJobOutcome::Done { id, shards } => {
+            eprintln!("all {} task(s) of job {id} done; merging", shards.len());
+            Ok(Some(shards))
+        }
+    }
 }

@@ -4,15 +4,18 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand, ValueEnum};
 
-use super::added_mass::DEFAULT_EXCLUDE_DEEPEST;
-use super::data::HeightColumn;
-use super::intrusion::CurveKind;
-use super::jumps::DragParam;
-use super::{FitKind, FitReport, FitRequest, check_rtol, write_params_files};
 use crate::command::CliError;
-use crate::command::args::{ModelArg, check_phi};
-use crate::command::resolve::ParamsFile;
+use crate::command::args::ModelArg;
+use sandjumper_model::resolve::ParamsFile;
 use sandjumper_output::Silent;
+use sandjumper_study::StudyError;
+use sandjumper_study::fit::added_mass::DEFAULT_EXCLUDE_DEEPEST;
+use sandjumper_study::fit::data::HeightColumn;
+use sandjumper_study::fit::intrusion::CurveKind;
+use sandjumper_study::fit::jumps::DragParam;
+use sandjumper_study::fit::{
+    self, FitKind, FitReport, FitRequest, check_rtol, parse_phi, write_params_files,
+};
 
 /// `sandjumper fit`.
 #[derive(Debug, Clone, Args)]
@@ -126,14 +129,6 @@ pub struct JumpFitArgs {
     pub output: FitOutput,
 }
 
-fn parse_phi(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{s}` is not a number"))?;
-    check_phi(v)
-}
-
 impl FitCommand {
     /// The library's request (`--params` read and checked in the order the command line
     /// always had: a jump fit's `--rtol` first).
@@ -161,12 +156,12 @@ impl FitCommand {
             FitCommand::Drag(j) => (&j.file, 0.57, j.kind(DragParam::Alpha)?, &j.output),
             FitCommand::Inertial(j) => (&j.file, 0.57, j.kind(DragParam::B)?, &j.output),
         };
-        let params = ParamsFile::read_opt(output.params.as_deref())?;
+        let params = ParamsFile::read_opt(output.params.as_deref()).map_err(StudyError::from)?;
         let request = FitRequest {
             file: file.clone(),
             kind,
             phi,
-            params: params.as_ref().map(ParamsFile::to_library),
+            params,
         };
         Ok((request, output))
     }
@@ -190,13 +185,13 @@ impl JumpFitArgs {
 /// Run `fit ...`.
 pub fn run(a: &FitArgs) -> Result<(), CliError> {
     let (request, output) = a.what.request()?;
-    let report = super::run(&request, &Silent)?;
+    let report = fit::run(&request, &Silent)?;
     emit(&report, output)
 }
 
 fn emit(report: &FitReport, output: &FitOutput) -> Result<(), CliError> {
     let written = match &output.out {
-        Some(out) => write_params_files(report, out).map_err(|e| CliError::input(e.to_string()))?,
+        Some(out) => write_params_files(report, out)?,
         None => Vec::new(),
     };
     if output.json {
