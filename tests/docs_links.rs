@@ -172,11 +172,11 @@ fn the_readme_fits_on_a_screen_and_opens_with_its_two_commands() {
         commands[1],
         "cargo nextest run --workspace && cargo test --workspace --doc"
     );
+    // In a subshell there, so that `set -e` also stops at a failure of the first half.
     let ci = std::fs::read_to_string(root().join(".ci/run")).expect(".ci/run");
+    let in_ci = format!("( {} )", commands[1]);
     assert!(
-        ci.lines()
-            .any(|l| l.trim() == format!("( {} )", commands[1])),
-        ".ci/run does not run the README's test command `{}`",
-        commands[1]
+        ci.lines().any(|l| l.trim() == in_ci),
+        ".ci/run does not run the README's test command: `{in_ci}`"
     );
 }
