@@ -166,5 +166,17 @@ fn the_readme_fits_on_a_screen_and_opens_with_its_two_commands() {
         .collect();
     assert_eq!(commands.len(), 2, "{commands:?}");
     assert!(commands[0].contains(" jump ") && commands[0].contains("--out"));
-    assert_eq!(commands[1], "cargo test --workspace");
+    // The test command: nextest runs the test binaries side by side (.config/nextest.toml),
+    // `cargo test --doc` the doc tests nextest does not run; CI runs it word for word.
+    assert_eq!(
+        commands[1],
+        "cargo nextest run --workspace && cargo test --workspace --doc"
+    );
+    // In a subshell there, so that `set -e` also stops at a failure of the first half.
+    let ci = std::fs::read_to_string(root().join(".ci/run")).expect(".ci/run");
+    let in_ci = format!("( {} )", commands[1]);
+    assert!(
+        ci.lines().any(|l| l.trim() == in_ci),
+        ".ci/run does not run the README's test command: `{in_ci}`"
+    );
 }
