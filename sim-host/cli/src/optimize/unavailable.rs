@@ -4,20 +4,13 @@
 /// The command in a build without it.
 pub mod command {
     use crate::command::CliError;
+    use crate::command::unavailable::{Unbuilt, refuse};
 
     /// Whatever was given.
-    #[derive(Debug, Clone, clap::Args)]
-    pub struct OptimizeArgs {
-        /// The arguments, unread.
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true, hide = true)]
-        pub rest: Vec<String>,
-    }
+    pub type OptimizeArgs = Unbuilt;
 
     /// Refuse: this build has no optimiser.
     pub fn run(_: &OptimizeArgs) -> Result<(), CliError> {
-        Err(CliError::input(
-            "optimize: this build has no optimiser (built with --no-default-features; build \
-             sandjumper-cli with its default features, or with --features optimize)",
-        ))
+        refuse("optimize", "optimiser", "optimize")
     }
 }
