@@ -3,14 +3,7 @@
 
 /// The command in a build without it.
 pub mod command {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given.
-    pub type CampaignArgs = Unbuilt;
-
-    /// Refuse: this build has no campaigns.
-    pub fn run(_: &CampaignArgs) -> Result<(), CliError> {
-        refuse("campaign", "campaigns", "campaign")
+    crate::command::unavailable::stand_in! {
+        CampaignArgs, run: "campaign" needs "campaigns" from "campaign";
     }
 }

@@ -19,3 +19,23 @@ pub fn refuse(command: &str, what: &str, feature: &str) -> Result<(), CliError> 
          sandjumper-cli with its default features, or with --features {feature})"
     )))
 }
+
+/// The stand-ins of a module's commands: for each, `ARGS, RUN: "command" needs "what" from
+/// "feature";` declares `ARGS` ([`Unbuilt`]) and `RUN`, which [`refuse`]s it. (A build with
+/// every feature has no stand-in.)
+#[allow(unused_macros)]
+macro_rules! stand_in {
+    ($($args:ident, $run:ident: $command:literal needs $what:literal from $feature:literal;)+) => {
+        $(
+            #[doc = concat!("Whatever was given to `", $command, "`.")]
+            pub type $args = $crate::command::unavailable::Unbuilt;
+
+            #[doc = concat!("Refuse `", $command, "`: this build has no ", $what, ".")]
+            pub fn $run(_: &$args) -> Result<(), $crate::command::CliError> {
+                $crate::command::unavailable::refuse($command, $what, $feature)
+            }
+        )+
+    };
+}
+#[allow(unused_imports)]
+pub(crate) use stand_in;

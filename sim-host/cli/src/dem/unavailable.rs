@@ -3,28 +3,14 @@
 
 /// `dem` in a build without it.
 pub mod command {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given.
-    pub type DemArgs = Unbuilt;
-
-    /// Refuse: this build has no DEM.
-    pub fn run(_: &DemArgs) -> Result<(), CliError> {
-        refuse("dem", "DEM", "dem")
+    crate::command::unavailable::stand_in! {
+        DemArgs, run: "dem" needs "DEM" from "dem";
     }
 }
 
 /// `figures dem` in a build without it.
 pub mod paper_figures {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given.
-    pub type DemFiguresArgs = Unbuilt;
-
-    /// Refuse: this build has no DEM.
-    pub fn run(_: &DemFiguresArgs) -> Result<(), CliError> {
-        refuse("figures dem", "DEM", "dem")
+    crate::command::unavailable::stand_in! {
+        DemFiguresArgs, run: "figures dem" needs "DEM" from "dem";
     }
 }

@@ -3,21 +3,8 @@
 
 /// The commands in a build without them.
 pub mod command {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given to `piv`.
-    pub type PivArgs = Unbuilt;
-    /// Whatever was given to `piv-synthetic`.
-    pub type SyntheticArgs = Unbuilt;
-
-    /// Refuse `piv`.
-    pub fn run(_: &PivArgs) -> Result<(), CliError> {
-        refuse("piv", "PIV", "imaging")
-    }
-
-    /// Refuse `piv-synthetic`.
-    pub fn run_synthetic(_: &SyntheticArgs) -> Result<(), CliError> {
-        refuse("piv-synthetic", "PIV", "imaging")
+    crate::command::unavailable::stand_in! {
+        PivArgs, run: "piv" needs "PIV" from "imaging";
+        SyntheticArgs, run_synthetic: "piv-synthetic" needs "PIV" from "imaging";
     }
 }

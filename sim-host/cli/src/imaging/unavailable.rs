@@ -3,21 +3,8 @@
 
 /// The commands in a build without them.
 pub mod command {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given to `track`.
-    pub type TrackArgs = Unbuilt;
-    /// Whatever was given to `camera-scale`.
-    pub type CameraScaleArgs = Unbuilt;
-
-    /// Refuse `track`.
-    pub fn run(_: &TrackArgs) -> Result<(), CliError> {
-        refuse("track", "imaging", "imaging")
-    }
-
-    /// Refuse `camera-scale`.
-    pub fn run_scale(_: &CameraScaleArgs) -> Result<(), CliError> {
-        refuse("camera-scale", "imaging", "imaging")
+    crate::command::unavailable::stand_in! {
+        TrackArgs, run: "track" needs "imaging" from "imaging";
+        CameraScaleArgs, run_scale: "camera-scale" needs "imaging" from "imaging";
     }
 }

@@ -3,14 +3,7 @@
 
 /// The command in a build without it.
 pub mod command {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given.
-    pub type OptimizeArgs = Unbuilt;
-
-    /// Refuse: this build has no optimiser.
-    pub fn run(_: &OptimizeArgs) -> Result<(), CliError> {
-        refuse("optimize", "optimiser", "optimize")
+    crate::command::unavailable::stand_in! {
+        OptimizeArgs, run: "optimize" needs "optimiser" from "optimize";
     }
 }

@@ -5,29 +5,15 @@
 pub mod hil {
     /// The command.
     pub mod command {
-        use crate::command::CliError;
-        use crate::command::unavailable::{Unbuilt, refuse};
-
-        /// Whatever was given.
-        pub type HilArgs = Unbuilt;
-
-        /// Refuse: this build has no control loop.
-        pub fn run(_: &HilArgs) -> Result<(), CliError> {
-            refuse("hil", "rig", "rig")
+        crate::command::unavailable::stand_in! {
+            HilArgs, run: "hil" needs "rig" from "rig";
         }
     }
 }
 
 /// The rig tool in a build without it.
 pub mod tool {
-    use crate::command::CliError;
-    use crate::command::unavailable::{Unbuilt, refuse};
-
-    /// Whatever was given.
-    pub type RigArgs = Unbuilt;
-
-    /// Refuse: this build has no rig tool.
-    pub fn run(_: &RigArgs) -> Result<(), CliError> {
-        refuse("rig", "rig", "rig")
+    crate::command::unavailable::stand_in! {
+        RigArgs, run: "rig" needs "rig" from "rig";
     }
 }
