@@ -33,6 +33,15 @@ impl StudyError {
     }
 }
 
+/// Why `what` is refused in a build without the `rig` feature (the README's first command
+/// builds sandjumper-cli without it): bad input, saying how to build it.
+pub fn without_rig(what: &str) -> String {
+    format!(
+        "{what}: this build has no rig (built with --no-default-features; build sandjumper-cli \
+         with its default features, or with --features rig)"
+    )
+}
+
 impl Blamed for StudyError {
     fn blame(&self) -> Blame {
         match self {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use serde::{Serialize, Serializer};
 
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_model::jump::{JumpSpec, simulate_jump, simulate_stroke};
+use sandjumper_model::jump::{JumpSpec, simulate_jump};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::{ModelName, Params};
 use sandjumper_model::record::JumpSummary;
@@ -15,7 +15,9 @@ use sandjumper_model::resolve::{ParamsFile, resolve_params};
 use sandjumper_model::trajectory::kind_name;
 use sandjumper_output::plot::save_figure;
 use sandjumper_output::{Progress, StagedDir};
+#[cfg(feature = "rig")]
 use sandjumper_rig::hil::rig_model::RigModelConfig;
+#[cfg(feature = "rig")]
 use sandjumper_rig::stroke_table::{RigLimits, StrokeTable};
 
 use crate::StudyError;
@@ -88,6 +90,7 @@ impl JumpRequest {
 /// The stroke file `path`, checked by the rig's feasibility check for `params`' robot
 /// ([`StrokeTable::check`]) with a table rate that divides the control rate. Every failure is
 /// an input error naming the file.
+#[cfg(feature = "rig")]
 pub fn checked_stroke(path: &Path, params: &Params) -> Result<StrokeTable, StudyError> {
     let table = StrokeTable::read_csv(path).map_err(StudyError::Input)?;
     table
@@ -178,11 +181,14 @@ pub fn run_with_params(
     };
     let simulated = match &request.stroke {
         None => simulate_jump(&params, &spec, &opts),
+        #[cfg(feature = "rig")]
         Some(path) => {
             let table = checked_stroke(path, &params)?;
             let stroke = table.kinematic_stroke().map_err(StudyError::Input)?;
-            simulate_stroke(&params, spec.model, stroke, &opts)
+            sandjumper_model::jump::simulate_stroke(&params, spec.model, stroke, &opts)
         }
+        #[cfg(not(feature = "rig"))]
+        Some(_) => return Err(StudyError::Input(crate::error::without_rig("--stroke"))),
     }
     .map_err(|e| StudyError::input(format!("simulation of the jump failed: {e}")))?;
     let phi = params.sand.packing_fraction;

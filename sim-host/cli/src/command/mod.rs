@@ -7,7 +7,9 @@ pub mod args;
 pub mod error;
 pub mod progress;
 pub mod resolve;
+#[cfg(feature = "rig")]
 pub mod stroke;
+pub mod unavailable;
 
 /// Print an analysis's JSON (`json`) or its human summary on stdout.
 pub fn print_analysed(analysed: &Analysed, json: bool) {

@@ -44,6 +44,10 @@ pub fn run(a: &FiguresArgs) -> Result<(), CliError> {
     let Some(out) = &a.out else {
         return Err(CliError::input("figures: --out DIR is required"));
     };
+    if cfg!(not(feature = "rig")) {
+        // Its delay curve runs through the sil rig.
+        return crate::command::unavailable::refuse("figures", "rig", "rig");
+    }
     let request = FiguresRequest {
         out: out.clone(),
         quick: a.quick,

@@ -8,7 +8,9 @@ use super::{Combination, JumpMetrics, SweepDrive, SweepOutcome, run_parallel};
 use sandjumper_model::jump::{JumpSpec, simulate_jump};
 use sandjumper_model::options::SimOptions;
 use sandjumper_model::params::Params;
+#[cfg(feature = "rig")]
 use sandjumper_rig::hil::run::rig_config;
+#[cfg(feature = "rig")]
 use sandjumper_rig::hil::{HilSpec, RigModelConfig, SilLink, run_jump};
 
 /// The metrics of combination `c` on `params`, driven by `drive`, the plant integrated at
@@ -35,6 +37,9 @@ pub fn jump_metrics(
                 .map_err(|e| e.to_string())?
                 .summary
         }
+        #[cfg(not(feature = "rig"))]
+        SweepDrive::Sil { .. } => return Err(crate::error::without_rig("a sweep through sil")),
+        #[cfg(feature = "rig")]
         SweepDrive::Sil { gain_lowering } => {
             let o = run_jump(
                 params,
@@ -87,6 +92,7 @@ where
 }
 
 /// The loop's spec for combination `c` (the rig's gains, as `hil` uses them).
+#[cfg(feature = "rig")]
 pub fn sil_spec(c: &Combination, gain_lowering: Option<f64>, rtol: f64) -> HilSpec {
     let mut spec = HilSpec::new(c.kind, c.freq_hz, c.tau_s, c.model);
     spec.gain_lowering = gain_lowering.map(|f| HilSpec::gain_lowering_factor(f as f32));
@@ -94,6 +100,7 @@ pub fn sil_spec(c: &Combination, gain_lowering: Option<f64>, rtol: f64) -> HilSp
     spec
 }
 
+#[cfg(feature = "rig")]
 fn sil_link() -> Result<SilLink, String> {
     SilLink::new(rig_config(&RigModelConfig::default())).map_err(|e| e.to_string())
 }

@@ -57,8 +57,15 @@ impl SweepRequest {
         resolve_sweep_params(&self.spec, self.params.as_ref())
     }
 
-    /// Refuse bad parameters before anything runs.
+    /// Refuse bad parameters (and, in a build without the rig, a sweep through sil) before
+    /// anything runs.
     pub fn validate(&self) -> Result<(), StudyError> {
+        #[cfg(not(feature = "rig"))]
+        if self.spec.drive != super::SweepDrive::Kinematic {
+            return Err(StudyError::Input(crate::error::without_rig(
+                "sweep --link sil",
+            )));
+        }
         self.resolved_params().map(drop)
     }
 }
