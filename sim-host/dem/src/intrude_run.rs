@@ -25,6 +25,17 @@ pub enum Episode {
     PushOff,
 }
 
+/// clap value parser of a share in 0..=1 ([`IntrudeRequest::min_speed_ratio`], also
+/// `dem lammps`'s).
+pub fn parse_share(s: &str) -> Result<f64, String> {
+    let v = sandjumper_output::parse::parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
+    }
+}
+
 /// An intrusion to run (or a stopped one to continue).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IntrudeRequest {

@@ -1,10 +1,10 @@
 //! `sandjumper log check FILE` and `sandjumper log convert IN OUT`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
+use super::{CheckRequest, ConvertRequest, LogForm};
 use crate::command::CliError;
 use sandjumper_output::Silent;
 
@@ -81,18 +81,6 @@ pub fn run(a: &LogArgs) -> Result<(), CliError> {
     }
 }
 
-/// Reads and checks a log (CSV or binary) as `log check` does: the log and the JSON object
-/// `log check --json` prints. Errors are the CLI's.
-pub fn load_checked(path: &Path, allow_gaps: bool) -> Result<(AcqLog, String), CliError> {
-    let request = CheckRequest {
-        file: path.to_path_buf(),
-        allow_gaps,
-    };
-    let outcome = super::check::run(&request, &Silent)?;
-    let json = outcome.json()?;
-    Ok((outcome.log, json))
-}
-
 fn check(a: &CheckArgs) -> Result<(), CliError> {
     let request = CheckRequest {
         file: a.file.clone(),
@@ -107,18 +95,23 @@ fn check(a: &CheckArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+impl ConvertArgs {
+    /// The library's request for these arguments.
+    pub fn request(&self) -> ConvertRequest {
+        ConvertRequest {
+            input: self.input.clone(),
+            output: self.output.clone(),
+            to: self.to.map(|t| match t {
+                ConvertTo::Csv => LogForm::Csv,
+                ConvertTo::Mcap => LogForm::Mcap,
+            }),
+            allow_gaps: self.allow_gaps,
+            force: self.force,
+        }
+    }
+}
+
 fn convert(a: &ConvertArgs) -> Result<(), CliError> {
-    let request = ConvertRequest {
-        input: a.input.clone(),
-        output: a.output.clone(),
-        to: a.to.map(|t| match t {
-            ConvertTo::Csv => LogForm::Csv,
-            ConvertTo::Mcap => LogForm::Mcap,
-        }),
-        allow_gaps: a.allow_gaps,
-        force: a.force,
-    };
-    let outcome = super::convert::run(&request, &Silent)?;
-    eprint!("{outcome}");
+    eprint!("{}", super::convert::run(&a.request(), &Silent)?);
     Ok(())
 }

@@ -5,10 +5,11 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use super::collide::{CollideRequest, CollisionResult};
+use super::collide::CollideRequest;
+use super::intrude_run::parse_share;
 use super::params::Model;
 use super::request::{ModelRequest, Sizes};
-use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
+use super::shared::{EpisodeChoice, print_json};
 use super::world::Integrator;
 use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive as positive};
@@ -341,7 +342,7 @@ pub struct CollideArgs {
 pub fn run(a: &DemArgs) -> Result<(), CliError> {
     match &a.command {
         DemCommand::Collide(c) => {
-            let r = collide(c)?;
+            let r = super::collide::run(&c.request(), &sandjumper_output::Silent)?;
             if c.json {
                 print_json(&r)
             } else {
@@ -369,29 +370,22 @@ pub fn run(a: &DemArgs) -> Result<(), CliError> {
     }
 }
 
-/// The JSON object `dem collide --json` prints, for `dem collide` arguments (bad input, and
-/// any other `dem` subcommand, is an error).
-pub fn collide_json(a: &DemArgs) -> Result<String, CliError> {
-    let DemCommand::Collide(c) = &a.command else {
-        return Err(CliError::input("not a `dem collide` command"));
-    };
-    serde_json::to_string_pretty(&collide(c)?).map_err(|e| CliError::internal(e.to_string()))
-}
-
-fn collide(a: &CollideArgs) -> Result<CollisionResult, CliError> {
-    let request = CollideRequest {
-        d1_m: a.d1,
-        d2_m: a.d2,
-        wall: a.wall,
-        kn_n_per_m: a.kn,
-        damping_n_s_per_m: a.damping,
-        speed_m_s: a.speed,
-        density_kg_m3: a.density,
-        dt_s: a.dt,
-        force_step: a.force_step,
-        integrator: a.integrator.into(),
-    };
-    super::collide::run(&request, &sandjumper_output::Silent).map_err(cli_error)
+impl CollideArgs {
+    /// The library's request for these arguments.
+    pub fn request(&self) -> CollideRequest {
+        CollideRequest {
+            d1_m: self.d1,
+            d2_m: self.d2,
+            wall: self.wall,
+            kn_n_per_m: self.kn,
+            damping_n_s_per_m: self.damping,
+            speed_m_s: self.speed,
+            density_kg_m3: self.density,
+            dt_s: self.dt,
+            force_step: self.force_step,
+            integrator: self.integrator.into(),
+        }
+    }
 }
 
 impl BedArgs {

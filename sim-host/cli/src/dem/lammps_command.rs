@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::command::CliError;
-use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest};
+use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest, Submitted};
 use sandjumper_lammps::spec::Preset;
 
-use super::shared::{EpisodeChoice, parse_share, print_json};
+use super::intrude_run::parse_share;
+use super::shared::EpisodeChoice;
 use crate::command::args::parse_positive as positive;
 use crate::command::progress::Bars;
 
@@ -150,8 +151,7 @@ impl LammpsArgs {
 
 fn report(outcome: &LammpsOutcome, json: bool) -> Result<(), CliError> {
     if json {
-        print_json(&outcome.summary)
-            .map_err(|e| CliError::internal(format!("cannot encode the summary: {}", e.message)))?;
+        println!("{}", outcome.summary_json()?);
     } else {
         println!("{outcome}");
     }
@@ -161,28 +161,18 @@ fn report(outcome: &LammpsOutcome, json: bool) -> Result<(), CliError> {
 
 /// Run `dem lammps` (here, or submitted to Slurm with `--slurm`).
 pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
-    let request = a.request();
     if !a.slurm.slurm {
-        let outcome = sandjumper_lammps::run::run(&request, &Bars::default())?;
+        let outcome = sandjumper_lammps::run::run(&a.request(), &Bars::default())?;
         return report(&outcome, a.json);
     }
-    // LAMMPS is looked for here also before a job is submitted (a cluster's login node sees
-    // the shared file system its nodes do): a missing one is refused now, not after the queue.
-    request.validate()?;
-    request.lammps()?;
-    crate::slurm::submit_job(
-        "dem-lammps",
-        &["dem", "lammps"],
-        a.ranks,
-        &a.out,
-        &["summary.json"],
-        &a.slurm,
-    )?;
-    if a.json && !a.slurm.queue.slurm_no_wait {
-        let p = a.out.join("summary.json");
-        let text = std::fs::read_to_string(&p)
-            .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
-        print!("{text}");
+    let queue = a.slurm.queue.options();
+    match sandjumper_lammps::run::submit(&a.request(), &queue, &Bars::new())? {
+        Submitted::Queued { id } => {
+            println!("{id}");
+            eprintln!("when it is done its output is in {}", a.out.display());
+        }
+        Submitted::Done { summary_json } if a.json => print!("{summary_json}"),
+        Submitted::Done { .. } => {}
     }
     Ok(())
 }

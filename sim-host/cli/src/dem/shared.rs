@@ -1,20 +1,7 @@
-//! What the `dem` subcommands share: `--episode`, a share's parser, a library error as the
-//! command line's, JSON on stdout.
+//! What the `dem` subcommands share: `--episode` and JSON on stdout.
 
 use crate::command::CliError;
 use sandjumper_dem::intrude_run::Episode;
-
-use crate::command::args::parse_number;
-
-/// A share in 0..=1.
-pub(crate) fn parse_share(s: &str) -> Result<f64, String> {
-    let v = parse_number(s)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
-    }
-}
 
 /// `--episode`: a part of a jump's trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -30,8 +17,6 @@ impl From<EpisodeChoice> for Episode {
         }
     }
 }
-
-pub use crate::command::progress::cli_error;
 
 /// Print `value` as pretty JSON on stdout.
 pub fn print_json(value: &impl serde::Serialize) -> Result<(), CliError> {

@@ -2,65 +2,20 @@
 //! and added mass; `sandjumper piv-synthetic`: grain images with a known motion. The runs are
 //! `sandjumper_flow::run` and `sandjumper_flow::piv_synthetic`; this is their face.
 
-use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
-use super::piv_synthetic::SyntheticRequest;
+use super::piv_synthetic::{SyntheticRequest, parse_shift, parse_size};
 pub use super::piv_synthetic::cone_displacement;
 use super::preprocess::Preprocess;
-use super::run::PivRequest;
+use super::run::{PivRequest, parse_point, parse_ratio, parse_sigma, parse_windows};
+use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive};
 use crate::command::progress::Bars;
-use crate::command::{Analysed, CliError};
-use sandjumper_output::{Blamed, Progress};
-
-pub use crate::command::progress::cli_error;
-
-/// The command line's bars, with the run's notes held back until [`HeldNotes::release`]: the
-/// analyses print `wrote DIR` (or their result) before their notes, as they always did.
-#[derive(Debug, Default)]
-pub struct HeldNotes {
-    bars: Bars,
-    notes: Mutex<Vec<String>>,
-}
-
-impl HeldNotes {
-    /// Print the held notes on stderr.
-    pub fn release(&self) {
-        for line in self
-            .notes
-            .lock()
-            .map(|mut n| std::mem::take(&mut *n))
-            .unwrap_or_default()
-        {
-            eprintln!("{line}");
-        }
-    }
-}
-
-impl Progress for HeldNotes {
-    fn start(&self, what: &str, len: Option<u64>) {
-        self.bars.start(what, len);
-    }
-    fn advance(&self, n: u64) {
-        self.bars.advance(n);
-    }
-    fn finish(&self) {
-        self.bars.finish();
-    }
-    fn note(&self, line: &str) {
-        if let Ok(mut n) = self.notes.lock() {
-            n.push(line.to_string());
-        }
-    }
-    fn cancelled(&self) -> bool {
-        self.bars.cancelled()
-    }
-}
+use sandjumper_flow::FlowError;
 
 /// `--pairs`: how frames are paired ([`Pairing`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -77,21 +32,6 @@ impl From<PairingArg> for Pairing {
             PairingArg::Consecutive => Pairing::Consecutive,
             PairingArg::Ab => Pairing::Ab,
         }
-    }
-}
-
-fn parse_windows(s: &str) -> Result<Vec<usize>, String> {
-    s.split(',')
-        .map(|p| p.trim().parse::<usize>())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|_| format!("`{s}` is not a list of window sizes such as 64,32,16"))
-}
-
-fn parse_point(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
-    match v.as_slice() {
-        [Ok(x), Ok(y)] => Ok((*x, *y)),
-        _ => Err(format!("`{s}` is not a point X,Y in pixels")),
     }
 }
 
@@ -191,15 +131,6 @@ pub enum SubPixelArg {
     Parabolic,
 }
 
-fn parse_ratio(s: &str) -> Result<f64, String> {
-    let v = crate::command::args::parse_number(s)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("speed ratio {v} out of range (allowed: 0 to 1)"))
-    }
-}
-
 /// A known motion of `piv-synthetic`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SyntheticField {
@@ -252,44 +183,15 @@ pub struct SyntheticArgs {
     pub out: PathBuf,
 }
 
-fn parse_sigma(s: &str) -> Result<f64, String> {
-    match parse_number(s) {
-        Ok(v) if (0.0..=512.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a width in px (allowed: 0, off, or up to 512)"
-        )),
-    }
-}
-
-fn parse_shift(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
-    match v.as_slice() {
-        [Ok(x), Ok(y)] if x.abs() <= 1000.0 && y.abs() <= 1000.0 => Ok((*x, *y)),
-        _ => Err(format!(
-            "`{s}` is not a shift DX,DY in px (each within +-1000)"
-        )),
-    }
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let v: Vec<Result<u32, _>> = s.split('x').map(str::parse).collect();
-    match v.as_slice() {
-        [Ok(w), Ok(h)] if (16..=16384).contains(w) && (16..=16384).contains(h) => Ok((*w, *h)),
-        _ => Err(format!("`{s}` is not a size WxH (16..=16384 px each)")),
-    }
-}
-
 impl PivArgs {
     /// The request these arguments make (`--windows` parsed here).
-    pub fn request(&self) -> Result<PivRequest, CliError> {
-        let windows =
-            parse_windows(&self.windows).map_err(|e| CliError::input(format!("--windows {e}")))?;
+    pub fn request(&self) -> Result<PivRequest, FlowError> {
         Ok(PivRequest {
             frames: self.frames.clone(),
             pairs: self.pairs.into(),
             every: self.every as usize,
             piv: PivConfig {
-                windows,
+                windows: parse_windows(&self.windows)?,
                 overlap: self.overlap,
                 deform: !self.no_deform,
                 subpixel: match self.subpixel {
@@ -319,43 +221,18 @@ impl PivArgs {
     }
 }
 
-/// Run `sandjumper piv`.
+/// Run `sandjumper piv`: `--out` written (then `wrote DIR`), the notes, the summary.
 pub fn run(a: &PivArgs) -> Result<(), CliError> {
-    crate::command::print_analysed(&analyse(a)?, a.json);
-    Ok(())
-}
-
-/// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
-pub fn analyse(a: &PivArgs) -> Result<Analysed, CliError> {
-    let progress = HeldNotes::default();
+    let progress = Bars::holding();
     let outcome = super::run::run(&a.request()?, &progress)?;
-    finish(
-        &progress,
-        a.out.as_deref(),
-        |dir| outcome.write(dir),
-        || outcome.summary_json(),
-        outcome.to_string(),
-    )
-}
-
-/// An analysis as the command line ends it: `--out` written (then `wrote DIR`), the held
-/// notes printed, and its JSON and human summary returned.
-pub fn finish<E: Blamed>(
-    progress: &HeldNotes,
-    out: Option<&Path>,
-    write: impl FnOnce(&Path) -> Result<PathBuf, E>,
-    json: impl FnOnce() -> Result<String, E>,
-    human: String,
-) -> Result<Analysed, CliError> {
-    if let Some(dir) = out {
-        let dir = write(dir)?;
-        eprintln!("wrote {}", dir.display());
+    let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
+    progress.release(written.as_deref());
+    if a.json {
+        println!("{}", outcome.summary_json()?);
+    } else {
+        print!("{outcome}");
     }
-    progress.release();
-    Ok(Analysed {
-        json: json()?,
-        human,
-    })
+    Ok(())
 }
 
 impl From<SyntheticField> for super::piv_synthetic::SyntheticField {
