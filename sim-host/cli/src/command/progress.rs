@@ -47,9 +47,10 @@ impl Bars {
         if let Some(dir) = written {
             eprintln!("wrote {}", dir.display());
         }
-        let held = self.held.as_ref().map(|h| {
-            std::mem::take(&mut *h.lock().unwrap_or_else(PoisonError::into_inner))
-        });
+        let held = self
+            .held
+            .as_ref()
+            .map(|h| std::mem::take(&mut *h.lock().unwrap_or_else(PoisonError::into_inner)));
         for line in held.into_iter().flatten() {
             eprintln!("{line}");
         }

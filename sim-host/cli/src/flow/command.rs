@@ -8,8 +8,8 @@ use clap::{Args, ValueEnum};
 
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
-use super::piv_synthetic::{SyntheticRequest, parse_shift, parse_size};
 pub use super::piv_synthetic::cone_displacement;
+use super::piv_synthetic::{SyntheticRequest, parse_shift, parse_size};
 use super::preprocess::Preprocess;
 use super::run::{PivRequest, parse_point, parse_ratio, parse_sigma, parse_windows};
 use crate::command::CliError;
