@@ -20,6 +20,7 @@ use sandjumper_output::{Progress, StagedDir};
 
 /// A part of a jump's trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Episode {
     /// The foot's last intrusion before the jump's flight.
     PushOff,

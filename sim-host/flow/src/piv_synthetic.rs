@@ -17,11 +17,12 @@ use sandjumper_imaging::sequence::decode_file;
 use sandjumper_output::parse::parse_number;
 use sandjumper_output::{Progress, StagedDir};
 
-/// A known motion of `piv-synthetic`.
+/// A known motion of `piv-synthetic` (`Shift`: by [`SyntheticRequest::shift_px`] when given).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SyntheticField {
-    /// Every grain moves by the shift (default `(MAG, MAG/2)`) px per frame.
+    /// Every grain moves by (MAG, MAG/2) px per frame.
     Shift,
     /// u = MAG * (y - H/2) / (H/2) px per frame: a shear.
     Shear,

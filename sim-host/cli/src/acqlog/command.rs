@@ -54,7 +54,7 @@ pub struct ConvertArgs {
     /// What to write: `csv` (the default, unless OUT ends in `.mcap`) or `mcap` (one channel
     /// per quantity group, JSON messages with JSON schemas, chunked and indexed).
     #[arg(long, value_enum, value_name = "FORM")]
-    pub to: Option<ConvertTo>,
+    pub to: Option<LogForm>,
     /// Convert even if sequence numbers show lost samples (the CSV's tick column shows the
     /// gaps and `dropped_samples` counts them).
     #[arg(long)]
@@ -62,15 +62,6 @@ pub struct ConvertArgs {
     /// Replace OUT if it exists.
     #[arg(long)]
     pub force: bool,
-}
-
-/// What `log convert` writes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ConvertTo {
-    /// The CSV form (`sandjumper-acqlog 1`).
-    Csv,
-    /// MCAP (see [`super::mcap_file`]).
-    Mcap,
 }
 
 /// Run `log`.
@@ -101,10 +92,7 @@ impl ConvertArgs {
         ConvertRequest {
             input: self.input.clone(),
             output: self.output.clone(),
-            to: self.to.map(|t| match t {
-                ConvertTo::Csv => LogForm::Csv,
-                ConvertTo::Mcap => LogForm::Mcap,
-            }),
+            to: self.to,
             allow_gaps: self.allow_gaps,
             force: self.force,
         }

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::collide::CollideRequest;
-use super::intrude_run::parse_share;
+use super::intrude_run::{Episode, parse_share};
 use super::params::Model;
 use super::request::{ModelRequest, Sizes};
-use super::shared::{EpisodeChoice, print_json};
+use super::shared::print_json;
 use super::world::Integrator;
 use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive as positive};
@@ -41,51 +41,15 @@ pub enum DemCommand {
     LammpsRead(Box<super::lammps_command::LammpsReadArgs>),
 }
 
-/// The DEM's model as named on the command line ([`Model`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ModelChoice {
-    /// Supplementary I exactly.
-    Paper,
-    /// Gravity, walls, friction, velocity Verlet.
-    Full,
-}
-
-impl From<ModelChoice> for Model {
-    fn from(m: ModelChoice) -> Self {
-        match m {
-            ModelChoice::Paper => Model::Paper,
-            ModelChoice::Full => Model::Full,
-        }
-    }
-}
-
-/// The DEM's integrator as named on the command line ([`Integrator`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum IntegratorChoice {
-    /// Forward Euler (the paper's).
-    ForwardEuler,
-    /// Velocity Verlet (leapfrog form).
-    VelocityVerlet,
-}
-
-impl From<IntegratorChoice> for Integrator {
-    fn from(i: IntegratorChoice) -> Self {
-        match i {
-            IntegratorChoice::ForwardEuler => Integrator::ForwardEuler,
-            IntegratorChoice::VelocityVerlet => Integrator::VelocityVerlet,
-        }
-    }
-}
-
 /// Grain and contact choices shared by `bed` and `intrude`.
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
     /// Model: `paper` (Supplementary I) or `full` (gravity, walls, friction, Verlet).
     #[arg(long, value_enum, default_value = "paper")]
-    pub model: ModelChoice,
+    pub model: Model,
     /// Grain sizes: mono, bi (50:50, ratio 1.4) or poly.
     #[arg(long, value_enum, default_value = "bi")]
-    pub sizes: SizesArg,
+    pub sizes: Sizes,
     /// Large over small diameter (bi).
     #[arg(long, value_name = "R", default_value = "1.4", value_parser = positive)]
     pub ratio: f64,
@@ -122,7 +86,7 @@ pub struct ModelArgs {
     pub drag: Option<f64>,
     /// Integrator (paper: forward Euler, full: velocity Verlet).
     #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorChoice>,
+    pub integrator: Option<Integrator>,
     /// Steps per shortest contact time.
     #[arg(long, value_name = "N", default_value = "50", value_parser = parse_number)]
     pub steps_per_contact: f64,
@@ -137,27 +101,12 @@ pub struct ModelArgs {
     pub walls: bool,
 }
 
-/// `--sizes`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum SizesArg {
-    /// One size.
-    Mono,
-    /// Two sizes, 50:50.
-    Bi,
-    /// Uniform spread.
-    Poly,
-}
-
 impl ModelArgs {
     /// The library's request for these choices.
     pub fn request(&self) -> ModelRequest {
         ModelRequest {
-            model: self.model.into(),
-            sizes: match self.sizes {
-                SizesArg::Mono => Sizes::Mono,
-                SizesArg::Bi => Sizes::Bi,
-                SizesArg::Poly => Sizes::Poly,
-            },
+            model: self.model,
+            sizes: self.sizes,
             ratio: self.ratio,
             spread: self.spread,
             diameter_m: self.diameter,
@@ -169,7 +118,7 @@ impl ModelArgs {
             damping_n_s_per_m: self.damping,
             mu: self.mu,
             drag_per_s: self.drag,
-            integrator: self.integrator.map(Into::into),
+            integrator: self.integrator,
             steps_per_contact: self.steps_per_contact,
             dt_s: self.dt,
             force_step: self.force_step,
@@ -228,7 +177,7 @@ pub struct IntrudeArgs {
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
     /// `push-off`, the foot's last intrusion before the jump's flight.
     #[arg(long, value_enum, value_name = "EPISODE", requires = "trajectory", conflicts_with_all = ["from", "to"])]
-    pub episode: Option<EpisodeChoice>,
+    pub episode: Option<Episode>,
     /// Use the trajectory from this time, s.
     #[arg(long, value_name = "S", value_parser = parse_number)]
     pub from: Option<f64>,
@@ -332,7 +281,7 @@ pub struct CollideArgs {
     pub force_step: bool,
     /// Integrator.
     #[arg(long, value_enum, default_value = "velocity-verlet")]
-    pub integrator: IntegratorChoice,
+    pub integrator: Integrator,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -383,7 +332,7 @@ impl CollideArgs {
             density_kg_m3: self.density,
             dt_s: self.dt,
             force_step: self.force_step,
-            integrator: self.integrator.into(),
+            integrator: self.integrator,
         }
     }
 }
@@ -412,7 +361,7 @@ impl IntrudeArgs {
         super::intrude_run::IntrudeRequest {
             bed: self.bed.clone(),
             trajectory: self.trajectory.clone(),
-            episode: self.episode.map(Into::into),
+            episode: self.episode,
             from_s: self.from,
             to_s: self.to,
             speed_m_s: self.speed,

@@ -4,36 +4,18 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
 pub use super::piv_synthetic::cone_displacement;
-use super::piv_synthetic::{SyntheticRequest, parse_shift, parse_size};
+use super::piv_synthetic::{SyntheticField, SyntheticRequest, parse_shift, parse_size};
 use super::preprocess::Preprocess;
 use super::run::{PivRequest, parse_point, parse_ratio, parse_sigma, parse_windows};
 use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive};
 use crate::command::progress::Bars;
 use sandjumper_flow::FlowError;
-
-/// `--pairs`: how frames are paired ([`Pairing`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PairingArg {
-    /// 1-2, 2-3, 3-4, ...
-    Consecutive,
-    /// 1-2, 3-4, ... (double-frame cameras).
-    Ab,
-}
-
-impl From<PairingArg> for Pairing {
-    fn from(p: PairingArg) -> Self {
-        match p {
-            PairingArg::Consecutive => Pairing::Consecutive,
-            PairingArg::Ab => Pairing::Ab,
-        }
-    }
-}
 
 /// `sandjumper piv`.
 #[derive(Debug, Clone, Args)]
@@ -44,7 +26,7 @@ pub struct PivArgs {
     pub frames: String,
     /// Pairing of the frames.
     #[arg(long, value_enum, default_value = "consecutive")]
-    pub pairs: PairingArg,
+    pub pairs: Pairing,
     /// Analyse every Nth pair.
     #[arg(long, value_name = "N", default_value = "1", value_parser = clap::value_parser!(u32).range(1..))]
     pub every: u32,
@@ -59,7 +41,7 @@ pub struct PivArgs {
     pub no_deform: bool,
     /// Sub-pixel peak estimator.
     #[arg(long, value_enum, default_value = "gaussian")]
-    pub subpixel: SubPixelArg,
+    pub subpixel: SubPixel,
     /// Normalised median test threshold.
     #[arg(long, value_name = "X", default_value = "2", value_parser = parse_positive)]
     pub median_threshold: f64,
@@ -122,29 +104,6 @@ pub struct PivArgs {
     pub json: bool,
 }
 
-/// `--subpixel`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SubPixelArg {
-    /// 3-point Gaussian.
-    Gaussian,
-    /// 3-point parabola.
-    Parabolic,
-}
-
-/// A known motion of `piv-synthetic`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SyntheticField {
-    /// Every grain moves by (MAG, MAG/2) px per frame.
-    Shift,
-    /// u = MAG * (y - H/2) / (H/2) px per frame: a shear.
-    Shear,
-    /// A rigid rotation about the centre, MAG px per frame at the edge.
-    Rotation,
-    /// A flat foot (half-width H/4) descending MAG px per frame from a surface at H/4, with
-    /// the 60-degree cone of grains under it moving along and the rest at rest.
-    Cone,
-}
-
 /// `sandjumper piv-synthetic`.
 #[derive(Debug, Clone, Args)]
 pub struct SyntheticArgs {
@@ -188,16 +147,13 @@ impl PivArgs {
     pub fn request(&self) -> Result<PivRequest, FlowError> {
         Ok(PivRequest {
             frames: self.frames.clone(),
-            pairs: self.pairs.into(),
+            pairs: self.pairs,
             every: self.every as usize,
             piv: PivConfig {
                 windows: parse_windows(&self.windows)?,
                 overlap: self.overlap,
                 deform: !self.no_deform,
-                subpixel: match self.subpixel {
-                    SubPixelArg::Gaussian => SubPixel::Gaussian,
-                    SubPixelArg::Parabolic => SubPixel::Parabolic,
-                },
+                subpixel: self.subpixel,
                 median_threshold: self.median_threshold,
                 min_peak_ratio: self.min_peak_ratio,
             },
@@ -235,21 +191,10 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-impl From<SyntheticField> for super::piv_synthetic::SyntheticField {
-    fn from(f: SyntheticField) -> Self {
-        match f {
-            SyntheticField::Shift => Self::Shift,
-            SyntheticField::Shear => Self::Shear,
-            SyntheticField::Rotation => Self::Rotation,
-            SyntheticField::Cone => Self::Cone,
-        }
-    }
-}
-
 /// Run `sandjumper piv-synthetic`.
 pub fn run_synthetic(a: &SyntheticArgs) -> Result<(), CliError> {
     let request = SyntheticRequest {
-        field: a.field.into(),
+        field: a.field,
         magnitude_px: a.magnitude,
         size_px: a.size,
         frames: a.frames,
