@@ -329,10 +329,9 @@ pub fn dem_collide(
     let DemCommand::Collide(c) = a.command else {
         unreachable!("`sandjumper dem collide` parses as DemCommand::Collide")
     };
-    let result =
-        sandjumper_dem::collide::run(&c.request(), &Silent).map_err(|e| argv.error(e.into()))?;
-    let json = serde_json::to_string_pretty(&result)
-        .map_err(|e| argv.error(CliError::internal(e.to_string())))?;
+    let json = sandjumper_dem::collide::run(&c.request(), &Silent)
+        .and_then(|r| r.json())
+        .map_err(|e| argv.error(e.into()))?;
     Ok(json_to_py(py, &json)?.unbind())
 }
 

@@ -6,10 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use super::collide::CollideRequest;
-use super::intrude_run::{Episode, parse_share};
+use super::intrude_run::{Episode, IntrudeOutcome, parse_share};
 use super::params::Model;
 use super::request::{ModelRequest, Sizes};
-use super::shared::print_json;
 use super::world::Integrator;
 use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive as positive};
@@ -293,30 +292,20 @@ pub fn run(a: &DemArgs) -> Result<(), CliError> {
         DemCommand::Collide(c) => {
             let r = super::collide::run(&c.request(), &sandjumper_output::Silent)?;
             if c.json {
-                print_json(&r)
+                println!("{}", r.json()?);
             } else {
                 println!("{r}");
-                Ok(())
             }
         }
-        DemCommand::Bed(b) => {
-            let outcome = super::bed_run::run(&b.request(), &Bars::default())?;
-            println!("{outcome}");
-            Ok(())
-        }
-        DemCommand::Intrude(i) => {
-            let outcome = super::intrude_run::run(&i.request(), &Bars::default())?;
-            match &outcome {
-                super::intrude_run::IntrudeOutcome::Finished(s) if i.json => print_json(s),
-                _ => {
-                    println!("{outcome}");
-                    Ok(())
-                }
-            }
-        }
-        DemCommand::Lammps(l) => super::lammps_command::run(l),
-        DemCommand::LammpsRead(r) => super::lammps_command::run_read(r),
+        DemCommand::Bed(b) => println!("{}", super::bed_run::run(&b.request(), &Bars::new())?),
+        DemCommand::Intrude(i) => match super::intrude_run::run(&i.request(), &Bars::new())? {
+            IntrudeOutcome::Finished(s) if i.json => println!("{}", s.json()?),
+            outcome => println!("{outcome}"),
+        },
+        DemCommand::Lammps(l) => super::lammps_command::run(l)?,
+        DemCommand::LammpsRead(r) => super::lammps_command::run_read(r)?,
     }
+    Ok(())
 }
 
 impl CollideArgs {
