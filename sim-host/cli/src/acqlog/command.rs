@@ -78,12 +78,7 @@ fn check(a: &CheckArgs) -> Result<(), CliError> {
         allow_gaps: a.allow_gaps,
     };
     let outcome = super::check::run(&request, &Silent)?;
-    if a.json {
-        println!("{}", outcome.json()?);
-    } else {
-        print!("{outcome}");
-    }
-    Ok(())
+    crate::command::print_outcome(a.json, &outcome, || outcome.json())
 }
 
 impl ConvertArgs {

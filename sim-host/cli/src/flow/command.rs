@@ -183,12 +183,7 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
     let outcome = super::run::run(&a.request()?, &progress)?;
     let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
     progress.release(written.as_deref());
-    if a.json {
-        println!("{}", outcome.summary_json()?);
-    } else {
-        print!("{outcome}");
-    }
-    Ok(())
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())
 }
 
 /// Run `sandjumper piv-synthetic`.

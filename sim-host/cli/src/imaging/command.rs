@@ -102,12 +102,7 @@ pub fn run(a: &TrackArgs) -> Result<(), CliError> {
     let outcome = super::run::run(&a.request(), &progress)?;
     let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
     progress.release(written.as_deref());
-    if a.json {
-        println!("{}", outcome.summary_json()?);
-    } else {
-        print!("{outcome}");
-    }
-    Ok(())
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())
 }
 
 /// Run `sandjumper camera-scale`.
@@ -120,11 +115,7 @@ pub fn run_scale(a: &CameraScaleArgs) -> Result<(), CliError> {
     };
     let progress = Bars::holding();
     let outcome = super::camera_scale::run(&request, &progress)?;
-    if a.json {
-        println!("{}", outcome.summary_json()?);
-    } else {
-        print!("{outcome}");
-    }
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())?;
     progress.release(None);
     Ok(())
 }
