@@ -12,11 +12,12 @@ use sandjumper_output::Progress;
 
 /// What `log convert` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LogForm {
     /// The CSV form (`sandjumper-acqlog 1`).
     Csv,
-    /// MCAP (see [`crate::mcap_file`]).
+    /// MCAP (see [`super::mcap_file`]).
     Mcap,
 }
 

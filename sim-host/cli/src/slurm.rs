@@ -1,17 +1,12 @@
-//! Slurm's options on the command line and `dem lammps --slurm`'s submission, over
-//! [`sandjumper_slurm`] (the job's folder, its script, `sbatch`, `squeue`, `scontrol`).
+//! Slurm's options on the command line, as [`sandjumper_slurm`]'s [`QueueOptions`].
 //!
 //! Two commands submit: `sweep --slurm N` (a job array, one shard per task:
 //! `crate::study::sweep`) and `dem lammps --slurm` (one job of `--ranks` MPI tasks:
-//! [`submit_job`]).
-
-use std::path::Path;
+//! `sandjumper_lammps::run::submit`).
 
 use clap::Args;
 
-use crate::command::CliError;
-use crate::command::progress::Bars;
-use sandjumper_slurm::{self as slurm, QueueOptions};
+use sandjumper_slurm::QueueOptions;
 
 /// The queue options every submitting command has (each requires its `--slurm`).
 #[derive(Debug, Clone, Args)]
@@ -53,30 +48,4 @@ pub struct JobArgs {
     /// Partition, time limit, waiting.
     #[command(flatten)]
     pub queue: QueueArgs,
-}
-
-/// Submit this very command (the words `command`, its arguments without the Slurm options,
-/// `--out` and `--ranks`) as one job of `tasks` tasks writing `out`
-/// ([`sandjumper_slurm::submit_command`]); without waiting, print the job's id.
-pub fn submit_job(
-    name: &str,
-    command: &[&str],
-    tasks: u32,
-    out: &Path,
-    expect: &[&str],
-    s: &JobArgs,
-) -> Result<(), CliError> {
-    let job = slurm::CommandJob {
-        name,
-        command,
-        tasks,
-        out,
-        expect,
-        queue: s.queue.options(),
-    };
-    if let slurm::CommandJobOutcome::Queued { id } = slurm::submit_command(&job, &Bars::new())? {
-        println!("{id}");
-        eprintln!("when it is done its output is in {}", out.display());
-    }
-    Ok(())
 }

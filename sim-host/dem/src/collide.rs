@@ -337,6 +337,13 @@ pub fn run(
         .map_err(crate::error::DemError::Input)
 }
 
+impl CollisionResult {
+    /// What `dem collide --json` prints: this result as pretty JSON.
+    pub fn json(&self) -> Result<String, crate::error::DemError> {
+        serde_json::to_string_pretty(self).map_err(crate::error::DemError::internal)
+    }
+}
+
 impl std::fmt::Display for CollisionResult {
     /// The line `dem collide` prints.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -20,9 +20,21 @@ use sandjumper_output::{Progress, StagedDir};
 
 /// A part of a jump's trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Episode {
     /// The foot's last intrusion before the jump's flight.
     PushOff,
+}
+
+/// clap value parser of a share in 0..=1 ([`IntrudeRequest::min_speed_ratio`], also
+/// `dem lammps`'s).
+pub fn parse_share(s: &str) -> Result<f64, String> {
+    let v = sandjumper_output::parse::parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("`{s}` not allowed (allowed: 0 to 1)"))
+    }
 }
 
 /// An intrusion to run (or a stopped one to continue).

@@ -79,6 +79,11 @@ pub struct Summary {
 }
 
 impl Summary {
+    /// What `dem intrude --json` prints: this summary as pretty JSON.
+    pub fn json(&self) -> Result<String, DemError> {
+        serde_json::to_string_pretty(self).map_err(DemError::internal)
+    }
+
     /// One line for the terminal.
     pub fn line(&self) -> String {
         format!(

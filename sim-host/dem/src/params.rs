@@ -19,6 +19,7 @@ use super::world::{Integrator, Walls, WorldConfig};
 
 /// A named model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Model {
     /// Supplementary I exactly.

@@ -8,14 +8,16 @@ use crate::grains::SizeDistribution;
 use crate::params::{Choice, DemParams, Model};
 use crate::world::Integrator;
 
-/// The grains' sizes as a request names them.
+/// The grains' sizes as a request names them: two sizes large over small
+/// [`ModelRequest::ratio`], or a uniform spread [`ModelRequest::spread`] about the mean.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Sizes {
     /// One size.
     Mono,
-    /// Two sizes, 50:50, large over small [`ModelRequest::ratio`].
+    /// Two sizes, 50:50.
     Bi,
-    /// Uniform spread [`ModelRequest::spread`] about the mean.
+    /// Uniform spread.
     Poly,
 }
 

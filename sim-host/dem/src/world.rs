@@ -13,6 +13,7 @@ pub use super::grains::{INTERIOR, NEAR_WALL, PRESCRIBED};
 
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Integrator {
     /// Forward Euler (the paper's).

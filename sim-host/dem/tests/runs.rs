@@ -145,3 +145,29 @@ fn a_collision_matches_the_analytic_restitution() {
     .unwrap_err();
     assert_eq!(e.blame(), Blame::Input);
 }
+
+#[test]
+fn a_collisions_json_has_the_keys_dem_collide_prints_and_a_share_is_0_to_1() {
+    let r = collide::run(
+        &CollideRequest {
+            d1_m: 1e-3,
+            wall: true,
+            kn_n_per_m: 2e4,
+            damping_n_s_per_m: 2e-3,
+            speed_m_s: 0.3,
+            ..CollideRequest::default()
+        },
+        &Silent,
+    )
+    .unwrap();
+    let text = r.json().unwrap();
+    assert!(text.starts_with("{\n  \"restitution\": "), "{text}");
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(json["dt_s"], r.dt_s);
+    assert_eq!(json["contact_time_s"], r.contact_time_s);
+    assert_eq!(intrude_run::parse_share("0.3"), Ok(0.3));
+    assert_eq!(
+        intrude_run::parse_share("1.1"),
+        Err("`1.1` not allowed (allowed: 0 to 1)".into())
+    );
+}

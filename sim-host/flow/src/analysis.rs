@@ -18,6 +18,7 @@ use crate::preprocess::{Preprocess, apply, background};
 
 /// How frames are paired.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Pairing {
     /// 1-2, 2-3, 3-4, ...

@@ -166,13 +166,14 @@ fn prefilter(c: &mut [f32]) {
     }
 }
 
-/// How the correlation peak is refined.
+/// How the correlation peak is refined, per axis (default: Gaussian).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SubPixel {
-    /// 3-point Gaussian per axis (the default).
+    /// 3-point Gaussian.
     Gaussian,
-    /// 3-point parabola per axis.
+    /// 3-point parabola.
     Parabolic,
 }
 

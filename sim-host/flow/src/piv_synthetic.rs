@@ -14,13 +14,15 @@ use crate::synthetic::{Grain, GrainScene};
 use sandjumper_frame::GrayFrame;
 use sandjumper_imaging::render::write_png;
 use sandjumper_imaging::sequence::decode_file;
+use sandjumper_output::parse::parse_number;
 use sandjumper_output::{Progress, StagedDir};
 
-/// A known motion of `piv-synthetic`.
+/// A known motion of `piv-synthetic` (`Shift`: by [`SyntheticRequest::shift_px`] when given).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SyntheticField {
-    /// Every grain moves by the shift (default `(MAG, MAG/2)`) px per frame.
+    /// Every grain moves by (MAG, MAG/2) px per frame.
     Shift,
     /// u = MAG * (y - H/2) / (H/2) px per frame: a shear.
     Shear,
@@ -93,6 +95,26 @@ impl SyntheticRequest {
     fn shift(&self) -> (f64, f64) {
         self.shift_px
             .unwrap_or((self.magnitude_px, 0.5 * self.magnitude_px))
+    }
+}
+
+/// clap value parser of [`SyntheticRequest::shift_px`]: `DX,DY`, px, each within +-1000.
+pub fn parse_shift(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
+    match v.as_slice() {
+        [Ok(x), Ok(y)] if x.abs() <= 1000.0 && y.abs() <= 1000.0 => Ok((*x, *y)),
+        _ => Err(format!(
+            "`{s}` is not a shift DX,DY in px (each within +-1000)"
+        )),
+    }
+}
+
+/// clap value parser of [`SyntheticRequest::size_px`]: `WxH`, 16 to 16384 px each.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let v: Vec<Result<u32, _>> = s.split('x').map(str::parse).collect();
+    match v.as_slice() {
+        [Ok(w), Ok(h)] if (16..=16384).contains(w) && (16..=16384).contains(h) => Ok((*w, *h)),
+        _ => Err(format!("`{s}` is not a size WxH (16..=16384 px each)")),
     }
 }
 

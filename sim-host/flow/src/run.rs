@@ -131,6 +131,48 @@ impl PivRequest {
     }
 }
 
+/// `--windows`: the passes' window sizes, px, comma-separated (`64,32,16`); the message
+/// names the option.
+pub fn parse_windows(s: &str) -> Result<Vec<usize>, FlowError> {
+    s.split(',')
+        .map(|p| p.trim().parse::<usize>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|_| {
+            FlowError::input(format!(
+                "--windows `{s}` is not a list of window sizes such as 64,32,16"
+            ))
+        })
+}
+
+/// clap value parser of `--origin`: a point `X,Y`, px.
+pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
+    match v.as_slice() {
+        [Ok(x), Ok(y)] => Ok((*x, *y)),
+        _ => Err(format!("`{s}` is not a point X,Y in pixels")),
+    }
+}
+
+/// clap value parser of [`PivRequest::min_speed_ratio`]: 0 to 1.
+pub fn parse_ratio(s: &str) -> Result<f64, String> {
+    let v = parse_number(s)?;
+    if (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("speed ratio {v} out of range (allowed: 0 to 1)"))
+    }
+}
+
+/// clap value parser of a Gaussian's width, px: 0 (off) to 512.
+pub fn parse_sigma(s: &str) -> Result<f64, String> {
+    match parse_number(s) {
+        Ok(v) if (0.0..=512.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a width in px (allowed: 0, off, or up to 512)"
+        )),
+    }
+}
+
 /// A PIV run's result: `summary.json`'s fields (serialised in this order) and, skipped by
 /// serde, everything the output folder is written from, in memory.
 #[derive(Clone, Debug, Serialize)]

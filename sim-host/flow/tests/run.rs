@@ -213,3 +213,39 @@ fn the_model_added_mass_grows_with_depth_and_the_foot_area() {
     assert!(m(0.038, 0.02) > m(0.019, 0.02));
     assert!(sandjumper_flow::momentum::model_added_mass(2.0, 0.019, 0.01).is_err());
 }
+
+#[test]
+fn the_value_parsers_allow_what_the_requests_allow_with_the_command_lines_messages() {
+    assert_eq!(run::parse_windows("64, 32,16").unwrap(), [64, 32, 16]);
+    let e = run::parse_windows("64,x").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "--windows `64,x` is not a list of window sizes such as 64,32,16"
+    );
+    assert_eq!(e.blame(), Blame::Input);
+    assert_eq!(run::parse_point("10, -2.5"), Ok((10.0, -2.5)));
+    assert_eq!(
+        run::parse_point("10"),
+        Err("`10` is not a point X,Y in pixels".into())
+    );
+    assert_eq!(run::parse_ratio("1"), Ok(1.0));
+    assert_eq!(
+        run::parse_ratio("1.5"),
+        Err("speed ratio 1.5 out of range (allowed: 0 to 1)".into())
+    );
+    assert_eq!(run::parse_sigma("0"), Ok(0.0));
+    assert_eq!(
+        run::parse_sigma("513"),
+        Err("`513` is not a width in px (allowed: 0, off, or up to 512)".into())
+    );
+    assert_eq!(piv_synthetic::parse_shift("-3,1000"), Ok((-3.0, 1000.0)));
+    assert_eq!(
+        piv_synthetic::parse_shift("1001,0"),
+        Err("`1001,0` is not a shift DX,DY in px (each within +-1000)".into())
+    );
+    assert_eq!(piv_synthetic::parse_size("16x16384"), Ok((16, 16384)));
+    assert_eq!(
+        piv_synthetic::parse_size("15x20"),
+        Err("`15x20` is not a size WxH (16..=16384 px each)".into())
+    );
+}

@@ -19,6 +19,7 @@ use crate::track::{
     Apex, CSV_HEADER, FlagCounts, FrameClock, TrackResult, TrackSpec, log_clock, track_sequence,
 };
 use sandjumper_acqlog::{AcqLog, Column, ReadOptions};
+use sandjumper_output::parse::parse_positive_as;
 use sandjumper_output::plot::save_figure;
 use sandjumper_output::{Progress, StagedDir};
 
@@ -83,6 +84,56 @@ impl TrackRequest {
             apex_window_s: self.apex_window_s,
             exposure_s: self.exposure_s,
         }
+    }
+}
+
+/// clap value parser of [`TrackRequest::m_per_px`]: a scale, m/px, > 0.
+pub fn parse_m_per_px(s: &str) -> Result<f64, String> {
+    parse_positive_as(s, "a scale in metres per pixel")
+}
+
+/// clap value parser of [`TrackRequest::fps`]: a frame rate, frames/s, > 0.
+pub fn parse_fps(s: &str) -> Result<f64, String> {
+    parse_positive_as(s, "a frame rate in frames/s")
+}
+
+/// clap value parser of [`TrackRequest::ball_diameter_m`]: a length, m, > 0.
+pub fn parse_length(s: &str) -> Result<f64, String> {
+    parse_positive_as(s, "a length in metres")
+}
+
+/// clap value parser of [`TrackRequest::apex_window_s`]: a time, s, > 0.
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    parse_positive_as(s, "a time in seconds")
+}
+
+/// clap value parser of [`TrackRequest::exposure_s`]: a time, s, >= 0.
+pub fn parse_exposure(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not an exposure time: seconds >= 0")),
+    }
+}
+
+/// clap value parser of a ball's diameter in the image, px, > 0
+/// ([`crate::camera_scale::ScaleRequest::ball_px`]).
+pub fn parse_px(s: &str) -> Result<f64, String> {
+    parse_positive_as(s, "a diameter in pixels")
+}
+
+/// clap value parser of a region of interest: `X,Y,W,H` in whole pixels, W and H > 0.
+pub fn parse_roi(s: &str) -> Result<Roi, String> {
+    let parts: Vec<Result<u32, _>> = s.split(',').map(|p| p.trim().parse::<u32>()).collect();
+    match parts.as_slice() {
+        [Ok(x), Ok(y), Ok(w), Ok(h)] if *w > 0 && *h > 0 => Ok(Roi {
+            x: *x,
+            y: *y,
+            width: *w,
+            height: *h,
+        }),
+        _ => Err(format!(
+            "`{s}` is not a region: X,Y,W,H in whole pixels, W and H > 0"
+        )),
     }
 }
 

@@ -133,3 +133,28 @@ fn refused_requests_say_what_the_command_line_says() {
     assert!(e.to_string().starts_with("--log "), "{e}");
     assert_eq!(e.blame(), Blame::Input);
 }
+
+#[test]
+fn the_value_parsers_name_what_is_allowed() {
+    use sandjumper_imaging::run::{parse_exposure, parse_fps, parse_m_per_px, parse_roi};
+    assert_eq!(parse_fps("500"), Ok(500.0));
+    assert_eq!(
+        parse_fps("0"),
+        Err("`0` is not a frame rate in frames/s: a finite number > 0".into())
+    );
+    assert_eq!(
+        parse_m_per_px("-1"),
+        Err("`-1` is not a scale in metres per pixel: a finite number > 0".into())
+    );
+    assert_eq!(parse_exposure("0"), Ok(0.0));
+    assert_eq!(
+        parse_exposure("-0.001"),
+        Err("`-0.001` is not an exposure time: seconds >= 0".into())
+    );
+    let roi = parse_roi("1, 2,30,40").unwrap();
+    assert_eq!((roi.x, roi.y, roi.width, roi.height), (1, 2, 30, 40));
+    assert_eq!(
+        parse_roi("1,2,0,40"),
+        Err("`1,2,0,40` is not a region: X,Y,W,H in whole pixels, W and H > 0".into())
+    );
+}

@@ -51,3 +51,13 @@ impl From<OutputError> for LammpsError {
         Self::Input(e.to_string())
     }
 }
+
+/// A Slurm submission's failure keeps its message and its blame.
+impl From<sandjumper_slurm::SlurmError> for LammpsError {
+    fn from(e: sandjumper_slurm::SlurmError) -> Self {
+        match e {
+            sandjumper_slurm::SlurmError::Input(m) => Self::Input(m),
+            sandjumper_slurm::SlurmError::Internal(m) => Self::Internal(m),
+        }
+    }
+}

@@ -10,6 +10,7 @@ use serde::Serialize;
 use sandjumper_dem::intrude_run::Episode;
 use sandjumper_dem::intruder::Trajectory;
 use sandjumper_output::{Progress, StagedDir};
+use sandjumper_slurm::{CommandJobOutcome, QueueOptions};
 
 use crate::error::LammpsError;
 use crate::lammps::Lammps;
@@ -103,6 +104,14 @@ pub struct LammpsOutcome {
     pub out: PathBuf,
 }
 
+impl LammpsOutcome {
+    /// The summary as pretty JSON (what `dem lammps --json` prints).
+    pub fn summary_json(&self) -> Result<String, LammpsError> {
+        serde_json::to_string_pretty(&self.summary)
+            .map_err(|e| LammpsError::internal(format!("cannot encode the summary: {e}")))
+    }
+}
+
 impl fmt::Display for LammpsOutcome {
     /// The two-part summary `dem lammps` prints on stdout.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -193,6 +202,52 @@ impl LammpsRequest {
     pub fn lammps(&self) -> Result<Lammps, LammpsError> {
         crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref())
             .map_err(LammpsError::Input)
+    }
+}
+
+/// What a run submitted to Slurm ([`submit`]) came to.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Submitted {
+    /// Submitted without waiting ([`QueueOptions::no_wait`]): Slurm's job id.
+    Queued {
+        /// Slurm's job id.
+        id: String,
+    },
+    /// The job ran and wrote its folder: the text of its `summary.json`.
+    Done {
+        /// `summary.json` as the job wrote it (what `dem lammps --json` prints).
+        summary_json: String,
+    },
+}
+
+/// Submit the run `request` asks for to Slurm as one job of [`LammpsRequest::ranks`] tasks
+/// that runs this program's `dem lammps` again on the cluster
+/// ([`sandjumper_slurm::submit_command`]), wait for it unless `queue` says not to, and check
+/// it. The request is checked and LAMMPS looked for here first (a cluster's login node sees
+/// the shared file system its nodes do): a missing one is refused now, not after the queue.
+pub fn submit(
+    request: &LammpsRequest,
+    queue: &QueueOptions,
+    progress: &dyn Progress,
+) -> Result<Submitted, LammpsError> {
+    request.validate()?;
+    request.lammps()?;
+    let job = sandjumper_slurm::CommandJob {
+        name: "dem-lammps",
+        command: &["dem", "lammps"],
+        tasks: request.ranks,
+        out: &request.out,
+        expect: &["summary.json"],
+        queue: queue.clone(),
+    };
+    match sandjumper_slurm::submit_command(&job, progress)? {
+        CommandJobOutcome::Queued { id } => Ok(Submitted::Queued { id }),
+        CommandJobOutcome::Done { .. } => {
+            let p = request.out.join("summary.json");
+            let summary_json = std::fs::read_to_string(&p)
+                .map_err(|e| LammpsError::internal(format!("{}: {e}", p.display())))?;
+            Ok(Submitted::Done { summary_json })
+        }
     }
 }
 

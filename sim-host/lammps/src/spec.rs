@@ -11,13 +11,14 @@ use serde::{Deserialize, Serialize};
 
 /// A preset scale.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Preset {
-    /// The paper's foot (76 mm) in ~1 mm grains, a bed 0.30 m across and 0.15 m deep
-    /// (~15 million grains): a cluster job.
+    /// The paper's 76 mm foot in ~1 mm grains, a 0.30 m x 0.15 m bed (~15 million grains,
+    /// Young's modulus 100 MPa): a cluster job.
     Paper,
-    /// A 20 mm foot in ~2 mm grains, a bed 60 mm across and 40 mm deep (~20,000 grains):
-    /// minutes on two cores.
+    /// A 20 mm foot in ~2 mm grains, a 60 mm x 40 mm bed (~20,000 grains, 5 MPa): minutes on
+    /// two cores.
     Small,
 }
 

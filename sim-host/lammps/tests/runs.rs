@@ -106,3 +106,31 @@ fn a_read_back_refuses_an_output_inside_its_run_and_a_folder_without_one() {
     assert_eq!(e.blame(), Blame::Input);
     assert!(e.to_string().contains("run.toml"), "{e}");
 }
+
+#[test]
+fn a_slurm_submission_refuses_what_a_run_refuses_before_it_looks_for_slurm() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("run");
+    let queue = sandjumper_slurm::QueueOptions::default();
+    for (request, why) in [
+        (
+            LammpsRequest {
+                speed_m_s: None,
+                ..small(&out)
+            },
+            "--speed",
+        ),
+        (
+            LammpsRequest {
+                lmp: Some("/nonexistent/lmp".into()),
+                ..small(&out)
+            },
+            "pip install",
+        ),
+    ] {
+        let e = run::submit(&request, &queue, &Silent).unwrap_err();
+        assert_eq!(e.blame(), Blame::Input, "{e}");
+        assert!(e.to_string().contains(why), "{e}");
+        assert!(!out.exists() && !work.path().join("run.slurm").exists());
+    }
+}

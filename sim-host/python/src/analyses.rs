@@ -11,7 +11,13 @@ use std::path::{Path, PathBuf};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyList, PyString, PyTuple};
+use sandjumper_acqlog::check::{self, CheckRequest};
+use sandjumper_cli::acqlog::command::LogAction;
 use sandjumper_cli::cli::args::Command;
+use sandjumper_cli::command::CliError;
+use sandjumper_cli::command::progress::Bars;
+use sandjumper_cli::dem::command::DemCommand;
+use sandjumper_output::Silent;
 
 use crate::argv::Argv;
 use crate::convert::{f64_array, json_to_py, path_arg, py_err, str_array};
@@ -229,13 +235,27 @@ fn frames_analysis(
     more(&mut argv);
     argv.value("out", "--out", dir.display());
     add_options(&mut argv, options)?;
-    let analysed = match argv.parse()? {
-        Command::Track(a) => py.detach(|| sandjumper_cli::imaging::command::analyse(&a)),
-        Command::Piv(a) => py.detach(|| sandjumper_cli::flow::command::analyse(&a)),
-        _ => unreachable!("frames_analysis runs track or piv"),
-    };
-    let done = analysed.map_err(|e| argv.error(e))?;
-    load_folder(py, &dir, Some(&done.json), tmp.is_none())
+    let command = argv.parse()?;
+    let json = py
+        .detach(|| -> Result<String, CliError> {
+            // As the command line: `wrote DIR`, then the run's notes, on stderr.
+            let progress = Bars::holding();
+            let (written, json) = match command {
+                Command::Track(a) => {
+                    let outcome = sandjumper_imaging::run::run(&a.request(), &progress)?;
+                    (outcome.write(&dir)?, outcome.summary_json()?)
+                }
+                Command::Piv(a) => {
+                    let outcome = sandjumper_flow::run::run(&a.request()?, &progress)?;
+                    (outcome.write(&dir)?, outcome.summary_json()?)
+                }
+                _ => unreachable!("frames_analysis runs track or piv"),
+            };
+            progress.release(Some(&written));
+            Ok(json)
+        })
+        .map_err(|e| argv.error(e))?;
+    load_folder(py, &dir, Some(&json), tmp.is_none())
 }
 
 /// Track the rod's ball through camera frames and measure the jump height the paper's way,
@@ -306,7 +326,12 @@ pub fn dem_collide(
     let Command::Dem(a) = argv.parse()? else {
         unreachable!("`sandjumper dem` parses as Command::Dem")
     };
-    let json = sandjumper_cli::dem::command::collide_json(&a).map_err(|e| argv.error(e))?;
+    let DemCommand::Collide(c) = a.command else {
+        unreachable!("`sandjumper dem collide` parses as DemCommand::Collide")
+    };
+    let json = sandjumper_dem::collide::run(&c.request(), &Silent)
+        .and_then(|r| r.json())
+        .map_err(|e| argv.error(e.into()))?;
     Ok(json_to_py(py, &json)?.unbind())
 }
 
@@ -376,11 +401,15 @@ pub fn read_log(
     #[pyo3(from_py_with = typed::allow_gaps)] allow_gaps: bool,
 ) -> PyResult<Py<PyAny>> {
     let path = path_arg("path", path)?;
-    let (log, summary) =
-        sandjumper_cli::acqlog::command::load_checked(&path, allow_gaps).map_err(py_err)?;
+    let request = CheckRequest {
+        file: path,
+        allow_gaps,
+    };
+    let checked = check::run(&request, &Silent).map_err(|e| py_err(e.into()))?;
+    let summary = checked.json().map_err(|e| py_err(e.into()))?;
     let d = PyDict::new(py);
-    d.set_item("columns", log_columns(py, &log)?)?;
-    d.set_item("metadata", log_metadata(py, &log)?)?;
+    d.set_item("columns", log_columns(py, &checked.log)?)?;
+    d.set_item("metadata", log_metadata(py, &checked.log)?)?;
     d.set_item("summary", json_to_py(py, &summary)?)?;
     Ok(d.into_any().unbind())
 }
@@ -407,6 +436,13 @@ pub fn log_to_mcap(
     let Command::Log(a) = argv.parse()? else {
         unreachable!("`sandjumper log` parses as Command::Log")
     };
-    py.detach(|| sandjumper_cli::acqlog::command::run(&a))
-        .map_err(|e| argv.error(e))
+    let LogAction::Convert(c) = a.action else {
+        unreachable!("`sandjumper log convert` parses as LogAction::Convert")
+    };
+    let outcome = py
+        .detach(|| sandjumper_acqlog::convert::run(&c.request(), &Silent))
+        .map_err(|e| argv.error(e.into()))?;
+    // As the command line: what was written, on stderr.
+    eprint!("{outcome}");
+    Ok(())
 }

@@ -1,10 +1,10 @@
 //! `sandjumper log check FILE` and `sandjumper log convert IN OUT`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use super::{AcqLog, CheckRequest, ConvertRequest, LogForm};
+use super::{CheckRequest, ConvertRequest, LogForm};
 use crate::command::CliError;
 use sandjumper_output::Silent;
 
@@ -54,7 +54,7 @@ pub struct ConvertArgs {
     /// What to write: `csv` (the default, unless OUT ends in `.mcap`) or `mcap` (one channel
     /// per quantity group, JSON messages with JSON schemas, chunked and indexed).
     #[arg(long, value_enum, value_name = "FORM")]
-    pub to: Option<ConvertTo>,
+    pub to: Option<LogForm>,
     /// Convert even if sequence numbers show lost samples (the CSV's tick column shows the
     /// gaps and `dropped_samples` counts them).
     #[arg(long)]
@@ -62,15 +62,6 @@ pub struct ConvertArgs {
     /// Replace OUT if it exists.
     #[arg(long)]
     pub force: bool,
-}
-
-/// What `log convert` writes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ConvertTo {
-    /// The CSV form (`sandjumper-acqlog 1`).
-    Csv,
-    /// MCAP (see [`super::mcap_file`]).
-    Mcap,
 }
 
 /// Run `log`.
@@ -81,44 +72,29 @@ pub fn run(a: &LogArgs) -> Result<(), CliError> {
     }
 }
 
-/// Reads and checks a log (CSV or binary) as `log check` does: the log and the JSON object
-/// `log check --json` prints. Errors are the CLI's.
-pub fn load_checked(path: &Path, allow_gaps: bool) -> Result<(AcqLog, String), CliError> {
-    let request = CheckRequest {
-        file: path.to_path_buf(),
-        allow_gaps,
-    };
-    let outcome = super::check::run(&request, &Silent)?;
-    let json = outcome.json()?;
-    Ok((outcome.log, json))
-}
-
 fn check(a: &CheckArgs) -> Result<(), CliError> {
     let request = CheckRequest {
         file: a.file.clone(),
         allow_gaps: a.allow_gaps,
     };
     let outcome = super::check::run(&request, &Silent)?;
-    if a.json {
-        println!("{}", outcome.json()?);
-    } else {
-        print!("{outcome}");
+    crate::command::print_outcome(a.json, &outcome, || outcome.json())
+}
+
+impl ConvertArgs {
+    /// The library's request for these arguments.
+    pub fn request(&self) -> ConvertRequest {
+        ConvertRequest {
+            input: self.input.clone(),
+            output: self.output.clone(),
+            to: self.to,
+            allow_gaps: self.allow_gaps,
+            force: self.force,
+        }
     }
-    Ok(())
 }
 
 fn convert(a: &ConvertArgs) -> Result<(), CliError> {
-    let request = ConvertRequest {
-        input: a.input.clone(),
-        output: a.output.clone(),
-        to: a.to.map(|t| match t {
-            ConvertTo::Csv => LogForm::Csv,
-            ConvertTo::Mcap => LogForm::Mcap,
-        }),
-        allow_gaps: a.allow_gaps,
-        force: a.force,
-    };
-    let outcome = super::convert::run(&request, &Silent)?;
-    eprint!("{outcome}");
+    eprint!("{}", super::convert::run(&a.request(), &Silent)?);
     Ok(())
 }

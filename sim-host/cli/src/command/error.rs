@@ -1,5 +1,5 @@
-//! The error every command returns (one message and an exit status), an analysis's two
-//! summaries, and a library error as the command line's ([`cli_error`]).
+//! The error every command returns (one message and an exit status), and a library error as
+//! the command line's ([`cli_error`]).
 
 use std::fmt;
 
@@ -9,17 +9,6 @@ use sandjumper_output::{Blame, Blamed};
 pub const EXIT_BAD_INPUT: u8 = 2;
 /// Exit status for an internal failure after the input was accepted.
 pub const EXIT_INTERNAL: u8 = 1;
-
-/// What an analysis command leaves besides its output folder: its JSON summary (what
-/// `--json` prints and `summary.json` holds) and the text summary it prints without `--json`.
-/// Its `analyse` function returns this without printing; the command line prints one of the two.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Analysed {
-    /// The JSON summary, pretty-printed.
-    pub json: String,
-    /// The human summary.
-    pub human: String,
-}
 
 /// A command failed: the message to print and the exit status.
 #[derive(Debug, Clone, PartialEq)]

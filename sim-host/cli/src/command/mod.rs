@@ -11,13 +11,19 @@ pub mod resolve;
 pub mod stroke;
 pub mod unavailable;
 
-/// Print an analysis's JSON (`json`) or its human summary on stdout.
-pub fn print_analysed(analysed: &Analysed, json: bool) {
+/// Print a run's outcome on stdout: its JSON summary (`json`: what `to_json` gives) or its
+/// human summary (its `Display`, which ends its own lines).
+pub fn print_outcome<E: sandjumper_output::Blamed>(
+    json: bool,
+    outcome: &impl std::fmt::Display,
+    to_json: impl FnOnce() -> Result<String, E>,
+) -> Result<(), CliError> {
     if json {
-        println!("{}", analysed.json);
+        println!("{}", to_json()?);
     } else {
-        print!("{}", analysed.human);
+        print!("{outcome}");
     }
+    Ok(())
 }
 
 /// A progress bar on stderr for `len` items called `what`, shown only on a terminal (hidden

@@ -14,6 +14,7 @@ use super::{progress_bar, progress_counter};
 pub struct Bars {
     bar: Mutex<Option<indicatif::ProgressBar>>,
     notes: bool,
+    held: Option<Mutex<Vec<String>>>,
 }
 
 impl Default for Bars {
@@ -28,6 +29,30 @@ impl Bars {
         Self {
             bar: Mutex::new(None),
             notes: true,
+            held: None,
+        }
+    }
+
+    /// Bars, and the notes held back until [`Bars::release`]: an analysis prints `wrote DIR`
+    /// (or its result) before its notes.
+    pub fn holding() -> Self {
+        Self {
+            held: Some(Mutex::default()),
+            ..Self::new()
+        }
+    }
+
+    /// `wrote DIR` on stderr for the folder written (if any), then the held notes.
+    pub fn release(&self, written: Option<&std::path::Path>) {
+        if let Some(dir) = written {
+            eprintln!("wrote {}", dir.display());
+        }
+        let held = self
+            .held
+            .as_ref()
+            .map(|h| std::mem::take(&mut *h.lock().unwrap_or_else(PoisonError::into_inner)));
+        for line in held.into_iter().flatten() {
+            eprintln!("{line}");
         }
     }
 
@@ -75,7 +100,11 @@ impl Progress for Bars {
     }
 
     fn note(&self, line: &str) {
-        if self.notes {
+        if let Some(held) = &self.held {
+            held.lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .push(line.to_string());
+        } else if self.notes {
             self.suspend(|| eprintln!("{line}"));
         }
     }

@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use super::collide::{CollideRequest, CollisionResult};
+use super::collide::CollideRequest;
+use super::intrude_run::{Episode, IntrudeOutcome, parse_share};
 use super::params::Model;
 use super::request::{ModelRequest, Sizes};
-use super::shared::{EpisodeChoice, cli_error, parse_share, print_json};
 use super::world::Integrator;
 use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive as positive};
@@ -40,51 +40,15 @@ pub enum DemCommand {
     LammpsRead(Box<super::lammps_command::LammpsReadArgs>),
 }
 
-/// The DEM's model as named on the command line ([`Model`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ModelChoice {
-    /// Supplementary I exactly.
-    Paper,
-    /// Gravity, walls, friction, velocity Verlet.
-    Full,
-}
-
-impl From<ModelChoice> for Model {
-    fn from(m: ModelChoice) -> Self {
-        match m {
-            ModelChoice::Paper => Model::Paper,
-            ModelChoice::Full => Model::Full,
-        }
-    }
-}
-
-/// The DEM's integrator as named on the command line ([`Integrator`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum IntegratorChoice {
-    /// Forward Euler (the paper's).
-    ForwardEuler,
-    /// Velocity Verlet (leapfrog form).
-    VelocityVerlet,
-}
-
-impl From<IntegratorChoice> for Integrator {
-    fn from(i: IntegratorChoice) -> Self {
-        match i {
-            IntegratorChoice::ForwardEuler => Integrator::ForwardEuler,
-            IntegratorChoice::VelocityVerlet => Integrator::VelocityVerlet,
-        }
-    }
-}
-
 /// Grain and contact choices shared by `bed` and `intrude`.
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
     /// Model: `paper` (Supplementary I) or `full` (gravity, walls, friction, Verlet).
     #[arg(long, value_enum, default_value = "paper")]
-    pub model: ModelChoice,
+    pub model: Model,
     /// Grain sizes: mono, bi (50:50, ratio 1.4) or poly.
     #[arg(long, value_enum, default_value = "bi")]
-    pub sizes: SizesArg,
+    pub sizes: Sizes,
     /// Large over small diameter (bi).
     #[arg(long, value_name = "R", default_value = "1.4", value_parser = positive)]
     pub ratio: f64,
@@ -121,7 +85,7 @@ pub struct ModelArgs {
     pub drag: Option<f64>,
     /// Integrator (paper: forward Euler, full: velocity Verlet).
     #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorChoice>,
+    pub integrator: Option<Integrator>,
     /// Steps per shortest contact time.
     #[arg(long, value_name = "N", default_value = "50", value_parser = parse_number)]
     pub steps_per_contact: f64,
@@ -136,27 +100,12 @@ pub struct ModelArgs {
     pub walls: bool,
 }
 
-/// `--sizes`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum SizesArg {
-    /// One size.
-    Mono,
-    /// Two sizes, 50:50.
-    Bi,
-    /// Uniform spread.
-    Poly,
-}
-
 impl ModelArgs {
     /// The library's request for these choices.
     pub fn request(&self) -> ModelRequest {
         ModelRequest {
-            model: self.model.into(),
-            sizes: match self.sizes {
-                SizesArg::Mono => Sizes::Mono,
-                SizesArg::Bi => Sizes::Bi,
-                SizesArg::Poly => Sizes::Poly,
-            },
+            model: self.model,
+            sizes: self.sizes,
             ratio: self.ratio,
             spread: self.spread,
             diameter_m: self.diameter,
@@ -168,7 +117,7 @@ impl ModelArgs {
             damping_n_s_per_m: self.damping,
             mu: self.mu,
             drag_per_s: self.drag,
-            integrator: self.integrator.map(Into::into),
+            integrator: self.integrator,
             steps_per_contact: self.steps_per_contact,
             dt_s: self.dt,
             force_step: self.force_step,
@@ -227,7 +176,7 @@ pub struct IntrudeArgs {
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
     /// `push-off`, the foot's last intrusion before the jump's flight.
     #[arg(long, value_enum, value_name = "EPISODE", requires = "trajectory", conflicts_with_all = ["from", "to"])]
-    pub episode: Option<EpisodeChoice>,
+    pub episode: Option<Episode>,
     /// Use the trajectory from this time, s.
     #[arg(long, value_name = "S", value_parser = parse_number)]
     pub from: Option<f64>,
@@ -331,7 +280,7 @@ pub struct CollideArgs {
     pub force_step: bool,
     /// Integrator.
     #[arg(long, value_enum, default_value = "velocity-verlet")]
-    pub integrator: IntegratorChoice,
+    pub integrator: Integrator,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -341,57 +290,40 @@ pub struct CollideArgs {
 pub fn run(a: &DemArgs) -> Result<(), CliError> {
     match &a.command {
         DemCommand::Collide(c) => {
-            let r = collide(c)?;
+            let r = super::collide::run(&c.request(), &sandjumper_output::Silent)?;
             if c.json {
-                print_json(&r)
+                println!("{}", r.json()?);
             } else {
                 println!("{r}");
-                Ok(())
             }
         }
-        DemCommand::Bed(b) => {
-            let outcome = super::bed_run::run(&b.request(), &Bars::default())?;
-            println!("{outcome}");
-            Ok(())
-        }
-        DemCommand::Intrude(i) => {
-            let outcome = super::intrude_run::run(&i.request(), &Bars::default())?;
-            match &outcome {
-                super::intrude_run::IntrudeOutcome::Finished(s) if i.json => print_json(s),
-                _ => {
-                    println!("{outcome}");
-                    Ok(())
-                }
-            }
-        }
-        DemCommand::Lammps(l) => super::lammps_command::run(l),
-        DemCommand::LammpsRead(r) => super::lammps_command::run_read(r),
+        DemCommand::Bed(b) => println!("{}", super::bed_run::run(&b.request(), &Bars::new())?),
+        DemCommand::Intrude(i) => match super::intrude_run::run(&i.request(), &Bars::new())? {
+            IntrudeOutcome::Finished(s) if i.json => println!("{}", s.json()?),
+            outcome => println!("{outcome}"),
+        },
+        DemCommand::Lammps(l) => super::lammps_command::run(l)?,
+        DemCommand::LammpsRead(r) => super::lammps_command::run_read(r)?,
     }
+    Ok(())
 }
 
-/// The JSON object `dem collide --json` prints, for `dem collide` arguments (bad input, and
-/// any other `dem` subcommand, is an error).
-pub fn collide_json(a: &DemArgs) -> Result<String, CliError> {
-    let DemCommand::Collide(c) = &a.command else {
-        return Err(CliError::input("not a `dem collide` command"));
-    };
-    serde_json::to_string_pretty(&collide(c)?).map_err(|e| CliError::internal(e.to_string()))
-}
-
-fn collide(a: &CollideArgs) -> Result<CollisionResult, CliError> {
-    let request = CollideRequest {
-        d1_m: a.d1,
-        d2_m: a.d2,
-        wall: a.wall,
-        kn_n_per_m: a.kn,
-        damping_n_s_per_m: a.damping,
-        speed_m_s: a.speed,
-        density_kg_m3: a.density,
-        dt_s: a.dt,
-        force_step: a.force_step,
-        integrator: a.integrator.into(),
-    };
-    super::collide::run(&request, &sandjumper_output::Silent).map_err(cli_error)
+impl CollideArgs {
+    /// The library's request for these arguments.
+    pub fn request(&self) -> CollideRequest {
+        CollideRequest {
+            d1_m: self.d1,
+            d2_m: self.d2,
+            wall: self.wall,
+            kn_n_per_m: self.kn,
+            damping_n_s_per_m: self.damping,
+            speed_m_s: self.speed,
+            density_kg_m3: self.density,
+            dt_s: self.dt,
+            force_step: self.force_step,
+            integrator: self.integrator,
+        }
+    }
 }
 
 impl BedArgs {
@@ -418,7 +350,7 @@ impl IntrudeArgs {
         super::intrude_run::IntrudeRequest {
             bed: self.bed.clone(),
             trajectory: self.trajectory.clone(),
-            episode: self.episode.map(Into::into),
+            episode: self.episode,
             from_s: self.from,
             to_s: self.to,
             speed_m_s: self.speed,

@@ -6,30 +6,19 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::command::CliError;
-use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest};
+use sandjumper_lammps::run::{LammpsOutcome, LammpsReadRequest, LammpsRequest, Submitted};
 use sandjumper_lammps::spec::Preset;
 
-use super::shared::{EpisodeChoice, parse_share, print_json};
+use super::intrude_run::{Episode, parse_share};
 use crate::command::args::parse_positive as positive;
 use crate::command::progress::Bars;
-
-/// The preset scale on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum PresetChoice {
-    /// The paper's 76 mm foot in ~1 mm grains, a 0.30 m x 0.15 m bed (~15 million grains,
-    /// Young's modulus 100 MPa): a cluster job.
-    Paper,
-    /// A 20 mm foot in ~2 mm grains, a 60 mm x 40 mm bed (~20,000 grains, 5 MPa): minutes on
-    /// two cores.
-    Small,
-}
 
 /// `dem lammps`.
 #[derive(Debug, Clone, Args)]
 pub struct LammpsArgs {
     /// The scale to start from; the options below change single values.
     #[arg(long, value_enum, default_value = "paper")]
-    pub preset: PresetChoice,
+    pub preset: Preset,
     /// Trajectory CSV (`t_s` with `x_f_m`, as `jump --out` writes, or `depth_m`); it must
     /// start at or above the bed's surface.
     #[arg(long, value_name = "CSV", conflicts_with = "speed")]
@@ -37,7 +26,7 @@ pub struct LammpsArgs {
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
     /// `push-off`, the foot's last intrusion before the jump's flight.
     #[arg(long, value_enum, value_name = "EPISODE", requires = "trajectory")]
-    pub episode: Option<EpisodeChoice>,
+    pub episode: Option<Episode>,
     /// Constant intrusion speed instead, m/s (from the surface).
     #[arg(long, value_name = "M_PER_S", value_parser = positive)]
     pub speed: Option<f64>,
@@ -121,12 +110,9 @@ impl LammpsArgs {
     /// The library's request for these arguments.
     pub fn request(&self) -> LammpsRequest {
         LammpsRequest {
-            preset: match self.preset {
-                PresetChoice::Paper => Preset::Paper,
-                PresetChoice::Small => Preset::Small,
-            },
+            preset: self.preset,
             trajectory: self.trajectory.clone(),
-            episode: self.episode.map(Into::into),
+            episode: self.episode,
             speed_m_s: self.speed,
             depth_m: self.depth,
             foot_diameter_m: self.foot_diameter,
@@ -150,8 +136,7 @@ impl LammpsArgs {
 
 fn report(outcome: &LammpsOutcome, json: bool) -> Result<(), CliError> {
     if json {
-        print_json(&outcome.summary)
-            .map_err(|e| CliError::internal(format!("cannot encode the summary: {}", e.message)))?;
+        println!("{}", outcome.summary_json()?);
     } else {
         println!("{outcome}");
     }
@@ -161,28 +146,18 @@ fn report(outcome: &LammpsOutcome, json: bool) -> Result<(), CliError> {
 
 /// Run `dem lammps` (here, or submitted to Slurm with `--slurm`).
 pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
-    let request = a.request();
     if !a.slurm.slurm {
-        let outcome = sandjumper_lammps::run::run(&request, &Bars::default())?;
+        let outcome = sandjumper_lammps::run::run(&a.request(), &Bars::default())?;
         return report(&outcome, a.json);
     }
-    // LAMMPS is looked for here also before a job is submitted (a cluster's login node sees
-    // the shared file system its nodes do): a missing one is refused now, not after the queue.
-    request.validate()?;
-    request.lammps()?;
-    crate::slurm::submit_job(
-        "dem-lammps",
-        &["dem", "lammps"],
-        a.ranks,
-        &a.out,
-        &["summary.json"],
-        &a.slurm,
-    )?;
-    if a.json && !a.slurm.queue.slurm_no_wait {
-        let p = a.out.join("summary.json");
-        let text = std::fs::read_to_string(&p)
-            .map_err(|e| CliError::internal(format!("{}: {e}", p.display())))?;
-        print!("{text}");
+    let queue = a.slurm.queue.options();
+    match sandjumper_lammps::run::submit(&a.request(), &queue, &Bars::new())? {
+        Submitted::Queued { id } => {
+            println!("{id}");
+            eprintln!("when it is done its output is in {}", a.out.display());
+        }
+        Submitted::Done { summary_json } if a.json => print!("{summary_json}"),
+        Submitted::Done { .. } => {}
     }
     Ok(())
 }

@@ -8,4 +8,3 @@ pub use sandjumper_dem::*;
 pub mod command;
 pub mod lammps_command;
 pub mod paper_figures;
-pub mod shared;

@@ -54,8 +54,7 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         full_model: !a.no_full_model,
         threads: a.threads,
     };
-    let outcome = sandjumper_figures_dem::run(&request, &Bars::default())
-        .map_err(super::shared::cli_error)?;
+    let outcome = sandjumper_figures_dem::run(&request, &Bars::default())?;
     println!("{outcome}");
     Ok(())
 }

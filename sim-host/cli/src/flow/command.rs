@@ -2,98 +2,20 @@
 //! and added mass; `sandjumper piv-synthetic`: grain images with a known motion. The runs are
 //! `sandjumper_flow::run` and `sandjumper_flow::piv_synthetic`; this is their face.
 
-use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
-use super::piv_synthetic::SyntheticRequest;
 pub use super::piv_synthetic::cone_displacement;
+use super::piv_synthetic::{SyntheticField, SyntheticRequest, parse_shift, parse_size};
 use super::preprocess::Preprocess;
-use super::run::PivRequest;
+use super::run::{PivRequest, parse_point, parse_ratio, parse_sigma, parse_windows};
+use crate::command::CliError;
 use crate::command::args::{parse_number, parse_positive};
 use crate::command::progress::Bars;
-use crate::command::{Analysed, CliError};
-use sandjumper_output::{Blamed, Progress};
-
-pub use crate::command::progress::cli_error;
-
-/// The command line's bars, with the run's notes held back until [`HeldNotes::release`]: the
-/// analyses print `wrote DIR` (or their result) before their notes, as they always did.
-#[derive(Debug, Default)]
-pub struct HeldNotes {
-    bars: Bars,
-    notes: Mutex<Vec<String>>,
-}
-
-impl HeldNotes {
-    /// Print the held notes on stderr.
-    pub fn release(&self) {
-        for line in self
-            .notes
-            .lock()
-            .map(|mut n| std::mem::take(&mut *n))
-            .unwrap_or_default()
-        {
-            eprintln!("{line}");
-        }
-    }
-}
-
-impl Progress for HeldNotes {
-    fn start(&self, what: &str, len: Option<u64>) {
-        self.bars.start(what, len);
-    }
-    fn advance(&self, n: u64) {
-        self.bars.advance(n);
-    }
-    fn finish(&self) {
-        self.bars.finish();
-    }
-    fn note(&self, line: &str) {
-        if let Ok(mut n) = self.notes.lock() {
-            n.push(line.to_string());
-        }
-    }
-    fn cancelled(&self) -> bool {
-        self.bars.cancelled()
-    }
-}
-
-/// `--pairs`: how frames are paired ([`Pairing`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PairingArg {
-    /// 1-2, 2-3, 3-4, ...
-    Consecutive,
-    /// 1-2, 3-4, ... (double-frame cameras).
-    Ab,
-}
-
-impl From<PairingArg> for Pairing {
-    fn from(p: PairingArg) -> Self {
-        match p {
-            PairingArg::Consecutive => Pairing::Consecutive,
-            PairingArg::Ab => Pairing::Ab,
-        }
-    }
-}
-
-fn parse_windows(s: &str) -> Result<Vec<usize>, String> {
-    s.split(',')
-        .map(|p| p.trim().parse::<usize>())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|_| format!("`{s}` is not a list of window sizes such as 64,32,16"))
-}
-
-fn parse_point(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
-    match v.as_slice() {
-        [Ok(x), Ok(y)] => Ok((*x, *y)),
-        _ => Err(format!("`{s}` is not a point X,Y in pixels")),
-    }
-}
+use sandjumper_flow::FlowError;
 
 /// `sandjumper piv`.
 #[derive(Debug, Clone, Args)]
@@ -104,7 +26,7 @@ pub struct PivArgs {
     pub frames: String,
     /// Pairing of the frames.
     #[arg(long, value_enum, default_value = "consecutive")]
-    pub pairs: PairingArg,
+    pub pairs: Pairing,
     /// Analyse every Nth pair.
     #[arg(long, value_name = "N", default_value = "1", value_parser = clap::value_parser!(u32).range(1..))]
     pub every: u32,
@@ -119,7 +41,7 @@ pub struct PivArgs {
     pub no_deform: bool,
     /// Sub-pixel peak estimator.
     #[arg(long, value_enum, default_value = "gaussian")]
-    pub subpixel: SubPixelArg,
+    pub subpixel: SubPixel,
     /// Normalised median test threshold.
     #[arg(long, value_name = "X", default_value = "2", value_parser = parse_positive)]
     pub median_threshold: f64,
@@ -182,38 +104,6 @@ pub struct PivArgs {
     pub json: bool,
 }
 
-/// `--subpixel`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SubPixelArg {
-    /// 3-point Gaussian.
-    Gaussian,
-    /// 3-point parabola.
-    Parabolic,
-}
-
-fn parse_ratio(s: &str) -> Result<f64, String> {
-    let v = crate::command::args::parse_number(s)?;
-    if (0.0..=1.0).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("speed ratio {v} out of range (allowed: 0 to 1)"))
-    }
-}
-
-/// A known motion of `piv-synthetic`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum SyntheticField {
-    /// Every grain moves by (MAG, MAG/2) px per frame.
-    Shift,
-    /// u = MAG * (y - H/2) / (H/2) px per frame: a shear.
-    Shear,
-    /// A rigid rotation about the centre, MAG px per frame at the edge.
-    Rotation,
-    /// A flat foot (half-width H/4) descending MAG px per frame from a surface at H/4, with
-    /// the 60-degree cone of grains under it moving along and the rest at rest.
-    Cone,
-}
-
 /// `sandjumper piv-synthetic`.
 #[derive(Debug, Clone, Args)]
 pub struct SyntheticArgs {
@@ -252,50 +142,18 @@ pub struct SyntheticArgs {
     pub out: PathBuf,
 }
 
-fn parse_sigma(s: &str) -> Result<f64, String> {
-    match parse_number(s) {
-        Ok(v) if (0.0..=512.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a width in px (allowed: 0, off, or up to 512)"
-        )),
-    }
-}
-
-fn parse_shift(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<Result<f64, _>> = s.split(',').map(|p| parse_number(p.trim())).collect();
-    match v.as_slice() {
-        [Ok(x), Ok(y)] if x.abs() <= 1000.0 && y.abs() <= 1000.0 => Ok((*x, *y)),
-        _ => Err(format!(
-            "`{s}` is not a shift DX,DY in px (each within +-1000)"
-        )),
-    }
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let v: Vec<Result<u32, _>> = s.split('x').map(str::parse).collect();
-    match v.as_slice() {
-        [Ok(w), Ok(h)] if (16..=16384).contains(w) && (16..=16384).contains(h) => Ok((*w, *h)),
-        _ => Err(format!("`{s}` is not a size WxH (16..=16384 px each)")),
-    }
-}
-
 impl PivArgs {
     /// The request these arguments make (`--windows` parsed here).
-    pub fn request(&self) -> Result<PivRequest, CliError> {
-        let windows =
-            parse_windows(&self.windows).map_err(|e| CliError::input(format!("--windows {e}")))?;
+    pub fn request(&self) -> Result<PivRequest, FlowError> {
         Ok(PivRequest {
             frames: self.frames.clone(),
-            pairs: self.pairs.into(),
+            pairs: self.pairs,
             every: self.every as usize,
             piv: PivConfig {
-                windows,
+                windows: parse_windows(&self.windows)?,
                 overlap: self.overlap,
                 deform: !self.no_deform,
-                subpixel: match self.subpixel {
-                    SubPixelArg::Gaussian => SubPixel::Gaussian,
-                    SubPixelArg::Parabolic => SubPixel::Parabolic,
-                },
+                subpixel: self.subpixel,
                 median_threshold: self.median_threshold,
                 min_peak_ratio: self.min_peak_ratio,
             },
@@ -319,60 +177,19 @@ impl PivArgs {
     }
 }
 
-/// Run `sandjumper piv`.
+/// Run `sandjumper piv`: `--out` written (then `wrote DIR`), the notes, the summary.
 pub fn run(a: &PivArgs) -> Result<(), CliError> {
-    crate::command::print_analysed(&analyse(a)?, a.json);
-    Ok(())
-}
-
-/// Run the PIV analysis `a` asks for (writing `--out` if given) without printing its summary.
-pub fn analyse(a: &PivArgs) -> Result<Analysed, CliError> {
-    let progress = HeldNotes::default();
+    let progress = Bars::holding();
     let outcome = super::run::run(&a.request()?, &progress)?;
-    finish(
-        &progress,
-        a.out.as_deref(),
-        |dir| outcome.write(dir),
-        || outcome.summary_json(),
-        outcome.to_string(),
-    )
-}
-
-/// An analysis as the command line ends it: `--out` written (then `wrote DIR`), the held
-/// notes printed, and its JSON and human summary returned.
-pub fn finish<E: Blamed>(
-    progress: &HeldNotes,
-    out: Option<&Path>,
-    write: impl FnOnce(&Path) -> Result<PathBuf, E>,
-    json: impl FnOnce() -> Result<String, E>,
-    human: String,
-) -> Result<Analysed, CliError> {
-    if let Some(dir) = out {
-        let dir = write(dir)?;
-        eprintln!("wrote {}", dir.display());
-    }
-    progress.release();
-    Ok(Analysed {
-        json: json()?,
-        human,
-    })
-}
-
-impl From<SyntheticField> for super::piv_synthetic::SyntheticField {
-    fn from(f: SyntheticField) -> Self {
-        match f {
-            SyntheticField::Shift => Self::Shift,
-            SyntheticField::Shear => Self::Shear,
-            SyntheticField::Rotation => Self::Rotation,
-            SyntheticField::Cone => Self::Cone,
-        }
-    }
+    let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
+    progress.release(written.as_deref());
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())
 }
 
 /// Run `sandjumper piv-synthetic`.
 pub fn run_synthetic(a: &SyntheticArgs) -> Result<(), CliError> {
     let request = SyntheticRequest {
-        field: a.field.into(),
+        field: a.field,
         magnitude_px: a.magnitude,
         size_px: a.size,
         frames: a.frames,

@@ -9,53 +9,12 @@ use clap::Args;
 
 use super::camera_scale::ScaleRequest;
 use super::frame::Roi;
-use super::run::TrackRequest;
-use crate::command::args::parse_positive_as;
-use crate::command::{Analysed, CliError};
-use crate::flow::command::{HeldNotes, finish};
-
-fn parse_m_per_px(s: &str) -> Result<f64, String> {
-    parse_positive_as(s, "a scale in metres per pixel")
-}
-
-fn parse_fps(s: &str) -> Result<f64, String> {
-    parse_positive_as(s, "a frame rate in frames/s")
-}
-
-fn parse_length(s: &str) -> Result<f64, String> {
-    parse_positive_as(s, "a length in metres")
-}
-
-fn parse_seconds(s: &str) -> Result<f64, String> {
-    parse_positive_as(s, "a time in seconds")
-}
-
-fn parse_exposure(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("`{s}` is not an exposure time: seconds >= 0")),
-    }
-}
-
-fn parse_px(s: &str) -> Result<f64, String> {
-    parse_positive_as(s, "a diameter in pixels")
-}
-
-/// `X,Y,W,H` in pixels.
-pub fn parse_roi(s: &str) -> Result<Roi, String> {
-    let parts: Vec<Result<u32, _>> = s.split(',').map(|p| p.trim().parse::<u32>()).collect();
-    match parts.as_slice() {
-        [Ok(x), Ok(y), Ok(w), Ok(h)] if *w > 0 && *h > 0 => Ok(Roi {
-            x: *x,
-            y: *y,
-            width: *w,
-            height: *h,
-        }),
-        _ => Err(format!(
-            "`{s}` is not a region: X,Y,W,H in whole pixels, W and H > 0"
-        )),
-    }
-}
+use super::run::{
+    TrackRequest, parse_exposure, parse_fps, parse_length, parse_m_per_px, parse_px, parse_roi,
+    parse_seconds,
+};
+use crate::command::CliError;
+use crate::command::progress::Bars;
 
 /// `sandjumper track`.
 #[derive(Debug, Clone, Args)]
@@ -137,23 +96,13 @@ impl TrackArgs {
     }
 }
 
-/// Run `sandjumper track`.
+/// Run `sandjumper track`: `--out` written (then `wrote DIR`), the notes, the summary.
 pub fn run(a: &TrackArgs) -> Result<(), CliError> {
-    crate::command::print_analysed(&analyse(a)?, a.json);
-    Ok(())
-}
-
-/// Track the frames `a` names (writing `--out` if given) without printing the summary.
-pub fn analyse(a: &TrackArgs) -> Result<Analysed, CliError> {
-    let progress = HeldNotes::default();
+    let progress = Bars::holding();
     let outcome = super::run::run(&a.request(), &progress)?;
-    finish(
-        &progress,
-        a.out.as_deref(),
-        |dir| outcome.write(dir),
-        || outcome.summary_json(),
-        outcome.to_string(),
-    )
+    let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
+    progress.release(written.as_deref());
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())
 }
 
 /// Run `sandjumper camera-scale`.
@@ -164,13 +113,9 @@ pub fn run_scale(a: &CameraScaleArgs) -> Result<(), CliError> {
         ball_px: a.ball_px,
         roi: a.roi,
     };
-    let progress = HeldNotes::default();
+    let progress = Bars::holding();
     let outcome = super::camera_scale::run(&request, &progress)?;
-    if a.json {
-        println!("{}", outcome.summary_json()?);
-    } else {
-        print!("{outcome}");
-    }
-    progress.release();
+    crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())?;
+    progress.release(None);
     Ok(())
 }
