@@ -8,15 +8,15 @@
 //! - [`rig`] (`sandjumper-rig`): `hil` and the rig tool;
 //! - [`dem`] (`sandjumper-dem`), [`flow`] (`sandjumper-flow`, PIV), [`imaging`]
 //!   (`sandjumper-imaging`, the rod camera), [`acqlog`] (`sandjumper-acqlog`, logs);
-//! - [`command`]: what every subcommand shares (the error and exit status from
-//!   `sandjumper-output`, the argument vocabulary).
+//! - [`command`]: what every subcommand shares (the error and exit statuses, progress bars,
+//!   the argument vocabulary).
 //!
 //! A build without a cargo feature (`rig`, `imaging`, `dem`, `campaign`, `optimize`; the
 //! README's first command builds with `--no-default-features`) keeps the feature's commands,
 //! each refused with exit status 2 saying how to build it ([`command::unavailable`]).
 //!
-//! Below all of them: `sandjumper-output` (errors, parameter resolution, figures, atomic
-//! output folders) and `sandjumper-model` (the plant).
+//! Below all of them: `sandjumper-output` (the progress sink, figures, atomic output
+//! folders) and `sandjumper-model` (the plant, parameter resolution).
 
 pub mod acqlog;
 #[cfg(feature = "campaign")]

@@ -10,7 +10,7 @@
 //!
 //! Each subcommand's arguments and code live in the room of what it does (`study/`, `rig/`);
 //! this module only parses and dispatches. What every subcommand shares (the error type,
-//! argument vocabulary, parameter resolution) is in [`sandjumper_output`].
+//! argument vocabulary, progress bars) is in [`crate::command`].
 
 pub mod args;
 mod params_command;

@@ -1,5 +1,5 @@
-//! What every subcommand shares: the error and exit statuses (from `sandjumper_output`) and
-//! the argument vocabulary ([`args`]).
+//! What every subcommand shares: the error and exit statuses ([`error`]), progress bars
+//! ([`progress`]) and the argument vocabulary ([`args`]).
 
 pub use error::*;
 
@@ -7,8 +7,6 @@ pub mod args;
 pub mod error;
 pub mod progress;
 pub mod resolve;
-#[cfg(feature = "rig")]
-pub mod stroke;
 pub mod unavailable;
 
 /// Print a run's outcome on stdout: its JSON summary (`json`: what `to_json` gives) or its

@@ -1,6 +1,5 @@
 //! The command line's [`Progress`]: a library call's stages drawn as indicatif bars on stderr
-//! (shown only on a terminal), its notes printed there, Ctrl-C read from [`crate::interrupt`];
-//! and a library error as the command line's error ([`cli_error`]).
+//! (shown only on a terminal), its notes printed there, Ctrl-C read from [`crate::interrupt`].
 
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
@@ -113,5 +112,3 @@ impl Progress for Bars {
         crate::interrupt::interrupted()
     }
 }
-
-pub use super::error::cli_error;

@@ -27,23 +27,34 @@ pub fn run_program<R: ProgramRequest>(
     let mut view = LiveView::start(live, &JUMP_CHANNELS)?;
     let staged = StagedDir::create(out)?;
     let outcome = request.run_checked(checked, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, Some(staged), mcap, json);
+    let result = conclude(&outcome, Some(staged), (mcap, json), false);
     crate::live::finish_as(view, &result, "completed");
     result
 }
 
 /// The end of every program: write its folder into `staged` (if any), print its JSON
-/// (`json`) or its summary and faults, say where the files went, and fail (exit 1) when the
-/// controller did not complete the program cleanly.
+/// (`json`) or its summary and faults, say where the files went (before the printing with
+/// `wrote_first`, as `hil` on a lockstep link always has; after it, as the rig tool does), and
+/// fail (exit 1) when the controller did not complete the program cleanly.
 pub fn conclude(
     outcome: &dyn ProgramOutcome,
     staged: Option<StagedDir>,
-    mcap: bool,
-    json: bool,
+    (mcap, json): (bool, bool),
+    wrote_first: bool,
 ) -> Result<(), CliError> {
     let dir = staged.map(|s| outcome.write(s, mcap)).transpose()?;
+    let wrote = || {
+        if let Some(dir) = &dir {
+            eprintln!("wrote {}", dir.display());
+        }
+    };
+    if wrote_first {
+        wrote();
+    }
     print!("{}", outcome.printed(json)?);
+    if !wrote_first {
+        wrote();
+    }
     let Some(dir) = dir else { return Ok(()) };
-    eprintln!("wrote {}", dir.display());
     Ok(outcome.check(&dir)?)
 }

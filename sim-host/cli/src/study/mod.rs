@@ -9,8 +9,6 @@ pub mod jump_command;
 pub mod replay;
 pub mod sweep;
 
-pub use crate::command::progress::cli_error;
-
 /// Say where a jump's folder went (when `dir`), print the outcome (`text` with `--json`,
 /// else `human`), then each of its `warnings` on stderr (`jump` and `replay`).
 fn print_jump(

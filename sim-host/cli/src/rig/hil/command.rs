@@ -155,11 +155,16 @@ fn jump(a: &HilArgs, out: Option<PathBuf>) -> Result<(), CliError> {
     if request.uses_camera() {
         request.camera = read_camera(a.camera.as_deref())?;
     }
+    // A lockstep run claims its folder before the live view starts (as `hil` always has); the
+    // virtual board after it, as the rig tool does.
+    let lockstep = request.link != LinkArg::F407;
+    let stage = || out.as_deref().map(StagedDir::create).transpose();
+    let early = if lockstep { stage()? } else { None };
     let mut live = LiveView::start(&a.live, &JUMP_CHANNELS)?;
     if let Some(v) = live.as_mut().filter(|_| request.keeps_own_time()) {
         v.unpaced();
     }
-    let staged = out.as_deref().map(StagedDir::create).transpose()?;
+    let staged = if lockstep { early } else { stage()? };
     let jump = match lib::run_checked(&request, &progress, watch(&mut live)) {
         Ok(jump) => jump,
         Err(e) => {
@@ -171,7 +176,7 @@ fn jump(a: &HilArgs, out: Option<PathBuf>) -> Result<(), CliError> {
             return Err(e);
         }
     };
-    let result = conclude(&jump, staged, a.mcap, a.json);
+    let result = conclude(&jump, staged, (a.mcap, a.json), lockstep);
     let error = result.as_ref().err().map(|e| e.message.as_str());
     if let (Some(v), Some((t_end, line, ok))) = (live, jump.live_end(error)) {
         v.finish(t_end, line, ok);
