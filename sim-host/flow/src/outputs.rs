@@ -23,7 +23,11 @@ impl PivOutcome {
     /// Write the output folder `dir` atomically (it appears complete or not at all; an
     /// existing folder is replaced only if sandjumper wrote it) and return its path.
     pub fn write(&self, dir: &Path) -> Result<PathBuf, FlowError> {
-        let staged = StagedDir::create(dir)?;
+        self.write_into(StagedDir::create(dir)?)
+    }
+
+    /// Write the folder already claimed as `staged` and commit it; its path.
+    pub fn write_into(&self, staged: StagedDir) -> Result<PathBuf, FlowError> {
         let (frames, run, opts) = (&self.frames, &self.run, &self.options);
         write_animation(&staged, frames, run)?;
         write_field_tables(&staged, run, opts.calibration)?;

@@ -25,8 +25,8 @@ use crate::preprocess::Preprocess;
 use sandjumper_acqlog::{AcqLog, ReadOptions};
 use sandjumper_imaging::sequence::{ImageSequence, decode_file};
 use sandjumper_imaging::track::{FrameClock, frame_times, log_clock};
-use sandjumper_output::Progress;
 use sandjumper_output::parse::parse_number;
+use sandjumper_output::{Progress, StagedDir};
 
 /// What a PIV run analyses and how: `sandjumper piv`'s arguments, typed.
 #[derive(Clone, Debug, PartialEq)]
@@ -254,12 +254,36 @@ impl fmt::Display for PivOutcome {
 /// size, the mask read, then every pair analysed (one `advance` per pair of the stage
 /// "PIV pairs"). A note says how many outliers were replaced.
 pub fn run(request: &PivRequest, progress: &dyn Progress) -> Result<PivOutcome, FlowError> {
+    run_stages(request, None, progress).map(|(outcome, _)| outcome)
+}
+
+/// [`run`], and the output folder `out` written ([`PivOutcome::write_into`]): the folder is
+/// claimed once the arguments are checked, before any frame is decoded, so a folder that
+/// cannot be written is refused before the analysis. The outcome and the folder's path.
+pub fn run_into(
+    request: &PivRequest,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(PivOutcome, PathBuf), FlowError> {
+    let (outcome, staged) = run_stages(request, Some(out), progress)?;
+    let staged = staged.ok_or_else(|| FlowError::Internal("no output folder".into()))?;
+    let dir = outcome.write_into(staged)?;
+    Ok((outcome, dir))
+}
+
+/// The stages of [`run`], the folder `out` (if any) claimed after the arguments are checked.
+fn run_stages(
+    request: &PivRequest,
+    out: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(PivOutcome, Option<StagedDir>), FlowError> {
     let seq = open_frames(&request.frames)?;
     let numbers = seq.numbers();
     let times_s = frame_clock(request, &numbers)?;
     request.validate()?;
     let feet = request.foot.as_deref().map(read_foot).transpose()?;
     let mut opts = request.options(feet);
+    let staged = out.map(StagedDir::create).transpose()?;
     let frames = decode_frames(&seq, numbers, times_s)?;
     analysis::check(&frames, &opts).map_err(FlowError::input)?;
     opts.static_mask = match &request.mask {
@@ -280,7 +304,7 @@ pub fn run(request: &PivRequest, progress: &dyn Progress) -> Result<PivOutcome, 
         ));
     }
     let f0 = &run.results[0].field;
-    Ok(PivOutcome {
+    let outcome = PivOutcome {
         pairs: run.results.len(),
         grid: (f0.nx, f0.ny, f0.step_px),
         vectors: totals.valid + totals.replaced + totals.masked,
@@ -295,7 +319,8 @@ pub fn run(request: &PivRequest, progress: &dyn Progress) -> Result<PivOutcome, 
         frames,
         options: opts,
         request: request.clone(),
-    })
+    };
+    Ok((outcome, staged))
 }
 
 /// The sequence `spec` names (at least two frames), not decoded yet.

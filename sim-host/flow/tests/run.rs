@@ -249,3 +249,27 @@ fn the_value_parsers_allow_what_the_requests_allow_with_the_command_lines_messag
         Err("`15x20` is not a size WxH (16..=16384 px each)".into())
     );
 }
+
+/// `run_into` claims its folder once the arguments are checked and before any frame is
+/// decoded: with frames that cannot be decoded and a folder that is not ours, the folder is
+/// what is refused (as the command line always did); without a folder, the frames are.
+#[test]
+fn run_into_claims_the_folder_before_decoding_a_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    for n in 0..2 {
+        std::fs::write(frames.join(format!("frame_{n:06}.png")), b"not a png").unwrap();
+    }
+    let foreign = tmp.path().join("theirs");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), b"someone else's folder").unwrap();
+    let request = two_passes(&frames);
+    let decode = run::run(&request, &Silent).unwrap_err().to_string();
+    let folder = run::run_into(&request, &foreign, &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(folder.contains("theirs"), "{folder}");
+    assert_ne!(folder, decode);
+    assert!(!decode.contains("theirs"), "{decode}");
+}

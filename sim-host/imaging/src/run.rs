@@ -185,6 +185,29 @@ pub struct TrackOutcome {
 /// the log read, a clock given, the options and every frame (by the tracker). A note says how
 /// many frames were flagged.
 pub fn run(request: &TrackRequest, progress: &dyn Progress) -> Result<TrackOutcome, ImagingError> {
+    run_stages(request, None, progress).map(|(outcome, _)| outcome)
+}
+
+/// [`run`], and the output folder `out` written ([`TrackOutcome::write_into`]): the folder is
+/// claimed once the arguments are checked, before any frame is tracked, so a folder that
+/// cannot be written is refused before the tracking. The outcome and the folder's path.
+pub fn run_into(
+    request: &TrackRequest,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(TrackOutcome, PathBuf), ImagingError> {
+    let (outcome, staged) = run_stages(request, Some(out), progress)?;
+    let staged = staged.ok_or_else(|| ImagingError::Internal("no output folder".into()))?;
+    let dir = outcome.write_into(staged)?;
+    Ok((outcome, dir))
+}
+
+/// The stages of [`run`], the folder `out` (if any) claimed after the arguments are checked.
+fn run_stages(
+    request: &TrackRequest,
+    out: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(TrackOutcome, Option<StagedDir>), ImagingError> {
     let sequence = ImageSequence::open(&request.frames)
         .map_err(|e| ImagingError::input(format!("frames: {e}")))?;
     let log = request.log.as_deref().map(read_log).transpose()?;
@@ -194,6 +217,7 @@ pub fn run(request: &TrackRequest, progress: &dyn Progress) -> Result<TrackOutco
         (_, fps) => FrameClock::Fps(fps.unwrap_or(f64::NAN)),
     };
     let spec = request.spec();
+    let staged = out.map(StagedDir::create).transpose()?;
     let result = track_sequence(&sequence, &spec, &clock).map_err(ImagingError::input)?;
     if result.frames_flagged() > 0 {
         progress.note(&format!(
@@ -205,7 +229,7 @@ pub fn run(request: &TrackRequest, progress: &dyn Progress) -> Result<TrackOutco
             result.flagged.ambiguous
         ));
     }
-    Ok(TrackOutcome {
+    let outcome = TrackOutcome {
         jump_height_m: result.apex.jump_height_m,
         apex_time_s: result.apex.apex_time_s,
         apex: result.apex.clone(),
@@ -223,7 +247,8 @@ pub fn run(request: &TrackRequest, progress: &dyn Progress) -> Result<TrackOutco
         sequence,
         log,
         request: request.clone(),
-    })
+    };
+    Ok((outcome, staged))
 }
 
 /// The acquisition log at `path`.
@@ -242,7 +267,11 @@ impl TrackOutcome {
     /// Write `track.csv`, `summary.json`, `track.toml`, `track.png/.svg` (and, with a log,
     /// `acquisition.csv` with `rod_height_m`) into the folder `dir`, atomically; its path.
     pub fn write(&self, dir: &Path) -> Result<PathBuf, ImagingError> {
-        let staged = StagedDir::create(dir)?;
+        self.write_into(StagedDir::create(dir)?)
+    }
+
+    /// Write the folder already claimed as `staged` and commit it; its path.
+    pub fn write_into(&self, staged: StagedDir) -> Result<PathBuf, ImagingError> {
         let internal = |what: &str, e: &dyn fmt::Display| {
             ImagingError::Internal(format!("cannot write {what}: {e}"))
         };

@@ -242,12 +242,14 @@ fn frames_analysis(
             let progress = Bars::holding();
             let (written, json) = match command {
                 Command::Track(a) => {
-                    let outcome = sandjumper_imaging::run::run(&a.request(), &progress)?;
-                    (outcome.write(&dir)?, outcome.summary_json()?)
+                    let (outcome, written) =
+                        sandjumper_imaging::run::run_into(&a.request(), &dir, &progress)?;
+                    (written, outcome.summary_json()?)
                 }
                 Command::Piv(a) => {
-                    let outcome = sandjumper_flow::run::run(&a.request()?, &progress)?;
-                    (outcome.write(&dir)?, outcome.summary_json()?)
+                    let (outcome, written) =
+                        sandjumper_flow::run::run_into(&a.request()?, &dir, &progress)?;
+                    (written, outcome.summary_json()?)
                 }
                 _ => unreachable!("frames_analysis runs track or piv"),
             };

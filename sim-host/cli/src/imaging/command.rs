@@ -99,8 +99,11 @@ impl TrackArgs {
 /// Run `sandjumper track`: `--out` written (then `wrote DIR`), the notes, the summary.
 pub fn run(a: &TrackArgs) -> Result<(), CliError> {
     let progress = Bars::holding();
-    let outcome = super::run::run(&a.request(), &progress)?;
-    let written = a.out.as_deref().map(|d| outcome.write(d)).transpose()?;
+    let request = a.request();
+    let (outcome, written) = match a.out.as_deref() {
+        Some(out) => super::run::run_into(&request, out, &progress).map(|(o, d)| (o, Some(d)))?,
+        None => (super::run::run(&request, &progress)?, None),
+    };
     progress.release(written.as_deref());
     crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())
 }
