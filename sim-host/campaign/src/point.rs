@@ -366,6 +366,11 @@ fn collect_frames(
         let Some(name) = p.file_name() else { continue };
         let to = frames.join(name);
         if std::fs::rename(&p, &to).is_err() {
+            if !p.exists() {
+                // Gone between the listing and the move (a camera that renames its files into
+                // place); not ours to move, and an image missing is counted by `moved`.
+                continue;
+            }
             std::fs::copy(&p, &to)
                 .and_then(|_| std::fs::remove_file(&p))
                 .map_err(|e| format!("cannot move {} into the point's folder: {e}", p.display()))?;
