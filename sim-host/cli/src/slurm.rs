@@ -49,3 +49,9 @@ pub struct JobArgs {
     #[command(flatten)]
     pub queue: QueueArgs,
 }
+
+/// This program's path, which a Slurm job runs again on the cluster.
+pub fn this_program() -> Result<std::path::PathBuf, crate::command::CliError> {
+    std::env::current_exe()
+        .map_err(|e| crate::command::CliError::internal(format!("cannot find this program: {e}")))
+}

@@ -4,9 +4,9 @@
 //!
 //! The environment is `target/python-venv` (made once, with maturin, numpy, pytest and
 //! matplotlib (for the notebook) and mcap (Foxglove's reader, to check our MCAP files) from
-//! PyPI); the wheel builds in `target/python` (the outer `cargo test` holds the lock on
-//! `target/`'s own build). Skips with a message when there is no `python3` or PyPI cannot be
-//! reached, unless `CI` is set (then it fails).
+//! PyPI); the wheel builds in `target/` under cargo-nextest, in `target/python` under `cargo
+//! test` (which holds the lock on `target/`): see `wheel_build`. Skips with a message when
+//! there is no `python3` or PyPI cannot be reached, unless `CI` is set (then it fails).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -65,6 +65,19 @@ fn venv(root: &Path) -> Result<PathBuf, String> {
     Ok(python)
 }
 
+/// Where the wheel builds, and the arguments maturin gets. Under cargo-nextest (the README's
+/// test command) the tests' build is over and `target/` free: the wheel builds there in the
+/// tests' own `dev` profile (dependencies optimised), reusing what the tests compiled. Under
+/// `cargo test`, which holds `target/`'s lock while the tests run, in `target/python` with the
+/// wheel's own profile.
+fn wheel_build(root: &Path) -> (PathBuf, Option<&'static str>) {
+    if std::env::var_os("NEXTEST").is_some() {
+        (root.join("target"), Some("--profile dev"))
+    } else {
+        (root.join("target/python"), None)
+    }
+}
+
 #[test]
 fn python_module_builds_installs_and_passes_its_tests() {
     let root = workspace();
@@ -79,6 +92,7 @@ fn python_module_builds_installs_and_passes_its_tests() {
             return;
         }
     };
+    let (target, profile) = wheel_build(&root);
     run(Command::new(&python)
         .args([
             "-m",
@@ -89,7 +103,8 @@ fn python_module_builds_installs_and_passes_its_tests() {
             "--no-deps",
         ])
         .arg(root.join("sim-host/python"))
-        .env("CARGO_TARGET_DIR", root.join("target/python")))
+        .env("CARGO_TARGET_DIR", &target)
+        .envs(profile.map(|p| ("MATURIN_PEP517_ARGS", p))))
     .unwrap_or_else(|e| panic!("pip install ./sim-host/python: {e}"));
     // Run from a folder without a `sandjumper` directory, so the installed module is tested.
     let here = tempfile::tempdir().unwrap();

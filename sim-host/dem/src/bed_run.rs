@@ -17,26 +17,39 @@ use sandjumper_output::{Progress, StagedDir, write_csv};
 
 /// A bed to prepare.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct BedRequest {
     /// Grains and contacts.
+    #[cfg_attr(feature = "clap", command(flatten))]
     pub model: ModelRequest,
-    /// Box width, m. Default 0.23.
+    /// Box width, m.
+    #[cfg_attr(feature = "clap", arg(long = "width", value_name = "M", default_value = "0.23", value_parser = sandjumper_output::parse::parse_number))]
     pub width_m: f64,
-    /// Bed height, m. Default 0.08.
+    /// Bed height, m.
+    #[cfg_attr(feature = "clap", arg(long = "height", value_name = "M", default_value = "0.08", value_parser = sandjumper_output::parse::parse_number))]
     pub height_m: f64,
-    /// Pack to this area fraction with no gravity instead of settling under gravity, 1.
+    /// Pack to this area fraction with no gravity instead of settling under gravity.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PHI", value_parser = sandjumper_output::parse::parse_number))]
     pub pack: Option<f64>,
-    /// Seed. Default 1.
+    /// Seed.
+    #[cfg_attr(feature = "clap", arg(long, default_value = "1"))]
     pub seed: u64,
-    /// Longest preparation, simulated s. Default 2.
+    /// Longest preparation, simulated s.
+    #[cfg_attr(feature = "clap", arg(long = "max-time", value_name = "S", default_value = "2", value_parser = sandjumper_output::parse::parse_number))]
     pub max_time_s: f64,
-    /// At rest once the kinetic energy per grain is below this share of m g d. Default 1e-8.
+    /// At rest once the kinetic energy per grain is below this share of m g d.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "F", default_value = "1e-8", value_parser = sandjumper_output::parse::parse_number))]
     pub rest: f64,
-    /// Threads (0: all cores). Default 0.
+    /// Threads (0: all cores).
+    #[cfg_attr(feature = "clap", arg(long, default_value = "0"))]
     pub threads: usize,
-    /// Pin each thread to a core of its own. Default false.
+    /// Pin each thread to a core of its own, among those this process may run on (as
+    /// OpenMP's `OMP_PROC_BIND`): steadier, and about 2 % faster on two threads. Leave it
+    /// off on a node shared with jobs that are not confined to cores of their own.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub pin_threads: bool,
-    /// Output directory (created, or replaced if it holds an earlier sandjumper output).
+    /// Output directory: bed.ckpt, grains.csv, load.csv, bed.toml, bed.png/.svg.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "DIR"))]
     pub out: PathBuf,
 }
 

@@ -269,26 +269,40 @@ mod tests {
 
 /// `dem collide` as a request: one head-on collision with the paper's contact law.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct CollideRequest {
-    /// Diameter of disk 1 (the one that hits the wall), m (required; default 0).
+    /// Diameter of disk 1 (the one that hits the wall), m.
+    #[cfg_attr(feature = "clap", arg(long = "d1", value_name = "M", value_parser = sandjumper_output::parse::parse_number))]
     pub d1_m: f64,
-    /// Diameter of disk 2, m (`None`: disk 1's).
+    /// Diameter of disk 2, m.
+    #[cfg_attr(feature = "clap", arg(long = "d2", value_name = "M", value_parser = sandjumper_output::parse::parse_number, required_unless_present = "wall"))]
     pub d2_m: Option<f64>,
-    /// Disk 1 against a flat wall. Default false.
+    /// Disk 1 against a flat wall.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub wall: bool,
-    /// Normal stiffness, N/m (required; default 0).
+    /// Normal stiffness, N/m.
+    #[cfg_attr(feature = "clap", arg(long = "kn", value_name = "N_PER_M", value_parser = sandjumper_output::parse::parse_number))]
     pub kn_n_per_m: f64,
-    /// Normal damping, N s/m (required; default 0).
+    /// Normal damping, N s/m.
+    #[cfg_attr(feature = "clap", arg(long = "damping", value_name = "N_S_PER_M", value_parser = sandjumper_output::parse::parse_number))]
     pub damping_n_s_per_m: f64,
-    /// Impact speed, m/s (required; default 0).
+    /// Impact speed, m/s.
+    #[cfg_attr(feature = "clap", arg(long = "speed", value_name = "M_PER_S", value_parser = sandjumper_output::parse::parse_number))]
     pub speed_m_s: f64,
-    /// Grain density, kg/m^3. Default 1000.
+    /// Grain density, kg/m^3.
+    #[cfg_attr(feature = "clap", arg(long = "density", value_name = "KG_M3", default_value = "1000", value_parser = sandjumper_output::parse::parse_number))]
     pub density_kg_m3: f64,
-    /// Time step, s (`None`: t_c / 50).
+    /// Time step, s (default t_c / 50).
+    #[cfg_attr(feature = "clap", arg(long = "dt", value_name = "S", value_parser = sandjumper_output::parse::parse_number))]
     pub dt_s: Option<f64>,
-    /// Allow a step above t_c / 10. Default false.
+    /// Allow a step above t_c / 10.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub force_step: bool,
-    /// Integrator. Default velocity Verlet.
+    /// Integrator.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_enum, default_value = "velocity-verlet")
+    )]
     pub integrator: Integrator,
 }
 

@@ -24,43 +24,62 @@ pub enum Sizes {
 /// Grains and contacts of a bed or an intrusion, as the command line's model options give
 /// them; [`ModelRequest::resolve`] turns them into [`DemParams`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ModelRequest {
-    /// Model: [`Model::Paper`] (Supplementary I) or [`Model::Full`] (gravity, walls,
-    /// friction, Verlet). Default paper.
+    /// Model: `paper` (Supplementary I) or `full` (gravity, walls, friction, Verlet).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "paper"))]
     pub model: Model,
-    /// Grain sizes. Default bi.
+    /// Grain sizes: mono, bi (50:50, ratio 1.4) or poly.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "bi"))]
     pub sizes: Sizes,
-    /// Large over small diameter (bi), 1. Default 1.4.
+    /// Large over small diameter (bi).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "R", default_value = "1.4", value_parser = sandjumper_output::parse::parse_positive))]
     pub ratio: f64,
-    /// Spread of diameters about the mean (poly), share. Default 0.2.
+    /// Spread of diameters about the mean (poly), share.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "S", default_value = "0.2", value_parser = sandjumper_output::parse::parse_number))]
     pub spread: f64,
-    /// Small grain diameter, m. Default 1e-3.
+    /// Small grain diameter, m.
+    #[cfg_attr(feature = "clap", arg(long = "diameter", value_name = "M", default_value = "1e-3", value_parser = sandjumper_output::parse::parse_number))]
     pub diameter_m: f64,
-    /// Grain density, kg/m^3. Default 1000.
+    /// Grain density, kg/m^3.
+    #[cfg_attr(feature = "clap", arg(long = "density", value_name = "KG_M3", default_value = "1000", value_parser = sandjumper_output::parse::parse_number))]
     pub density_kg_m3: f64,
-    /// Intrusion speed the stiffness is chosen for, m/s. Default 0.5.
+    /// Intrusion speed the stiffness is chosen for, m/s.
+    #[cfg_attr(feature = "clap", arg(long = "design-speed", value_name = "M_PER_S", default_value = "0.5", value_parser = sandjumper_output::parse::parse_number))]
     pub design_speed_m_s: f64,
-    /// Largest overlap at that speed, share of a diameter. Default 0.01.
+    /// Largest overlap at that speed, share of a diameter.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "F", default_value = "0.01", value_parser = sandjumper_output::parse::parse_number))]
     pub overlap: f64,
     /// Normal stiffness instead, N/m.
+    #[cfg_attr(feature = "clap", arg(long = "kn", value_name = "N_PER_M", value_parser = sandjumper_output::parse::parse_number))]
     pub kn_n_per_m: Option<f64>,
-    /// Coefficient of restitution, 1. Default 0.5.
+    /// Coefficient of restitution (paper: of two small grains, with one dashpot for all
+    /// pairs; full: of every pair).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "E", default_value = "0.5", value_parser = sandjumper_output::parse::parse_number))]
     pub restitution: f64,
-    /// Dashpot instead, N s/m.
+    /// Dashpot instead, N s/m (the same for every pair).
+    #[cfg_attr(feature = "clap", arg(long = "damping", value_name = "N_S_PER_M", value_parser = sandjumper_output::parse::parse_number))]
     pub damping_n_s_per_m: Option<f64>,
-    /// Friction coefficient (full model), 1. Default 0.5.
+    /// Friction coefficient (full model).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "MU", default_value = "0.5", value_parser = sandjumper_output::parse::parse_number))]
     pub mu: f64,
-    /// Per-grain drag rate, 1/s (`None`: paper 20, full 0).
+    /// Per-grain drag rate, 1/s (paper default 20, full 0).
+    #[cfg_attr(feature = "clap", arg(long = "drag", value_name = "PER_S", value_parser = sandjumper_output::parse::parse_number))]
     pub drag_per_s: Option<f64>,
-    /// Integrator (`None`: paper forward Euler, full velocity Verlet).
+    /// Integrator (paper: forward Euler, full: velocity Verlet).
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub integrator: Option<Integrator>,
-    /// Steps per shortest contact time, 1. Default 50.
+    /// Steps per shortest contact time.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "50", value_parser = sandjumper_output::parse::parse_number))]
     pub steps_per_contact: f64,
     /// Time step instead, s.
+    #[cfg_attr(feature = "clap", arg(long = "dt", value_name = "S", value_parser = sandjumper_output::parse::parse_number))]
     pub dt_s: Option<f64>,
-    /// Allow a step above `t_c / 10`. Default false.
+    /// Allow a step above t_c / 10.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub force_step: bool,
-    /// Walls in the paper model (the full model always has them). Default false.
+    /// Walls in the paper model (the full model always has them).
+    #[cfg_attr(feature = "clap", arg(long))]
     pub walls: bool,
 }
 

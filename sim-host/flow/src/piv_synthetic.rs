@@ -35,26 +35,37 @@ pub enum SyntheticField {
 
 /// What sequence to make: `sandjumper piv-synthetic`'s arguments, typed.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct SyntheticRequest {
-    /// The motion (the command line requires it; the default here is `Shift`).
+    /// The motion.
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
     pub field: SyntheticField,
-    /// Magnitude, px per frame (default 2.5).
+    /// Magnitude, px per frame.
+    #[cfg_attr(feature = "clap", arg(long = "magnitude", value_name = "PX", default_value = "2.5", value_parser = parse_number))]
     pub magnitude_px: f64,
-    /// Frame size (width, height), px (default 1280x1024).
+    /// Frame size WxH, px.
+    #[cfg_attr(feature = "clap", arg(long = "size", value_name = "WxH", default_value = "1280x1024", value_parser = parse_size))]
     pub size_px: (u32, u32),
-    /// Frames, >= 2 (default 2).
+    /// Frames to write.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(2..=10000)))]
     pub frames: u32,
-    /// Grain diameter, px (default 5).
+    /// Grain diameter, px.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PX", default_value = "5", value_parser = sandjumper_output::parse::parse_positive))]
     pub grain_px: f64,
-    /// Read noise, 8-bit levels RMS (0: none, the default).
+    /// Read noise, 8-bit levels RMS (0: none).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LEVELS", default_value = "0", value_parser = parse_number))]
     pub noise: f64,
-    /// Seed of the grains and the noise (default 1).
+    /// Seed.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "1"))]
     pub seed: u64,
-    /// Move this real image (PNG, TIFF, BMP) instead of rendering grains (`Shift` only):
-    /// frame n is it translated by n times the shift, as 16-bit PNG.
+    /// Move this real image (PNG, TIFF, BMP; grey or colour) instead of rendering grains:
+    /// frame n is it translated by n times the shift, exactly (a Fourier shift of its mirrored
+    /// extension), written as 16-bit PNG. Only with `--field shift`.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "IMAGE"))]
     pub image: Option<PathBuf>,
-    /// The shift per frame (dx right, dy down), px, for `Shift` (default: the magnitude in x
-    /// and half of it in y).
+    /// The shift per frame DX,DY, px (x right, y down) for `--field shift` (default:
+    /// `--magnitude` in x and half of it in y).
+    #[cfg_attr(feature = "clap", arg(long = "shift", value_name = "DX,DY", value_parser = parse_shift, allow_hyphen_values = true))]
     pub shift_px: Option<(f64, f64)>,
 }
 

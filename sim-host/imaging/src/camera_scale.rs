@@ -22,15 +22,20 @@ use sandjumper_output::Progress;
 /// What to measure the scale from: `sandjumper camera-scale`'s arguments, typed. Every field
 /// is required (the command line has no defaults here but `roi`), so there is no `Default`.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ScaleRequest {
-    /// The frames of the slow move: a directory, a glob or a multi-page TIFF.
+    /// The frames of the slow move (as for `track`).
+    #[cfg_attr(feature = "clap", arg(value_name = "FRAMES"))]
     pub frames: String,
-    /// The acquisition log of the move: its `camera_frame` rows give each frame's encoder
-    /// position.
+    /// The acquisition log of the move: its `camera_frame` rows give the encoder position of
+    /// each frame.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ACQ.csv"))]
     pub log: PathBuf,
     /// The ball's diameter in the image, px (roughly: it sets which bright objects count).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PX", value_parser = crate::run::parse_px))]
     pub ball_px: f64,
-    /// Region of interest, px (`None`: the whole frame).
+    /// Region of interest X,Y,W,H, px.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "X,Y,W,H", value_parser = crate::run::parse_roi))]
     pub roi: Option<Roi>,
 }
 

@@ -20,48 +20,77 @@ use crate::spec::{LammpsSpec, Preset};
 /// A 3-D intrusion to run with LAMMPS: a preset scale with single values changed, and the
 /// foot's motion.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct LammpsRequest {
-    /// The scale to start from. Default [`Preset::Paper`].
+    /// The scale to start from; the options below change single values.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "paper"))]
     pub preset: Preset,
-    /// Trajectory CSV (`t_s` with `x_f_m`, or `depth_m`); it must start at or above the
-    /// bed's surface.
+    /// Trajectory CSV (`t_s` with `x_f_m`, as `jump --out` writes, or `depth_m`); it must
+    /// start at or above the bed's surface.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "CSV", conflicts_with = "speed_m_s")
+    )]
     pub trajectory: Option<PathBuf>,
-    /// Take one episode of the trajectory, shifted to start at the surface.
+    /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
+    /// `push-off`, the foot's last intrusion before the jump's flight.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_enum, value_name = "EPISODE", requires = "trajectory")
+    )]
     pub episode: Option<Episode>,
     /// Constant intrusion speed instead, m/s (from the surface).
+    #[cfg_attr(feature = "clap", arg(long = "speed", value_name = "M_PER_S", value_parser = sandjumper_output::parse::parse_positive))]
     pub speed_m_s: Option<f64>,
-    /// Final depth at constant speed, m. Default 0.02.
+    /// Final depth at constant speed, m.
+    #[cfg_attr(feature = "clap", arg(long = "depth", value_name = "M", default_value = "0.02", value_parser = sandjumper_output::parse::parse_positive))]
     pub depth_m: f64,
-    /// Foot diameter, m (`None`: the preset's).
+    /// Foot diameter, m.
+    #[cfg_attr(feature = "clap", arg(long = "foot-diameter", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub foot_diameter_m: Option<f64>,
-    /// Mean grain diameter, m (`None`: the preset's).
+    /// Mean grain diameter, m (uniform within +-10 %).
+    #[cfg_attr(feature = "clap", arg(long = "grain-diameter", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub grain_diameter_m: Option<f64>,
-    /// Bed width (square, periodic sides), m (`None`: the preset's).
+    /// Bed width (square, periodic sides), m.
+    #[cfg_attr(feature = "clap", arg(long = "bed-width", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub bed_width_m: Option<f64>,
-    /// Bed depth, m (`None`: the preset's).
+    /// Bed depth, m.
+    #[cfg_attr(feature = "clap", arg(long = "bed-depth", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub bed_depth_m: Option<f64>,
-    /// Target packing fraction of the poured bed, 1 (`None`: the preset's).
+    /// Target packing fraction of the poured bed (0.583 to 0.625, what pouring frictional
+    /// spheres gives); also the model's phi (within the presets' 0.57 to 0.62).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PHI", value_parser = sandjumper_output::parse::parse_positive))]
     pub phi: Option<f64>,
-    /// Young's modulus of the grains, Pa (`None`: the preset's).
+    /// Young's modulus of the (softened) grains, Pa.
+    #[cfg_attr(feature = "clap", arg(long = "youngs-modulus", value_name = "PA", value_parser = sandjumper_output::parse::parse_positive))]
     pub youngs_modulus_pa: Option<f64>,
-    /// Sliding friction coefficient (`None`: the preset's).
+    /// Sliding friction coefficient.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "MU"))]
     pub friction: Option<f64>,
-    /// Normal restitution coefficient (`None`: the preset's).
+    /// Normal restitution coefficient.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "E"))]
     pub restitution: Option<f64>,
-    /// Dump rate, frames/s (`None`: the preset's).
+    /// Dump rate (the PIV camera's), frames/s.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "FPS", value_parser = sandjumper_output::parse::parse_positive))]
     pub fps: Option<f64>,
-    /// Seed of the grains' sizes and start (`None`: the preset's).
+    /// Seed of the grains' sizes and start.
+    #[cfg_attr(feature = "clap", arg(long))]
     pub seed: Option<u64>,
     /// The added mass is taken while the foot moves down at least this share of its
-    /// fastest speed, 1. Default 0.3.
+    /// fastest speed.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "F", default_value = "0.3", value_parser = sandjumper_dem::intrude_run::parse_share))]
     pub min_speed_ratio: f64,
-    /// MPI ranks. Default 2.
+    /// MPI ranks (`mpiexec -n N lmp`).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(1..=100_000)))]
     pub ranks: u32,
-    /// The LAMMPS executable (`None`: $SANDJUMPER_LMP, else lmp on PATH).
+    /// The LAMMPS executable (default: $SANDJUMPER_LMP, else lmp on PATH).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub lmp: Option<PathBuf>,
-    /// The MPI launcher (`None`: the mpiexec beside lmp, else on PATH).
+    /// The MPI launcher (default: the mpiexec beside lmp, else on PATH).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub mpiexec: Option<PathBuf>,
     /// Output directory.
+    #[cfg_attr(feature = "clap", arg(skip))]
     pub out: PathBuf,
 }
 
@@ -192,6 +221,59 @@ impl LammpsRequest {
         Ok(t)
     }
 
+    /// The words of `sandjumper dem lammps` that ask for this run, without `--ranks` and
+    /// `--out` (a Slurm job adds them; [`submit`]): every value this request sets, so the job
+    /// runs what was checked here. A path that is not UTF-8 text is refused (a job script
+    /// could not pass it on).
+    pub fn job_arguments(&self) -> Result<Vec<String>, LammpsError> {
+        let mut args: Vec<String> = ["dem", "lammps", "--preset", self.preset.name()]
+            .map(String::from)
+            .into();
+        let path = |flag: &str, p: &Option<PathBuf>, args: &mut Vec<String>| {
+            if let Some(p) = p {
+                let text = p.to_str().ok_or_else(|| {
+                    LammpsError::input(format!(
+                        "{flag} {} is not UTF-8 text (allowed with --slurm: UTF-8 paths, which \
+                         the job script passes on)",
+                        p.display()
+                    ))
+                })?;
+                args.extend([flag.to_string(), text.to_string()]);
+            }
+            Ok::<(), LammpsError>(())
+        };
+        path("--trajectory", &self.trajectory, &mut args)?;
+        if let Some(Episode::PushOff) = self.episode {
+            args.extend(["--episode".into(), "push-off".into()]);
+        }
+        let values = [
+            ("--speed", self.speed_m_s),
+            ("--depth", Some(self.depth_m)),
+            ("--foot-diameter", self.foot_diameter_m),
+            ("--grain-diameter", self.grain_diameter_m),
+            ("--bed-width", self.bed_width_m),
+            ("--bed-depth", self.bed_depth_m),
+            ("--phi", self.phi),
+            ("--youngs-modulus", self.youngs_modulus_pa),
+            ("--friction", self.friction),
+            ("--restitution", self.restitution),
+            ("--fps", self.fps),
+            ("--min-speed-ratio", Some(self.min_speed_ratio)),
+        ];
+        for (flag, v) in values {
+            if let Some(v) = v {
+                // `{}` writes the shortest text that reads back as the same f64.
+                args.extend([flag.to_string(), format!("{v}")]);
+            }
+        }
+        if let Some(seed) = self.seed {
+            args.extend(["--seed".into(), seed.to_string()]);
+        }
+        path("--lmp", &self.lmp, &mut args)?;
+        path("--mpiexec", &self.mpiexec, &mut args)?;
+        Ok(args)
+    }
+
     /// Check the request before anything runs: the motion, the values, the foot kept above
     /// the floor.
     pub fn validate(&self) -> Result<(), LammpsError> {
@@ -221,20 +303,24 @@ pub enum Submitted {
 }
 
 /// Submit the run `request` asks for to Slurm as one job of [`LammpsRequest::ranks`] tasks
-/// that runs this program's `dem lammps` again on the cluster
-/// ([`sandjumper_slurm::submit_command`]), wait for it unless `queue` says not to, and check
-/// it. The request is checked and LAMMPS looked for here first (a cluster's login node sees
-/// the shared file system its nodes do): a missing one is refused now, not after the queue.
+/// that runs `program` (the `sandjumper` binary, on the cluster's shared file system) with
+/// [`LammpsRequest::job_arguments`] ([`sandjumper_slurm::submit_command`]), wait for it unless
+/// `queue` says not to, and check it. The request is checked and LAMMPS looked for here first
+/// (a cluster's login node sees the shared file system its nodes do): a missing one is refused
+/// now, not after the queue.
 pub fn submit(
     request: &LammpsRequest,
+    program: &Path,
     queue: &QueueOptions,
     progress: &dyn Progress,
 ) -> Result<Submitted, LammpsError> {
     request.validate()?;
     request.lammps()?;
+    let args = request.job_arguments()?;
     let job = sandjumper_slurm::CommandJob {
         name: "dem-lammps",
-        command: &["dem", "lammps"],
+        program,
+        args: &args,
         tasks: request.ranks,
         out: &request.out,
         expect: &["summary.json"],

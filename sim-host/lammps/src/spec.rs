@@ -22,6 +22,16 @@ pub enum Preset {
     Small,
 }
 
+impl Preset {
+    /// The preset's name on the command line and in files (`paper`, `small`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Small => "small",
+        }
+    }
+}
+
 /// One run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LammpsSpec {

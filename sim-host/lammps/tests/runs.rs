@@ -1,6 +1,8 @@
 //! `dem lammps` and `dem lammps-read` as library calls: their refusals before anything runs,
 //! a LAMMPS that fails keeping its files, a read-back that refuses its own run as output.
 
+use std::path::Path;
+
 use sandjumper_lammps::run::{self, LammpsReadRequest, LammpsRequest};
 use sandjumper_lammps::spec::Preset;
 use sandjumper_output::{Blame, Blamed, Silent};
@@ -128,7 +130,7 @@ fn a_slurm_submission_refuses_what_a_run_refuses_before_it_looks_for_slurm() {
             "pip install",
         ),
     ] {
-        let e = run::submit(&request, &queue, &Silent).unwrap_err();
+        let e = run::submit(&request, Path::new("/opt/sandjumper"), &queue, &Silent).unwrap_err();
         assert_eq!(e.blame(), Blame::Input, "{e}");
         assert!(e.to_string().contains(why), "{e}");
         assert!(!out.exists() && !work.path().join("run.slurm").exists());

@@ -331,7 +331,7 @@ pub fn dem_collide(
     let DemCommand::Collide(c) = a.command else {
         unreachable!("`sandjumper dem collide` parses as DemCommand::Collide")
     };
-    let json = sandjumper_dem::collide::run(&c.request(), &Silent)
+    let json = sandjumper_dem::collide::run(&c.request, &Silent)
         .and_then(|r| r.json())
         .map_err(|e| argv.error(e.into()))?;
     Ok(json_to_py(py, &json)?.unbind())

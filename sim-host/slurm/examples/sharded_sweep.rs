@@ -1,45 +1,35 @@
 //! The job script of a sweep run as a Slurm job array, built with the library as
-//! `sandjumper sweep ... --slurm 4 --slurm-cpus 2` builds it (printed, not submitted: a
-//! submission runs this very program again, see `submit_sharded`): the sweep's own
-//! arguments without the ones each task sets, then one shard per task.
+//! `sandjumper sweep --kind single --freq 8:14:2 --out sweep --slurm 4 --slurm-cpus 2` builds
+//! it (printed, not submitted: [`sandjumper_slurm::submit_sharded`] submits it and waits): the
+//! sweep's own words, then one shard per task.
 //!
 //! Run it with `cargo run --example sharded_sweep -p sandjumper-slurm`.
 
-use sandjumper_slurm::{JobScript, QueueOptions, quote, shard_task_arguments};
+use std::path::Path;
+
+use sandjumper_slurm::{QueueOptions, ShardedJob};
 
 fn main() {
-    let argv: Vec<String> = [
-        "sandjumper",
-        "sweep",
-        "--kind",
-        "single",
-        "--freq",
-        "8:14:2",
-        "--out",
-        "sweep",
-        "--slurm",
-        "4",
-        "--slurm-cpus",
-        "2",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let passed: Vec<String> = shard_task_arguments(&argv, &["sweep"])
+    let args: Vec<String> = ["sweep", "--kind", "single", "--freq", "8:14:2"]
         .iter()
-        .map(|a| quote(a))
+        .map(|s| s.to_string())
         .collect();
-    let script = JobScript {
-        name: "sweep".into(),
-        shape: vec!["--array=1-4".into(), "--cpus-per-task=2".into()],
-        log: "sweep.slurm/logs/task-%a.out".into(),
-        cwd: ".".into(),
+    let job = ShardedJob {
+        name: "sweep",
+        program: Path::new("/opt/sandjumper/bin/sandjumper"),
+        args: &args,
+        files: &[],
+        tasks: 4,
+        cpus: 2,
+        out: Path::new("sweep"),
+        expect: "sweep.toml",
         queue: QueueOptions::default(),
-        command: format!(
-            "exec sandjumper sweep {} --shard \"$SLURM_ARRAY_TASK_ID/4\" --threads \
-             \"${{SLURM_CPUS_PER_TASK:-1}}\" --out sweep.slurm/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
-            passed.join(" ")
-        ),
     };
-    print!("{}", script.text());
+    match job.script(Path::new("/home/me/sweep.slurm"), Path::new("/home/me")) {
+        Ok(script) => print!("{}", script.text()),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    }
 }

@@ -121,36 +121,6 @@ pub fn quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', r"'\''"))
 }
 
-/// A command's own arguments (after the words `after`, e.g. `["dem", "lammps"]`) without
-/// the options in `with_value` (and their values) and the flags in `flags`.
-pub fn passed_on(
-    argv: &[String],
-    after: &[&str],
-    with_value: &[&str],
-    flags: &[&str],
-) -> Vec<String> {
-    let start = argv
-        .windows(after.len())
-        .position(|w| w.iter().zip(after).all(|(a, b)| a == b))
-        .map_or(argv.len(), |i| i + after.len());
-    let mut out = Vec::new();
-    let mut it = argv[start..].iter();
-    while let Some(a) = it.next() {
-        let name = a.split('=').next().unwrap_or(a);
-        if flags.contains(&a.as_str()) {
-            continue;
-        }
-        if with_value.contains(&name) {
-            if !a.contains('=') {
-                it.next();
-            }
-            continue;
-        }
-        out.push(a.clone());
-    }
-    out
-}
-
 /// Refuse without Slurm's `name` on PATH (`option` names what needs it).
 pub fn tool(name: &str, option: &str) -> Result<(), SlurmError> {
     match Command::new(name).arg("--version").output() {
@@ -297,29 +267,27 @@ pub fn fresh_job_dir(out: &Path) -> Result<PathBuf, SlurmError> {
     std::fs::canonicalize(&dir).map_err(|e| SlurmError::Internal(format!("{}: {e}", dir.display())))
 }
 
-/// This program's arguments as text (an error naming one that is not UTF-8: a job script
-/// could not pass it on faithfully).
-pub fn arguments() -> Result<Vec<String>, SlurmError> {
-    std::env::args_os()
-        .map(|a| {
-            a.into_string().map_err(|a| {
-                SlurmError::Input(format!(
-                    "the argument {} is not UTF-8 text (allowed with --slurm: UTF-8 arguments, \
-                     which the job script passes on)",
-                    a.to_string_lossy()
-                ))
-            })
-        })
-        .collect()
+/// The working directory a job starts in: this process's (relative paths in a job's
+/// arguments mean what they mean here).
+pub fn working_dir() -> Result<PathBuf, SlurmError> {
+    std::env::current_dir().map_err(|e| SlurmError::Internal(format!("no working directory: {e}")))
 }
 
-/// This program and the working directory, for a job script.
-pub fn program_and_cwd() -> Result<(PathBuf, PathBuf), SlurmError> {
-    let exe = std::env::current_exe()
-        .map_err(|e| SlurmError::Internal(format!("cannot find this program: {e}")))?;
-    let cwd = std::env::current_dir()
-        .map_err(|e| SlurmError::Internal(format!("no working directory: {e}")))?;
-    Ok((exe, cwd))
+/// A job script's command: `program` and `args`, each word quoted; an argument that is not
+/// UTF-8 text is refused (a job script could not pass it on faithfully).
+pub fn command_line(program: &Path, args: &[String]) -> Result<String, SlurmError> {
+    let program = program.to_str().ok_or_else(|| {
+        SlurmError::Input(format!(
+            "the program {} is not UTF-8 text (allowed with --slurm: UTF-8 paths, which the job \
+             script passes on)",
+            program.display()
+        ))
+    })?;
+    Ok(std::iter::once(program)
+        .chain(args.iter().map(String::as_str))
+        .map(quote)
+        .collect::<Vec<_>>()
+        .join(" "))
 }
 
 /// Write `script` to `dir/job.sbatch` and submit it; the job (its id also in `dir/job.id`).
@@ -351,107 +319,17 @@ pub fn submit(dir: &Path, script: &JobScript) -> Result<Job, SlurmError> {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_job_gets_the_commands_arguments_without_the_ones_it_sets() {
-        let argv: Vec<String> = [
-            "sandjumper",
-            "dem",
-            "lammps",
-            "--preset",
-            "small",
-            "--out",
-            "x",
-            "--slurm",
-            "--ranks=4",
-            "--speed",
-            "0.1",
-            "--slurm-time",
-            "5",
-            "--slurm-no-wait",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        assert_eq!(
-            passed_on(
-                &argv,
-                &["dem", "lammps"],
-                &["--out", "--ranks", "--slurm-time"],
-                &["--slurm", "--slurm-no-wait"]
-            ),
-            ["--preset", "small", "--speed", "0.1"]
-        );
-        assert_eq!(quote("a'b"), r"'a'\''b'");
-        assert_eq!(job_dir(Path::new("/t/run")), Path::new("/t/run.slurm"));
-    }
-
-    #[test]
-    fn each_task_gets_the_sweeps_arguments_without_the_ones_it_sets() {
-        let argv: Vec<String> = [
-            "sandjumper",
-            "sweep",
-            "--kind",
-            "single",
-            "--out",
-            "x",
-            "--slurm",
-            "3",
-            "--slurm-time=5",
-            "--freq",
-            "8:12:1",
-            "--threads",
-            "2",
-            "--slurm-no-wait",
-            "--shard=1/2",
-            "--slurm-cpus",
-            "2",
-            "--phi",
-            "0.57",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        assert_eq!(
-            shard_task_arguments(&argv, &["sweep"]),
-            ["--kind", "single", "--freq", "8:12:1", "--phi", "0.57"]
-        );
-    }
-
-    #[test]
-    fn a_script_quotes_its_log_folder_and_keeps_the_file_names_patterns() {
-        let s = JobScript {
-            name: "sweep".into(),
-            shape: vec!["--array=1-3".into()],
-            log: "/j/100%.slurm/logs/task-%a.out".into(),
-            cwd: "/w".into(),
-            queue: QueueOptions {
-                partition: Some("debug".into()),
-                ..QueueOptions::default()
-            },
-            command: "exec true\n".into(),
-        };
-        assert_eq!(
-            s.text(),
-            "#!/bin/bash\n#SBATCH --job-name=sandjumper-sweep\n#SBATCH --array=1-3\n\
-             #SBATCH --time=1:00:00\n#SBATCH --output=\"/j/100%%.slurm/logs/task-%a.out\"\n\
-             #SBATCH --chdir=\"/w\"\n#SBATCH --partition=debug\nset -euo pipefail\nexec true\n"
-        );
-    }
-}
-
-/// One job that runs this very program's command again on the cluster: the words
-/// [`CommandJob::command`] (e.g. `["dem", "lammps"]`), this process's own arguments without
-/// the Slurm options, `--out` and `--ranks`, then `--ranks` and `--out`.
+/// One job that runs a command of `program` (the `sandjumper` binary, on the cluster's shared
+/// file system) on the cluster: `program ARGS --ranks TASKS --out OUT`.
 #[derive(Debug, Clone)]
 pub struct CommandJob<'a> {
     /// The job's name in the queue.
     pub name: &'a str,
-    /// The command's words.
-    pub command: &'a [&'a str],
+    /// The program the job runs.
+    pub program: &'a Path,
+    /// Its words (the command and its options, e.g. `dem lammps --preset small`), without
+    /// `--ranks` and `--out`, which the job adds.
+    pub args: &'a [String],
     /// Tasks (MPI ranks) of the job.
     pub tasks: u32,
     /// The output folder the job writes.
@@ -477,6 +355,33 @@ pub enum CommandJobOutcome {
     },
 }
 
+impl CommandJob<'_> {
+    /// The job's script (its folder `dir`, started in `cwd`).
+    pub fn script(&self, dir: &Path, cwd: &Path) -> Result<JobScript, SlurmError> {
+        let out_abs = std::path::absolute(self.out)
+            .map_err(|e| SlurmError::Internal(format!("{}: {e}", self.out.display())))?;
+        let out = out_abs.to_str().ok_or_else(|| {
+            SlurmError::Input(format!(
+                "the output folder {} is not UTF-8 text (allowed with --slurm: UTF-8 paths)",
+                out_abs.display()
+            ))
+        })?;
+        let tasks = self.tasks;
+        Ok(JobScript {
+            name: self.name.to_string(),
+            shape: vec![format!("--ntasks={tasks}")],
+            log: dir.join("logs").join("job.out"),
+            cwd: cwd.to_path_buf(),
+            queue: self.queue.clone(),
+            command: format!(
+                "exec {} --ranks \"${{SLURM_NTASKS:-{tasks}}}\" --out {}\n",
+                command_line(self.program, self.args)?,
+                quote(out)
+            ),
+        })
+    }
+}
+
 /// Submit `job` (see [`CommandJob`]), wait for it unless told not to, and check that it
 /// succeeded and wrote every expected file. A job that failed, timed out or was cancelled is
 /// an internal error with the tail of its log. Where the job's script and log are, and when
@@ -486,36 +391,16 @@ pub fn submit_command(
     progress: &dyn sandjumper_output::Progress,
 ) -> Result<CommandJobOutcome, SlurmError> {
     tool("sbatch", "--slurm")?;
+    let cwd = working_dir()?;
     let dir = fresh_job_dir(job.out)?;
-    let (exe, cwd) = program_and_cwd()?;
-    let argv = arguments()?;
-    let args = passed_on(
-        &argv,
-        job.command,
-        &["--out", "--ranks", "--slurm-partition", "--slurm-time"],
-        &["--slurm", "--slurm-no-wait"],
-    );
-    let out_abs = std::path::absolute(job.out)
-        .map_err(|e| SlurmError::Internal(format!("{}: {e}", job.out.display())))?;
-    let tasks = job.tasks;
-    let script = JobScript {
-        name: job.name.to_string(),
-        shape: vec![format!("--ntasks={tasks}")],
-        log: dir.join("logs").join("job.out"),
-        cwd,
-        queue: job.queue.clone(),
-        command: format!(
-            "exec {} {} {} --ranks \"${{SLURM_NTASKS:-{tasks}}}\" --out {}\n",
-            quote(&exe.to_string_lossy()),
-            job.command.join(" "),
-            args.iter().map(|a| quote(a)).collect::<Vec<_>>().join(" "),
-            quote(&out_abs.to_string_lossy())
-        ),
-    };
+    let script = job.script(&dir, &cwd).inspect_err(|_| {
+        let _ = std::fs::remove_dir_all(&dir);
+    })?;
     let submitted = submit(&dir, &script)?;
     progress.note(&format!(
-        "submitted Slurm job {} ({tasks} task(s)); script and log in {}",
+        "submitted Slurm job {} ({} task(s)); script and log in {}",
         submitted.id,
+        job.tasks,
         dir.display()
     ));
     if job.queue.no_wait {
@@ -541,16 +426,23 @@ pub fn submit_command(
     Ok(CommandJobOutcome::Done { id: submitted.id })
 }
 
-/// A command run as a Slurm job array of shards: task `I` of [`ShardedJob::tasks`] runs this
-/// very program's command again (the words [`ShardedJob::command`], then this process's own
-/// arguments without the Slurm options, `--out`, `--shard` and `--threads`) with `--shard
-/// I/N --threads CPUS --out DIR.slurm/shard-I`; each task's log is `DIR.slurm/logs/task-I.out`.
+/// A command run as a Slurm job array of shards: task `I` of [`ShardedJob::tasks`] runs
+/// `program ARGS --shard I/N --threads CPUS --out DIR.slurm/shard-I`; each task's log is
+/// `DIR.slurm/logs/task-I.out`.
 #[derive(Debug, Clone)]
 pub struct ShardedJob<'a> {
     /// The job's name in the queue.
     pub name: &'a str,
-    /// The command's words (e.g. `["sweep"]`).
-    pub command: &'a [&'a str],
+    /// The program each task runs (the `sandjumper` binary, on the cluster's shared file
+    /// system).
+    pub program: &'a Path,
+    /// Its words (the command and its options, e.g. `sweep --kind single --freq 8:12:1`),
+    /// without `--shard`, `--threads` and `--out`, which each task adds.
+    pub args: &'a [String],
+    /// Files written into the job's folder before it is submitted, name and text (e.g. the
+    /// parameter file its tasks read: the words may name it in
+    /// `absolute(job_dir(out))/NAME`).
+    pub files: &'a [(&'a str, String)],
     /// Array tasks, one shard each.
     pub tasks: u32,
     /// CPUs of each task (its `--threads`).
@@ -582,23 +474,33 @@ pub enum ShardedJobOutcome {
     },
 }
 
-/// The command's own arguments in `argv` (after the words `command`) without the ones each
-/// task of a [`ShardedJob`] sets itself: `--out`, `--shard`, `--threads` and every `--slurm*`.
-pub fn shard_task_arguments(argv: &[String], command: &[&str]) -> Vec<String> {
-    passed_on(
-        argv,
-        command,
-        &[
-            "--out",
-            "--shard",
-            "--threads",
-            "--slurm",
-            "--slurm-partition",
-            "--slurm-time",
-            "--slurm-cpus",
-        ],
-        &["--slurm-no-wait"],
-    )
+impl ShardedJob<'_> {
+    /// The job array's script (its folder `dir`, started in `cwd`).
+    pub fn script(&self, dir: &Path, cwd: &Path) -> Result<JobScript, SlurmError> {
+        let tasks = self.tasks;
+        let dir_text = dir.to_str().ok_or_else(|| {
+            SlurmError::Input(format!(
+                "the job's folder {} is not UTF-8 text (allowed with --slurm: UTF-8 paths)",
+                dir.display()
+            ))
+        })?;
+        Ok(JobScript {
+            name: self.name.to_string(),
+            shape: vec![
+                format!("--array=1-{tasks}"),
+                format!("--cpus-per-task={}", self.cpus),
+            ],
+            log: dir.join("logs").join("task-%a.out"),
+            cwd: cwd.to_path_buf(),
+            queue: self.queue.clone(),
+            command: format!(
+                "exec {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
+                 \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
+                command_line(self.program, self.args)?,
+                quote(dir_text)
+            ),
+        })
+    }
 }
 
 /// Submit `job` as a job array (see [`ShardedJob`]); unless told not to, wait for it and check
@@ -609,33 +511,18 @@ pub fn submit_sharded(
     job: &ShardedJob,
     progress: &dyn sandjumper_output::Progress,
 ) -> Result<ShardedJobOutcome, SlurmError> {
-    let argv = arguments()?;
     let tasks = job.tasks;
     tool("sbatch", "--slurm")?;
+    let cwd = working_dir()?;
     let dir = fresh_job_dir(job.out)?;
-    let (exe, cwd) = program_and_cwd()?;
-    let script = JobScript {
-        name: job.name.to_string(),
-        shape: vec![
-            format!("--array=1-{tasks}"),
-            format!("--cpus-per-task={}", job.cpus),
-        ],
-        log: dir.join("logs").join("task-%a.out"),
-        cwd,
-        queue: job.queue.clone(),
-        command: format!(
-            "exec {} {} {} --shard \"$SLURM_ARRAY_TASK_ID/{tasks}\" --threads \
-             \"${{SLURM_CPUS_PER_TASK:-1}}\" --out {}/shard-\"$SLURM_ARRAY_TASK_ID\"\n",
-            quote(&exe.to_string_lossy()),
-            job.command.join(" "),
-            shard_task_arguments(&argv, job.command)
-                .iter()
-                .map(|a| quote(a))
-                .collect::<Vec<_>>()
-                .join(" "),
-            quote(&dir.to_string_lossy())
-        ),
-    };
+    let script = job.script(&dir, &cwd).inspect_err(|_| {
+        let _ = std::fs::remove_dir_all(&dir);
+    })?;
+    for (name, text) in job.files {
+        let path = dir.join(name);
+        std::fs::write(&path, text)
+            .map_err(|e| SlurmError::Internal(format!("cannot write {}: {e}", path.display())))?;
+    }
     let submitted = submit(&dir, &script)?;
     progress.note(&format!(
         "submitted Slurm job {} (array 1-{tasks}, {} CPU(s) each); script and logs in {}",
@@ -679,4 +566,104 @@ pub fn submit_sharded(
         id: submitted.id,
         shards,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(w: &[&str]) -> Vec<String> {
+        w.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_job_runs_the_program_given_with_the_words_given_then_ranks_and_out() {
+        let args = words(&[
+            "dem",
+            "lammps",
+            "--preset",
+            "small",
+            "--trajectory",
+            "it's.csv",
+        ]);
+        let job = CommandJob {
+            name: "dem-lammps",
+            program: Path::new("/opt/bin/sandjumper"),
+            args: &args,
+            tasks: 4,
+            out: Path::new("/t/run"),
+            expect: &["summary.json"],
+            queue: QueueOptions::default(),
+        };
+        let script = job
+            .script(Path::new("/t/run.slurm"), Path::new("/w"))
+            .unwrap();
+        assert_eq!(
+            script.command,
+            "exec '/opt/bin/sandjumper' 'dem' 'lammps' '--preset' 'small' '--trajectory' \
+             'it'\\''s.csv' --ranks \"${SLURM_NTASKS:-4}\" --out '/t/run'\n"
+        );
+        assert_eq!(script.shape, ["--ntasks=4"]);
+        assert_eq!(quote("a'b"), r"'a'\''b'");
+        assert_eq!(job_dir(Path::new("/t/run")), Path::new("/t/run.slurm"));
+    }
+
+    #[test]
+    fn each_task_runs_the_words_given_then_its_shard_threads_and_folder() {
+        let args = words(&["sweep", "--kind", "single", "--freq", "8:12:1"]);
+        let job = ShardedJob {
+            name: "sweep",
+            program: Path::new("/b/sandjumper"),
+            args: &args,
+            files: &[],
+            tasks: 3,
+            cpus: 2,
+            out: Path::new("/t/sw"),
+            expect: "sweep.toml",
+            queue: QueueOptions::default(),
+        };
+        let script = job
+            .script(Path::new("/t/sw.slurm"), Path::new("/w"))
+            .unwrap();
+        assert_eq!(
+            script.command,
+            "exec '/b/sandjumper' 'sweep' '--kind' 'single' '--freq' '8:12:1' --shard \
+             \"$SLURM_ARRAY_TASK_ID/3\" --threads \"${SLURM_CPUS_PER_TASK:-1}\" --out \
+             '/t/sw.slurm'/shard-\"$SLURM_ARRAY_TASK_ID\"\n"
+        );
+        assert_eq!(script.shape, ["--array=1-3", "--cpus-per-task=2"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_program_or_argument_that_is_not_text_is_refused() {
+        use std::os::unix::ffi::OsStrExt;
+        let program = Path::new(std::ffi::OsStr::from_bytes(b"/b/sand\xffjumper"));
+        let e = command_line(program, &[]).unwrap_err();
+        assert!(
+            matches!(e, SlurmError::Input(ref m) if m.contains("not UTF-8")),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_script_quotes_its_log_folder_and_keeps_the_file_names_patterns() {
+        let s = JobScript {
+            name: "sweep".into(),
+            shape: vec!["--array=1-3".into()],
+            log: "/j/100%.slurm/logs/task-%a.out".into(),
+            cwd: "/w".into(),
+            queue: QueueOptions {
+                partition: Some("debug".into()),
+                ..QueueOptions::default()
+            },
+            command: "exec true\n".into(),
+        };
+        assert_eq!(
+            s.text(),
+            "#!/bin/bash\n#SBATCH --job-name=sandjumper-sweep\n#SBATCH --array=1-3\n\
+             #SBATCH --time=1:00:00\n#SBATCH --output=\"/j/100%%.slurm/logs/task-%a.out\"\n\
+             #SBATCH --chdir=\"/w\"\n#SBATCH --partition=debug\nset -euo pipefail\nexec true\n"
+        );
+    }
 }

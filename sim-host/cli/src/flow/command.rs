@@ -8,8 +8,8 @@ use clap::Args;
 
 use super::analysis::Pairing;
 use super::piv::{PivConfig, SubPixel};
+use super::piv_synthetic::SyntheticRequest;
 pub use super::piv_synthetic::cone_displacement;
-use super::piv_synthetic::{SyntheticField, SyntheticRequest, parse_shift, parse_size};
 use super::preprocess::Preprocess;
 use super::run::{PivRequest, parse_point, parse_ratio, parse_sigma, parse_windows};
 use crate::command::CliError;
@@ -107,36 +107,9 @@ pub struct PivArgs {
 /// `sandjumper piv-synthetic`.
 #[derive(Debug, Clone, Args)]
 pub struct SyntheticArgs {
-    /// The motion.
-    #[arg(long, value_enum)]
-    pub field: SyntheticField,
-    /// Magnitude, px per frame.
-    #[arg(long, value_name = "PX", default_value = "2.5", value_parser = parse_number)]
-    pub magnitude: f64,
-    /// Frame size WxH, px.
-    #[arg(long, value_name = "WxH", default_value = "1280x1024", value_parser = parse_size)]
-    pub size: (u32, u32),
-    /// Frames to write.
-    #[arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(2..=10000))]
-    pub frames: u32,
-    /// Grain diameter, px.
-    #[arg(long, value_name = "PX", default_value = "5", value_parser = parse_positive)]
-    pub grain_px: f64,
-    /// Read noise, 8-bit levels RMS (0: none).
-    #[arg(long, value_name = "LEVELS", default_value = "0", value_parser = parse_number)]
-    pub noise: f64,
-    /// Seed.
-    #[arg(long, value_name = "N", default_value = "1")]
-    pub seed: u64,
-    /// Move this real image (PNG, TIFF, BMP; grey or colour) instead of rendering grains:
-    /// frame n is it translated by n times the shift, exactly (a Fourier shift of its mirrored
-    /// extension), written as 16-bit PNG. Only with `--field shift`.
-    #[arg(long, value_name = "IMAGE")]
-    pub image: Option<PathBuf>,
-    /// The shift per frame DX,DY, px (x right, y down) for `--field shift` (default:
-    /// `--magnitude` in x and half of it in y).
-    #[arg(long, value_name = "DX,DY", value_parser = parse_shift, allow_hyphen_values = true)]
-    pub shift: Option<(f64, f64)>,
+    /// The sequence.
+    #[command(flatten)]
+    pub request: SyntheticRequest,
     /// Output directory (frame_NNNNNN.png, foot.csv for the cone, synthetic.toml).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -191,18 +164,7 @@ pub fn run(a: &PivArgs) -> Result<(), CliError> {
 
 /// Run `sandjumper piv-synthetic`.
 pub fn run_synthetic(a: &SyntheticArgs) -> Result<(), CliError> {
-    let request = SyntheticRequest {
-        field: a.field,
-        magnitude_px: a.magnitude,
-        size_px: a.size,
-        frames: a.frames,
-        grain_px: a.grain_px,
-        noise: a.noise,
-        seed: a.seed,
-        image: a.image.clone(),
-        shift_px: a.shift,
-    };
-    let outcome = super::piv_synthetic::run(&request, &Bars::new())?;
+    let outcome = super::piv_synthetic::run(&a.request, &Bars::new())?;
     let dir = outcome.write(&a.out)?;
     eprintln!("wrote {}", dir.display());
     Ok(())

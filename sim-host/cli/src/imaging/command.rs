@@ -10,8 +10,7 @@ use clap::Args;
 use super::camera_scale::ScaleRequest;
 use super::frame::Roi;
 use super::run::{
-    TrackRequest, parse_exposure, parse_fps, parse_length, parse_m_per_px, parse_px, parse_roi,
-    parse_seconds,
+    TrackRequest, parse_exposure, parse_fps, parse_length, parse_m_per_px, parse_roi, parse_seconds,
 };
 use crate::command::CliError;
 use crate::command::progress::Bars;
@@ -61,19 +60,9 @@ pub struct TrackArgs {
 /// `sandjumper camera-scale`.
 #[derive(Debug, Clone, Args)]
 pub struct CameraScaleArgs {
-    /// The frames of the slow move (as for `track`).
-    #[arg(value_name = "FRAMES")]
-    pub frames: String,
-    /// The acquisition log of the move: its `camera_frame` rows give the encoder position of
-    /// each frame.
-    #[arg(long, value_name = "ACQ.csv")]
-    pub log: PathBuf,
-    /// The ball's diameter in the image, px (roughly: it sets which bright objects count).
-    #[arg(long, value_name = "PX", value_parser = parse_px)]
-    pub ball_px: f64,
-    /// Region of interest X,Y,W,H, px.
-    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_roi)]
-    pub roi: Option<Roi>,
+    /// The move.
+    #[command(flatten)]
+    pub request: ScaleRequest,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -110,14 +99,8 @@ pub fn run(a: &TrackArgs) -> Result<(), CliError> {
 
 /// Run `sandjumper camera-scale`.
 pub fn run_scale(a: &CameraScaleArgs) -> Result<(), CliError> {
-    let request = ScaleRequest {
-        frames: a.frames.clone(),
-        log: a.log.clone(),
-        ball_px: a.ball_px,
-        roi: a.roi,
-    };
     let progress = Bars::holding();
-    let outcome = super::camera_scale::run(&request, &progress)?;
+    let outcome = super::camera_scale::run(&a.request, &progress)?;
     crate::command::print_outcome(a.json, &outcome, || outcome.summary_json())?;
     progress.release(None);
     Ok(())

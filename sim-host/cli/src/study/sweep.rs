@@ -1,8 +1,8 @@
 //! `sandjumper sweep` (on this machine or, with `--slurm N`, as a Slurm job array, one shard
-//! per task: [`sandjumper_slurm::submit_sharded`]) and `merge` (join the shard directories of
-//! one sweep: [`sandjumper_study::sweep::merge()`]).
+//! per task: [`sandjumper_study::sweep::cluster::run_on_slurm`]) and `merge` (join the shard
+//! directories of one sweep: [`sandjumper_study::sweep::merge()`]).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 
@@ -11,8 +11,8 @@ use crate::command::args::{KindArg, ModelArg, ParamSource};
 use crate::command::progress::Bars;
 use sandjumper_model::resolve::ParamsFile;
 use sandjumper_output::{Silent, StagedDir};
-use sandjumper_slurm::{self as slurm, ShardedJob, ShardedJobOutcome};
 use sandjumper_study::StudyError;
+use sandjumper_study::sweep::cluster::{SlurmSweepOutcome, SlurmSweepRequest, run_on_slurm};
 use sandjumper_study::sweep::{
     self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange, merge,
     parse_freq_range, parse_phi_range, parse_shard, parse_tau_range,
@@ -95,25 +95,38 @@ impl SweepArgs {
     }
 }
 
-/// Run `sweep`.
+/// Run `sweep` (here, or with `--slurm N` as a job array merged into `--out`).
 pub fn run(a: &SweepArgs) -> Result<(), CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref()).map_err(StudyError::from)?;
     let request = a.request(file);
-    request.validate()?;
-    if a.slurm.slurm.is_some() {
-        if a.shard.is_some() {
-            return Err(CliError::input(
-                "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
-            ));
-        }
-        return match submit(&a.out, &a.slurm)? {
-            Some(dirs) => merge_into(&MergeRequest {
-                dirs,
-                out: a.out.clone(),
-            }),
-            None => Ok(()),
+    if let Some(tasks) = a.slurm.slurm {
+        let slurm = SlurmSweepRequest {
+            sweep: request,
+            tasks,
+            cpus_per_task: a.slurm.slurm_cpus,
+            queue: a.slurm.queue.options(),
+            program: crate::slurm::this_program()?,
+            out: a.out.clone(),
         };
+        match run_on_slurm(&slurm, &Bars::new())? {
+            SlurmSweepOutcome::Queued { id, dir } => {
+                println!("{id}");
+                eprintln!(
+                    "when it is done: sandjumper merge {}/shard-* --out {}",
+                    dir.display(),
+                    a.out.display()
+                );
+            }
+            SlurmSweepOutcome::Merged {
+                merged, written, ..
+            } => merged
+                .report(&written)
+                .iter()
+                .for_each(|l| eprintln!("{l}")),
+        }
+        return Ok(());
     }
+    request.validate()?;
     let staged = StagedDir::create(&a.out)?;
     let swept = sweep::run(&request, &Bars::default())?;
     let plots = swept.write_into(&staged)?;
@@ -138,20 +151,16 @@ pub struct MergeArgs {
 
 /// Run `merge`.
 pub fn run_merge(a: &MergeArgs) -> Result<(), CliError> {
-    merge_into(&MergeRequest {
+    let request = MergeRequest {
         dirs: a.dirs.clone(),
         out: a.out.clone(),
-    })
-}
-
-/// Merge the shards `request` names into its `out` and tell the user (also `sweep --slurm`'s
-/// last step).
-pub fn merge_into(request: &MergeRequest) -> Result<(), CliError> {
-    let merged = merge(request, &Silent)?;
+    };
+    let merged = merge(&request, &Silent)?;
     let written = merged.write(&request.out)?;
-    for line in merged.report(&written) {
-        eprintln!("{line}");
-    }
+    merged
+        .report(&written)
+        .iter()
+        .for_each(|l| eprintln!("{l}"));
     Ok(())
 }
 
@@ -170,33 +179,4 @@ pub struct SlurmArgs {
     /// `sandjumper merge` command).
     #[command(flatten)]
     pub queue: crate::slurm::QueueArgs,
-}
-
-/// Submit this sweep as a job array of `--slurm` tasks writing shards for `out`; unless told
-/// not to, wait for it: the shard directories to merge into `out` (None: not waited for).
-pub fn submit(out: &Path, s: &SlurmArgs) -> Result<Option<Vec<PathBuf>>, CliError> {
-    let job = ShardedJob {
-        name: "sweep",
-        command: &["sweep"],
-        tasks: s.slurm.unwrap_or(1),
-        cpus: s.slurm_cpus,
-        out,
-        expect: "sweep.toml",
-        queue: s.queue.options(),
-    };
-    match slurm::submit_sharded(&job, &Bars::new())? {
-        ShardedJobOutcome::Queued { id, dir } => {
-            println!("{id}");
-            eprintln!(
-                "when it is done: sandjumper merge {}/shard-* --out {}",
-                dir.display(),
-                out.display()
-            );
-            Ok(None)
-        }
-        ShardedJobOutcome::Done { id, shards } => {
-            eprintln!("all {} task(s) of job {id} done; merging", shards.len());
-            Ok(Some(shards))
-        }
-    }
 }

@@ -2,8 +2,8 @@
 //! forcing frequency, run in parallel, in a deterministic order, optionally one shard of it.
 //!
 //! - [`range`]: `A:B:STEP` ranges; [`shard`]: `--shard I/N` slices; [`mod@merge`]: joining shards;
-//!   [`plot`]: height against frequency and delay. The `sweep` and `merge` subcommands live in
-//!   the CLI crate.
+//!   [`plot`]: height against frequency and delay; [`cluster`]: a sweep as a Slurm job array,
+//!   merged ([`cluster::run_on_slurm`]).
 //! - [`SweepSpec::combinations`] fixes the row order: kind, model, phi, tau, then frequency
 //!   (innermost, so each height-vs-frequency line is contiguous). The delay only applies to
 //!   the delayed stutter: other kinds run once with `tau_s = 0`.
@@ -12,6 +12,7 @@
 //! - [`SweepMeta`] (`sweep.toml`) records the spec, its hash and the shard, so shards can be
 //!   checked and merged, and a sweep reproduced from its folder alone.
 
+pub mod cluster;
 pub mod drive;
 pub mod merge;
 pub mod plot;

@@ -149,6 +149,25 @@ impl ValueRange {
         })
     }
 
+    /// A spec (`A` or `A:B:STEP`) that [`ValueRange::parse`] expands to exactly `values`, if
+    /// there is one: how a list of values is written on a command line again (a Slurm task's
+    /// sweep). `None` for no values, or values that are no such range.
+    pub fn written_for(values: &[f64]) -> Option<String> {
+        match values {
+            [] => None,
+            [v] => Some(format!("{v}")),
+            [first, .., last] => {
+                let step = (last - first) / (values.len() - 1) as f64;
+                // The step as written with 0, 1, 2 ... decimals (each `{}` above is the shortest
+                // text that reads back as the same f64): the first that gives `values` back.
+                (0..=17).find_map(|d| {
+                    let spec = format!("{first}:{last}:{step:.d$}");
+                    (Self::parse(&spec).ok()?.values == values).then_some(spec)
+                })
+            }
+        }
+    }
+
     /// A range holding one value.
     pub fn single(value: f64) -> Self {
         Self {
@@ -218,6 +237,46 @@ pub fn parse_phi_range(s: &str) -> Result<ValueRange, String> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn values_are_written_as_the_range_that_gives_them_back() {
+        for spec in [
+            "0.57:0.62:0.01",
+            "8:14:2",
+            "10",
+            "0.1",
+            "1e-3",
+            "0:0.3:0.05",
+            "5:20:0.5",
+        ] {
+            let values = ValueRange::parse(spec).unwrap().values;
+            let written = ValueRange::written_for(&values).unwrap();
+            assert_eq!(
+                ValueRange::parse(&written).unwrap().values,
+                values,
+                "{spec} -> {written}"
+            );
+        }
+        assert_eq!(ValueRange::written_for(&[0.57, 0.6, 0.61]), None);
+        assert_eq!(ValueRange::written_for(&[12.0, 10.0]), None);
+        assert_eq!(ValueRange::written_for(&[]), None);
+    }
+
+    proptest! {
+        #[test]
+        fn any_typed_range_is_written_back_to_its_values(
+            start in 0u32..2000, count in 1u32..40, step in 1u32..500, decimals in 0u32..4
+        ) {
+            let scale = 10f64.powi(decimals as i32);
+            let d = decimals as usize;
+            let (a, s) = (f64::from(start) / scale, f64::from(step) / scale);
+            let b = a + f64::from(count - 1) * s;
+            let spec = format!("{a:.d$}:{b:.d$}:{s:.d$}");
+            let values = ValueRange::parse(&spec).unwrap().values;
+            let written = ValueRange::written_for(&values).unwrap();
+            prop_assert_eq!(ValueRange::parse(&written).unwrap().values, values);
+        }
+    }
 
     #[test]
     fn single_value_is_a_range_of_one() {
