@@ -3,10 +3,10 @@
 //! deformation, a rotation's vorticity, and the grain momentum of a foot's cone against the
 //! exact integral.
 
-use sandjumper_cli::flow::command::cone_displacement;
 use sandjumper_flow::fields::{Grid, derive};
 use sandjumper_flow::momentum::{Calibration, grain_momentum, inside};
 use sandjumper_flow::piv::{Image, PivConfig, VectorField, flag, piv_pair};
+use sandjumper_flow::piv_synthetic::cone_displacement;
 use sandjumper_flow::synthetic::GrainScene;
 
 fn run(scene: &GrainScene, cfg: &PivConfig, d: impl Fn(f64, f64) -> (f64, f64)) -> VectorField {
