@@ -22,6 +22,9 @@ use sandjumper_output::{Progress, StagedDir, write_csv};
 use sandjumper_study::StudyError;
 use sandjumper_study::jump::{JumpOutcome, JumpRequest};
 
+/// `dem bed`'s longest preparation, simulated s (its default).
+const BED_MAX_TIME_S: f64 = 2.0;
+
 /// `figures dem`'s request.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FiguresDemRequest {
@@ -40,6 +43,10 @@ pub struct FiguresDemRequest {
     pub full_model: bool,
     /// Threads (0: all cores). Default 0.
     pub threads: usize,
+    /// Longest preparation of each bed, simulated s (`dem bed --max-time`). Default 2, as
+    /// `dem bed`'s. The packed beds come to rest in a few hundredths of a second; the full
+    /// model's, settling under gravity, may take it all: a shorter one is a test's knob.
+    pub bed_max_time_s: f64,
 }
 
 impl Default for FiguresDemRequest {
@@ -52,6 +59,7 @@ impl Default for FiguresDemRequest {
             foot_width_m: 0.076,
             full_model: true,
             threads: 0,
+            bed_max_time_s: BED_MAX_TIME_S,
         }
     }
 }
@@ -63,6 +71,12 @@ impl FiguresDemRequest {
             return Err(FiguresDemError::input(format!(
                 "--foot-width {} m (allowed: 0.005..=0.2)",
                 self.foot_width_m
+            )));
+        }
+        if !(self.bed_max_time_s.is_finite() && self.bed_max_time_s > 0.0) {
+            return Err(FiguresDemError::input(format!(
+                "bed preparation {} s (allowed: above 0)",
+                self.bed_max_time_s
             )));
         }
         if !(0.5..=40.0).contains(&self.freq_hz) || !(0.0..=1.0).contains(&self.tau_s) {
@@ -473,16 +487,24 @@ impl Plan<'_> {
             width_m: self.bed_w,
             height_m: self.bed_h,
             pack,
+            max_time_s: self.request.bed_max_time_s,
             threads: self.request.threads,
             out: self.runs.join(name),
             ..BedRequest::default()
         };
+        // `--max-time` only when it is not `dem bed`'s default (the record as before).
+        let max_time = self.request.bed_max_time_s;
         let command = format!(
-            "sandjumper dem bed --model {} --width {:.4} --height {:.4}{} --threads {} --out {}",
+            "sandjumper dem bed --model {} --width {:.4} --height {:.4}{}{} --threads {} --out {}",
             model_name(model),
             self.bed_w,
             self.bed_h,
             pack.map_or(String::new(), |p| format!(" --pack {p:.2}")),
+            if max_time == BED_MAX_TIME_S {
+                String::new()
+            } else {
+                format!(" --max-time {max_time}")
+            },
             self.request.threads,
             request.out.display()
         );

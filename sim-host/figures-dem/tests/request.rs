@@ -1,5 +1,5 @@
-//! `figures dem` as a call: bad requests refused before anything is written, a failing
-//! stage's error named by its command line with its blame kept.
+//! `figures dem` as a call: its defaults, bad requests refused before anything is written, a
+//! failing stage's error named by its command line with its blame kept.
 
 use std::path::Path;
 
@@ -18,8 +18,17 @@ fn run(request: &FiguresDemRequest) -> Result<(), FiguresDemError> {
     run_with_jump(request, &failing_jump, &Silent).map(drop)
 }
 
+/// The beds are prepared for as long as `dem bed` prepares them by default.
 #[test]
-fn a_foot_or_a_frequency_out_of_range_is_refused_and_nothing_written() {
+fn the_beds_preparation_is_dem_beds_by_default() {
+    assert_eq!(
+        FiguresDemRequest::default().bed_max_time_s,
+        sandjumper_dem::bed_run::BedRequest::default().max_time_s
+    );
+}
+
+#[test]
+fn a_foot_a_frequency_or_a_bed_time_out_of_range_is_refused_and_nothing_written() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("dem");
     for (request, allowed) in [
@@ -38,6 +47,14 @@ fn a_foot_or_a_frequency_out_of_range_is_refused_and_nothing_written() {
                 ..FiguresDemRequest::default()
             },
             "0.5..=40",
+        ),
+        (
+            FiguresDemRequest {
+                bed_max_time_s: 0.0,
+                out: out.clone(),
+                ..FiguresDemRequest::default()
+            },
+            "bed preparation 0 s (allowed: above 0)",
         ),
     ] {
         let e = run(&request).unwrap_err();

@@ -53,6 +53,7 @@ pub fn run(a: &DemFiguresArgs) -> Result<(), CliError> {
         foot_width_m: a.foot_width,
         full_model: !a.no_full_model,
         threads: a.threads,
+        ..FiguresDemRequest::default()
     };
     let outcome = sandjumper_figures_dem::run(&request, &Bars::default())?;
     println!("{outcome}");
