@@ -8,18 +8,18 @@
 use sandjumper_core::RigState;
 use sandjumper_core::reset::ResetCause;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_model::params::{ModelName, Params};
+use sandjumper_model::params::ModelName;
 use sandjumper_output::Silent;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::hil_command::{self, HilRequest};
 use sandjumper_rig::tool::intrude::{self, IntrudeRequest};
 use sandjumper_rig::tool::jump::{self, JumpOutcome, JumpRequest};
-use sandjumper_rig::tool::replay::{self, ReplayRequest, ReplaySource};
+use sandjumper_rig::tool::replay;
 use sandjumper_rig::tool::status::status;
 use sandjumper_rig::tool::target::Target;
 
 mod common;
-use common::{qemu_firmware, replay_error, virtual_board};
+use common::{qemu_firmware, replay_error, replay_of_log, virtual_board};
 
 /// `rig jump` of `kind` at 10 Hz (delay `tau_s`) on `target`, completed.
 fn jump_on(target: Target, kind: JumpKind, tau_s: Option<f64>) -> JumpOutcome {
@@ -121,17 +121,7 @@ fn intrusion_and_replay_through_the_f407_binary_match_sil() {
         "force at 20 mm: f407 {f407} N, sil {sil} N"
     );
     let original = jump_on(Target::on(LinkArg::Sil), JumpKind::Single, None);
-    let request = ReplayRequest {
-        target: Target::on(LinkArg::F407),
-        source: ReplaySource::Log(Box::new(original.log.clone())),
-        source_name: "jump.csv".into(),
-        scale: 1.0,
-        time_stretch: 1.0,
-        clip: None,
-        table_rate_hz: None,
-        model: ModelName::Eq4,
-        params: Params::default(),
-    };
+    let request = replay_of_log(Target::on(LinkArg::F407), &original.log, "jump.csv");
     let outcome = replay::run(&request, &Silent).expect("the replay runs");
     assert!(outcome.completed, "{:?}", outcome.fault_names());
     let (max, rms) = replay_error(&original.log, &outcome.log);

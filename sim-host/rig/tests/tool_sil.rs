@@ -18,19 +18,19 @@ use sandjumper_acqlog::{AcqLog, CheckRequest, ReadOptions};
 use sandjumper_core::RigState;
 use sandjumper_core::reset::ResetCause;
 use sandjumper_core::trajectory::JumpKind;
-use sandjumper_model::params::{ModelName, Params};
+use sandjumper_model::params::ModelName;
 use sandjumper_output::{Blame, Blamed, Silent, StagedDir};
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::tool::calibrate::{CalibrateRequest, acknowledge_reset, calibrate};
 use sandjumper_rig::tool::flash::{FlashRequest, Flashed, flash};
 use sandjumper_rig::tool::intrude::{self, IntrudeRequest};
 use sandjumper_rig::tool::jump::{self, JumpOutcome, JumpRequest};
-use sandjumper_rig::tool::replay::{self, ReplayRequest, ReplaySource, plan};
+use sandjumper_rig::tool::replay::{self, ReplayRequest, plan};
 use sandjumper_rig::tool::status::status;
 use sandjumper_rig::tool::target::Target;
 
 mod common;
-use common::{log_rows, replay_error};
+use common::{log_rows, pngs_in, replay_error, replay_of_log};
 
 fn sil() -> Target {
     Target::on(LinkArg::Sil)
@@ -44,21 +44,6 @@ fn single_jump(camera_fps: u32) -> JumpOutcome {
     };
     request.validate().expect("a valid jump");
     jump::run(&request, &Silent).expect("the jump runs")
-}
-
-/// `rig replay` of `log` through sil, named `name`, unedited.
-fn replay_of(log: &AcqLog, name: &str) -> ReplayRequest {
-    ReplayRequest {
-        target: sil(),
-        source: ReplaySource::Log(Box::new(log.clone())),
-        source_name: name.into(),
-        scale: 1.0,
-        time_stretch: 1.0,
-        clip: None,
-        table_rate_hz: None,
-        model: ModelName::Eq4,
-        params: Params::default(),
-    }
 }
 
 /// The controller on sil is idle, without a fault, and has dropped no sample.
@@ -115,17 +100,7 @@ fn jump_through_sil_writes_a_complete_log_that_log_check_accepts() {
     let out = slow
         .write(StagedDir::create(&dir.path().join("jump")).unwrap(), false)
         .unwrap();
-    let pngs = std::fs::read_dir(out.join("frames"))
-        .unwrap()
-        .filter(|e| {
-            e.as_ref()
-                .unwrap()
-                .path()
-                .extension()
-                .is_some_and(|x| x == "png")
-        })
-        .count();
-    assert_eq!(pngs, slow.camera_frames);
+    assert_eq!(pngs_in(&out.join("frames")), slow.camera_frames);
 }
 
 /// The slow intrusion into the `eq1` sand (the command's defaults: 20 mm at 10 mm/s, 0.5 s
@@ -168,14 +143,14 @@ fn intrusion_measures_the_sands_penetration_force() {
 /// the defaults' 8.5 s take seconds to write as MCAP).
 #[test]
 fn the_intrusions_mcap_log_holds_every_row() {
-    let request = IntrudeRequest {
+    let short = IntrudeRequest {
         model: ModelName::Eq1,
         speed_m_s: 0.04,
         hold_s: 0.05,
         ..IntrudeRequest::default()
     };
-    let outcome = intrude::run(&request, &Silent).expect("the intrusion runs");
-    assert!(outcome.completed, "{:?}", outcome.faults);
+    let outcome = intrude::run(&short, &Silent).unwrap();
+    assert!(outcome.completed && outcome.faults.is_empty());
     let dir = tempfile::tempdir().unwrap();
     let out = outcome
         .write(
@@ -202,7 +177,8 @@ fn the_intrusions_mcap_log_holds_every_row() {
 #[test]
 fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
     let original = single_jump(0);
-    let outcome = replay::run(&replay_of(&original.log, "jump.csv"), &Silent).expect("replays");
+    let outcome =
+        replay::run(&replay_of_log(sil(), &original.log, "jump.csv"), &Silent).expect("replays");
     assert!(outcome.completed);
     assert!(outcome.faults.is_empty(), "{:?}", outcome.fault_names());
     let text = String::from_utf8(outcome.log.write_csv(Vec::new()).unwrap()).unwrap();
@@ -222,7 +198,7 @@ fn a_replayed_jump_reproduces_the_original_motor_trajectory() {
 #[test]
 fn replays_beyond_the_stroke_the_force_or_the_buffer_are_refused_before_anything_moves() {
     let original = single_jump(0);
-    let base = replay_of(&original.log, "jump.csv");
+    let base = replay_of_log(sil(), &original.log, "jump.csv");
     for (scale, stretch, reason) in [
         (1.5, 1.0, "outside the stroke"),
         (1.0, 0.4, "of motor force"),

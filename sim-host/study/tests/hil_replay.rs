@@ -102,11 +102,12 @@ fn hil_logs_replay_to_the_original_jump_height_within_two_percent() {
 fn a_log_of_a_robot_held_still_replays_to_no_jump() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("still.csv");
-    let mut text = String::from("# rate_hz: 10000\n# counts_per_m: 1e6\nt_s,encoder_counts\n");
-    for k in 0..200 {
-        text.push_str(&format!("{},{}\n", k as f64 * 1e-4, -18750));
-    }
-    std::fs::write(&path, text).unwrap();
+    // 20 ms at 10 kHz at the bottom of the stroke, without `phi`.
+    let rows: String = (0..200)
+        .map(|k| format!("{},-18750\n", k as f64 * 1e-4))
+        .collect();
+    let header = "# rate_hz: 10000\n# counts_per_m: 1e6\nt_s,encoder_counts\n";
+    std::fs::write(&path, format!("{header}{rows}")).unwrap();
     let request = ReplayRequest {
         log: path,
         ..ReplayRequest::default()
@@ -140,11 +141,14 @@ fn a_log_of_a_robot_held_still_replays_to_no_jump() {
 fn a_bad_log_is_refused_naming_the_line() {
     let tmp = tempfile::tempdir().unwrap();
     let log = tmp.path().join("bad.csv");
-    std::fs::write(
-        &log,
-        "# rate_hz: 1000\n# counts_per_m: 1e6\nt_s,encoder_counts\n0,0\n0.001,x\n",
-    )
-    .unwrap();
+    let lines = [
+        "# rate_hz: 1000",
+        "# counts_per_m: 1e6",
+        "t_s,encoder_counts",
+        "0,0",
+        "0.001,x",
+    ];
+    std::fs::write(&log, lines.join("\n") + "\n").unwrap();
     let e = replay::run(
         &ReplayRequest {
             log,

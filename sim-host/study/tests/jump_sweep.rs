@@ -16,6 +16,18 @@ use sandjumper_study::sweep::{
     self, MergeRequest, ShardSpec, SweepRequest, SweepRunOutcome, SweepSpec, ValueRange,
 };
 
+/// `jump --kind KIND --freq F [--tau T] --model MODEL` at phi 0.57, run.
+fn sine(kind: JumpKind, freq_hz: f64, tau_s: Option<f64>, model: ModelName) -> jump::JumpOutcome {
+    let request = JumpRequest {
+        kind,
+        freq_hz,
+        tau_s,
+        model,
+        ..JumpRequest::default()
+    };
+    jump::run(&request, &Silent).expect("the jump runs")
+}
+
 fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
@@ -26,15 +38,7 @@ fn read(p: &Path) -> String {
 /// summary names the request.
 #[test]
 fn a_single_jump_has_sane_metrics() {
-    let out = jump::run(
-        &JumpRequest {
-            kind: JumpKind::Single,
-            freq_hz: 10.0,
-            ..JumpRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap();
+    let out = sine(JumpKind::Single, 10.0, None, ModelName::Eq4);
     let s = &out.simulated.summary;
     let json: serde_json::Value = serde_json::from_str(&out.json().unwrap()).unwrap();
     assert_eq!(json["kind"], "single");
@@ -60,16 +64,7 @@ fn a_single_jump_has_sane_metrics() {
         s.events.windows(2).all(|w| w[0].t_s <= w[1].t_s),
         "events in time order"
     );
-    let stutter = jump::run(
-        &JumpRequest {
-            kind: JumpKind::Stutter,
-            freq_hz: 12.0,
-            model: ModelName::Eq1,
-            ..JumpRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap();
+    let stutter = sine(JumpKind::Stutter, 12.0, None, ModelName::Eq1);
     let text = stutter.to_string();
     assert!(
         text.contains("stutter jump, f = 12 Hz, model eq1"),
@@ -306,31 +301,14 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
 #[test]
 fn a_final_height_that_is_not_positive_is_explained() {
     const NOTE: &str = "push-off did not lift the rod above its rest height";
-    let stalled = jump::run(
-        &JumpRequest {
-            kind: JumpKind::Stutter,
-            freq_hz: 12.0,
-            ..JumpRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap();
+    let stalled = sine(JumpKind::Stutter, 12.0, None, ModelName::Eq4);
     let s = &stalled.simulated.summary;
     assert!(s.final_jump_height_m <= 0.0, "{}", s.final_jump_height_m);
     assert_eq!(s.final_height_note(), Some(NOTE));
     let json: serde_json::Value = serde_json::from_str(&stalled.json().unwrap()).unwrap();
     assert_eq!(json["final_jump_note"], NOTE);
     assert!(stalled.to_string().contains(NOTE));
-    let readme_first = jump::run(
-        &JumpRequest {
-            kind: JumpKind::DelayedStutter,
-            freq_hz: 10.0,
-            tau_s: Some(0.1),
-            ..JumpRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap();
+    let readme_first = sine(JumpKind::DelayedStutter, 10.0, Some(0.1), ModelName::Eq4);
     let s = &readme_first.simulated.summary;
     assert!(s.final_jump_height_m > 0.03, "{}", s.final_jump_height_m);
     assert!(s.final_height_note().is_none());

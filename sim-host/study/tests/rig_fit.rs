@@ -30,19 +30,16 @@ fn fitted(report: &FitReport, name: &str) -> f64 {
 /// re-intrusion to 30 mm).
 #[test]
 fn intrusion_through_the_rig_and_fit_recover_the_sand() {
-    let request = IntrudeRequest {
+    let eq1_sand = IntrudeRequest {
         model: ModelName::Eq1,
         ..IntrudeRequest::default()
     };
-    let outcome = intrude::run(&request, &Silent).expect("the intrusion runs");
-    assert!(outcome.completed, "{:?}", outcome.faults);
-    let dir = tempfile::tempdir().unwrap();
-    let out = outcome
-        .write(
-            StagedDir::create(&dir.path().join("intrude")).unwrap(),
-            false,
-        )
-        .unwrap();
+    let measured = intrude::run(&eq1_sand, &Silent).expect("the intrusion runs");
+    assert!(measured.completed, "{:?}", measured.faults);
+    // Its curves as `rig intrude --out` writes them, `fit intrusion`'s input.
+    let folder = tempfile::tempdir().unwrap();
+    let staged = StagedDir::create(&folder.path().join("intrude")).unwrap();
+    let out = measured.write(staged, false).unwrap();
     let fit_curve = |file: &str, curve: CurveKind| {
         fit::run(
             &FitRequest {

@@ -11,6 +11,10 @@ use std::path::{Path, PathBuf};
 use sandjumper_acqlog::AcqLog;
 use sandjumper_core::sample::flags;
 use sandjumper_rig::hil::emulated_firmware;
+use sandjumper_rig::hil::virtual_board::VirtualBoardConfig;
+use sandjumper_rig::stroke_table::StrokeTable;
+use sandjumper_rig::tool::replay::{ReplayRequest, ReplaySource};
+use sandjumper_rig::tool::target::Target;
 
 /// The workspace's root directory (two levels above `sim-host/rig`).
 pub fn workspace() -> PathBuf {
@@ -54,37 +58,55 @@ pub fn replay_error(original: &AcqLog, replay: &AcqLog) -> (f64, f64) {
 /// The emulated board's firmware, built once; `None` (skip, or fail in CI) when QEMU or the
 /// firmware toolchain is missing or the firmware does not build here.
 pub fn qemu_firmware() -> Option<PathBuf> {
-    if emulated_firmware::test_prerequisites("rig through PIL")
-        .map_err(|skip| eprintln!("{skip}"))
-        .is_err()
-    {
-        return None;
-    }
-    match emulated_firmware::build_once(&workspace()) {
-        Ok(elf) => Some(elf.to_path_buf()),
-        Err(msg) => {
-            assert!(std::env::var_os("CI").is_none(), "{msg}");
-            eprintln!("SKIPPED: rig through PIL: {msg}");
-            None
-        }
-    }
+    let built = emulated_firmware::test_prerequisites("rig through PIL").and_then(|()| {
+        emulated_firmware::build_once(&workspace())
+            .map(Path::to_path_buf)
+            .map_err(|msg| {
+                assert!(std::env::var_os("CI").is_none(), "{msg}");
+                format!("SKIPPED: rig through PIL: {msg}")
+            })
+    });
+    built.map_err(|skip| eprintln!("{skip}")).ok()
 }
 
-/// The virtual board's program and the F407 ELF (built by `sim-host/virtual-f407/build.sh`
-/// and the firmware build) are there, or `None` with a message; under CI both must be there.
+/// The virtual board's program and the F407 ELF at their default places (built by
+/// `sim-host/virtual-f407/build.sh` and the firmware build) are there, or `None` with a
+/// message; under CI both must be there.
 pub fn virtual_board() -> Option<()> {
-    let root = workspace();
-    let program = root.join(sandjumper_rig::hil::virtual_board::VIRTUAL_BOARD_BIN);
-    let elf = root.join(sandjumper_rig::firmware_image::F407_ELF);
-    if program.is_file() && elf.is_file() {
+    let board = VirtualBoardConfig::new(&workspace());
+    let missing: Vec<String> = [&board.program, &board.elf]
+        .into_iter()
+        .filter(|p| !p.is_file())
+        .map(|p| p.display().to_string())
+        .collect();
+    if missing.is_empty() {
         return Some(());
     }
     let msg = format!(
-        "skipped: --link f407 needs {} and {} (sim-host/virtual-f407/build.sh; the F407 firmware build)",
-        program.display(),
-        elf.display()
+        "skipped: --link f407 needs {} (sim-host/virtual-f407/build.sh; the F407 firmware build)",
+        missing.join(" and ")
     );
     assert!(std::env::var_os("CI").is_none(), "{msg}");
     eprintln!("{msg}");
     None
+}
+
+/// `rig replay` of the log `log` (named `name` in messages) on `target`, unedited, at the
+/// command's defaults (a 1 kHz table, eq4, the phi = 0.57 preset).
+pub fn replay_of_log(target: Target, log: &AcqLog, name: &str) -> ReplayRequest {
+    // `stroke`'s defaults are a log's; its table is replaced by the log.
+    let unused = StrokeTable::resample(&[(0.0, 0.0), (1e-3, 0.0)], 1000);
+    ReplayRequest {
+        source: ReplaySource::Log(Box::new(log.clone())),
+        ..ReplayRequest::stroke(target, unused, name)
+    }
+}
+
+/// How many PNG files `dir` holds.
+pub fn pngs_in(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .expect("a folder")
+        .filter_map(Result::ok)
+        .filter(|e| e.path().extension() == Some("png".as_ref()))
+        .count()
 }
