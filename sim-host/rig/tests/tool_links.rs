@@ -97,8 +97,10 @@ fn status_and_jump_through_the_f407_binary_match_sil() {
 }
 
 /// The slow intrusion into `eq1` sand through the F407 binary measures the force at its 20 mm
-/// depth within 0.5 N of sil's (measured 29.29 N against 29.34 N); a sil jump replayed on the
-/// board follows it within 1.5 mm, 0.5 mm RMS (measured max 0.91 mm, rms 0.21 mm).
+/// depth within 0.5 N of sil's; a sil jump replayed on the board follows it within 1.5 mm,
+/// 0.5 mm RMS (measured max 0.91 mm, rms 0.21 mm). A shorter program than the command's
+/// defaults (20 mm/s, 0.1 s holds; `sandjumper rig intrude --link f407 --model eq1 --out DIR`
+/// runs the defaults' 10 mm/s and 0.5 s holds, measured 29.29 N against sil's 29.34 N).
 #[test]
 fn intrusion_and_replay_through_the_f407_binary_match_sil() {
     if virtual_board().is_none() {
@@ -108,6 +110,8 @@ fn intrusion_and_replay_through_the_f407_binary_match_sil() {
         let request = IntrudeRequest {
             target: Target::on(link),
             model: ModelName::Eq1,
+            speed_m_s: 0.02,
+            hold_s: 0.1,
             ..IntrudeRequest::default()
         };
         let outcome = intrude::run(&request, &Silent).expect("the intrusion runs");
