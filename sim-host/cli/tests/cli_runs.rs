@@ -1,4 +1,8 @@
-//! The `sandjumper` binary's outputs: `jump --json`, `jump --out`, `sweep`, shards and `merge`.
+//! The `sandjumper` binary's outputs, the contract: what `jump --json` prints, the files
+//! `jump --out`, `sweep` (whole and in shards) and `merge` write, the shard sets `merge`
+//! refuses (exit 2, nothing written), and the summary's words. The numbers (a jump's metrics,
+//! the trajectory, the sweep's rows and their determinism, shards merging to the unsharded
+//! sweep) are tested through `sandjumper_study` in `sim-host/study/tests/jump_sweep.rs`.
 
 use std::path::Path;
 
@@ -32,8 +36,9 @@ fn assert_svg(path: &Path) {
     assert!(text.contains("<text"), "{} has no text", path.display());
 }
 
+/// `jump --json` prints one JSON object with every metric, the request echoed.
 #[test]
-fn jump_json_has_every_metric_with_sane_values() {
+fn jump_json_has_every_metric() {
     let out = ok(&["jump", "--kind", "single", "--freq", "10", "--json"]);
     let v: serde_json::Value = serde_json::from_str(&out).expect("stdout is one JSON object");
     for key in [
@@ -53,29 +58,16 @@ fn jump_json_has_every_metric_with_sane_values() {
     assert_eq!(v["kind"], "single");
     assert_eq!(v["model"], "eq4");
     assert_eq!(v["phi"], 0.57);
-    let h = v["jump_height_m"].as_f64().unwrap();
-    assert!(h > 1e-4 && h < 0.2, "jump height {h} m");
-    let depth = v["max_depth_m"].as_f64().unwrap();
-    assert!(depth > 0.0 && depth < 0.1, "max depth {depth} m on sand");
     assert!(
-        v["peak_added_mass_kg"].as_f64().unwrap() > 0.0,
-        "eq4 has added mass"
+        v["liftoff_time_s"].is_f64(),
+        "a 10 Hz jump leaves the ground"
     );
-    let liftoff = v["liftoff_time_s"]
-        .as_f64()
-        .expect("a 10 Hz jump leaves the ground");
-    let apex = v["apex_time_s"].as_f64().unwrap();
     assert!(
-        0.0 < liftoff && liftoff < apex,
-        "lift-off {liftoff} s, apex {apex} s"
-    );
-    assert!(v["rhs_evaluations"].as_u64().unwrap() > 100);
-    let events = v["events"].as_array().unwrap();
-    assert!(events.iter().any(|e| e["kind"] == "LiftOff"));
-    let times: Vec<f64> = events.iter().map(|e| e["t_s"].as_f64().unwrap()).collect();
-    assert!(
-        times.windows(2).all(|w| w[0] <= w[1]),
-        "events in time order"
+        v["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|e| e["kind"].is_string() && e["t_s"].is_f64())
     );
 }
 
@@ -88,6 +80,9 @@ fn jump_human_summary_names_the_jump() {
     assert!(out.contains("jump height") && out.contains(" mm"), "{out}");
 }
 
+/// `jump --out DIR --json` writes summary.json (what --json prints), jump.png, jump.svg,
+/// trajectory.csv (its header) and params.toml (which `params --params` reads back to the same
+/// text), leaves no staging folder, and a second run replaces the folder.
 #[test]
 fn jump_out_writes_data_picture_and_parameters() {
     let dir = tempfile::tempdir().unwrap();
@@ -124,30 +119,6 @@ fn jump_out_writes_data_picture_and_parameters() {
             "t_s", "x_m_m", "x_r_m", "x_f_m", "p_m", "f_s_n", "f_gm_n", "m_a_kg", "mode"
         ]
     );
-    let mut last_t = f64::NEG_INFINITY;
-    let mut rows = 0;
-    let mut modes = std::collections::BTreeSet::new();
-    for rec in rdr.records() {
-        let rec = rec.unwrap();
-        assert_eq!(rec.len(), 9);
-        let num = |i: usize| rec[i].parse::<f64>().unwrap();
-        let t = num(0);
-        assert!(t >= last_t, "time goes forward");
-        last_t = t;
-        // p = x_m - x_r, within the stroke.
-        assert!((num(4) - (num(1) - num(2))).abs() < 1e-9);
-        assert!(num(4).abs() <= 0.025 + 1e-12);
-        modes.insert(rec[8].to_string());
-        rows += 1;
-    }
-    assert!(rows > 100, "{rows} rows");
-    assert!(
-        modes.iter().any(|m| m.eq_ignore_ascii_case("aerial")),
-        "{modes:?}"
-    );
-    let end = saved["end_time_s"].as_f64().unwrap();
-    assert!((last_t - end).abs() < 1e-9, "series ends at the run's end");
-
     // params.toml reads back through --params to the same parameters.
     let params = std::fs::read_to_string(run.join("params.toml")).unwrap();
     let again = ok(&[
@@ -181,18 +152,21 @@ fn jump_out_writes_data_picture_and_parameters() {
     assert_eq!(saved["kind"], "single");
 }
 
+/// The smallest sweep that writes every file: single and delayed at 10 Hz, phi 0.57 and 0.58
+/// (one params file each), tau 0 and 0.2 s (the delay figure), eq4: 6 jumps. (The 36-jump
+/// sweep these tests ran before is `sim-host/study/tests/jump_sweep.rs`'s.)
 const SWEEP: &[&str] = &[
     "sweep",
     "--kind",
     "single,delayed",
     "--freq",
-    "6:14:4",
+    "10",
     "--phi",
     "0.57:0.58:0.01",
     "--tau",
     "0:0.2:0.2",
     "--model",
-    "eq1-linear,eq4",
+    "eq4",
 ];
 
 fn sweep(out: &Path, extra: &[&str]) {
@@ -205,46 +179,36 @@ fn sweep(out: &Path, extra: &[&str]) {
     ok(&args);
 }
 
+/// `sweep --out DIR` writes sweep.csv (its header), failures.csv, sweep.toml (counting every
+/// combination), one params file per phi and the figures.
 #[test]
-fn sweep_rows_cover_every_combination_in_order() {
+fn sweep_writes_its_rows_metadata_parameters_and_figures() {
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole");
     sweep(&whole, &[]);
     let text = read(&whole.join("sweep.csv"));
-    let mut lines = text.lines();
     assert_eq!(
-        lines.next().unwrap(),
+        text.lines().next().unwrap(),
         "kind,model,phi,freq_hz,tau_s,jump_height_m,final_jump_height_m,max_depth_m,peak_added_mass_kg,peak_motor_force_n,drive"
     );
-    assert!(lines.clone().all(|l| l.ends_with(",kinematic")), "{text}");
     let failures = read(&whole.join("failures.csv"));
-    let failed = failures.lines().count() - 1;
-    // single: 2 models x 2 phi x 3 f; delayed: 2 models x 2 phi x 2 tau x 3 f.
-    assert_eq!(lines.clone().count() + failed, 12 + 24);
-    let first: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(&first[..2], ["single", "eq1-linear"]);
-    let nums: Vec<f64> = first[2..5].iter().map(|v| v.parse().unwrap()).collect();
-    assert_eq!(nums, [0.57, 6.0, 0.0]);
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 11);
-        let h: f64 = f[5].parse().unwrap();
-        assert!(h.is_finite() && h >= 0.0, "{line}");
-    }
+    assert_eq!(
+        failures.lines().next().unwrap(),
+        "kind,model,phi,freq_hz,tau_s,error"
+    );
     let meta: toml::Table = read(&whole.join("sweep.toml")).parse().unwrap();
-    assert_eq!(meta["total_combinations"].as_integer(), Some(36));
+    assert_eq!(meta["total_combinations"].as_integer(), Some(6));
     assert!(whole.join("params-phi-0.57.toml").exists());
     assert!(whole.join("params-phi-0.58.toml").exists());
     assert_png(&whole.join("height_vs_freq.png"));
     assert_svg(&whole.join("height_vs_freq.svg"));
     assert_png(&whole.join("height_vs_tau.png"));
-
-    // Deterministic: another run with another thread count gives the same file.
-    let again = dir.path().join("again");
-    sweep(&again, &["--threads", "1"]);
-    assert_eq!(read(&again.join("sweep.csv")), text);
 }
 
+/// `sweep --shard I/N` writes its shard (sweep.toml says which); `merge` of all shards in any
+/// order writes the merged folder; a shard given twice, a missing shard, a shard of another
+/// sweep, one of another shard count and a shard whose rows were cut are refused with exit 2,
+/// naming the problem, and nothing is written.
 #[test]
 fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -265,19 +229,17 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
         "--out",
         s(&p("merged")),
     ]);
+    for f in [
+        "sweep.csv",
+        "failures.csv",
+        "sweep.toml",
+        "params-phi-0.57.toml",
+        "params-phi-0.58.toml",
+    ] {
+        assert!(p("merged").join(f).is_file(), "{f}");
+    }
     assert_eq!(read(&p("merged/sweep.csv")), read(&p("whole/sweep.csv")));
-    assert_eq!(
-        read(&p("merged/failures.csv")),
-        read(&p("whole/failures.csv"))
-    );
-    assert_eq!(
-        read(&p("merged/params-phi-0.57.toml")),
-        read(&p("whole/params-phi-0.57.toml"))
-    );
     assert_png(&p("merged/height_vs_freq.png"));
-    let merged: toml::Table = read(&p("merged/sweep.toml")).parse().unwrap();
-    let whole: toml::Table = read(&p("whole/sweep.toml")).parse().unwrap();
-    assert_eq!(merged, whole, "merged metadata is the unsharded sweep's");
 
     // Overlap, missing shard, and a shard of another sweep are refused; nothing is written.
     let bad = p("bad");
@@ -298,7 +260,7 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
         &["missing shard(s) 2/3"],
     );
     let mut other = SWEEP.to_vec();
-    other[4] = "6:14:2";
+    other[4] = "10:12:2";
     let o2 = p("o2");
     other.extend(["--out", s(&o2), "--shard", "2/3"]);
     ok(&other);
@@ -325,9 +287,9 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
         ],
         &["same N"],
     );
-    // A shard whose rows were tampered with.
+    // A shard whose rows were tampered with (2 rows a shard: the header and one are left).
     let csv = read(&p("s2/sweep.csv"));
-    let cut: String = csv.lines().take(3).map(|l| format!("{l}\n")).collect();
+    let cut: String = csv.lines().take(2).map(|l| format!("{l}\n")).collect();
     std::fs::write(p("s2/sweep.csv"), cut).unwrap();
     refused(
         &[
@@ -345,16 +307,13 @@ fn shards_merge_into_the_unsharded_sweep_and_bad_sets_are_refused() {
 
 /// A final jump height that is not positive is said in words (summary, JSON); a jump that
 /// lifts the rod above rest carries no such note. The README's first command is such a jump.
+/// (The heights themselves: `sim-host/study/tests/jump_sweep.rs`.)
 #[test]
 fn a_final_height_that_is_not_positive_is_explained() {
     const NOTE: &str = "push-off did not lift the rod above its rest height";
     let stalled = ["jump", "--kind", "stutter", "--freq", "12", "--phi", "0.57"];
     let json: serde_json::Value =
         serde_json::from_str(&ok(&[&stalled[..], &["--json"]].concat())).expect("JSON");
-    assert!(
-        json["final_jump_height_m"].as_f64().unwrap() <= 0.0,
-        "{json}"
-    );
     assert_eq!(json["final_jump_note"], NOTE);
     assert!(ok(&stalled).contains(NOTE));
     let readme_first = [
@@ -363,10 +322,6 @@ fn a_final_height_that_is_not_positive_is_explained() {
     ];
     let json: serde_json::Value =
         serde_json::from_str(&ok(&[&readme_first[..], &["--json"]].concat())).expect("JSON");
-    assert!(
-        json["final_jump_height_m"].as_f64().unwrap() > 0.03,
-        "{json}"
-    );
     assert!(json.get("final_jump_note").is_none(), "{json}");
     assert!(!ok(&readme_first).contains(NOTE));
 }

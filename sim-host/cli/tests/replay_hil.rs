@@ -1,9 +1,7 @@
-//! Logs recorded from hardware-in-the-loop runs (`sandjumper hil --out`: the core's controller
-//! against the force-driven plant), replayed in the kinematic simulation, give the jump height
-//! of the original run within 2 % (issue 6). Also: `log check` accepts them, and bad logs exit
-//! with status 2 and a message naming the line.
-
-use std::path::Path;
+//! Logs recorded by `sandjumper hil --out` through the command line: `log check` accepts them
+//! and `replay` reads them; bad logs exit with status 2 and a message naming the line. (That
+//! replaying a HIL log gives the original jump height within 2 %, issue 6, is tested through
+//! the libraries in `sim-host/study/tests/hil_replay.rs`.)
 
 mod common;
 use common::sandjumper;
@@ -20,16 +18,18 @@ fn json_field(out: &std::process::Output, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("`{key}` missing in {v}"))
 }
 
-/// (HIL, replay) pairs of jump height and final jump height.
-fn hil_then_replay(dir: &Path, hil: &[&str], model: &str) -> [(f64, f64); 2] {
-    let out_dir = dir.to_str().unwrap();
-    let mut args = vec![
-        "hil", "--link", "sil", "--model", model, "--out", out_dir, "--json",
-    ];
-    args.extend_from_slice(hil);
-    let run = sandjumper(&args);
-    let original = json_field(&run, "jump_height_m");
-    let original_final = json_field(&run, "final_jump_height_m");
+/// `hil --out DIR` (a 10 Hz single jump, camera off) writes acquisition.csv; `log check`
+/// accepts it and `replay LOG --json` prints the jump heights of the replay.
+#[test]
+fn hil_logs_pass_log_check_and_replay() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("hil");
+    let mut hil: Vec<&str> = "hil --link sil --kind single --freq 10 --camera-fps 0 --json"
+        .split(' ')
+        .collect();
+    hil.extend(["--out", dir.to_str().unwrap()]);
+    let run = sandjumper(&hil);
+    json_field(&run, "jump_height_m");
     let log = dir.join("acquisition.csv");
     let check = sandjumper(&["log", "check", log.to_str().unwrap()]);
     assert!(
@@ -37,51 +37,9 @@ fn hil_then_replay(dir: &Path, hil: &[&str], model: &str) -> [(f64, f64); 2] {
         "{}",
         String::from_utf8_lossy(&check.stderr)
     );
-    let replay = sandjumper(&["replay", log.to_str().unwrap(), "--model", model, "--json"]);
-    [
-        (original, json_field(&replay, "jump_height_m")),
-        (original_final, json_field(&replay, "final_jump_height_m")),
-    ]
-}
-
-#[test]
-fn hil_logs_replay_to_the_original_jump_height_within_two_percent() {
-    let tmp = tempfile::tempdir().unwrap();
-    for (i, (hil, model)) in [
-        (
-            &["--kind", "single", "--freq", "10", "--phi", "0.57"][..],
-            "eq4",
-        ),
-        (
-            &["--kind", "stutter", "--freq", "12", "--phi", "0.57"][..],
-            "hard",
-        ),
-        (
-            &[
-                "--kind", "delayed", "--freq", "12", "--tau", "0.3", "--phi", "0.62",
-            ][..],
-            "eq4",
-        ),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        // The final jump height needs the push-off start, which replay takes from the
-        // controller's PUSH_OFF flag in the log.
-        let pairs = hil_then_replay(&tmp.path().join(i.to_string()), hil, model);
-        for (what, (original, replayed)) in ["jump height", "final jump height"].iter().zip(pairs) {
-            assert!(
-                original > 5e-3,
-                "{hil:?}: the HIL {what} must be above rest"
-            );
-            let error = (replayed - original).abs() / original;
-            assert!(
-                error < 0.02,
-                "{hil:?} {model} {what}: replayed {replayed} m vs HIL {original} m ({:.2} %)",
-                100.0 * error
-            );
-        }
-    }
+    let replay = sandjumper(&["replay", log.to_str().unwrap(), "--json"]);
+    json_field(&replay, "jump_height_m");
+    json_field(&replay, "final_jump_height_m");
 }
 
 #[test]
@@ -116,12 +74,8 @@ fn bad_logs_exit_with_status_two_and_name_the_line() {
     let out = sandjumper(&["replay", no_phi.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("give the packing fraction with --phi"));
+    // With --phi the log replays (that a robot held still does not jump:
+    // `sim-host/study/tests/hil_replay.rs`).
     let out = sandjumper(&["replay", no_phi.to_str().unwrap(), "--phi", "0.6", "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    // A robot held still does not jump.
-    assert!(json_field(&out, "jump_height_m") < 1e-4);
+    json_field(&out, "jump_height_m");
 }
