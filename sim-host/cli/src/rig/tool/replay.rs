@@ -10,10 +10,8 @@ use clap::Args;
 use super::{RigParamArgs, TargetArgs};
 use crate::command::CliError;
 use crate::rig::face::run_program;
-use sandjumper_rig::tool::replay::{
-    self as lib, ReplayRequest, ReplaySource, parse_clip, parse_factor,
-};
-pub use sandjumper_rig::tool::replay::{Clip, ReplayPlan};
+use sandjumper_rig::tool::replay::Clip;
+use sandjumper_rig::tool::replay::{ReplayRequest, ReplaySource, parse_clip, parse_factor};
 
 /// `rig replay`.
 #[derive(Debug, Clone, Args)]
@@ -65,20 +63,6 @@ pub struct ReplayArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Resample `record` at `rate_hz` and check stroke, force and buffer (the rig's feasibility
-/// check): [`sandjumper_rig::tool::replay::plan`] with the command line's error.
-pub fn plan(
-    record: &[(f64, f64)],
-    rate_hz: u32,
-    tick_hz: u32,
-    motor_mass_kg: f64,
-    gravity: f64,
-    peak_force_n: f64,
-) -> Result<ReplayPlan, CliError> {
-    let (m, g, peak) = (motor_mass_kg, gravity, peak_force_n);
-    Ok(lib::plan(record, rate_hz, tick_hz, m, g, peak)?)
 }
 
 impl ReplayArgs {
