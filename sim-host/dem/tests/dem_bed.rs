@@ -1,18 +1,30 @@
-//! DEM bed preparation: a settled bed carries its weight (floor force, stress profile), a
-//! packed bed reaches its area fraction, and checkpoints round-trip or are refused.
+//! DEM bed preparation: a settled bed carries its weight (floor force, stress profile),
+//! monodisperse beds crystallise and bidisperse ones do not, and checkpoints round-trip or
+//! are refused.
 
 use sandjumper_dem::bed::{BedMethod, BedSpec, prepare};
+use sandjumper_dem::checkpoint;
 use sandjumper_dem::grains::SizeDistribution;
 use sandjumper_dem::params::{Choice, Model};
+use sandjumper_dem::structure::hexatic_order;
 
-fn settled(
+/// A bed of `model`'s grains of `sizes` (at a 2 % overlap) prepared as `spec` says.
+fn prepared(
     model: Model,
     sizes: SizeDistribution,
+    spec: &BedSpec,
 ) -> (sandjumper_dem::world::World, sandjumper_dem::bed::BedReport) {
     let mut c = Choice::new(model);
     c.sizes = sizes;
     c.overlap = 0.02;
     let p = c.resolve(false).unwrap();
+    prepare(&p, spec, |_| {}).unwrap()
+}
+
+fn settled(
+    model: Model,
+    sizes: SizeDistribution,
+) -> (sandjumper_dem::world::World, sandjumper_dem::bed::BedReport) {
     let spec = BedSpec {
         width_m: 0.02,
         height_m: 0.012,
@@ -21,7 +33,7 @@ fn settled(
         max_time_s: 1.0,
         rest_agitation: 1e-9,
     };
-    prepare(&p, &spec, |_| {}).unwrap()
+    prepared(model, sizes, &spec)
 }
 
 #[test]
@@ -56,4 +68,72 @@ fn settled_bed_on_a_frictionless_floor_carries_its_weight() {
             "at {h} m: {l} N vs {above} N"
         );
     }
+}
+
+fn settled_hexatic(sizes: SizeDistribution) -> f64 {
+    let spec = BedSpec {
+        width_m: 0.025,
+        height_m: 0.012,
+        method: BedMethod::Settle,
+        seed: 3,
+        max_time_s: 0.6,
+        rest_agitation: 1e-7,
+    };
+    hexatic_order(&prepared(Model::Full, sizes, &spec).0)
+}
+
+#[test]
+fn monodisperse_beds_crystallise_and_bidisperse_ones_do_not() {
+    let mono = settled_hexatic(SizeDistribution::Mono);
+    let bi = settled_hexatic(SizeDistribution::BI);
+    eprintln!("hexatic order: mono {mono:.3}, bi {bi:.3}");
+    assert!(mono > 0.7, "mono {mono}");
+    assert!(bi < 0.6, "bi {bi}");
+}
+
+#[test]
+fn checkpoints_round_trip_and_refuse_corruption() {
+    let spec = BedSpec {
+        width_m: 0.012,
+        height_m: 0.006,
+        method: BedMethod::Pack { phi: 0.8 },
+        seed: 5,
+        max_time_s: 0.01,
+        rest_agitation: 1e-6,
+    };
+    let (mut w, _) = prepared(Model::Full, SizeDistribution::BI, &spec);
+    w.cfg.gravity_m_s2 = 9.81;
+    for _ in 0..500 {
+        w.step();
+    }
+    w.rebuild();
+    let rec = serde_json::json!({"note": "x"});
+    let bytes = checkpoint::encode(&w, &rec, &[1.0, 2.5]);
+    let mut a = checkpoint::decode(&bytes).unwrap();
+    assert_eq!(a.extra, vec![1.0, 2.5]);
+    assert_eq!(a.record, rec);
+    assert_eq!(a.world.g, w.g);
+    // The same future.
+    let mut b = w.clone();
+    for _ in 0..300 {
+        a.world.step();
+        b.step();
+    }
+    assert_eq!(a.world.g.x, b.g.x);
+    assert_eq!(a.world.g.vy, b.g.vy);
+    // A flipped byte, a cut file, another version: refused with the reason.
+    let mut bad = bytes.clone();
+    let k = bad.len() / 2;
+    bad[k] ^= 0x10;
+    assert!(checkpoint::decode(&bad).unwrap_err().contains("checksum"));
+    let cut = &bytes[..bytes.len() - 100];
+    assert!(checkpoint::decode(cut).is_err());
+    let mut ver = bytes.clone();
+    ver[8] = 9;
+    assert!(checkpoint::decode(&ver).unwrap_err().contains("version"));
+    assert!(
+        checkpoint::decode(b"hello")
+            .unwrap_err()
+            .contains("not a sandjumper")
+    );
 }

@@ -1,5 +1,6 @@
-//! The closed loop (part of `dem.rs`): `sandjumper piv` run on the side-wall frames a DEM intrusion renders
-//! must find the velocity field the DEM coarse-grains from its own grains.
+//! The closed loop (part of `intrusion.rs`): PIV (`sandjumper_flow::run::run`, what
+//! `sandjumper piv` calls) run on the side-wall frames a DEM intrusion renders must find the
+//! velocity field the DEM coarse-grains from its own grains.
 //!
 //! PIV pair k (frames k and k+1) measures the mean displacement between the two frames;
 //! the DEM's fields at samples k and k+1 are averaged and interpolated (bilinearly, on the
@@ -16,13 +17,18 @@
 
 use std::path::Path;
 
-use super::{sandjumper_text, wide_bed};
+use sandjumper_dem::intrude_run::{self, IntrudeRequest};
+use sandjumper_flow::piv::flag;
+use sandjumper_flow::run::PivRequest;
+use sandjumper_output::Silent;
+
+use super::{finished, wide_bed};
 
 /// Foot speed, m/s, and width, m.
 const SPEED: f64 = 0.3;
 const FOOT: f64 = 0.008;
 
-/// A field CSV's rows as (x_m, h_m, u_m_s, v_m_s, extra column).
+/// A DEM field CSV's rows as (x_m, h_m, u_m_s, v_m_s, extra column).
 fn field(path: &Path, extra: &str) -> Vec<[f64; 5]> {
     let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let h = r.headers().unwrap().clone();
@@ -41,7 +47,7 @@ fn field(path: &Path, extra: &str) -> Vec<[f64; 5]> {
     r.records()
         .map(|rec| {
             let rec = rec.unwrap();
-            // Empty cells (masked PIV nodes) read as NaN.
+            // Empty cells read as NaN.
             cols.map(|c| rec[c].parse::<f64>().unwrap_or(f64::NAN))
         })
         .collect()
@@ -109,60 +115,51 @@ fn piv_on_rendered_dem_frames_finds_the_dem_velocity_field() {
     let tmp = tempfile::tempdir().unwrap();
     let bed = wide_bed(tmp.path());
     let run = tmp.path().join("run");
-    let piv = tmp.path().join("piv");
-    let (c, _, e) = sandjumper_text(&[
-        "dem",
-        "intrude",
-        "--bed",
-        bed.to_str().unwrap(),
-        "--speed",
-        &SPEED.to_string(),
-        "--depth",
-        "0.004",
-        "--foot-width",
-        &FOOT.to_string(),
-        "--fps",
-        "2000",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert_eq!(c, 0, "{e}");
-    // PIV as camera.toml says.
+    // `dem intrude --bed BED --speed 0.3 --depth 0.004 --foot-width 0.008 --fps 2000`.
+    finished(
+        intrude_run::run(
+            &IntrudeRequest {
+                bed: Some(bed),
+                speed_m_s: Some(SPEED),
+                depth_m: 0.004,
+                foot_width_m: FOOT,
+                fps: 2000.0,
+                out: run.clone(),
+                ..IntrudeRequest::default()
+            },
+            &Silent,
+        )
+        .unwrap(),
+    );
+    // PIV as camera.toml says (`piv FRAMES --m-per-px --fps --origin --foot foot.csv`).
     let cam: toml::Table = std::fs::read_to_string(run.join("camera.toml"))
         .unwrap()
         .parse()
         .unwrap();
-    let num = |k: &str| cam[k].as_float().or(cam[k].as_integer().map(|i| i as f64));
+    let num = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64)).unwrap();
     let origin = cam["origin_px"].as_array().unwrap();
-    let o = |k: usize| {
-        origin[k]
-            .as_float()
-            .or(origin[k].as_integer().map(|i| i as f64))
-            .unwrap()
-    };
-    let (c, out, e) = sandjumper_text(&[
-        "piv",
-        run.join("frames").to_str().unwrap(),
-        "--m-per-px",
-        &num("m_per_px").unwrap().to_string(),
-        "--fps",
-        &num("fps").unwrap().to_string(),
-        &format!("--origin={},{}", o(0), o(1)),
-        "--foot",
-        run.join("foot.csv").to_str().unwrap(),
-        "--out",
-        piv.to_str().unwrap(),
-    ]);
-    assert_eq!(c, 0, "{e}");
-    eprintln!("{out}");
-    let pairs = std::fs::read_dir(piv.join("fields")).unwrap().count();
+    let piv = sandjumper_flow::run::run(
+        &PivRequest {
+            frames: run.join("frames").to_str().unwrap().to_string(),
+            m_per_px: Some(num(&cam["m_per_px"])),
+            fps: Some(num(&cam["fps"])),
+            origin_px: Some((num(&origin[0]), num(&origin[1]))),
+            foot: Some(run.join("foot.csv")),
+            ..PivRequest::default()
+        },
+        &Silent,
+    )
+    .unwrap();
+    eprintln!("{piv}");
+    let pairs = piv.pairs;
     assert!(pairs >= 20, "{pairs} PIV pairs");
+    let cal = piv.options.calibration.expect("a calibrated run");
 
     // (piv v, dem v, vector error over the foot speed, distance from the foot's edge, shear)
     let mut nodes: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
     let d_grain = 0.001;
-    for k in 0..pairs {
-        let p = field(&piv.join(format!("fields/{k:04}.csv")), "flag");
+    for (k, pair) in piv.run.results.iter().enumerate() {
+        let (f, si) = (&pair.field, pair.si.as_ref().expect("SI fields"));
         let a = Grid::new(&field(
             &run.join(format!("fields/{k:04}.csv")),
             "shear_rate_per_s",
@@ -171,9 +168,10 @@ fn piv_on_rendered_dem_frames_finds_the_dem_velocity_field() {
             &run.join(format!("fields/{:04}.csv", k + 1)),
             "shear_rate_per_s",
         ));
-        for r in p {
-            let (x, h) = (r[0], r[1]);
-            if r[4] != 0.0 || h > -d_grain || !r[2].is_finite() || !r[3].is_finite() {
+        for (q, &fl) in f.flag.iter().enumerate() {
+            let (x, h) = (cal.x_m(f.xs[q % f.nx]), cal.h_m(f.ys[q / f.nx]));
+            let (pu, pv) = (si.u.values[q], si.v.values[q]);
+            if fl != flag::VALID || h > -d_grain || !pu.is_finite() || !pv.is_finite() {
                 continue;
             }
             let (Some(da), Some(db)) = (a.at(x, h), b.at(x, h)) else {
@@ -184,8 +182,8 @@ fn piv_on_rendered_dem_frames_finds_the_dem_velocity_field() {
                 0.5 * (da[1] + db[1]),
                 0.5 * (da[2] + db[2]),
             );
-            let err = (r[2] - u).hypot(r[3] - v) / SPEED;
-            nodes.push((r[3], v, err, (x.abs() - 0.5 * FOOT).abs(), shear));
+            let err = (pu - u).hypot(pv - v) / SPEED;
+            nodes.push((pv, v, err, (x.abs() - 0.5 * FOOT).abs(), shear));
         }
     }
     assert!(nodes.len() > 2000, "only {} nodes compared", nodes.len());
