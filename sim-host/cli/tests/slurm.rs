@@ -183,7 +183,9 @@ impl Drop for Cluster {
     }
 }
 
-fn sweep_args(out: &Path) -> Vec<String> {
+/// The sweep, with the parameter overrides `params` (a stiffer spring: a job that lost them
+/// would give other heights than the local sweep).
+fn sweep_args(out: &Path, params: &Path) -> Vec<String> {
     [
         "sweep",
         "--kind",
@@ -192,10 +194,11 @@ fn sweep_args(out: &Path) -> Vec<String> {
         "8:12:0.5",
         "--phi",
         "0.57:0.58:0.01",
-        "--out",
+        "--params",
     ]
     .iter()
     .map(|s| s.to_string())
+    .chain([params.display().to_string(), "--out".into()])
     .chain([out.display().to_string()])
     .collect()
 }
@@ -232,10 +235,15 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     let cluster = Cluster::start().unwrap_or_else(|e| panic!("cannot start the test cluster: {e}"));
     let work = tempfile::tempdir().unwrap();
     let exe = env!("CARGO_BIN_EXE_sandjumper");
+    let params = work.path().join("stiffer.toml");
+    std::fs::write(&params, "[robot]\nspring_stiffness_n_m = 3900.0\n").unwrap();
 
     // The same sweep, here and through a 3-task job array.
     let local = work.path().join("local");
-    let out = Command::new(exe).args(sweep_args(&local)).output().unwrap();
+    let out = Command::new(exe)
+        .args(sweep_args(&local, &params))
+        .output()
+        .unwrap();
     assert!(
         out.status.success(),
         "{}",
@@ -244,7 +252,7 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     let slurm = work.path().join("slurm");
     let out = cluster
         .command(exe)
-        .args(sweep_args(&slurm))
+        .args(sweep_args(&slurm, &params))
         .args(["--slurm", "3"])
         .output()
         .unwrap();
@@ -267,13 +275,25 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
         );
     }
     assert!(read(&job_dir.join("job.sbatch")).contains("#SBATCH --array=1-3"));
+    // The tasks read the job folder's copy of the overrides; the merged sweep names the file
+    // the user gave, as the local one does.
+    assert_eq!(
+        read(&job_dir.join("params.toml")),
+        read(&params),
+        "the overrides' copy"
+    );
+    let meta = read(&slurm.join("sweep.toml"));
+    assert!(
+        meta.contains("stiffer.toml") && !meta.contains(".slurm"),
+        "{meta}"
+    );
 
     // A task cancelled before it starts: tasks take the whole node (one at a time), so the
     // third is still pending when it is cancelled.
     let failed = work.path().join("failed");
     let mut child = cluster
         .command(exe)
-        .args(sweep_args(&failed))
+        .args(sweep_args(&failed, &params))
         .args(["--slurm", "3", "--slurm-cpus"])
         .arg(
             std::thread::available_parallelism()
@@ -312,7 +332,7 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     let rejected = work.path().join("rejected");
     let out = cluster
         .command(exe)
-        .args(sweep_args(&rejected))
+        .args(sweep_args(&rejected, &params))
         .args(["--slurm", "2", "--slurm-partition", "no-such-partition"])
         .output()
         .unwrap();

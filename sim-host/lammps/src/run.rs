@@ -223,12 +223,35 @@ impl LammpsRequest {
 
     /// The words of `sandjumper dem lammps` that ask for this run, without `--ranks` and
     /// `--out` (a Slurm job adds them; [`submit`]): every value this request sets, so the job
-    /// runs what was checked here. A path that is not UTF-8 text is refused (a job script
-    /// could not pass it on).
+    /// runs what was checked here (the motion [`LammpsRequest::trajectory`] takes: the file,
+    /// else the speed). Values as `--flag=value`. A path that is not UTF-8 text is refused (a
+    /// job script could not pass it on).
     pub fn job_arguments(&self) -> Result<Vec<String>, LammpsError> {
-        let mut args: Vec<String> = ["dem", "lammps", "--preset", self.preset.name()]
-            .map(String::from)
-            .into();
+        // Every field named: one added later must be carried here too (or said not to be).
+        let Self {
+            preset,
+            trajectory,
+            episode,
+            speed_m_s,
+            depth_m,
+            foot_diameter_m,
+            grain_diameter_m,
+            bed_width_m,
+            bed_depth_m,
+            phi,
+            youngs_modulus_pa,
+            friction,
+            restitution,
+            fps,
+            seed,
+            min_speed_ratio,
+            ranks: _,
+            lmp,
+            mpiexec,
+            out: _,
+        } = self;
+        let mut args: Vec<String> = vec!["dem".into(), "lammps".into()];
+        args.push(format!("--preset={}", preset.name()));
         let path = |flag: &str, p: &Option<PathBuf>, args: &mut Vec<String>| {
             if let Some(p) = p {
                 let text = p.to_str().ok_or_else(|| {
@@ -238,45 +261,65 @@ impl LammpsRequest {
                         p.display()
                     ))
                 })?;
-                args.extend([flag.to_string(), text.to_string()]);
+                args.push(format!("{flag}={text}"));
             }
             Ok::<(), LammpsError>(())
         };
-        path("--trajectory", &self.trajectory, &mut args)?;
-        if let Some(Episode::PushOff) = self.episode {
-            args.extend(["--episode".into(), "push-off".into()]);
-        }
-        let values = [
-            ("--speed", self.speed_m_s),
-            ("--depth", Some(self.depth_m)),
-            ("--foot-diameter", self.foot_diameter_m),
-            ("--grain-diameter", self.grain_diameter_m),
-            ("--bed-width", self.bed_width_m),
-            ("--bed-depth", self.bed_depth_m),
-            ("--phi", self.phi),
-            ("--youngs-modulus", self.youngs_modulus_pa),
-            ("--friction", self.friction),
-            ("--restitution", self.restitution),
-            ("--fps", self.fps),
-            ("--min-speed-ratio", Some(self.min_speed_ratio)),
-        ];
-        for (flag, v) in values {
-            if let Some(v) = v {
-                // `{}` writes the shortest text that reads back as the same f64.
-                args.extend([flag.to_string(), format!("{v}")]);
+        path("--trajectory", trajectory, &mut args)?;
+        if trajectory.is_some() {
+            match episode {
+                Some(Episode::PushOff) => args.push("--episode=push-off".into()),
+                None => {}
             }
         }
-        if let Some(seed) = self.seed {
-            args.extend(["--seed".into(), seed.to_string()]);
+        let speed = if trajectory.is_some() {
+            None
+        } else {
+            *speed_m_s
+        };
+        let values = [
+            ("--speed", speed),
+            ("--depth", Some(*depth_m)),
+            ("--foot-diameter", *foot_diameter_m),
+            ("--grain-diameter", *grain_diameter_m),
+            ("--bed-width", *bed_width_m),
+            ("--bed-depth", *bed_depth_m),
+            ("--phi", *phi),
+            ("--youngs-modulus", *youngs_modulus_pa),
+            ("--friction", *friction),
+            ("--restitution", *restitution),
+            ("--fps", *fps),
+            ("--min-speed-ratio", Some(*min_speed_ratio)),
+        ];
+        // `{}` writes the shortest text that reads back as the same f64.
+        args.extend(
+            values
+                .iter()
+                .filter_map(|(flag, v)| v.map(|v| format!("{flag}={v}"))),
+        );
+        if let Some(seed) = seed {
+            args.push(format!("--seed={seed}"));
         }
-        path("--lmp", &self.lmp, &mut args)?;
-        path("--mpiexec", &self.mpiexec, &mut args)?;
+        path("--lmp", lmp, &mut args)?;
+        path("--mpiexec", mpiexec, &mut args)?;
         Ok(args)
     }
 
     /// Check the request before anything runs: the motion, the values, the foot kept above
     /// the floor.
     pub fn validate(&self) -> Result<(), LammpsError> {
+        if !(0.0..=1.0).contains(&self.min_speed_ratio) {
+            return Err(LammpsError::input(format!(
+                "--min-speed-ratio {} not allowed (allowed: 0 to 1)",
+                self.min_speed_ratio
+            )));
+        }
+        if !(1..=100_000).contains(&self.ranks) {
+            return Err(LammpsError::input(format!(
+                "--ranks {} not allowed (allowed: 1 to 100000)",
+                self.ranks
+            )));
+        }
         outputs::check_inputs(&self.spec(), &self.trajectory()?)
     }
 
@@ -340,9 +383,9 @@ pub fn submit(
 /// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write
 /// its folder (a failed run keeps its LAMMPS files in `OUT.failed/`).
 pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
+    request.validate()?;
     let spec = request.spec();
     let traj = request.trajectory()?;
-    outputs::check_inputs(&spec, &traj)?;
     let lammps = request.lammps()?;
     // What this run will cost, before it starts (the paper preset is a cluster's job): the
     // settle at most its longest, at the small preset's measured 4 million grain-steps per

@@ -1,7 +1,8 @@
-//! The job script of a sweep run as a Slurm job array, built with the library as
-//! `sandjumper sweep --kind single --freq 8:14:2 --out sweep --slurm 4 --slurm-cpus 2` builds
-//! it (printed, not submitted: [`sandjumper_slurm::submit_sharded`] submits it and waits): the
-//! sweep's own words, then one shard per task.
+//! The job script of a command run as a Slurm job array of four shards, two CPUs each (printed,
+//! not submitted: [`sandjumper_slurm::submit_sharded`] submits it and waits): the program and
+//! its words, then each task's shard, threads and folder. `sandjumper sweep --slurm 4
+//! --slurm-cpus 2` builds its words from the typed sweep
+//! (`sandjumper_study::sweep::cluster::run_on_slurm`), every axis and option written out.
 //!
 //! Run it with `cargo run --example sharded_sweep -p sandjumper-slurm`.
 

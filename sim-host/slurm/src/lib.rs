@@ -520,8 +520,13 @@ pub fn submit_sharded(
     })?;
     for (name, text) in job.files {
         let path = dir.join(name);
-        std::fs::write(&path, text)
-            .map_err(|e| SlurmError::Internal(format!("cannot write {}: {e}", path.display())))?;
+        if let Err(e) = std::fs::write(&path, text) {
+            let _ = std::fs::remove_dir_all(&dir);
+            return Err(SlurmError::Internal(format!(
+                "cannot write {}: {e}",
+                path.display()
+            )));
+        }
     }
     let submitted = submit(&dir, &script)?;
     progress.note(&format!(

@@ -141,7 +141,7 @@ fn a_jumps_folder_holds_its_trajectory_and_parameters() {
     assert_eq!(text, outcome.params.to_toml());
 }
 
-/// The sweep of `cli/tests/cli_runs.rs`: single and delayed, 6..14 Hz by 4, phi 0.57 and
+/// The sweep `cli/tests/cli_runs.rs` once ran (36 jumps; it runs 6 now): single and delayed, 6..14 Hz by 4, phi 0.57 and
 /// 0.58, tau 0 and 0.2 s, eq1-linear and eq4 (36 combinations), on `threads` threads.
 fn sweep_request(threads: usize) -> SweepRequest {
     let range = |s: &str| ValueRange::parse(s).unwrap().values;

@@ -9,7 +9,8 @@ use sandjumper_output::Progress;
 use sandjumper_slurm::{QueueOptions, ShardedJob, ShardedJobOutcome, SlurmError};
 
 use super::{
-    MergeOutcome, MergeRequest, SweepDrive, SweepRequest, ValueRange, WrittenSweep, merge,
+    MergeOutcome, MergeRequest, SweepDrive, SweepRequest, SweepSpec, ValueRange, WrittenSweep,
+    merge,
 };
 use crate::StudyError;
 
@@ -71,41 +72,62 @@ impl SweepRequest {
     /// tolerance, the drive, and `--params params` if the request has overrides. An axis that
     /// is no range `A:B:STEP` is refused (the command line could not say it).
     pub fn task_arguments(&self, params: Option<&Path>) -> Result<Vec<String>, StudyError> {
-        let spec = &self.spec;
-        let kinds: Vec<&str> = spec.kinds.iter().map(|&k| kind_name(k)).collect();
-        let models: Vec<&str> = spec.models.iter().map(|m| m.as_str()).collect();
+        // Every field named: one added later must be carried here too.
+        let SweepSpec {
+            kinds,
+            models,
+            phis,
+            freqs_hz,
+            taus_s,
+            rtol,
+            drive,
+        } = &self.spec;
+        if kinds.is_empty() || models.is_empty() {
+            return Err(StudyError::input(
+                "the sweep has no jump kind or no ground model (allowed: at least one of each)",
+            ));
+        }
+        let kinds: Vec<&str> = kinds.iter().map(|&k| kind_name(k)).collect();
+        let models: Vec<&str> = models.iter().map(|m| m.as_str()).collect();
         let mut args: Vec<String> = vec![
             "sweep".into(),
-            "--kind".into(),
-            kinds.join(","),
-            "--model".into(),
-            models.join(","),
+            format!("--kind={}", kinds.join(",")),
+            format!("--model={}", models.join(",")),
         ];
         for (flag, values, what) in [
-            ("--phi", &spec.phis, "packing fractions"),
-            ("--freq", &spec.freqs_hz, "frequencies"),
-            ("--tau", &spec.taus_s, "delays"),
+            ("--phi", phis, "packing fractions"),
+            ("--freq", freqs_hz, "frequencies"),
+            ("--tau", taus_s, "delays"),
         ] {
+            if values.is_empty() {
+                return Err(StudyError::input(format!(
+                    "the sweep has no {what} (allowed: at least one)"
+                )));
+            }
             let written = ValueRange::written_for(values).ok_or_else(|| {
                 StudyError::input(format!(
                     "the sweep's {what} {values:?} are not one range A:B:STEP, which each Slurm \
                      task's {flag} needs (allowed: one value, or evenly spaced ascending values)"
                 ))
             })?;
-            args.extend([flag.to_string(), written]);
+            args.push(format!("{flag}={written}"));
         }
         // `{}` writes the shortest text that reads back as the same f64.
-        args.extend(["--rtol".to_string(), format!("{}", spec.rtol)]);
+        args.push(format!("--rtol={rtol}"));
         if let Some(p) = params {
-            let text = p
-                .to_str()
-                .ok_or_else(|| StudyError::input(format!("{} is not UTF-8 text", p.display())))?;
-            args.extend(["--params".to_string(), text.to_string()]);
+            let text = p.to_str().ok_or_else(|| {
+                StudyError::input(format!(
+                    "{} is not UTF-8 text (allowed with --slurm: an --out whose path is UTF-8 \
+                     text, beside which the job's folder holds the parameter file)",
+                    p.display()
+                ))
+            })?;
+            args.push(format!("--params={text}"));
         }
-        if let SweepDrive::Sil { gain_lowering } = spec.drive {
-            args.extend(["--link".to_string(), "sil".to_string()]);
+        if let SweepDrive::Sil { gain_lowering } = drive {
+            args.push("--link=sil".into());
             if let Some(g) = gain_lowering {
-                args.extend(["--gain-lowering".to_string(), format!("{g}")]);
+                args.push(format!("--gain-lowering={g}"));
             }
         }
         Ok(args)
@@ -121,6 +143,18 @@ pub fn run_on_slurm(
     progress: &dyn Progress,
 ) -> Result<SlurmSweepOutcome, StudyError> {
     request.sweep.validate()?;
+    if !(1..=10_000).contains(&request.tasks) {
+        return Err(StudyError::input(format!(
+            "--slurm {} not allowed (allowed: 1 to 10000 tasks)",
+            request.tasks
+        )));
+    }
+    if !(1..=1024).contains(&request.cpus_per_task) {
+        return Err(StudyError::input(format!(
+            "--slurm-cpus {} not allowed (allowed: 1 to 1024)",
+            request.cpus_per_task
+        )));
+    }
     if request.sweep.shard.is_some() {
         return Err(StudyError::input(
             "--slurm N makes the shards itself (task I runs --shard I/N): drop --shard",
@@ -158,7 +192,14 @@ pub fn run_on_slurm(
                 dirs: shards,
                 out: request.out.clone(),
             };
-            let merged = merge(&merge_request, progress)?;
+            let mut merged = merge(&merge_request, progress)?;
+            // The overrides as the caller named them (the tasks read the job folder's copy),
+            // as a sweep run here records them.
+            merged.meta.spec.params_file = request
+                .sweep
+                .params
+                .as_ref()
+                .map(|p| p.path.display().to_string());
             let written = merged.write(&request.out)?;
             Ok(SlurmSweepOutcome::Merged {
                 id,
@@ -172,7 +213,6 @@ pub fn run_on_slurm(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::SweepSpec;
     use sandjumper_core::trajectory::JumpKind;
     use sandjumper_model::params::ModelName;
 
@@ -197,9 +237,9 @@ mod tests {
             .unwrap();
         assert_eq!(
             args.join(" "),
-            "sweep --kind single,delayed --model eq1-linear,eq4 --phi 0.57:0.62:0.01 --freq 12.5 \
-             --tau 0:0.1:0.05 --rtol 0.000000001 --params /j/params.toml --link sil \
-             --gain-lowering 0.05"
+            "sweep --kind=single,delayed --model=eq1-linear,eq4 --phi=0.57:0.62:0.01 --freq=12.5 \
+             --tau=0:0.1:0.05 --rtol=0.000000001 --params=/j/params.toml --link=sil \
+             --gain-lowering=0.05"
         );
         let uneven = SweepRequest {
             spec: SweepSpec {
