@@ -17,6 +17,9 @@ use crate::lammps::Lammps;
 use crate::outputs::{self, Summary};
 use crate::spec::{LammpsSpec, Preset};
 
+/// Most MPI ranks a run takes ([`LammpsRequest::ranks`]).
+pub const MAX_RANKS: u32 = 100_000;
+
 /// A 3-D intrusion to run with LAMMPS: a preset scale with single values changed, and the
 /// foot's motion.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,7 +84,7 @@ pub struct LammpsRequest {
     #[cfg_attr(feature = "clap", arg(long, value_name = "F", default_value = "0.3", value_parser = sandjumper_dem::intrude_run::parse_share))]
     pub min_speed_ratio: f64,
     /// MPI ranks (`mpiexec -n N lmp`).
-    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(1..=100_000)))]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RANKS))))]
     pub ranks: u32,
     /// The LAMMPS executable (default: $SANDJUMPER_LMP, else lmp on PATH).
     #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
@@ -254,14 +257,7 @@ impl LammpsRequest {
         args.push(format!("--preset={}", preset.name()));
         let path = |flag: &str, p: &Option<PathBuf>, args: &mut Vec<String>| {
             if let Some(p) = p {
-                let text = p.to_str().ok_or_else(|| {
-                    LammpsError::input(format!(
-                        "{flag} {} is not UTF-8 text (allowed with --slurm: UTF-8 paths, which \
-                         the job script passes on)",
-                        p.display()
-                    ))
-                })?;
-                args.push(format!("{flag}={text}"));
+                args.push(format!("{flag}={}", sandjumper_slurm::path_text(p, flag)?));
             }
             Ok::<(), LammpsError>(())
         };
@@ -308,19 +304,26 @@ impl LammpsRequest {
     /// Check the request before anything runs: the motion, the values, the foot kept above
     /// the floor.
     pub fn validate(&self) -> Result<(), LammpsError> {
+        self.checked().map(drop)
+    }
+
+    /// [`LammpsRequest::validate`], giving back the run and the motion it checked.
+    fn checked(&self) -> Result<(LammpsSpec, Trajectory), LammpsError> {
         if !(0.0..=1.0).contains(&self.min_speed_ratio) {
             return Err(LammpsError::input(format!(
                 "--min-speed-ratio {} not allowed (allowed: 0 to 1)",
                 self.min_speed_ratio
             )));
         }
-        if !(1..=100_000).contains(&self.ranks) {
+        if !(1..=MAX_RANKS).contains(&self.ranks) {
             return Err(LammpsError::input(format!(
-                "--ranks {} not allowed (allowed: 1 to 100000)",
+                "--ranks {} not allowed (allowed: 1 to {MAX_RANKS})",
                 self.ranks
             )));
         }
-        outputs::check_inputs(&self.spec(), &self.trajectory()?)
+        let (spec, trajectory) = (self.spec(), self.trajectory()?);
+        outputs::check_inputs(&spec, &trajectory)?;
+        Ok((spec, trajectory))
     }
 
     /// The LAMMPS (and MPI launcher) this request names or finds.
@@ -383,9 +386,7 @@ pub fn submit(
 /// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write
 /// its folder (a failed run keeps its LAMMPS files in `OUT.failed/`).
 pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
-    request.validate()?;
-    let spec = request.spec();
-    let traj = request.trajectory()?;
+    let (spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
     // What this run will cost, before it starts (the paper preset is a cluster's job): the
     // settle at most its longest, at the small preset's measured 4 million grain-steps per

@@ -273,16 +273,23 @@ pub fn working_dir() -> Result<PathBuf, SlurmError> {
     std::env::current_dir().map_err(|e| SlurmError::Internal(format!("no working directory: {e}")))
 }
 
-/// A job script's command: `program` and `args`, each word quoted; an argument that is not
-/// UTF-8 text is refused (a job script could not pass it on faithfully).
-pub fn command_line(program: &Path, args: &[String]) -> Result<String, SlurmError> {
-    let program = program.to_str().ok_or_else(|| {
+/// `path` as text for a job script, or refused (input) when it is not UTF-8 text: a job script
+/// could not pass it on faithfully. `what` names it in the message (`the program`,
+/// `--trajectory`, ...).
+pub fn path_text<'a>(path: &'a Path, what: &str) -> Result<&'a str, SlurmError> {
+    path.to_str().ok_or_else(|| {
         SlurmError::Input(format!(
-            "the program {} is not UTF-8 text (allowed with --slurm: UTF-8 paths, which the job \
+            "{what} {} is not UTF-8 text (allowed with --slurm: UTF-8 paths, which the job \
              script passes on)",
-            program.display()
+            path.display()
         ))
-    })?;
+    })
+}
+
+/// A job script's command: `program` and `args`, each word quoted; a program path that is not
+/// UTF-8 text is refused ([`path_text`]).
+pub fn command_line(program: &Path, args: &[String]) -> Result<String, SlurmError> {
+    let program = path_text(program, "the program")?;
     Ok(std::iter::once(program)
         .chain(args.iter().map(String::as_str))
         .map(quote)
@@ -360,12 +367,7 @@ impl CommandJob<'_> {
     pub fn script(&self, dir: &Path, cwd: &Path) -> Result<JobScript, SlurmError> {
         let out_abs = std::path::absolute(self.out)
             .map_err(|e| SlurmError::Internal(format!("{}: {e}", self.out.display())))?;
-        let out = out_abs.to_str().ok_or_else(|| {
-            SlurmError::Input(format!(
-                "the output folder {} is not UTF-8 text (allowed with --slurm: UTF-8 paths)",
-                out_abs.display()
-            ))
-        })?;
+        let out = path_text(&out_abs, "the output folder")?;
         let tasks = self.tasks;
         Ok(JobScript {
             name: self.name.to_string(),
@@ -478,12 +480,7 @@ impl ShardedJob<'_> {
     /// The job array's script (its folder `dir`, started in `cwd`).
     pub fn script(&self, dir: &Path, cwd: &Path) -> Result<JobScript, SlurmError> {
         let tasks = self.tasks;
-        let dir_text = dir.to_str().ok_or_else(|| {
-            SlurmError::Input(format!(
-                "the job's folder {} is not UTF-8 text (allowed with --slurm: UTF-8 paths)",
-                dir.display()
-            ))
-        })?;
+        let dir_text = path_text(dir, "the job's folder")?;
         Ok(JobScript {
             name: self.name.to_string(),
             shape: vec![

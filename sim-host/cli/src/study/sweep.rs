@@ -12,7 +12,9 @@ use crate::command::progress::Bars;
 use sandjumper_model::resolve::ParamsFile;
 use sandjumper_output::{Silent, StagedDir};
 use sandjumper_study::StudyError;
-use sandjumper_study::sweep::cluster::{SlurmSweepOutcome, SlurmSweepRequest, run_on_slurm};
+use sandjumper_study::sweep::cluster::{
+    MAX_CPUS_PER_TASK, MAX_TASKS, SlurmSweepOutcome, SlurmSweepRequest, run_on_slurm,
+};
 use sandjumper_study::sweep::{
     self as sweep, MergeRequest, ShardSpec, SweepDrive, SweepRequest, SweepSpec, ValueRange, merge,
     parse_freq_range, parse_phi_range, parse_shard, parse_tau_range,
@@ -169,11 +171,11 @@ pub fn run_merge(a: &MergeArgs) -> Result<(), CliError> {
 pub struct SlurmArgs {
     /// Submit the sweep to Slurm as a job array of N tasks (one shard each), wait for it and
     /// merge the shards into --out.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_TASKS)))]
     pub slurm: Option<u32>,
     /// CPUs of each task (its sweep's threads).
     #[arg(long, value_name = "N", default_value = "1", requires = "slurm",
-          value_parser = clap::value_parser!(u32).range(1..=1024))]
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_CPUS_PER_TASK)))]
     pub slurm_cpus: u32,
     /// Partition, time limit of each task, waiting (merge the shards later with the printed
     /// `sandjumper merge` command).

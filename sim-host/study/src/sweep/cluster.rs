@@ -17,6 +17,12 @@ use crate::StudyError;
 /// The parameter file a Slurm sweep's tasks read, in the job's folder (`OUT.slurm/`).
 pub const JOB_PARAMS_FILE: &str = "params.toml";
 
+/// Most tasks of a Slurm sweep's job array ([`SlurmSweepRequest::tasks`]).
+pub const MAX_TASKS: u32 = 10_000;
+
+/// Most CPUs of each task ([`SlurmSweepRequest::cpus_per_task`]).
+pub const MAX_CPUS_PER_TASK: u32 = 1024;
+
 /// A sweep run on a Slurm cluster as a job array.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SlurmSweepRequest {
@@ -115,13 +121,7 @@ impl SweepRequest {
         // `{}` writes the shortest text that reads back as the same f64.
         args.push(format!("--rtol={rtol}"));
         if let Some(p) = params {
-            let text = p.to_str().ok_or_else(|| {
-                StudyError::input(format!(
-                    "{} is not UTF-8 text (allowed with --slurm: an --out whose path is UTF-8 \
-                     text, beside which the job's folder holds the parameter file)",
-                    p.display()
-                ))
-            })?;
+            let text = sandjumper_slurm::path_text(p, "the parameter file (beside --out)")?;
             args.push(format!("--params={text}"));
         }
         if let SweepDrive::Sil { gain_lowering } = drive {
@@ -143,15 +143,15 @@ pub fn run_on_slurm(
     progress: &dyn Progress,
 ) -> Result<SlurmSweepOutcome, StudyError> {
     request.sweep.validate()?;
-    if !(1..=10_000).contains(&request.tasks) {
+    if !(1..=MAX_TASKS).contains(&request.tasks) {
         return Err(StudyError::input(format!(
-            "--slurm {} not allowed (allowed: 1 to 10000 tasks)",
+            "--slurm {} not allowed (allowed: 1 to {MAX_TASKS} tasks)",
             request.tasks
         )));
     }
-    if !(1..=1024).contains(&request.cpus_per_task) {
+    if !(1..=MAX_CPUS_PER_TASK).contains(&request.cpus_per_task) {
         return Err(StudyError::input(format!(
-            "--slurm-cpus {} not allowed (allowed: 1 to 1024)",
+            "--slurm-cpus {} not allowed (allowed: 1 to {MAX_CPUS_PER_TASK})",
             request.cpus_per_task
         )));
     }
