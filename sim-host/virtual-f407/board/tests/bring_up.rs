@@ -554,7 +554,7 @@ fn an_option_byte_write_that_never_ends_is_reported_and_the_board_starts() {
 /// and answers, with no watchdog reset, while the host sends bursts of small commands, more than
 /// the firmware's inbound queue holds (frames dropped, counted). A blocking RTT waits there
 /// forever with every interrupt masked: the tick never starts and the early watchdog resets the
-/// chip over and over. Killed by `rtt-blocking`. (`tests/f407_disassembly.rs` checks statically
+/// chip over and over. Killed by `rtt-blocking`. (`tests/integration/f407_disassembly.rs` checks statically
 /// that the tick and the link task never reach defmt.)
 #[test]
 fn a_probe_that_stops_reading_with_its_buffer_full_never_stalls_the_board() {

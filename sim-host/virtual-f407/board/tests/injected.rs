@@ -4,7 +4,7 @@
 //! virtual board, armed with the robot on hard ground: the fault handlers put the whole rig in
 //! the safe state at once, report over RTT, and the watchdog restarts the board, which reports
 //! the watchdog reset. The images are built into `target/inject-<kind>` of the main workspace
-//! (`tests/virtual_f407.rs` builds them; `SANDJUMPER_F407_INJECT_DIR` names another place).
+//! (`tests/integration/virtual_f407.rs` builds them; `SANDJUMPER_F407_INJECT_DIR` names another place).
 
 mod common;
 

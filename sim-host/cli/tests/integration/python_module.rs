@@ -1,0 +1,125 @@
+//! The Python module (`sim-host/python`): builds it with maturin into a virtual environment,
+//! installs it the way the README says (`pip install ./sim-host/python`) and runs its pytest
+//! suite against this build's `sandjumper` binary.
+//!
+//! The environment is `target/python-venv` (made once, with maturin, numpy, pytest and
+//! matplotlib (for the notebook) and mcap (Foxglove's reader, to check our MCAP files) from
+//! PyPI); the wheel builds in `target/` under cargo-nextest, in `target/python` under `cargo
+//! test` (which holds the lock on `target/`): see `wheel_build`. Skips with a message when
+//! there is no `python3` or PyPI cannot be reached, unless `CI` is set (then it fails).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::common;
+use common::workspace;
+
+fn skip_or_fail(why: &str) {
+    if std::env::var_os("CI").is_some() {
+        panic!("the Python module test cannot run: {why}");
+    }
+    eprintln!("skipping the Python module test: {why}");
+}
+
+fn run(cmd: &mut Command) -> Result<String, String> {
+    let shown = format!("{cmd:?}");
+    let out = cmd
+        .output()
+        .map_err(|e| format!("cannot run {shown}: {e}"))?;
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if out.status.success() {
+        Ok(text)
+    } else {
+        Err(format!("{shown} failed ({}):\n{text}", out.status))
+    }
+}
+
+/// The virtual environment with maturin, numpy and pytest, made on first use.
+fn venv(root: &Path) -> Result<PathBuf, String> {
+    let venv = root.join("target/python-venv");
+    let python = venv.join("bin/python");
+    if !python.exists() {
+        run(Command::new("python3").args(["-m", "venv"]).arg(&venv))?;
+    }
+    let ready =
+        run(Command::new(&python).args(["-c", "import maturin, numpy, pytest, matplotlib"]))
+            .is_ok();
+    if !ready {
+        run(Command::new(&python).args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "maturin>=1.9.4,<2",
+            "numpy",
+            "pytest",
+            "matplotlib",
+            "mcap",
+            "tomli; python_version < '3.11'",
+        ]))?;
+    }
+    Ok(python)
+}
+
+/// Where the wheel builds, and the arguments maturin gets. Under cargo-nextest (the README's
+/// test command) the tests' build is over and `target/` free: the wheel builds there in the
+/// tests' own `test` profile, reusing what the tests compiled. Under
+/// `cargo test`, which holds `target/`'s lock while the tests run, in `target/python` with the
+/// wheel's own profile.
+fn wheel_build(root: &Path) -> (PathBuf, Option<&'static str>) {
+    if std::env::var_os("NEXTEST").is_some() {
+        (root.join("target"), Some("--profile test"))
+    } else {
+        (root.join("target/python"), None)
+    }
+}
+
+#[test]
+fn python_module_builds_installs_and_passes_its_tests() {
+    let root = workspace();
+    if Command::new("python3").arg("--version").output().is_err() {
+        skip_or_fail("no python3 on PATH");
+        return;
+    }
+    let python = match venv(&root) {
+        Ok(p) => p,
+        Err(e) => {
+            skip_or_fail(&format!("cannot set up target/python-venv: {e}"));
+            return;
+        }
+    };
+    let (target, profile) = wheel_build(&root);
+    run(Command::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--force-reinstall",
+            "--no-deps",
+            // The venv's maturin (installed above), not a fresh download into an isolated
+            // build environment on every run.
+            "--no-build-isolation",
+        ])
+        .arg(root.join("sim-host/python"))
+        .env("CARGO_TARGET_DIR", &target)
+        .envs(profile.map(|p| ("MATURIN_PEP517_ARGS", p))))
+    .unwrap_or_else(|e| panic!("pip install ./sim-host/python: {e}"));
+    // Run from a folder without a `sandjumper` directory, so the installed module is tested.
+    let here = tempfile::tempdir().unwrap();
+    let report = run(Command::new(&python)
+        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+        .arg(root.join("sim-host/python/tests"))
+        .current_dir(here.path())
+        .env("SANDJUMPER_BIN", env!("CARGO_BIN_EXE_sandjumper")))
+    .unwrap_or_else(|e| panic!("pytest: {e}"));
+    eprintln!("{report}");
+    assert!(report.contains(" passed"), "{report}");
+    assert!(!report.contains("failed"), "{report}");
+    // Every test ran: the environment has everything they need (tomllib, matplotlib).
+    assert!(!report.contains("skipped"), "{report}");
+}
