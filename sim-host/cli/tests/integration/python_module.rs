@@ -65,14 +65,24 @@ fn venv(root: &Path) -> Result<PathBuf, String> {
     Ok(python)
 }
 
+/// `PATH` with `dir` first: maturin's build hook runs the `maturin` program by name.
+fn on_path(dir: &Path) -> std::ffi::OsString {
+    let mut dirs = vec![dir.to_path_buf()];
+    dirs.extend(std::env::split_paths(
+        &std::env::var_os("PATH").unwrap_or_default(),
+    ));
+    std::env::join_paths(dirs).expect("PATH joins")
+}
+
 /// Where the wheel builds, and the arguments maturin gets. Under cargo-nextest (the README's
 /// test command) the tests' build is over and `target/` free: the wheel builds there in the
-/// tests' own `test` profile, reusing what the tests compiled. Under
+/// `dev` profile, whose settings are the tests' own, reusing what the tests compiled (`cargo
+/// rustc`, which maturin runs, would build a test harness in the `test` profile). Under
 /// `cargo test`, which holds `target/`'s lock while the tests run, in `target/python` with the
 /// wheel's own profile.
 fn wheel_build(root: &Path) -> (PathBuf, Option<&'static str>) {
     if std::env::var_os("NEXTEST").is_some() {
-        (root.join("target"), Some("--profile test"))
+        (root.join("target"), Some("--profile dev"))
     } else {
         (root.join("target/python"), None)
     }
@@ -107,6 +117,10 @@ fn python_module_builds_installs_and_passes_its_tests() {
         ])
         .arg(root.join("sim-host/python"))
         .env("CARGO_TARGET_DIR", &target)
+        .env(
+            "PATH",
+            on_path(python.parent().expect("the venv's bin folder")),
+        )
         .envs(profile.map(|p| ("MATURIN_PEP517_ARGS", p))))
     .unwrap_or_else(|e| panic!("pip install ./sim-host/python: {e}"));
     // Run from a folder without a `sandjumper` directory, so the installed module is tested.
