@@ -291,60 +291,97 @@ impl VectorField {
     }
 }
 
-/// Why a pair cannot be analysed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PivError(pub String);
-
-impl std::fmt::Display for PivError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why a pair cannot be analysed: settings that do not fit the frames, or frames that do not
+/// fit each other. Each message says what is allowed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PivError {
+    /// No interrogation pass.
+    #[error("no passes (allowed: window sizes such as 64,32,16)")]
+    NoPasses,
+    /// A window that is not a power of two of at least 8 px.
+    #[error("window {size_px} px not allowed (allowed: a power of two >= 8)")]
+    WindowSize {
+        /// The window's side, px.
+        size_px: usize,
+    },
+    /// A window larger than the frames.
+    #[error("window {size_px} px is larger than the {width}x{height} image")]
+    WindowTooLarge {
+        /// The window's side, px.
+        size_px: usize,
+        /// The frames' width, px.
+        width: usize,
+        /// The frames' height, px.
+        height: usize,
+    },
+    /// A pass whose window is larger than the pass before.
+    #[error("window {size_px} px after {previous_px} px (allowed: sizes that do not grow)")]
+    WindowGrows {
+        /// The window's side, px.
+        size_px: usize,
+        /// The previous pass's window side, px.
+        previous_px: usize,
+    },
+    /// A window overlap outside 0..=0.9.
+    #[error("overlap {0} not allowed (allowed: 0..=0.9)")]
+    Overlap(f64),
+    /// A median-test threshold that is not a positive number.
+    #[error("median threshold {0} not allowed (allowed: > 0)")]
+    MedianThreshold(f64),
+    /// A minimum correlation peak ratio below 1.
+    #[error("minimum peak ratio {0} not allowed (allowed: >= 1)")]
+    MinPeakRatio(f64),
+    /// Two frames of different sizes.
+    #[error("the frames of a pair differ in size: {}x{} and {}x{}", first.0, first.1, second.0, second.1)]
+    SizeMismatch {
+        /// The first frame's width and height, px.
+        first: (usize, usize),
+        /// The second frame's width and height, px.
+        second: (usize, usize),
+    },
+    /// A mask whose pixel count is not the frames'.
+    #[error("the mask has {mask_px} pixels, the frames {width}x{height}")]
+    MaskSize {
+        /// The mask's number of pixels.
+        mask_px: usize,
+        /// The frames' width, px.
+        width: usize,
+        /// The frames' height, px.
+        height: usize,
+    },
 }
-
-impl std::error::Error for PivError {}
 
 /// Check the settings against an image size.
 pub fn check_config(cfg: &PivConfig, width: usize, height: usize) -> Result<(), PivError> {
     if cfg.windows.is_empty() {
-        return Err(PivError(
-            "no passes (allowed: window sizes such as 64,32,16)".into(),
-        ));
+        return Err(PivError::NoPasses);
     }
     for (k, &n) in cfg.windows.iter().enumerate() {
         if n < 8 || !n.is_power_of_two() {
-            return Err(PivError(format!(
-                "window {n} px not allowed (allowed: a power of two >= 8)"
-            )));
+            return Err(PivError::WindowSize { size_px: n });
         }
         if n > width || n > height {
-            return Err(PivError(format!(
-                "window {n} px is larger than the {width}x{height} image"
-            )));
+            return Err(PivError::WindowTooLarge {
+                size_px: n,
+                width,
+                height,
+            });
         }
         if k > 0 && n > cfg.windows[k - 1] {
-            return Err(PivError(format!(
-                "window {n} px after {} px (allowed: sizes that do not grow)",
-                cfg.windows[k - 1]
-            )));
+            return Err(PivError::WindowGrows {
+                size_px: n,
+                previous_px: cfg.windows[k - 1],
+            });
         }
     }
     if !(0.0..=0.9).contains(&cfg.overlap) {
-        return Err(PivError(format!(
-            "overlap {} not allowed (allowed: 0..=0.9)",
-            cfg.overlap
-        )));
+        return Err(PivError::Overlap(cfg.overlap));
     }
     if !(cfg.median_threshold.is_finite() && cfg.median_threshold > 0.0) {
-        return Err(PivError(format!(
-            "median threshold {} not allowed (allowed: > 0)",
-            cfg.median_threshold
-        )));
+        return Err(PivError::MedianThreshold(cfg.median_threshold));
     }
     if !(cfg.min_peak_ratio.is_finite() && cfg.min_peak_ratio >= 1.0) {
-        return Err(PivError(format!(
-            "minimum peak ratio {} not allowed (allowed: >= 1)",
-            cfg.min_peak_ratio
-        )));
+        return Err(PivError::MinPeakRatio(cfg.min_peak_ratio));
     }
     Ok(())
 }
@@ -497,21 +534,20 @@ pub fn piv_pair(
     cfg: &PivConfig,
 ) -> Result<VectorField, PivError> {
     if (a.width, a.height) != (b.width, b.height) {
-        return Err(PivError(format!(
-            "the frames of a pair differ in size: {}x{} and {}x{}",
-            a.width, a.height, b.width, b.height
-        )));
+        return Err(PivError::SizeMismatch {
+            first: (a.width, a.height),
+            second: (b.width, b.height),
+        });
     }
     check_config(cfg, a.width, a.height)?;
     if let Some(m) = mask
         && m.len() != a.width * a.height
     {
-        return Err(PivError(format!(
-            "the mask has {} pixels, the frames {}x{}",
-            m.len(),
-            a.width,
-            a.height
-        )));
+        return Err(PivError::MaskSize {
+            mask_px: m.len(),
+            width: a.width,
+            height: a.height,
+        });
     }
     let mut field: Option<VectorField> = None;
     let splines = cfg
@@ -588,7 +624,7 @@ pub fn piv_pair(
         }
         field = Some(f);
     }
-    field.ok_or_else(|| PivError("no passes".into()))
+    field.ok_or(PivError::NoPasses)
 }
 
 /// Copy an n x n window at `(x0, y0)` (clamped at the edges), remove the mean of its

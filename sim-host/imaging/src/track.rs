@@ -66,22 +66,110 @@ pub enum FrameClock {
     },
 }
 
-/// Why tracking could not run (bad input: exit status 2).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TrackError(pub String);
-
-impl std::fmt::Display for TrackError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why tracking could not run (bad input: exit status 2). Each message names the flag or the
+/// frames and says what is allowed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TrackError {
+    /// `--fps` is not a positive frame rate.
+    #[error("--fps {0} not allowed (allowed: a frame rate > 0 frames/s)")]
+    FrameRate(f64),
+    /// The log that should time the frames has no camera frames.
+    #[error(
+        "the log has no camera frames (no `camera_frame` values): it cannot time the frames; use --fps"
+    )]
+    NoCameraFrames,
+    /// The log lists one camera frame twice.
+    #[error("the log lists camera frame {0} twice")]
+    FrameTwice(u64),
+    /// The frames and the log's camera ticks are not the same frame numbers.
+    #[error("{}", log_disagreement(*.images, *.ticks, .not_in_log, .without_image))]
+    LogDisagrees {
+        /// How many images the sequence has.
+        images: usize,
+        /// How many camera ticks the log has.
+        ticks: usize,
+        /// Frame numbers of images that the log does not list.
+        not_in_log: Vec<u64>,
+        /// Frame numbers the log lists without an image.
+        without_image: Vec<u64>,
+    },
+    /// The region of interest does not lie inside the frames.
+    #[error(
+        "--roi {},{},{},{} lies outside the {}x{} frames of {sequence} (allowed: inside the frame, not empty)",
+        roi.x, roi.y, roi.width, roi.height, frame.0, frame.1
+    )]
+    RoiOutside {
+        /// The region asked for, px.
+        roi: Roi,
+        /// The frames' width and height, px.
+        frame: (u32, u32),
+        /// The image sequence, as named to the user.
+        sequence: String,
+    },
+    /// A length, scale or window that must be positive is not.
+    #[error("{flag} {value} not allowed (allowed: finite and > 0)")]
+    NotPositive {
+        /// The flag, e.g. `--m-per-px`.
+        flag: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A negative or non-finite exposure.
+    #[error("--exposure {0} not allowed (allowed: finite and >= 0 s)")]
+    Exposure(f64),
+    /// No rest frame asked for.
+    #[error("--rest-frames 0 not allowed (allowed: >= 1)")]
+    NoRestFrames,
+    /// The ball was not measured in any rest frame.
+    #[error(
+        "no rest frame with the ball measured ({rest_frames} rest frames: {rule}); the rest height is unknown"
+    )]
+    RestUnmeasured {
+        /// How many frames the rule took as rest frames.
+        rest_frames: usize,
+        /// Which frames are the rest frames.
+        rule: String,
+    },
+    /// The ball was not measured in any frame.
+    #[error("no frame with the ball measured")]
+    NeverMeasured,
+    /// A frame of the sequence could not be read.
+    #[error("frames: {0}")]
+    Frames(#[from] SequenceError),
 }
 
-impl std::error::Error for TrackError {}
-
-impl From<SequenceError> for TrackError {
-    fn from(e: SequenceError) -> Self {
-        Self(format!("frames: {e}"))
+/// [`TrackError::LogDisagrees`]'s message: the counts, then up to five frame numbers of each kind.
+fn log_disagreement(
+    images: usize,
+    ticks: usize,
+    not_in_log: &[u64],
+    without_image: &[u64],
+) -> String {
+    let list = |v: &[u64]| {
+        let shown: Vec<String> = v.iter().take(5).map(u64::to_string).collect();
+        format!(
+            "{}{}",
+            shown.join(", "),
+            if v.len() > 5 { ", ..." } else { "" }
+        )
+    };
+    let mut why =
+        format!("the frames ({images} images) and the log ({ticks} camera ticks) disagree");
+    if !not_in_log.is_empty() {
+        why += &format!(
+            "; {} frame number(s) not in the log: {}",
+            not_in_log.len(),
+            list(not_in_log)
+        );
     }
+    if !without_image.is_empty() {
+        why += &format!(
+            "; {} camera tick(s) without an image: frame {}",
+            without_image.len(),
+            list(without_image)
+        );
+    }
+    why
 }
 
 /// One tracked frame (a row of `track.csv`).
@@ -182,26 +270,19 @@ pub fn frame_times(numbers: &[u64], clock: &FrameClock) -> Result<Vec<f64>, Trac
     match clock {
         FrameClock::Fps(fps) => {
             if !(fps.is_finite() && *fps > 0.0) {
-                return Err(TrackError(format!(
-                    "--fps {fps} not allowed (allowed: a frame rate > 0 frames/s)"
-                )));
+                return Err(TrackError::FrameRate(*fps));
             }
             let first = numbers.first().copied().unwrap_or(0);
             Ok(numbers.iter().map(|&n| (n - first) as f64 / fps).collect())
         }
         FrameClock::Log { frames, .. } => {
             if frames.is_empty() {
-                return Err(TrackError(
-                    "the log has no camera frames (no `camera_frame` values): it cannot time the frames; use --fps".into(),
-                ));
+                return Err(TrackError::NoCameraFrames);
             }
             let mut by_number: Vec<(u64, f64)> = frames.clone();
             by_number.sort_by_key(|f| f.0);
             if let Some(w) = by_number.windows(2).find(|w| w[0].0 == w[1].0) {
-                return Err(TrackError(format!(
-                    "the log lists camera frame {} twice",
-                    w[0].0
-                )));
+                return Err(TrackError::FrameTwice(w[0].0));
             }
             let in_log = |n: u64| by_number.binary_search_by_key(&n, |f| f.0).ok();
             let missing_in_log: Vec<u64> = numbers
@@ -215,34 +296,12 @@ pub fn frame_times(numbers: &[u64], clock: &FrameClock) -> Result<Vec<f64>, Trac
                 .filter(|n| numbers.binary_search(n).is_err())
                 .collect();
             if !missing_in_log.is_empty() || !missing_frames.is_empty() {
-                let list = |v: &[u64]| {
-                    let shown: Vec<String> = v.iter().take(5).map(u64::to_string).collect();
-                    format!(
-                        "{}{}",
-                        shown.join(", "),
-                        if v.len() > 5 { ", ..." } else { "" }
-                    )
-                };
-                let mut why = format!(
-                    "the frames ({} images) and the log ({} camera ticks) disagree",
-                    numbers.len(),
-                    by_number.len()
-                );
-                if !missing_in_log.is_empty() {
-                    why += &format!(
-                        "; {} frame number(s) not in the log: {}",
-                        missing_in_log.len(),
-                        list(&missing_in_log)
-                    );
-                }
-                if !missing_frames.is_empty() {
-                    why += &format!(
-                        "; {} camera tick(s) without an image: frame {}",
-                        missing_frames.len(),
-                        list(&missing_frames)
-                    );
-                }
-                return Err(TrackError(why));
+                return Err(TrackError::LogDisagrees {
+                    images: numbers.len(),
+                    ticks: by_number.len(),
+                    not_in_log: missing_in_log,
+                    without_image: missing_frames,
+                });
             }
             Ok(numbers
                 .iter()
@@ -289,16 +348,11 @@ pub fn follow_ball(
             })
         });
         if !region.fits(f.frame.width(), f.frame.height()) {
-            return Err(TrackError(format!(
-                "--roi {},{},{},{} lies outside the {}x{} frames of {} (allowed: inside the frame, not empty)",
-                region.x,
-                region.y,
-                region.width,
-                region.height,
-                f.frame.width(),
-                f.frame.height(),
-                f.source
-            )));
+            return Err(TrackError::RoiOutside {
+                roi: region,
+                frame: (f.frame.width(), f.frame.height()),
+                sequence: f.source.to_string(),
+            });
         }
         let prediction = match last.as_slice() {
             [.., (n1, _, _)] if f.number - n1 > LOST_AFTER_FRAMES => None,
@@ -323,28 +377,21 @@ pub fn follow_ball(
 
 /// Check a tracking spec's numbers.
 pub fn check_spec(spec: &TrackSpec) -> Result<(), TrackError> {
-    let positive = |name: &str, v: f64| {
-        if v.is_finite() && v > 0.0 {
+    let positive = |flag: &'static str, value: f64| {
+        if value.is_finite() && value > 0.0 {
             Ok(())
         } else {
-            Err(TrackError(format!(
-                "{name} {v} not allowed (allowed: finite and > 0)"
-            )))
+            Err(TrackError::NotPositive { flag, value })
         }
     };
     positive("--m-per-px", spec.m_per_px)?;
     positive("--ball-diameter", spec.ball_diameter_m)?;
     positive("--apex-window", spec.apex_window_s)?;
     if !(spec.exposure_s.is_finite() && spec.exposure_s >= 0.0) {
-        return Err(TrackError(format!(
-            "--exposure {} not allowed (allowed: finite and >= 0 s)",
-            spec.exposure_s
-        )));
+        return Err(TrackError::Exposure(spec.exposure_s));
     }
     if spec.rest_frames == 0 {
-        return Err(TrackError(
-            "--rest-frames 0 not allowed (allowed: >= 1)".into(),
-        ));
+        return Err(TrackError::NoRestFrames);
     }
     Ok(())
 }
@@ -397,10 +444,10 @@ pub fn track_sequence(
         .map(|&i| frames[i].y_px)
         .collect();
     if rest_y.is_empty() {
-        return Err(TrackError(format!(
-            "no rest frame with the ball measured ({} rest frames: {rest_rule}); the rest height is unknown",
-            rest_idx.len()
-        )));
+        return Err(TrackError::RestUnmeasured {
+            rest_frames: rest_idx.len(),
+            rule: rest_rule,
+        });
     }
     rest_y.sort_by(f64::total_cmp);
     let m = rest_y.len();
@@ -418,8 +465,7 @@ pub fn track_sequence(
             FixStatus::Ambiguous => flagged.ambiguous += 1,
         }
     }
-    let apex = fit_apex(&frames, spec.apex_window_s)
-        .ok_or_else(|| TrackError("no frame with the ball measured".into()))?;
+    let apex = fit_apex(&frames, spec.apex_window_s).ok_or(TrackError::NeverMeasured)?;
     Ok(TrackResult {
         frames,
         rest_height_px,

@@ -334,17 +334,17 @@ impl LammpsRequest {
 }
 
 /// What a run submitted to Slurm ([`submit`]) came to.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub enum Submitted {
     /// Submitted without waiting ([`QueueOptions::no_wait`]): Slurm's job id.
     Queued {
         /// Slurm's job id.
         id: String,
     },
-    /// The job ran and wrote its folder: the text of its `summary.json`.
+    /// The job ran and wrote its folder: its summary, read back from its `summary.json`.
     Done {
-        /// `summary.json` as the job wrote it (what `dem lammps --json` prints).
-        summary_json: String,
+        /// The finished run (boxed: a summary is a few hundred bytes, a job id a string).
+        outcome: Box<LammpsOutcome>,
     },
 }
 
@@ -376,9 +376,16 @@ pub fn submit(
         CommandJobOutcome::Queued { id } => Ok(Submitted::Queued { id }),
         CommandJobOutcome::Done { .. } => {
             let p = request.out.join("summary.json");
-            let summary_json = std::fs::read_to_string(&p)
+            let summary = std::fs::read_to_string(&p)
+                .map_err(|e| e.to_string())
+                .and_then(|text| serde_json::from_str(&text).map_err(|e| e.to_string()))
                 .map_err(|e| LammpsError::internal(format!("{}: {e}", p.display())))?;
-            Ok(Submitted::Done { summary_json })
+            Ok(Submitted::Done {
+                outcome: Box::new(LammpsOutcome {
+                    summary,
+                    out: request.out.clone(),
+                }),
+            })
         }
     }
 }

@@ -5,10 +5,9 @@
 //! overrides text that has a `[sand]` table (the sand values at that phi); keys the text does
 //! not set come from the nearest preset row, and `sand.packing_fraction` is set to `phi`.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::params::{PRESET_PHI_MAX, PRESET_PHI_MIN, Params};
+use crate::params::{PRESET_PHI_MAX, PRESET_PHI_MIN, Params, ParamsError};
 
 /// A user's parameter overrides (TOML, tables `[robot]`, `[drive]`, `[sand]`, `[model]`),
 /// read once.
@@ -21,24 +20,68 @@ pub struct ParamsFile {
     pub text: String,
 }
 
-/// Why parameters could not be resolved: the whole message, naming the flag or the file, the
-/// key and the line, and what is allowed. Always the caller's input.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ResolveError(pub String);
-
-impl fmt::Display for ResolveError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why parameters could not be resolved; each message names the flag or the file, the key and
+/// the line, and what is allowed. Always the caller's input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ResolveError {
+    /// The params file could not be read.
+    #[error("cannot read params file `{}`: {reason}", path.display())]
+    Unreadable {
+        /// The file as given.
+        path: PathBuf,
+        /// The system's reason.
+        reason: String,
+    },
+    /// The packing fraction has no preset row.
+    #[error("--phi {phi}: {source}")]
+    Preset {
+        /// The packing fraction asked for.
+        phi: f64,
+        /// The preset's refusal.
+        source: ParamsError,
+    },
+    /// A packing fraction outside the presets with a params file that has no `[sand]` table.
+    #[error(
+        "--phi {phi} is outside the presets ({}..={}) and the params file `{}` has no [sand] table \
+         to supply the sand values (allowed: a phi in {}..={}, or a params file with a [sand] \
+         table)",
+        PRESET_PHI_MIN,
+        PRESET_PHI_MAX,
+        file.display(),
+        PRESET_PHI_MIN,
+        PRESET_PHI_MAX
+    )]
+    NoSandTable {
+        /// The packing fraction asked for.
+        phi: f64,
+        /// The params file.
+        file: PathBuf,
+    },
+    /// A packing fraction outside the presets without a params file.
+    #[error(
+        "--phi {phi} is outside the presets' range (allowed: {}..={}, or any phi together with \
+         --params FILE giving the [sand] values)",
+        PRESET_PHI_MIN,
+        PRESET_PHI_MAX
+    )]
+    OutsidePresets {
+        /// The packing fraction asked for.
+        phi: f64,
+    },
+    /// A key of the params file is unknown, mistyped or out of its range.
+    #[error("params file: {0}")]
+    File(#[source] ParamsError),
+    /// The parameters, overrides applied, fail their validation.
+    #[error("parameters: {0}")]
+    Invalid(#[source] ParamsError),
 }
-
-impl std::error::Error for ResolveError {}
 
 impl ParamsFile {
     /// Read `path`; an unreadable file is an error naming the path.
     pub fn read(path: &Path) -> Result<Self, ResolveError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            ResolveError(format!("cannot read params file `{}`: {e}", path.display()))
+        let text = std::fs::read_to_string(path).map_err(|e| ResolveError::Unreadable {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
         })?;
         Ok(Self {
             path: path.to_path_buf(),
@@ -63,7 +106,7 @@ impl ParamsFile {
 pub fn resolve_params(phi: f64, file: Option<&ParamsFile>) -> Result<Params, ResolveError> {
     let in_presets = (PRESET_PHI_MIN - 1e-9..=PRESET_PHI_MAX + 1e-9).contains(&phi);
     let preset = |phi_row: f64| {
-        Params::preset(phi_row).map_err(|e| ResolveError(format!("--phi {phi}: {e}")))
+        Params::preset(phi_row).map_err(|source| ResolveError::Preset { phi, source })
     };
     let base = if in_presets {
         preset(phi)?
@@ -75,30 +118,21 @@ pub fn resolve_params(phi: f64, file: Option<&ParamsFile>) -> Result<Params, Res
                 p
             }
             Some(f) => {
-                return Err(ResolveError(format!(
-                    "--phi {phi} is outside the presets ({PRESET_PHI_MIN}..={PRESET_PHI_MAX}) and the \
-                     params file `{}` has no [sand] table to supply the sand values (allowed: a phi \
-                     in {PRESET_PHI_MIN}..={PRESET_PHI_MAX}, or a params file with a [sand] table)",
-                    f.path.display()
-                )));
+                return Err(ResolveError::NoSandTable {
+                    phi,
+                    file: f.path.clone(),
+                });
             }
-            None => {
-                return Err(ResolveError(format!(
-                    "--phi {phi} is outside the presets' range (allowed: {PRESET_PHI_MIN}..={PRESET_PHI_MAX}, \
-                     or any phi together with --params FILE giving the [sand] values)"
-                )));
-            }
+            None => return Err(ResolveError::OutsidePresets { phi }),
         }
     };
     let params = match file {
         Some(f) => base
             .with_overrides_toml(&f.text, &f.path.display().to_string())
-            .map_err(|e| ResolveError(format!("params file: {e}")))?,
+            .map_err(ResolveError::File)?,
         None => base,
     };
-    params
-        .validate()
-        .map_err(|e| ResolveError(format!("parameters: {e}")))?;
+    params.validate().map_err(ResolveError::Invalid)?;
     Ok(params)
 }
 
@@ -109,7 +143,10 @@ mod tests {
     #[test]
     fn a_phi_outside_the_presets_needs_a_sand_table() {
         let err = resolve_params(0.5, None).unwrap_err();
-        assert!(err.0.contains("outside the presets' range"), "{err}");
+        assert!(
+            err.to_string().contains("outside the presets' range"),
+            "{err}"
+        );
         let file = ParamsFile {
             path: "x.toml".into(),
             text: "[sand]\n".into(),
@@ -123,7 +160,7 @@ mod tests {
         assert!(
             resolve_params(0.5, Some(&bad))
                 .unwrap_err()
-                .0
+                .to_string()
                 .contains("`y.toml` has no [sand]")
         );
         assert_eq!(

@@ -2,6 +2,7 @@
 //! defaults), its checks ([`OptimizeRequest::validate`], the command line's messages) and the
 //! search it sets up ([`Setup`]).
 
+use sandjumper_output::parse::number_within;
 use std::path::{Path, PathBuf};
 
 use sandjumper_model::SimOptions;
@@ -153,9 +154,8 @@ pub fn ranged(
     hi: f64,
     unit: &'static str,
 ) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > lo && v <= hi => Ok(v),
-        _ => Err(out_of_range(what, s, lo, hi, unit)),
+    move |s: &str| {
+        number_within(s, |v| v > lo && v <= hi).ok_or_else(|| out_of_range(what, s, lo, hi, unit))
     }
 }
 

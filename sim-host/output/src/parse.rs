@@ -12,6 +12,15 @@ pub fn parse_number(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `s` as a finite number for which `allowed` holds, or `None`: the one test behind the value
+/// parsers of the commands' bounded numbers, each of which words its own refusal.
+pub fn number_within(s: &str, allowed: impl Fn(f64) -> bool) -> Option<f64> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|&v| v.is_finite() && allowed(v))
+}
+
 /// Parse a strictly positive number (a scale, a rate, a length).
 pub fn parse_positive(s: &str) -> Result<f64, String> {
     parse_number(s).and_then(|v| {

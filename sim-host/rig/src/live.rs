@@ -7,6 +7,7 @@
 use sandjumper_core::RigState;
 use sandjumper_core::fault::FaultCode;
 use sandjumper_live::{Event, LiveBus, LiveView};
+use sandjumper_output::parse::number_within;
 
 use crate::hil::run::PeriodView;
 use crate::tool::session::ProgramView;
@@ -26,20 +27,17 @@ pub const JUMP_CHANNELS: [&str; 6] = [
 /// `--pace X`: a simulated run's pace on a live view, times real time (0: as fast as
 /// possible, or 0.01..=1000).
 pub fn parse_pace(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v == 0.0 || (0.01..=1000.0).contains(&v) => Ok(v),
-        _ => Err(format!(
+    number_within(s, |v| v == 0.0 || (0.01..=1000.0).contains(&v)).ok_or_else(|| {
+        format!(
             "`{s}` is not a pace (allowed: 0, as fast as possible, or 0.01..=1000 times real time)"
-        )),
-    }
+        )
+    })
 }
 
 /// `--linger S`: how long a live view's page stays up after the run, s (0..=86400).
 pub fn parse_linger(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if (0.0..=86_400.0).contains(&v) => Ok(v),
-        _ => Err(format!("`{s}` is not a linger time (allowed: 0..=86400 s)")),
-    }
+    number_within(s, |v| (0.0..=86_400.0).contains(&v))
+        .ok_or_else(|| format!("`{s}` is not a linger time (allowed: 0..=86400 s)"))
 }
 
 /// A live view ([`sandjumper_live::LiveView`]: its bus, server and pacing) and the rig's

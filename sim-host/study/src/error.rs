@@ -53,6 +53,6 @@ impl Blamed for StudyError {
 
 impl From<sandjumper_model::resolve::ResolveError> for StudyError {
     fn from(e: sandjumper_model::resolve::ResolveError) -> Self {
-        Self::Input(e.0)
+        Self::Input(e.to_string())
     }
 }

@@ -19,7 +19,7 @@ pub struct ParamsFile {
 impl ParamsFile {
     /// Read `path`; an unreadable file is bad input naming the path.
     pub fn read(path: &Path) -> Result<Self, CliError> {
-        let f = lib::ParamsFile::read(path).map_err(|e| CliError::input(e.0))?;
+        let f = lib::ParamsFile::read(path).map_err(|e| CliError::input(e.to_string()))?;
         Ok(Self {
             path: f.path,
             text: f.text,
@@ -44,5 +44,5 @@ impl ParamsFile {
 /// validated. Errors (exit 2) name the flag or the file, key and line.
 pub fn resolve_params(phi: f64, file: Option<&ParamsFile>) -> Result<Params, CliError> {
     lib::resolve_params(phi, file.map(ParamsFile::to_library).as_ref())
-        .map_err(|e| CliError::input(e.0))
+        .map_err(|e| CliError::input(e.to_string()))
 }

@@ -78,7 +78,7 @@ pub fn run(a: &LammpsArgs) -> Result<(), CliError> {
             println!("{id}");
             eprintln!("when it is done its output is in {}", a.out.display());
         }
-        Submitted::Done { summary_json } if a.json => print!("{summary_json}"),
+        Submitted::Done { outcome } if a.json => println!("{}", outcome.summary_json()?),
         Submitted::Done { .. } => {}
     }
     Ok(())

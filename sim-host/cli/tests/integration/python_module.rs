@@ -137,3 +137,75 @@ fn python_module_builds_installs_and_passes_its_tests() {
     // Every test ran: the environment has everything they need (tomllib, matplotlib).
     assert!(!report.contains("skipped"), "{report}");
 }
+
+/// Each package `cargo tree` lists for `args` (in this workspace), with its features.
+fn resolved_features(
+    root: &Path,
+    args: &[&str],
+) -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
+    let out = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .arg("tree")
+        .args(args)
+        .args(["-f", "{p} {f}", "--prefix", "none"])
+        .current_dir(root)
+        .output()
+        .expect("run cargo tree");
+    assert!(
+        out.status.success(),
+        "cargo tree {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut features = std::collections::BTreeMap::<_, std::collections::BTreeSet<_>>::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let line = line.trim_end_matches(" (*)").replace(" (proc-macro)", "");
+        let mut words = line.split_whitespace();
+        let (Some(name), Some(version)) = (words.next(), words.next()) else {
+            continue;
+        };
+        let listed = words
+            .filter(|w| !w.starts_with('('))
+            .collect::<Vec<_>>()
+            .join(",");
+        features
+            .entry(format!("{name} {version}"))
+            .or_default()
+            .extend(
+                listed
+                    .split(',')
+                    .filter(|f| !f.is_empty())
+                    .map(str::to_string),
+            );
+    }
+    features
+}
+
+/// The wheel that `python_module_builds_installs_and_passes_its_tests` builds reuses the crates
+/// the tests compiled only where it resolves their features as the test build does (a crate
+/// built with other features, and every crate above it, compiles again: the whole workspace
+/// for `serde`'s `alloc`). It fails when they drift, naming what to add to
+/// `sim-host/python/Cargo.toml`'s list (tried: leaving out its `serde` line).
+#[test]
+fn the_wheel_resolves_the_features_of_the_test_build() {
+    let root = workspace();
+    let tests = resolved_features(&root, &["--workspace", "-e", "normal,build,dev"]);
+    let wheel = resolved_features(&root, &["-p", "sandjumper-python", "-e", "normal,build"]);
+    let drift: Vec<String> = wheel
+        .iter()
+        .filter_map(|(package, features)| {
+            let in_tests = tests.get(package)?;
+            (in_tests != features).then(|| {
+                format!(
+                    "{package}: the test build has {:?}, the wheel {:?}",
+                    in_tests.difference(features).collect::<Vec<_>>(),
+                    features.difference(in_tests).collect::<Vec<_>>()
+                )
+            })
+        })
+        .collect();
+    assert!(
+        drift.is_empty(),
+        "the Python wheel would compile these crates (and those above them) again; add their \
+         features to sim-host/python/Cargo.toml's list:\n{}",
+        drift.join("\n")
+    );
+}

@@ -13,6 +13,7 @@
 //!   `depth_m,force_n`, averaged in depth bins of `--bin` so depth strictly increases: the
 //!   input of `sandjumper fit intrusion` (`--first` / `--reintrusion`).
 
+use sandjumper_output::parse::number_within;
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
@@ -485,9 +486,9 @@ pub fn parse_bounded(
     lo: f64,
     hi: f64,
 ) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
-        _ => Err(format!("{what} `{s}` not allowed (allowed: {lo}..={hi})")),
+    move |s: &str| {
+        number_within(s, |v| (lo..=hi).contains(&v))
+            .ok_or_else(|| format!("{what} `{s}` not allowed (allowed: {lo}..={hi})"))
     }
 }
 crate::tool::output::validated_program!(IntrudeRequest, IntrudeOutcome, run_watching);

@@ -19,6 +19,7 @@
 //!    verify that the controller's committed checksum is the host's, run the replay and record
 //!    the new log. The summary compares the measured motor trajectory with the table.
 
+use sandjumper_output::parse::number_within;
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
@@ -579,9 +580,9 @@ crate::tool::output::program_outcome!(ReplayOutcome);
 pub fn parse_factor(
     what: &'static str,
 ) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-    move |s: &str| match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v <= 10.0 => Ok(v),
-        _ => Err(format!("{what} `{s}` not allowed (allowed: 0 < X <= 10)")),
+    move |s: &str| {
+        number_within(s, |v| v > 0.0 && v <= 10.0)
+            .ok_or_else(|| format!("{what} `{s}` not allowed (allowed: 0 < X <= 10)"))
     }
 }
 

@@ -1,6 +1,7 @@
 //! `rig status`: the controller's state, phase, latched fault and counters, once
 //! ([`status`]) or watched until the caller stops it ([`watch`]).
 
+use sandjumper_output::parse::number_within;
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -351,12 +352,8 @@ fn poll(
 
 /// `--watch-for S`: how long to watch, s (more than 0, up to 30 days).
 pub fn parse_watch_for(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= 30.0 * 86_400.0 => Ok(v),
-        _ => Err(format!(
-            "`{s}` is not a watch time (allowed: more than 0 s, up to 30 days)"
-        )),
-    }
+    number_within(s, |v| v > 0.0 && v <= 30.0 * 86_400.0)
+        .ok_or_else(|| format!("`{s}` is not a watch time (allowed: more than 0 s, up to 30 days)"))
 }
 
 impl StatusReport {

@@ -2,6 +2,7 @@
 //! simulated one (`sil`, `pil`, the virtual F407 board), with its firmware and the drive
 //! calibration sent when the session opens.
 
+use sandjumper_output::parse::number_within;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -118,11 +119,10 @@ impl Target {
 /// `--board-pace X`: the virtual board's pace, times real time (its program's range,
 /// 0.001..=1).
 pub fn parse_board_pace(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if (0.001..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!(
+    number_within(s, |v| (0.001..=1.0).contains(&v)).ok_or_else(|| {
+        format!(
             "`{s}` is not a board pace (allowed: 0.001..=1 times real time: a board run faster \
              than real time would see the host's 50 ms polls spread past its watchdogs)"
-        )),
-    }
+        )
+    })
 }

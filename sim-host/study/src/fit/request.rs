@@ -133,7 +133,7 @@ pub fn run(request: &FitRequest, _progress: &dyn Progress) -> Result<FitReport, 
             height,
             rtol,
         } => {
-            let base = move |phi: f64| resolve_params(phi, file).map_err(|e| e.0);
+            let base = move |phi: f64| resolve_params(phi, file).map_err(|e| e.to_string());
             let setup = JumpFitSetup {
                 param: *param,
                 model: model.unwrap_or(match param {
