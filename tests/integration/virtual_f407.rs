@@ -4,6 +4,7 @@
 //! when toolchain 1.98.0 or the F407 ELF is missing; under `CI` (which installs both) a skip is
 //! a failure.
 
+use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::Command;
 
@@ -63,6 +64,21 @@ fn firmware_build(
     cmd.output()
 }
 
+/// The board's build running beside the test, in a process group of its own: if the test
+/// returns or panics before waiting for it, the whole group (the script, cargo, each rustc) is
+/// killed, not left building into the board's target directory beside the next run.
+struct BackgroundBuild(std::process::Child);
+
+impl Drop for BackgroundBuild {
+    fn drop(&mut self) {
+        if let Ok(None) = self.0.try_wait() {
+            let group = format!("-{}", self.0.id());
+            let _ = Command::new("kill").args(["-KILL", "--", &group]).status();
+            let _ = self.0.wait();
+        }
+    }
+}
+
 #[test]
 fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -82,18 +98,20 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     let board_log = root.join("target/virtual-f407-build.log");
     std::fs::create_dir_all(root.join("target")).expect("the target folder");
     let log = std::fs::File::create(&board_log).expect("the board build's log");
-    let mut board_build = clean(Command::new(board.join("build.sh")).arg("--tests"))
-        .current_dir(&board)
-        .stdout(log.try_clone().expect("the log again"))
-        .stderr(log)
-        .spawn()
-        .expect("run build.sh");
+    let mut board_build = BackgroundBuild(
+        clean(Command::new(board.join("build.sh")).arg("--tests"))
+            .current_dir(&board)
+            .stdout(log.try_clone().expect("the log again"))
+            .stderr(log)
+            .process_group(0)
+            .spawn()
+            .expect("run build.sh"),
+    );
     // The F407 release ELF, built now so the board never runs a stale one (a no-op when it is
     // up to date); without the target or flip-link it cannot be built: skipped.
     let built = firmware_build(root, None, None);
     if !built.as_ref().is_ok_and(|o| o.status.success()) || !elf.is_file() {
-        let _ = board_build.kill();
-        let _ = board_build.wait();
+        drop(board_build);
         return skip(&format!(
             "the F407 ELF {} cannot be built here (`rustup target add thumbv7em-none-eabihf`, `cargo install flip-link`): {}",
             elf.display(),
@@ -132,7 +150,7 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
         )
         .expect("copy the test image");
     }
-    let build = board_build.wait().expect("wait for build.sh");
+    let build = board_build.0.wait().expect("wait for build.sh");
     assert!(
         build.success(),
         "sim-host/virtual-f407/build.sh failed:\n{}",

@@ -133,9 +133,15 @@ pub enum TrackError {
     /// The ball was not measured in any frame.
     #[error("no frame with the ball measured")]
     NeverMeasured,
-    /// A frame of the sequence could not be read.
+    /// A frame of the sequence could not be read (its message, not a separate error source).
     #[error("frames: {0}")]
-    Frames(#[from] SequenceError),
+    Frames(SequenceError),
+}
+
+impl From<SequenceError> for TrackError {
+    fn from(e: SequenceError) -> Self {
+        Self::Frames(e)
+    }
 }
 
 /// [`TrackError::LogDisagrees`]'s message: the counts, then up to five frame numbers of each kind.

@@ -124,33 +124,44 @@ pub struct Summary {
     /// Grains removed where the foot started.
     pub grains_removed_under_foot: u64,
     /// The target packing fraction, 1.
+    #[serde(deserialize_with = "number_or_nan")]
     pub target_packing_fraction: f64,
     /// The settled bed's (its bulk), 1.
+    #[serde(deserialize_with = "number_or_nan")]
     pub settled_packing_fraction: f64,
     /// Whether the settle ended on its rms speed.
     pub settled_by_speed: bool,
     /// Time step, s.
+    #[serde(deserialize_with = "number_or_nan")]
     pub time_step_s: f64,
     /// Frames read.
     pub frames: u64,
     /// Their rate, frames/s.
+    #[serde(deserialize_with = "number_or_nan")]
     pub fps: f64,
     /// Deepest the foot went, m.
+    #[serde(deserialize_with = "number_or_nan")]
     pub max_depth_m: f64,
     /// The paper's added mass over eq. 6's at the same depth: the median over the frames
     /// with the paper's added mass.
+    #[serde(deserialize_with = "number_or_nan")]
     pub added_mass_vs_eq6_median: f64,
     /// The column's peak momentum, kg m/s.
+    #[serde(deserialize_with = "number_or_nan")]
     pub grain_momentum_under_foot_kg_m_s: f64,
     /// The paper's added mass at the deepest frame that has one, kg.
+    #[serde(deserialize_with = "number_or_nan")]
     pub final_added_mass_kg: f64,
     /// Force on the foot over the model's `F_p`: the median over the windows deeper than one
     /// grain while the foot goes down.
+    #[serde(deserialize_with = "number_or_nan")]
     pub force_vs_penetration_force_median: f64,
     /// Largest force on the foot, N.
+    #[serde(deserialize_with = "number_or_nan")]
     pub peak_force_n: f64,
     /// Hertz overlap of a contact carrying the peak force shared by the foot's area at one
     /// grain per d^2, over d: how soft the softened grains are at the run's peak, 1.
+    #[serde(deserialize_with = "number_or_nan")]
     pub peak_overlap_ratio: f64,
     /// The jammed cone's angle to the horizontal, degrees: the mean of its sides when both
     /// narrow and agree within 10 degrees (null: none, see `cone_note`).
@@ -166,13 +177,23 @@ pub struct Summary {
     /// How the cone was found, or why not.
     pub cone_note: String,
     /// The speed rule: frames with the foot at least this share of its fastest, 1.
+    #[serde(deserialize_with = "number_or_nan")]
     pub min_speed_ratio: f64,
     /// Core-seconds the two stages took (wall time x ranks), s.
+    #[serde(deserialize_with = "number_or_nan")]
     pub core_seconds: f64,
     /// Grain-steps per core-second of the intrusion (the cost to scale by).
+    #[serde(deserialize_with = "number_or_nan")]
     pub grain_steps_per_core_second: f64,
     /// The run's id.
     pub run_id: String,
+}
+
+/// A number of `summary.json` read back: serde_json writes a NaN or an infinity (a run with no
+/// sample past the speed cut, no cone measured) as `null`, read back here as NaN, which writes
+/// as `null` again.
+fn number_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// A stage (`settle`, `intrusion`, `read`) of `steps` steps (frames for `read`) starts: a
@@ -664,4 +685,54 @@ fn write_outputs(
         m.spec.foot_radius_m(),
     )
     .map_err(LammpsError::internal)
+}
+
+#[cfg(test)]
+mod summary_tests {
+    use super::Summary;
+
+    /// A summary whose medians and deepest values are not numbers (a run with no sample past
+    /// the speed cut) is written with `null`s and reads back to the same text: what a Slurm
+    /// job's `summary.json` goes through before `dem lammps --slurm --json` prints it. Fails
+    /// without `number_or_nan` (serde_json refuses `null` for an `f64`).
+    #[test]
+    fn a_summary_with_nulls_reads_back_to_the_same_text() {
+        let summary = Summary {
+            lammps_version: "LAMMPS (22 Jul 2025)".into(),
+            grains: 1200,
+            foot_spheres: 61,
+            grains_removed_under_foot: 3,
+            target_packing_fraction: 0.6,
+            settled_packing_fraction: 0.59,
+            settled_by_speed: true,
+            time_step_s: 1e-6,
+            frames: 0,
+            fps: 2000.0,
+            max_depth_m: f64::NEG_INFINITY,
+            added_mass_vs_eq6_median: f64::NAN,
+            grain_momentum_under_foot_kg_m_s: f64::NEG_INFINITY,
+            final_added_mass_kg: f64::NAN,
+            force_vs_penetration_force_median: f64::NAN,
+            peak_force_n: 0.0,
+            peak_overlap_ratio: 0.0,
+            cone_angle_deg: None,
+            cone_left_deg: None,
+            cone_right_deg: None,
+            cone_apex_below_foot_m: None,
+            cone_rows: 0,
+            cone_note: "no cone".into(),
+            min_speed_ratio: 0.5,
+            core_seconds: 12.5,
+            grain_steps_per_core_second: 3.0e5,
+            run_id: "r".into(),
+        };
+        let text = serde_json::to_string_pretty(&summary).unwrap();
+        assert!(
+            text.contains("\"added_mass_vs_eq6_median\": null"),
+            "{text}"
+        );
+        let back: Summary = serde_json::from_str(&text).unwrap();
+        assert!(back.final_added_mass_kg.is_nan() && back.max_depth_m.is_nan());
+        assert_eq!(serde_json::to_string_pretty(&back).unwrap(), text);
+    }
 }

@@ -21,7 +21,9 @@ pub struct ParamsFile {
 }
 
 /// Why parameters could not be resolved; each message names the flag or the file, the key and
-/// the line, and what is allowed. Always the caller's input.
+/// the line, and what is allowed. Always the caller's input. A variant that carries the
+/// parameters' own error says it in its message (no separate error source, which a printer of
+/// error chains would repeat).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ResolveError {
     /// The params file could not be read.
@@ -33,12 +35,12 @@ pub enum ResolveError {
         reason: String,
     },
     /// The packing fraction has no preset row.
-    #[error("--phi {phi}: {source}")]
+    #[error("--phi {phi}: {error}")]
     Preset {
         /// The packing fraction asked for.
         phi: f64,
         /// The preset's refusal.
-        source: ParamsError,
+        error: ParamsError,
     },
     /// A packing fraction outside the presets with a params file that has no `[sand]` table.
     #[error(
@@ -70,10 +72,10 @@ pub enum ResolveError {
     },
     /// A key of the params file is unknown, mistyped or out of its range.
     #[error("params file: {0}")]
-    File(#[source] ParamsError),
+    File(ParamsError),
     /// The parameters, overrides applied, fail their validation.
     #[error("parameters: {0}")]
-    Invalid(#[source] ParamsError),
+    Invalid(ParamsError),
 }
 
 impl ParamsFile {
@@ -105,9 +107,8 @@ impl ParamsFile {
 /// validated. Errors name `--phi` or the file, key and line.
 pub fn resolve_params(phi: f64, file: Option<&ParamsFile>) -> Result<Params, ResolveError> {
     let in_presets = (PRESET_PHI_MIN - 1e-9..=PRESET_PHI_MAX + 1e-9).contains(&phi);
-    let preset = |phi_row: f64| {
-        Params::preset(phi_row).map_err(|source| ResolveError::Preset { phi, source })
-    };
+    let preset =
+        |phi_row: f64| Params::preset(phi_row).map_err(|error| ResolveError::Preset { phi, error });
     let base = if in_presets {
         preset(phi)?
     } else {

@@ -6,10 +6,7 @@ use sandjumper_core::trajectory::{MAX_FREQ_HZ, MAX_TAU_S, MIN_FREQ_HZ};
 
 /// A finite number.
 pub fn parse_number(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("`{s}` is not a finite number")),
-    }
+    number_within(s, |_| true).ok_or_else(|| format!("`{s}` is not a finite number"))
 }
 
 /// `s` as a finite number for which `allowed` holds, or `None`: the one test behind the value
@@ -120,5 +117,34 @@ pub fn parse_gain_lowering(s: &str) -> Result<f64, String> {
         Err(format!(
             "gain-lowering factor {v} out of range (allowed: 0 < factor <= 1; e.g. 0.05)"
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::number_within;
+
+    #[test]
+    fn number_within_takes_finite_numbers_in_bounds_around_blanks() {
+        let unit = |v: f64| (0.0..=1.0).contains(&v);
+        assert_eq!(number_within(" 0.5\t", unit), Some(0.5));
+        assert_eq!(number_within("0", unit), Some(0.0));
+        assert_eq!(number_within("1", unit), Some(1.0));
+        assert_eq!(number_within("1e0", unit), Some(1.0));
+        for refused in [
+            "1.0000001",
+            "-0.1",
+            "nan",
+            "NaN",
+            "inf",
+            "-inf",
+            "",
+            "0.5 s",
+            "x",
+        ] {
+            assert_eq!(number_within(refused, unit), None, "{refused:?}");
+        }
+        assert_eq!(number_within("inf", |_| true), None);
+        assert_eq!(number_within("1e308", |_| true), Some(1e308));
     }
 }

@@ -162,10 +162,13 @@ fn resolved_features(
         let (Some(name), Some(version)) = (words.next(), words.next()) else {
             continue;
         };
-        let listed = words
-            .filter(|w| !w.starts_with('('))
-            .collect::<Vec<_>>()
-            .join(",");
+        // A path dependency's `(PATH)`, which may hold blanks, then the features.
+        let mut rest: Vec<&str> = words.collect();
+        if rest.first().is_some_and(|w| w.starts_with('(')) {
+            let end = rest.iter().position(|w| w.ends_with(')')).unwrap_or(0);
+            rest.drain(..=end);
+        }
+        let listed = rest.join(",");
         features
             .entry(format!("{name} {version}"))
             .or_default()

@@ -591,7 +591,7 @@ pub fn parse_clip(s: &str) -> Result<Clip, String> {
     let bad =
         || format!("clip `{s}` not allowed (allowed: START:END in seconds, 0 <= START < END)");
     let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+    let num = |x: &str| number_within(x, |_| true);
     match (num(a), num(b)) {
         (Some(start_s), Some(end_s)) if start_s >= 0.0 && end_s > start_s => {
             Ok(Clip { start_s, end_s })
