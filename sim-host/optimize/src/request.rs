@@ -2,11 +2,11 @@
 //! defaults), its checks ([`OptimizeRequest::validate`], the command line's messages) and the
 //! search it sets up ([`Setup`]).
 
-use sandjumper_output::parse::number_within;
 use std::path::{Path, PathBuf};
 
 use sandjumper_model::SimOptions;
 use sandjumper_model::params::{ModelName, Params};
+use sandjumper_output::parse::number_within;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
 use sandjumper_rig::stroke_table::RigLimits;

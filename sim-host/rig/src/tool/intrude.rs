@@ -13,7 +13,6 @@
 //!   `depth_m,force_n`, averaged in depth bins of `--bin` so depth strictly increases: the
 //!   input of `sandjumper fit intrusion` (`--first` / `--reintrusion`).
 
-use sandjumper_output::parse::number_within;
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
@@ -22,6 +21,7 @@ use serde::Serialize;
 use sandjumper_acqlog::AcqLog;
 use sandjumper_core::{Gains, JumpConfig, SampleRecord, SlowIntrusion, TrajectorySpec};
 use sandjumper_model::params::{ModelName, Params};
+use sandjumper_output::parse::number_within;
 use sandjumper_output::plot::lines::{Line, LineFigure, LinePanel, grid_size};
 use sandjumper_output::plot::palette;
 use sandjumper_output::{Progress, StagedDir};

@@ -19,7 +19,6 @@
 //!    verify that the controller's committed checksum is the host's, run the replay and record
 //!    the new log. The summary compares the measured motor trajectory with the table.
 
-use sandjumper_output::parse::number_within;
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 
@@ -30,6 +29,7 @@ use sandjumper_core::replay::{REPLAY_CAPACITY, replay_checksum};
 use sandjumper_core::trajectory::STROKE_M;
 use sandjumper_core::{JumpConfig, TrajectorySpec};
 use sandjumper_model::params::{ModelName, Params};
+use sandjumper_output::parse::number_within;
 use sandjumper_output::plot::lines::LineFigure;
 use sandjumper_output::{Progress, StagedDir};
 

@@ -1,7 +1,6 @@
 //! `rig status`: the controller's state, phase, latched fault and counters, once
 //! ([`status`]) or watched until the caller stops it ([`watch`]).
 
-use sandjumper_output::parse::number_within;
 use std::fmt;
 use std::time::{Duration, Instant};
 
@@ -9,6 +8,7 @@ use serde::Serialize;
 
 use sandjumper_core::{Phase, RigState, SampleRecord, Status};
 use sandjumper_output::Progress;
+use sandjumper_output::parse::number_within;
 
 use super::session::ProgramView;
 use super::target::Target;

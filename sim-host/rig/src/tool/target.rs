@@ -2,9 +2,10 @@
 //! simulated one (`sil`, `pil`, the virtual F407 board), with its firmware and the drive
 //! calibration sent when the session opens.
 
-use sandjumper_output::parse::number_within;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+use sandjumper_output::parse::number_within;
 
 use super::drive_calibration::{read_calibration, send_calibration};
 use crate::error::RigError;
