@@ -1,26 +1,26 @@
-//! The analyses from Python: `track`, `piv`, the DEM (`dem_collide`, `dem_bed`,
-//! `dem_intrude`) and acquisition logs (`read_log`, `log_to_mcap`).
+//! The analyses from Python: `track`, `piv` and acquisition logs (`read_log`,
+//! `log_to_mcap`), each a call of its library (`sandjumper_imaging`, `sandjumper_flow`,
+//! `sandjumper_acqlog`).
 //!
-//! The folder-writing commands run exactly as on the command line into `out` (a temporary
-//! folder, removed afterwards, when `out` is None) and their results come back loaded: the
-//! JSON summary as a dict, every CSV table as numpy columns, every `.npy` array as a numpy
-//! array.
+//! `track` and `piv` write their folder (into `out`, or a temporary folder removed afterwards
+//! when `out` is None) and their results come back loaded: the JSON summary as a dict, every
+//! CSV table as numpy columns, every `.npy` array as a numpy array.
 
 use std::path::{Path, PathBuf};
 
-use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyList, PyString, PyTuple};
+use pyo3::types::PyDict;
 use sandjumper_acqlog::check::{self, CheckRequest};
-use sandjumper_cli::acqlog::command::LogAction;
-use sandjumper_cli::cli::args::Command;
-use sandjumper_cli::command::CliError;
-use sandjumper_cli::command::progress::Bars;
-use sandjumper_cli::dem::command::DemCommand;
+use sandjumper_flow::run::PivRequest;
+use sandjumper_imaging::run::TrackRequest;
 use sandjumper_output::Silent;
+use sandjumper_output::parse::{parse_number, parse_phi, parse_positive};
 
-use crate::argv::Argv;
-use crate::convert::{f64_array, json_to_py, path_arg, py_err, str_array};
+use crate::call::long_call;
+use crate::convert::{f64_array, json_to_py, path_arg, str_array};
+use crate::errors::{checked, lib_err};
+use crate::options::{self, Setter, apply, choice, count, flag, list_text, number, path};
 use crate::simulate::{log_columns, log_metadata};
 use crate::typed;
 
@@ -65,56 +65,6 @@ impl FolderResult {
             keys(&self.arrays),
         )
     }
-}
-
-/// `**options` as CLI flags: `name=value` is `--name value` (`_` as `-`); `True` is the bare
-/// flag, `False` and `None` leave it out; a list or tuple is written comma-separated.
-fn add_options(argv: &mut Argv, options: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-    let Some(options) = options else {
-        return Ok(());
-    };
-    for (key, value) in options.iter() {
-        let key: String = key.extract()?;
-        let py_name = key.as_str();
-        let flag = format!("--{}", key.replace('_', "-"));
-        if value.is_none() {
-            continue;
-        }
-        if value.is_instance_of::<PyBool>() {
-            argv.switch(py_name, &flag, value.extract()?);
-        } else if let Ok(v) = value.extract::<i64>() {
-            argv.value(py_name, &flag, v);
-        } else if let Ok(v) = value.extract::<f64>() {
-            argv.value(py_name, &flag, v);
-        } else if value.is_instance_of::<PyString>() {
-            argv.value(py_name, &flag, value.extract::<String>()?);
-        } else if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
-            let parts: Vec<String> = value
-                .try_iter()?
-                .map(|item| {
-                    let item = item?;
-                    if let Ok(v) = item.extract::<i64>() {
-                        Ok(v.to_string())
-                    } else if let Ok(v) = item.extract::<f64>() {
-                        Ok(v.to_string())
-                    } else {
-                        Err(PyTypeError::new_err(format!(
-                            "{key}: every item must be a number"
-                        )))
-                    }
-                })
-                .collect::<PyResult<_>>()?;
-            argv.value(py_name, &flag, parts.join(","));
-        } else if let Ok(path) = path_arg(&key, &value) {
-            argv.value(py_name, &flag, path.display());
-        } else {
-            return Err(PyTypeError::new_err(format!(
-                "{key}: expected a number, str, bool, path or list of numbers, got {}",
-                value.get_type().name()?
-            )));
-        }
-    }
-    Ok(())
 }
 
 /// The output folder: `out` as given, or a new temporary one.
@@ -175,7 +125,7 @@ fn csv_columns<'py>(py: Python<'py>, path: &Path) -> PyResult<Bound<'py, PyDict>
 
 /// Loads an output folder: its CSV tables and `.npy` arrays (top level), `summary` given or
 /// from `summary.json`.
-fn load_folder(
+pub fn load_folder(
     py: Python<'_>,
     dir: &Path,
     summary_json: Option<&str>,
@@ -218,178 +168,244 @@ fn load_folder(
     })
 }
 
-/// Runs `sandjumper <command> FRAMES --out DIR [options]` (`track` or `piv`; `more` adds
-/// the command's own arguments) without printing, and loads the folder it wrote.
-fn frames_analysis(
-    py: Python<'_>,
-    command: &str,
-    frames: &Bound<'_, PyAny>,
-    out: Option<&Bound<'_, PyAny>>,
-    options: Option<&Bound<'_, PyDict>>,
-    more: impl FnOnce(&mut Argv),
-) -> PyResult<FolderResult> {
-    let frames = path_arg("frames", frames)?;
-    let (dir, tmp) = output_folder(out)?;
-    let mut argv = Argv::new(&[command]);
-    argv.positional("frames", "FRAMES", frames.display());
-    more(&mut argv);
-    argv.value("out", "--out", dir.display());
-    add_options(&mut argv, options)?;
-    let command = argv.parse()?;
-    let json = py
-        .detach(|| -> Result<String, CliError> {
-            // As the command line: `wrote DIR`, then the run's notes, on stderr.
-            let progress = Bars::holding();
-            let (written, json) = match command {
-                Command::Track(a) => {
-                    let (outcome, written) =
-                        sandjumper_imaging::run::run_into(&a.request(), &dir, &progress)?;
-                    (written, outcome.summary_json()?)
-                }
-                Command::Piv(a) => {
-                    let (outcome, written) =
-                        sandjumper_flow::run::run_into(&a.request()?, &dir, &progress)?;
-                    (written, outcome.summary_json()?)
-                }
-                _ => unreachable!("frames_analysis runs track or piv"),
-            };
-            progress.release(Some(&written));
-            Ok(json)
-        })
-        .map_err(|e| argv.error(e))?;
-    load_folder(py, &dir, Some(&json), tmp.is_none())
-}
+/// The flags of `track` and `piv` and the Python arguments that carry them, for the
+/// libraries' messages.
+const FRAME_NAMES: [(&str, &str); 5] = [
+    ("--m-per-px", "m_per_px"),
+    ("--origin", "origin"),
+    ("--fps", "fps"),
+    ("--log", "log"),
+    ("--windows", "windows"),
+];
+
+/// `track`'s options by name.
+const TRACK_OPTIONS: [(&str, Setter<TrackRequest>); 7] = [
+    ("fps", |r, v| {
+        r.fps = Some(number("fps", v, sandjumper_imaging::run::parse_fps)?);
+        Ok(())
+    }),
+    ("log", |r, v| {
+        r.log = Some(path("log", v)?);
+        Ok(())
+    }),
+    ("roi", |r, v| {
+        r.roi = Some(checked(
+            "roi",
+            list_text("roi", v)?,
+            sandjumper_imaging::run::parse_roi,
+        )?);
+        Ok(())
+    }),
+    ("ball_diameter", |r, v| {
+        r.ball_diameter_m = number("ball_diameter", v, sandjumper_imaging::run::parse_length)?;
+        Ok(())
+    }),
+    ("rest_frames", |r, v| {
+        r.rest_frames = count::<usize>("rest_frames", v)?;
+        if r.rest_frames == 0 {
+            return Err(crate::errors::invalid_value(
+                "rest_frames",
+                0,
+                "0 is not in 1..4294967296",
+            ));
+        }
+        Ok(())
+    }),
+    ("exposure", |r, v| {
+        r.exposure_s = number("exposure", v, sandjumper_imaging::run::parse_exposure)?;
+        Ok(())
+    }),
+    ("apex_window", |r, v| {
+        r.apex_window_s = number("apex_window", v, sandjumper_imaging::run::parse_seconds)?;
+        Ok(())
+    }),
+];
 
 /// Track the rod's ball through camera frames and measure the jump height the paper's way,
 /// as `sandjumper track FRAMES --m-per-px X` does. `frames`: a folder or glob of images;
 /// `m_per_px`: the camera's scale, m/px; `out`: the output folder (temporary if None);
-/// `options`: the CLI's other flags by name (`fps=200`, `log="acquisition.csv"`,
-/// `ball_diameter=0.0127`, `roi=…`, `rest_frames=…`, `apex_window=…`, `exposure=…`).
-/// Returns `summary` (as `track --json`) and `tables["track"]` (per frame).
+/// `options`: the command's other options by name (`fps=200` or `log="acquisition.csv"`,
+/// `ball_diameter=0.0095`, `roi=[x, y, w, h]`, `rest_frames=10`, `apex_window=0.02`,
+/// `exposure=0`). Returns `summary` (as `track --json`) and `tables["track"]` (per frame).
 #[pyfunction]
-#[pyo3(signature = (frames, m_per_px, out = None, **options))]
+#[pyo3(signature = (frames, m_per_px, out = None, progress = None, **options))]
 pub fn track(
     py: Python<'_>,
     frames: &Bound<'_, PyAny>,
     #[pyo3(from_py_with = typed::m_per_px)] m_per_px: f64,
     out: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<FolderResult> {
-    frames_analysis(py, "track", frames, out, options, |argv| {
-        argv.value("m_per_px", "--m-per-px", m_per_px);
-    })
+    let mut request = TrackRequest {
+        frames: path_arg("frames", frames)?.display().to_string(),
+        m_per_px: checked(
+            "m_per_px",
+            m_per_px,
+            sandjumper_imaging::run::parse_m_per_px,
+        )?,
+        fps: None,
+        log: None,
+        roi: None,
+        ball_diameter_m: 0.0095,
+        rest_frames: 10,
+        exposure_s: 0.0,
+        apex_window_s: 0.02,
+    };
+    apply(&mut request, options, &TRACK_OPTIONS, &mut options::none)?;
+    if request.fps.is_some() == request.log.is_some() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            if request.fps.is_some() {
+                "fps cannot be used with log (the log's camera ticks time the frames)"
+            } else {
+                "the following required arguments were not provided: fps or log"
+            },
+        ));
+    }
+    let (dir, tmp) = output_folder(out)?;
+    let json = long_call(py, progress, |progress| {
+        let (outcome, _) = sandjumper_imaging::run::run_into(&request, &dir, progress)?;
+        outcome.summary_json()
+    })?
+    .map_err(|e| lib_err(e, &FRAME_NAMES))?;
+    load_folder(py, &dir, Some(&json), tmp.is_none())
 }
+
+/// `piv`'s options by name.
+const PIV_OPTIONS: [(&str, Setter<PivRequest>); 22] = [
+    ("pairs", |r, v| {
+        r.pairs = choice("pairs", v)?;
+        Ok(())
+    }),
+    ("every", |r, v| {
+        r.every = count::<usize>("every", v)?.max(1);
+        Ok(())
+    }),
+    ("windows", |r, v| {
+        let text = list_text("windows", v)?;
+        r.piv.windows =
+            sandjumper_flow::run::parse_windows(&text).map_err(|e| lib_err(e, &FRAME_NAMES))?;
+        Ok(())
+    }),
+    ("overlap", |r, v| {
+        r.piv.overlap = number("overlap", v, parse_number)?;
+        Ok(())
+    }),
+    ("no_deform", |r, v| {
+        r.piv.deform = !flag("no_deform", v)?;
+        Ok(())
+    }),
+    ("subpixel", |r, v| {
+        r.piv.subpixel = choice("subpixel", v)?;
+        Ok(())
+    }),
+    ("median_threshold", |r, v| {
+        r.piv.median_threshold = number("median_threshold", v, parse_positive)?;
+        Ok(())
+    }),
+    ("min_peak_ratio", |r, v| {
+        r.piv.min_peak_ratio = number("min_peak_ratio", v, parse_number)?;
+        Ok(())
+    }),
+    ("local_contrast", |r, v| {
+        r.preprocess.local_contrast_sigma_px =
+            number("local_contrast", v, sandjumper_flow::run::parse_sigma)?;
+        Ok(())
+    }),
+    ("clahe_tile", |r, v| {
+        r.preprocess.clahe_tile_px = count::<usize>("clahe_tile", v)?;
+        Ok(())
+    }),
+    ("clahe_clip", |r, v| {
+        r.preprocess.clahe_clip = number("clahe_clip", v, parse_positive)?;
+        Ok(())
+    }),
+    ("subtract_background", |r, v| {
+        r.preprocess.subtract_background = flag("subtract_background", v)?;
+        Ok(())
+    }),
+    ("cap_sigma", |r, v| {
+        r.preprocess.cap_sigma = number("cap_sigma", v, parse_number)?;
+        Ok(())
+    }),
+    ("mask", |r, v| {
+        r.mask = Some(path("mask", v)?);
+        Ok(())
+    }),
+    ("foot", |r, v| {
+        r.foot = Some(path("foot", v)?);
+        Ok(())
+    }),
+    ("m_per_px", |r, v| {
+        r.m_per_px = Some(number("m_per_px", v, parse_positive)?);
+        Ok(())
+    }),
+    ("fps", |r, v| {
+        r.fps = Some(number("fps", v, parse_positive)?);
+        Ok(())
+    }),
+    ("log", |r, v| {
+        r.log = Some(path("log", v)?);
+        Ok(())
+    }),
+    ("origin", |r, v| {
+        r.origin_px = Some(checked(
+            "origin",
+            list_text("origin", v)?,
+            sandjumper_flow::run::parse_point,
+        )?);
+        Ok(())
+    }),
+    ("phi", |r, v| {
+        r.phi = number("phi", v, parse_phi)?;
+        Ok(())
+    }),
+    ("grain_density", |r, v| {
+        r.grain_density_kg_m3 = number("grain_density", v, parse_positive)?;
+        Ok(())
+    }),
+    ("min_speed_ratio", |r, v| {
+        r.min_speed_ratio = number("min_speed_ratio", v, sandjumper_flow::run::parse_ratio)?;
+        Ok(())
+    }),
+];
 
 /// PIV of side-wall grain videos, as `sandjumper piv FRAMES` does: multipass FFT correlation
 /// with window deformation, validation, shear rate, grain momentum and added mass. `frames`:
-/// a folder or glob; `out`: the output folder (temporary if None); `options`: the CLI's
-/// other flags by name (`windows=[64, 32, 16]`, `overlap=0.5`, `fps=500`, `m_per_px=…`,
-/// `origin=[x, y]`, `foot=…`, …). Returns `summary` (as `piv --json`), `tables["flow"]`
-/// (momentum and added mass per pair) and `arrays` (`u_px`, `v_px`, `flag`, `s2n` and, when
-/// calibrated, the velocities, vorticity and shear rate in SI: stacks of 2-D fields, one per
-/// pair; `x_px`, `y_px`: the grid).
+/// a folder or glob; `out`: the output folder (temporary if None); `progress`:
+/// `progress(stage, done, total)` as the pairs are analysed (Ctrl-C stops the run between
+/// pairs); `options`: the command's other options by name (`windows=[64, 32, 16]`,
+/// `overlap=0.5`, `fps=500`, `m_per_px=…`, `origin=[x, y]`, `foot=…`, …). Returns `summary`
+/// (as `piv --json`), `tables["flow"]` (momentum and added mass per pair) and `arrays`
+/// (`u_px`, `v_px`, `flag`, `s2n` and, when calibrated, the velocities, vorticity and shear
+/// rate in SI: stacks of 2-D fields, one per pair; `x_px`, `y_px`: the grid).
 #[pyfunction]
-#[pyo3(signature = (frames, out = None, **options))]
+#[pyo3(signature = (frames, out = None, progress = None, **options))]
 pub fn piv(
     py: Python<'_>,
     frames: &Bound<'_, PyAny>,
     out: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<FolderResult> {
-    frames_analysis(py, "piv", frames, out, options, |_| {})
-}
-
-/// One head-on binary collision with the `paper` contact law, as `sandjumper dem collide
-/// --json` does: `d1_m`, `d2_m` (m; `d2_m` defaults to `d1_m`), `wall` (disk on a wall),
-/// `kn` (N/m), `damping` (N s/m), `speed` (m/s), `options`: `dt=…`, `density=…`,
-/// `integrator=…`, `force_step=True`. Returns the dict `--json` prints (`restitution`,
-/// `contact_time_s`, `effective_mass_kg`, `dt_s`, the analytic values and the errors).
-#[pyfunction]
-#[pyo3(signature = (d1_m, kn, damping, speed, d2_m = None, wall = false, **options))]
-#[allow(clippy::too_many_arguments)]
-pub fn dem_collide(
-    py: Python<'_>,
-    #[pyo3(from_py_with = typed::d1_m)] d1_m: f64,
-    #[pyo3(from_py_with = typed::kn)] kn: f64,
-    #[pyo3(from_py_with = typed::damping)] damping: f64,
-    #[pyo3(from_py_with = typed::speed)] speed: f64,
-    #[pyo3(from_py_with = typed::d2_m)] d2_m: Option<f64>,
-    #[pyo3(from_py_with = typed::wall)] wall: bool,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Py<PyAny>> {
-    let mut argv = Argv::new(&["dem", "collide"]);
-    argv.value("d1_m", "--d1", d1_m);
-    argv.opt("d2_m", "--d2", d2_m);
-    argv.switch("wall", "--wall", wall);
-    argv.value("kn", "--kn", kn);
-    argv.value("damping", "--damping", damping);
-    argv.value("speed", "--speed", speed);
-    add_options(&mut argv, options)?;
-    let Command::Dem(a) = argv.parse()? else {
-        unreachable!("`sandjumper dem` parses as Command::Dem")
+    let mut request = PivRequest {
+        frames: path_arg("frames", frames)?.display().to_string(),
+        ..PivRequest::default()
     };
-    let DemCommand::Collide(c) = a.command else {
-        unreachable!("`sandjumper dem collide` parses as DemCommand::Collide")
-    };
-    let json = sandjumper_dem::collide::run(&c.request, &Silent)
-        .and_then(|r| r.json())
-        .map_err(|e| argv.error(e.into()))?;
-    Ok(json_to_py(py, &json)?.unbind())
-}
-
-/// Prepare a DEM bed, as `sandjumper dem bed --out OUT` does (fill and settle under gravity,
-/// or pack to `pack=PHI`): `options` are the CLI's flags by name (`width=…`, `height=…`,
-/// `grains="bi"`, `seed=…`, `threads=…`, …). Returns the folder loaded (`tables["grains"]`,
-/// `tables["load"]`, …); `summary` is None (the bed's record is `bed.toml`).
-#[pyfunction]
-#[pyo3(signature = (out, **options))]
-pub fn dem_bed(
-    py: Python<'_>,
-    out: &Bound<'_, PyAny>,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<FolderResult> {
-    dem_run(py, "bed", out, options, |_| Ok(()))
-}
-
-/// Runs `sandjumper dem <sub> --out OUT [options]` (`more` adds the subcommand's own
-/// arguments) and loads the folder it wrote.
-fn dem_run(
-    py: Python<'_>,
-    sub: &str,
-    out: &Bound<'_, PyAny>,
-    options: Option<&Bound<'_, PyDict>>,
-    more: impl FnOnce(&mut Argv) -> PyResult<()>,
-) -> PyResult<FolderResult> {
-    let dir = path_arg("out", out)?;
-    let mut argv = Argv::new(&["dem", sub]);
-    more(&mut argv)?;
-    argv.value("out", "--out", dir.display());
-    add_options(&mut argv, options)?;
-    let Command::Dem(a) = argv.parse()? else {
-        unreachable!("`sandjumper dem` parses as Command::Dem")
-    };
-    py.detach(|| sandjumper_cli::dem::command::run(&a))
-        .map_err(|e| argv.error(e))?;
-    load_folder(py, &dir, None, true)
-}
-
-/// Run a DEM intrusion into a bed, as `sandjumper dem intrude --bed BED --out OUT` does:
-/// `options` are the CLI's flags by name (`speed=…` or `trajectory=…`, `depth=…`,
-/// `foot_width=…`, `fps=…`, `no_frames=True`, `threads=…`, `resume=True`, …). Returns
-/// `summary` (`summary.json`), `tables` (`force_depth`, `flow`, `added_mass`, …) and `arrays`
-/// (the coarse-grained fields).
-#[pyfunction]
-#[pyo3(signature = (bed, out, **options))]
-pub fn dem_intrude(
-    py: Python<'_>,
-    bed: &Bound<'_, PyAny>,
-    out: &Bound<'_, PyAny>,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<FolderResult> {
-    dem_run(py, "intrude", out, options, |argv| {
-        argv.value("bed", "--bed", path_arg("bed", bed)?.display());
-        Ok(())
-    })
+    apply(&mut request, options, &PIV_OPTIONS, &mut options::none)?;
+    if request.fps.is_some() && request.log.is_some() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "fps cannot be used with log (the log's camera ticks time the frames)",
+        ));
+    }
+    request.validate().map_err(|e| lib_err(e, &FRAME_NAMES))?;
+    let (dir, tmp) = output_folder(out)?;
+    let json = long_call(py, progress, |progress| {
+        let (outcome, _) = sandjumper_flow::run::run_into(&request, &dir, progress)?;
+        outcome.summary_json()
+    })?
+    .map_err(|e| lib_err(e, &FRAME_NAMES))?;
+    load_folder(py, &dir, Some(&json), tmp.is_none())
 }
 
 /// Read and check an acquisition log (CSV or binary), as `sandjumper log check` does:
@@ -407,8 +423,8 @@ pub fn read_log(
         file: path,
         allow_gaps,
     };
-    let checked = check::run(&request, &Silent).map_err(|e| py_err(e.into()))?;
-    let summary = checked.json().map_err(|e| py_err(e.into()))?;
+    let checked = check::run(&request, &Silent).map_err(|e| lib_err(e, &[]))?;
+    let summary = checked.json().map_err(|e| lib_err(e, &[]))?;
     let d = PyDict::new(py);
     d.set_item("columns", log_columns(py, &checked.log)?)?;
     d.set_item("metadata", log_metadata(py, &checked.log)?)?;
@@ -417,7 +433,9 @@ pub fn read_log(
 }
 
 /// Convert an acquisition log (CSV or binary) to MCAP for Foxglove, Lichtblick and
-/// PlotJuggler, as `sandjumper log convert IN OUT --to mcap` does.
+/// PlotJuggler, as `sandjumper log convert IN OUT --to mcap` does. Returns what was written:
+/// a dict with `out` (the file), `samples`, `channels` and the other counts of the
+/// conversion.
 #[pyfunction]
 #[pyo3(signature = (log, out, allow_gaps = false, force = false))]
 pub fn log_to_mcap(
@@ -426,25 +444,17 @@ pub fn log_to_mcap(
     out: &Bound<'_, PyAny>,
     #[pyo3(from_py_with = typed::allow_gaps)] allow_gaps: bool,
     #[pyo3(from_py_with = typed::force)] force: bool,
-) -> PyResult<()> {
-    let input = path_arg("log", log)?;
-    let output = path_arg("out", out)?;
-    let mut argv = Argv::new(&["log", "convert"]);
-    argv.positional("log", "IN", input.display());
-    argv.positional("out", "OUT", output.display());
-    argv.value("to", "--to", "mcap");
-    argv.switch("allow_gaps", "--allow-gaps", allow_gaps);
-    argv.switch("force", "--force", force);
-    let Command::Log(a) = argv.parse()? else {
-        unreachable!("`sandjumper log` parses as Command::Log")
-    };
-    let LogAction::Convert(c) = a.action else {
-        unreachable!("`sandjumper log convert` parses as LogAction::Convert")
+) -> PyResult<Py<PyAny>> {
+    use sandjumper_acqlog::convert::{ConvertRequest, LogForm};
+    let request = ConvertRequest {
+        input: path_arg("log", log)?,
+        output: path_arg("out", out)?,
+        to: Some(LogForm::Mcap),
+        allow_gaps,
+        force,
     };
     let outcome = py
-        .detach(|| sandjumper_acqlog::convert::run(&c.request(), &Silent))
-        .map_err(|e| argv.error(e.into()))?;
-    // As the command line: what was written, on stderr.
-    eprint!("{outcome}");
-    Ok(())
+        .detach(|| sandjumper_acqlog::convert::run(&request, &Silent))
+        .map_err(|e| lib_err(e, &[("--force", "force"), ("--allow-gaps", "allow_gaps")]))?;
+    Ok(crate::convert::summary_to_py(py, &outcome)?.unbind())
 }

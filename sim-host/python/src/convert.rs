@@ -4,20 +4,10 @@ use numpy::PyArray1;
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
-use sandjumper_cli::command::resolve::ParamsFile;
-use sandjumper_cli::command::{CliError, EXIT_BAD_INPUT};
+use sandjumper_model::resolve::ParamsFile;
+use serde::Serialize;
 
-/// The CLI's error as a Python exception: bad input (exit 2) is `ValueError`, anything else
-/// `RuntimeError`; the message is the CLI's.
-pub fn py_err(e: CliError) -> PyErr {
-    if e.exit == EXIT_BAD_INPUT {
-        PyValueError::new_err(e.message)
-    } else {
-        PyRuntimeError::new_err(e.message)
-    }
-}
-
-/// A JSON text (one of the CLI's summaries) as Python objects, through `json.loads`: the
+/// A JSON text (one of the libraries' summaries) as Python objects, through `json.loads`: the
 /// same keys and values a Python user gets from `json.loads(cli_output)`.
 pub fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
     py.import("json")?.call_method1("loads", (text,))
@@ -82,7 +72,23 @@ pub fn params_source(
         }));
     }
     let path = path_arg(name, p)?;
-    ParamsFile::read(&path).map(Some).map_err(py_err)
+    ParamsFile::read(&path)
+        .map(Some)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// A library's summary (what `summary.json` holds) as Python objects, the same keys and
+/// values `json.loads` gives for the file.
+pub fn summary_to_py<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    json_to_py(py, &text)
+}
+
+/// An optional `out=` folder argument.
+pub fn out_arg(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<std::path::PathBuf>> {
+    out.filter(|o| !o.is_none())
+        .map(|o| path_arg("out", o))
+        .transpose()
 }
 
 /// A `str` or `os.PathLike` argument as a path.

@@ -1,16 +1,22 @@
-//! The `sandjumper` Python module: the simulator and the analyses of the `sandjumper` CLI,
-//! called in-process (no subprocess), with results as dicts and numpy arrays.
+//! The `sandjumper` Python module: the project's libraries from Python, each command one call
+//! of its library crate (no command line, no subprocess), results in memory as dicts and numpy
+//! arrays, a folder written only when asked (`out=`).
 //!
-//! Every function takes the CLI's arguments under Python names (`freq_hz` for `--freq`) and
-//! goes through the CLI's own argument parser and library code, so the defaults, the checks
-//! and the error messages are the CLI's: bad input raises `ValueError` with the CLI's message
-//! (the flag replaced by the Python argument's name), a wrong type raises `TypeError` naming
-//! the argument, and a failure after the input was accepted raises `RuntimeError`.
+//! Every function takes the command line's arguments under Python names (`freq_hz` for
+//! `--freq`) and builds the library's typed request, with the libraries' own defaults and
+//! checks, so the error messages are the command line's: bad input raises `ValueError` (the
+//! flag written as the Python argument's name), a wrong type raises `TypeError` naming the
+//! argument, and a failure after the input was accepted raises `RuntimeError`. Long calls run
+//! with the GIL released, report to a `progress` callback and stop on Ctrl-C ([`call`]).
 
 mod analyses;
-mod argv;
+mod call;
 mod convert;
+mod dem;
+mod errors;
+mod options;
 mod simulate;
+mod studies;
 mod typed;
 
 use pyo3::prelude::*;
@@ -35,9 +41,18 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::replay, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::track, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::piv, m)?)?;
-    m.add_function(wrap_pyfunction!(analyses::dem_collide, m)?)?;
-    m.add_function(wrap_pyfunction!(analyses::dem_bed, m)?)?;
-    m.add_function(wrap_pyfunction!(analyses::dem_intrude, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::dem_collide, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::dem_bed, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::dem_intrude, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::lammps, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::optimize, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::campaign_run, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::campaign_resume, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::campaign_status, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::figures, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::figures_dem, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::rig_jump, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::read_log, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::log_to_mcap, m)?)?;
     Ok(())

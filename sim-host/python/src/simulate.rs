@@ -1,24 +1,50 @@
-//! The simulator from Python: `params`, `jump`, `sweep`, `hil`, `replay`.
+//! The simulator from Python: `params`, `jump`, `sweep`, `hil`, `replay`, `fit`.
 
-use clap::ValueEnum;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PySequence, PyString};
 use sandjumper_acqlog::{AcqLog, Column};
-use sandjumper_cli::cli::args::Command;
-use sandjumper_cli::command::args::{
-    KindArg, ModelArg, check_freq, check_phi, check_tau, parse_gain_lowering, parse_rtol,
-};
-use sandjumper_cli::command::resolve::resolve_params;
+use sandjumper_core::trajectory::JumpKind;
 use sandjumper_model::SeriesRow;
-use sandjumper_output::Silent;
+use sandjumper_model::params::ModelName;
+use sandjumper_model::resolve::resolve_params;
+use sandjumper_output::parse::{check_freq, check_phi, check_tau, parse_gain_lowering, parse_rtol};
 use sandjumper_study::series::SERIES_HEADER;
-use sandjumper_study::sweep::drive::run_driven;
-use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepRequest, SweepSpec, ValueRange};
+use sandjumper_study::sweep::SweepRequest;
+use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
 
-use crate::argv::Argv;
-use crate::convert::{f64_array, i64_array, json_to_py, params_source, py_err, str_array};
+use crate::call::long_call;
+use crate::convert::{f64_array, i64_array, json_to_py, out_arg, params_source, str_array};
+use crate::errors::{checked, choice, invalid_value, lib_err, required};
 use crate::typed;
+
+/// The jump kinds by their command-line names.
+pub const KINDS: [(&str, JumpKind); 3] = [
+    ("single", JumpKind::Single),
+    ("stutter", JumpKind::Stutter),
+    ("delayed", JumpKind::DelayedStutter),
+];
+
+/// The ground models by their command-line names.
+pub fn models() -> Vec<(&'static str, ModelName)> {
+    ModelName::ALL.iter().map(|m| (m.as_str(), *m)).collect()
+}
+
+/// The flags of the simulator's commands and the Python arguments that carry them.
+const JUMP_NAMES: [(&str, &str); 7] = [
+    ("--freq", "freq_hz"),
+    ("--tau", "tau_s"),
+    ("--phi", "phi"),
+    ("--kind", "kind"),
+    ("--model", "model"),
+    ("--rtol", "rtol"),
+    ("--params", "params"),
+];
+
+/// A checked number: `check` refuses it as the command line's value parser does.
+fn number(name: &str, value: f64, check: fn(f64) -> Result<f64, String>) -> PyResult<f64> {
+    check(value).map_err(|reason| invalid_value(name, value, &reason))
+}
 
 /// One simulated jump: `summary` (the dict `sandjumper jump --json` prints) and `series`
 /// (the columns of `trajectory.csv`, same names, as numpy arrays).
@@ -213,56 +239,96 @@ pub fn params(
     #[pyo3(from_py_with = typed::phi)] phi: f64,
     overrides: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
-    let mut argv = Argv::new(&["params"]);
-    argv.value("phi", "--phi", phi);
-    let Command::Params(a) = argv.parse()? else {
-        unreachable!("`sandjumper params` parses as Command::Params")
-    };
+    let phi = number("phi", phi, check_phi)?;
     let file = params_source("overrides", overrides)?;
-    let p = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
+    let p = resolve_params(phi, file.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let value: serde_json::Value = toml::from_str(&p.to_toml())
         .map_err(|e| PyValueError::new_err(format!("parameters: {e}")))?;
     Ok(json_to_py(py, &value.to_string())?.unbind())
 }
 
-/// Simulate one jump (docs/model.md's plant, imposed stroke) as `sandjumper jump` does.
+/// Simulate one jump (docs/model.md's plant, imposed stroke) as `sandjumper jump` does, in
+/// memory; `out` (a folder) also writes what `jump --out` writes.
 ///
 /// `kind`: `"single"`, `"stutter"` or `"delayed"`; `freq_hz`: forcing frequency, Hz;
 /// `model`: `"hard"`, `"eq1-linear"`, `"eq1"` or `"eq4"`; `phi`: packing fraction (presets
 /// 0.57..=0.62); `tau_s`: the delayed stutter's delay, s; `params`: overrides (a dict as
-/// `params()` returns, or a TOML file path); `rtol`: the integrator's relative tolerance.
+/// `params()` returns, or a TOML file path); `rtol`: the integrator's relative tolerance;
+/// `stroke`: a stroke file (`t_s,p_m`, e.g. `optimize`'s stroke.csv) run instead of a sine.
 #[pyfunction]
-#[pyo3(signature = (kind, freq_hz, model = "eq4".to_string(), phi = 0.57, tau_s = None, params = None, rtol = 1e-8))]
+#[pyo3(signature = (kind = None, freq_hz = None, model = "eq4".to_string(), phi = 0.57, tau_s = None, params = None, rtol = 1e-8, stroke = None, out = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn jump(
     py: Python<'_>,
-    #[pyo3(from_py_with = typed::kind)] kind: String,
-    #[pyo3(from_py_with = typed::freq_hz)] freq_hz: f64,
+    #[pyo3(from_py_with = typed::kind_opt)] kind: Option<String>,
+    #[pyo3(from_py_with = typed::freq_hz_opt)] freq_hz: Option<f64>,
     #[pyo3(from_py_with = typed::model)] model: String,
     #[pyo3(from_py_with = typed::phi)] phi: f64,
     #[pyo3(from_py_with = typed::tau_s)] tau_s: Option<f64>,
     params: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::rtol)] rtol: f64,
+    stroke: Option<&Bound<'_, PyAny>>,
+    out: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<JumpResult> {
-    let mut argv = Argv::new(&["jump"]);
-    argv.value("kind", "--kind", kind);
-    argv.value("freq_hz", "--freq", freq_hz);
-    argv.value("model", "--model", model);
-    argv.value("phi", "--phi", phi);
-    argv.opt("tau_s", "--tau", tau_s);
-    argv.value("rtol", "--rtol", rtol);
-    let Command::Jump(a) = argv.parse()? else {
-        unreachable!("`sandjumper jump` parses as Command::Jump")
+    let stroke = stroke
+        .filter(|s| !s.is_none())
+        .map(|s| crate::convert::path_arg("stroke", s))
+        .transpose()?;
+    let (kind, freq_hz, tau_s) = sine("kind", "freq_hz", kind, freq_hz, tau_s, stroke.is_some())?;
+    let request = sandjumper_study::jump::JumpRequest {
+        kind,
+        freq_hz,
+        tau_s,
+        stroke,
+        model: choice("model", &model, &models())?,
+        phi: number("phi", phi, check_phi)?,
+        params: params_source("params", params)?,
+        rtol: checked("rtol", rtol, parse_rtol)?,
+        record_series: true,
     };
-    let file = params_source("params", params)?;
-    let request = a.request(file.as_ref().map(|f| f.to_library()), true);
-    let out = py
-        .detach(|| sandjumper_study::jump::run(&request, &Silent))
-        .map_err(|e| argv.error(e.into()))?;
+    let out = out_arg(out)?;
+    let (outcome, _) = py
+        .detach(|| {
+            sandjumper_study::jump::run_into(&request, out.as_deref(), &sandjumper_output::Silent)
+        })
+        .map_err(|e| lib_err(e, &JUMP_NAMES))?;
+    let json = outcome.json().map_err(|e| lib_err(e, &[]))?;
     Ok(JumpResult {
-        summary: json_to_py(py, &out.json().map_err(|e| argv.error(e.into()))?)?.unbind(),
-        series: series_dict(py, &out.simulated.series)?.into_any().unbind(),
+        summary: json_to_py(py, &json)?.unbind(),
+        series: series_dict(py, &outcome.simulated.series)?
+            .into_any()
+            .unbind(),
     })
+}
+
+/// The one-cycle sine a jump asks for: its kind, frequency and delay, each checked as the
+/// command line checks them (`kind` and `freq_hz` required unless a stroke file replaces the
+/// sine; a delayed stutter needs `tau_s`).
+fn sine(
+    kind_name: &str,
+    freq_name: &str,
+    kind: Option<String>,
+    freq_hz: Option<f64>,
+    tau_s: Option<f64>,
+    stroke: bool,
+) -> PyResult<(JumpKind, f64, Option<f64>)> {
+    if stroke {
+        if kind.is_some() || freq_hz.is_some() || tau_s.is_some() {
+            return Err(PyValueError::new_err(format!(
+                "stroke cannot be used with {kind_name}, {freq_name} or tau_s (the stroke file replaces the sine)"
+            )));
+        }
+        return Ok((JumpKind::Single, 0.0, None));
+    }
+    let kind = kind.ok_or_else(|| required(kind_name))?;
+    let kind = choice(kind_name, &kind, &KINDS)?;
+    let freq_hz = freq_hz.ok_or_else(|| required(freq_name))?;
+    let freq_hz = number(freq_name, freq_hz, check_freq)?;
+    let tau_s = tau_s.map(|t| number("tau_s", t, check_tau)).transpose()?;
+    if kind == JumpKind::DelayedStutter && tau_s.is_none() {
+        return Err(required("tau_s"));
+    }
+    Ok((kind, freq_hz, tau_s))
 }
 
 /// Values of a sweep axis: a number, a sequence of numbers, or a range `"A:B:STEP"` (as the
@@ -304,8 +370,13 @@ fn axis(
         .collect()
 }
 
-/// Names of a sweep axis: one name or a sequence of names, each one of `T`'s CLI values.
-fn names<T: ValueEnum>(name: &str, what: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<T>> {
+/// Names of a sweep axis: one name or a sequence of names, each one of `allowed`.
+fn names<T: Copy>(
+    name: &str,
+    what: &str,
+    obj: &Bound<'_, PyAny>,
+    allowed: &[(&str, T)],
+) -> PyResult<Vec<T>> {
     let list: Vec<String> = if obj.is_instance_of::<PyString>() {
         vec![obj.extract()?]
     } else if obj.is_instance_of::<PyList>() || obj.cast::<PySequence>().is_ok() {
@@ -322,18 +393,19 @@ fn names<T: ValueEnum>(name: &str, what: &str, obj: &Bound<'_, PyAny>) -> PyResu
             "{name}: no values (allowed: one or more)"
         )));
     }
-    let allowed: Vec<String> = T::value_variants()
-        .iter()
-        .filter_map(|v| v.to_possible_value().map(|p| p.get_name().to_string()))
-        .collect();
     list.iter()
         .map(|s| {
-            T::from_str(s, false).map_err(|_| {
-                PyValueError::new_err(format!(
-                    "{name}: `{s}` is not a {what} (allowed: {})",
-                    allowed.join(", ")
-                ))
-            })
+            allowed
+                .iter()
+                .find(|(n, _)| n == s)
+                .map(|(_, v)| *v)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = allowed.iter().map(|(n, _)| *n).collect();
+                    PyValueError::new_err(format!(
+                        "{name}: `{s}` is not a {what} (allowed: {})",
+                        names.join(", ")
+                    ))
+                })
         })
         .collect()
 }
@@ -346,9 +418,11 @@ fn names<T: ValueEnum>(name: &str, what: &str, obj: &Bound<'_, PyAny>) -> PyResu
 /// list or a range `"A:B:STEP"`; `params`: overrides (dict or TOML path); `link`: `None`
 /// (the stroke imposed exactly) or `"sil"` (through the controller and the drive model);
 /// `gain_lowering`: with `link="sil"`, the position gain factor during a delay (0..1];
-/// `threads`: worker threads (default one per core).
+/// `threads`: worker threads (default one per core); `out`: also write what `sweep --out`
+/// writes into this folder; `progress`: `progress(stage, done, total)` called as the jumps
+/// finish. Ctrl-C stops the sweep between jumps and raises `KeyboardInterrupt`.
 #[pyfunction]
-#[pyo3(signature = (kinds, freqs_hz, phis = None, taus_s = None, models = None, params = None, rtol = 1e-8, link = None, gain_lowering = None, threads = None))]
+#[pyo3(signature = (kinds, freqs_hz, phis = None, taus_s = None, models = None, params = None, rtol = 1e-8, link = None, gain_lowering = None, threads = None, out = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn sweep(
     py: Python<'_>,
@@ -362,11 +436,13 @@ pub fn sweep(
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
     #[pyo3(from_py_with = typed::gain_lowering)] gain_lowering: Option<f64>,
     #[pyo3(from_py_with = typed::threads)] threads: Option<usize>,
+    out: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<SweepResult> {
-    let kinds: Vec<KindArg> = names("kinds", "jump kind", kinds)?;
-    let models: Vec<ModelArg> = match models {
-        Some(m) => names("models", "ground model", m)?,
-        None => vec![ModelArg::Eq4],
+    let kinds: Vec<JumpKind> = names("kinds", "jump kind", kinds, &KINDS)?;
+    let models: Vec<ModelName> = match models {
+        Some(m) => names("models", "ground model", m, &self::models())?,
+        None => vec![ModelName::Eq4],
     };
     let phis = match phis {
         Some(p) => axis("phis", p, check_phi)?,
@@ -397,41 +473,38 @@ pub fn sweep(
             )));
         }
     };
-    let threads = match threads {
-        Some(0) | Some(1025..) => {
-            return Err(PyValueError::new_err(
-                "threads: must be 1..=1024 (or None: one per core)",
-            ));
-        }
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
-    let spec = SweepSpec {
-        kinds: kinds.into_iter().map(Into::into).collect(),
-        models: models.into_iter().map(Into::into).collect(),
-        phis,
-        freqs_hz: freqs,
-        taus_s: taus,
-        rtol,
-        drive,
-    };
+    if let Some(0 | 1025..) = threads {
+        return Err(PyValueError::new_err(
+            "threads: must be 1..=1024 (or None: one per core)",
+        ));
+    }
     let request = SweepRequest {
-        spec: spec.clone(),
-        params: params_source("params", params)?.map(|f| f.to_library()),
-        ..SweepRequest::default()
+        spec: SweepSpec {
+            kinds,
+            models,
+            phis,
+            freqs_hz: freqs,
+            taus_s: taus,
+            rtol,
+            drive,
+        },
+        params: params_source("params", params)?,
+        threads,
+        shard: None,
     };
-    let (params_by_phi, _) = request.resolved_params().map_err(|e| py_err(e.into()))?;
-    let combos = spec.combinations();
-    let outcome = py
-        .detach(|| {
-            run_driven(&combos, threads, &|| {}, spec.drive, spec.rtol, |c| {
-                Ok(&params_by_phi[&c.phi.to_bits()])
-            })
-        })
-        .map_err(pyo3::exceptions::PyRuntimeError::new_err)?;
+    request.validate().map_err(|e| lib_err(e, &[]))?;
+    let out = out_arg(out)?;
+    let outcome = long_call(py, progress, |progress| {
+        let outcome = sandjumper_study::sweep::run(&request, progress)?;
+        if let Some(dir) = &out {
+            outcome.write(dir)?;
+        }
+        Ok(outcome)
+    })?
+    .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[]))?;
 
     let columns = PyDict::new(py);
-    let rows = &outcome.rows;
+    let rows = &outcome.outcome.rows;
     // Each row once as JSON: its numeric columns by name, as `sweep.csv` writes them.
     let as_json: Vec<serde_json::Value> = rows
         .iter()
@@ -457,7 +530,7 @@ pub fn sweep(
         columns.set_item(name, column)?;
     }
     let failures = PyList::empty(py);
-    for f in &outcome.failures {
+    for f in &outcome.outcome.failures {
         let text = serde_json::to_string(f)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         failures.append(json_to_py(py, &text)?)?;
@@ -476,12 +549,12 @@ pub fn sweep(
 /// inside each control period (default 1e-6); `camera_fps`: frames/s (0: none);
 /// `encoder_noise`: counts (standard deviation, seeded).
 #[pyfunction]
-#[pyo3(signature = (kind, freq_hz, link = "sil".to_string(), tau_s = None, gain_lowering = None, model = "eq4".to_string(), phi = 0.57, params = None, rtol = None, camera_fps = 200, encoder_noise = 0.0, firmware = None))]
+#[pyo3(signature = (kind = None, freq_hz = None, link = "sil".to_string(), tau_s = None, gain_lowering = None, model = "eq4".to_string(), phi = 0.57, params = None, rtol = None, camera_fps = 200, encoder_noise = 0.0, firmware = None, stroke = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn hil(
     py: Python<'_>,
-    #[pyo3(from_py_with = typed::kind)] kind: String,
-    #[pyo3(from_py_with = typed::freq_hz)] freq_hz: f64,
+    #[pyo3(from_py_with = typed::kind_opt)] kind: Option<String>,
+    #[pyo3(from_py_with = typed::freq_hz_opt)] freq_hz: Option<f64>,
     #[pyo3(from_py_with = typed::link)] link: String,
     #[pyo3(from_py_with = typed::tau_s)] tau_s: Option<f64>,
     #[pyo3(from_py_with = typed::gain_lowering)] gain_lowering: Option<f64>,
@@ -492,40 +565,67 @@ pub fn hil(
     #[pyo3(from_py_with = typed::camera_fps)] camera_fps: i64,
     #[pyo3(from_py_with = typed::encoder_noise)] encoder_noise: f64,
     firmware: Option<&Bound<'_, PyAny>>,
+    stroke: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<HilResult> {
-    let mut argv = Argv::new(&["hil"]);
-    argv.value("link", "--link", link);
-    argv.value("kind", "--kind", kind);
-    argv.value("freq_hz", "--freq", freq_hz);
-    argv.opt("tau_s", "--tau", tau_s);
-    argv.opt("gain_lowering", "--gain-lowering", gain_lowering);
-    argv.value("model", "--model", model);
-    argv.value("phi", "--phi", phi);
-    argv.opt("rtol", "--rtol", rtol);
-    argv.value("camera_fps", "--camera-fps", camera_fps);
-    argv.value("encoder_noise", "--encoder-noise", encoder_noise);
-    if let Some(f) = firmware {
-        let path = crate::convert::path_arg("firmware", f)?;
-        argv.value("firmware", "--firmware", path.display());
-    }
-    let Command::Hil(a) = argv.parse()? else {
-        unreachable!("`sandjumper hil` parses as Command::Hil")
+    use sandjumper_rig::hil_command::{self as lib, HilRequest, NamedStroke};
+    let names = [
+        ("--link", "link"),
+        ("--gain-lowering", "gain_lowering"),
+        ("--camera-fps", "camera_fps"),
+        ("--encoder-noise", "encoder_noise"),
+        ("--firmware", "firmware"),
+        ("--stroke", "stroke"),
+    ];
+    let link = checked("link", &link, sandjumper_rig::hil::open::parse_link)?;
+    let stroke = stroke
+        .filter(|s| !s.is_none())
+        .map(|s| crate::convert::path_arg("stroke", s))
+        .transpose()?;
+    let (kind, freq_hz, tau_s) = sine("kind", "freq_hz", kind, freq_hz, tau_s, stroke.is_some())?;
+    let gain_lowering = gain_lowering
+        .map(|g| checked("gain_lowering", g, lib::parse_gain_lowering))
+        .transpose()?;
+    let model = choice("model", &model, &models())?;
+    let phi = number("phi", phi, check_phi)?;
+    let rtol = rtol
+        .map(|r| checked("rtol", r, lib::parse_rtol))
+        .transpose()?;
+    let camera_fps = checked("camera_fps", camera_fps, lib::parse_camera_fps)?;
+    let encoder_noise = checked("encoder_noise", encoder_noise, lib::parse_encoder_noise)?;
+    let firmware = match firmware.filter(|f| !f.is_none()) {
+        Some(f) => crate::convert::path_arg("firmware", f)?,
+        None => sandjumper_rig::firmware_image::EMULATED_ELF.into(),
     };
     let file = params_source("params", params)?;
-    let params = resolve_params(a.phi, file.as_ref()).map_err(|e| argv.error(e))?;
-    let request = a.request(params).map_err(|e| argv.error(e))?;
-    let run = py
-        .detach(|| {
-            request.validate()?;
-            let jump = sandjumper_rig::hil_command::run_checked(
-                &request,
-                &sandjumper_output::Silent,
-                None,
-            )?;
-            Ok((jump.json()?, jump.acquisition_log()))
-        })
-        .map_err(|e: sandjumper_rig::RigError| argv.error(e.into()))?;
-    let (json, log) = run;
+    let params =
+        resolve_params(phi, file.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let stroke = stroke
+        .as_deref()
+        .map(NamedStroke::read)
+        .transpose()
+        .map_err(|e| lib_err(e, &names))?;
+    let request = HilRequest {
+        link,
+        kind,
+        freq_hz,
+        tau_s,
+        gain_lowering,
+        model,
+        rtol,
+        camera_fps,
+        encoder_noise_counts: encoder_noise,
+        firmware,
+        params,
+        stroke,
+        ..HilRequest::default()
+    };
+    let (json, log) = long_call(py, progress, |progress| {
+        request.validate()?;
+        let jump = lib::run_checked(&request, progress, None)?;
+        Ok((jump.json()?, jump.acquisition_log()))
+    })?
+    .map_err(|e: sandjumper_rig::RigError| lib_err(e, &names))?;
     Ok(HilResult {
         summary: json_to_py(py, &json)?.unbind(),
         log: log_columns(py, &log)?.into_any().unbind(),
@@ -537,7 +637,7 @@ pub fn hil(
 /// `sandjumper replay` does: a CSV log path; `phi` defaults to the log's; `window_ms`: the
 /// Savitzky-Golay window for p'' (default 1 ms); `allow_gaps`: interpolate missing samples.
 #[pyfunction]
-#[pyo3(signature = (log, model = "eq4".to_string(), phi = None, params = None, rtol = 1e-8, window_ms = None, allow_gaps = false))]
+#[pyo3(signature = (log, model = "eq4".to_string(), phi = None, params = None, rtol = 1e-8, window_ms = None, allow_gaps = false, out = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn replay(
     py: Python<'_>,
@@ -548,27 +648,39 @@ pub fn replay(
     #[pyo3(from_py_with = typed::rtol)] rtol: f64,
     #[pyo3(from_py_with = typed::window_ms)] window_ms: Option<f64>,
     #[pyo3(from_py_with = typed::allow_gaps)] allow_gaps: bool,
+    out: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<JumpResult> {
+    use sandjumper_study::replay::{self as lib, ReplayRequest};
+    let names = [
+        ("--phi", "phi"),
+        ("--model", "model"),
+        ("--rtol", "rtol"),
+        ("--window-ms", "window_ms"),
+        ("--allow-gaps", "allow_gaps"),
+        ("--params", "params"),
+    ];
     let path = crate::convert::path_arg("log", log)?;
-    let mut argv = Argv::new(&["replay"]);
-    argv.positional("log", "LOG", path.display());
-    argv.value("model", "--model", model);
-    argv.opt("phi", "--phi", phi);
-    argv.value("rtol", "--rtol", rtol);
-    argv.opt("window_ms", "--window-ms", window_ms);
-    argv.switch("allow_gaps", "--allow-gaps", allow_gaps);
-    let Command::Replay(a) = argv.parse()? else {
-        unreachable!("`sandjumper replay` parses as Command::Replay")
+    let window_ms = window_ms
+        .map(|w| checked("window_ms", w, lib::parse_window_ms))
+        .transpose()?;
+    let request = ReplayRequest {
+        log: path,
+        model: choice("model", &model, &models())?,
+        phi: phi.map(|p| number("phi", p, check_phi)).transpose()?,
+        params: params_source("params", params)?,
+        rtol: checked("rtol", rtol, parse_rtol)?,
+        window_s: window_ms.map_or(ReplayRequest::default().window_s, |w| w * 1e-3),
+        allow_gaps,
+        record_series: true,
     };
-    let file = params_source("params", params)?;
-    let request = a.request(file.as_ref().map(|f| f.to_library()), true);
-    let log = request.read_log().map_err(|e| argv.error(e.into()))?;
-    let out = py
-        .detach(|| sandjumper_study::replay::run_log(&request, &log, &Silent))
-        .map_err(|e| argv.error(e.into()))?;
+    let out = out_arg(out)?;
+    let (outcome, _) = py
+        .detach(|| lib::run_into(&request, out.as_deref(), &sandjumper_output::Silent))
+        .map_err(|e| lib_err(e, &names))?;
+    let json = outcome.json().map_err(|e| lib_err(e, &[]))?;
     Ok(JumpResult {
-        summary: json_to_py(py, &out.json().map_err(|e| argv.error(e.into()))?)?.unbind(),
-        series: series_dict(py, &out.replayed.outcome.series)?
+        summary: json_to_py(py, &json)?.unbind(),
+        series: series_dict(py, &outcome.replayed.outcome.series)?
             .into_any()
             .unbind(),
     })

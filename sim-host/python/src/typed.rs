@@ -69,5 +69,7 @@ optional_extractors! {
     window_ms("window_ms"): f64, "a number (ms)";
     d2_m("d2_m"): f64, "a number (m)";
     link_opt("link"): String, "a link name (str)";
+    kind_opt("kind"): String, "a jump kind name (str)";
+    freq_hz_opt("freq_hz"): f64, "a number (Hz)";
     threads("threads"): usize, "a positive integer";
 }
