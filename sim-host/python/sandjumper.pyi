@@ -1,15 +1,27 @@
 """Simulate the spring-mass jumping robot on granular media (Aguilar & Goldman, Nature
 Physics 2016) and analyse its measurements, from Python.
 
-Every function calls the same library code as the ``sandjumper`` command line (no
-subprocess), with the CLI's defaults, checks and messages. Bad input raises ``ValueError``
-with the CLI's message (the flag replaced by the argument's name); a wrong type raises
-``TypeError`` naming the argument; a failure after the input was accepted raises
-``RuntimeError``. Units are SI unless a name says otherwise (``freq_hz``, ``window_ms``).
+Every function is one call of the project's libraries (the code behind the ``sandjumper``
+command line; no subprocess, no command line), with the command line's defaults, checks and
+messages. Results come back in memory (dicts, numpy arrays); a folder is written only when
+``out`` is given (``track``, ``piv``, the DEM, ``optimize``, campaigns and figures always
+write theirs). Bad input raises ``ValueError`` with the command line's message (its flag
+written as the argument's name); a wrong type raises ``TypeError`` naming the argument; a
+failure after the input was accepted raises ``RuntimeError``. Units are SI unless a name
+says otherwise (``freq_hz``, ``window_ms``).
+
+Long calls (``sweep``, ``hil``, ``track``, ``piv``, the DEM, ``lammps``, ``optimize``,
+campaigns, figures, ``rig_jump``) run with the GIL released, so other Python threads run
+meanwhile; ``progress`` (a callable ``progress(stage, done, total)``, ``total`` None when
+unknown) is told as they go, at most about ten times a second; Ctrl-C (or a notebook's
+interrupt) stops them between their steps and raises ``KeyboardInterrupt`` (``sweep``,
+``piv``, ``dem_intrude``, ``lammps``, ``optimize`` and campaigns stop part-way; the others
+finish their current call first). An exception raised by ``progress`` stops the call the same
+way and is raised in its place.
 """
 
 import os
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -19,6 +31,7 @@ __version__: str
 PathLike = Union[str, "os.PathLike[str]"]
 Params = Union[Dict[str, Dict[str, Any]], PathLike]
 Axis = Union[float, str, Sequence[float]]
+Progress = Callable[[str, int, Optional[int]], None]
 
 class JumpResult:
     """One jump: ``summary`` and ``series``."""
@@ -78,13 +91,15 @@ def params(phi: float = 0.57, overrides: Optional[Params] = None) -> Dict[str, D
     ``params(phi, overrides=params(phi)) == params(phi)``."""
 
 def jump(
-    kind: str,
-    freq_hz: float,
+    kind: Optional[str] = None,
+    freq_hz: Optional[float] = None,
     model: str = "eq4",
     phi: float = 0.57,
     tau_s: Optional[float] = None,
     params: Optional[Params] = None,
     rtol: float = 1e-8,
+    stroke: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
 ) -> JumpResult:
     """Simulate one jump as ``sandjumper jump`` does.
 
@@ -92,7 +107,9 @@ def jump(
     model: ``"hard"``, ``"eq1-linear"``, ``"eq1"`` or ``"eq4"``. phi: packing fraction.
     tau_s: the delayed stutter's delay, s (required for ``"delayed"``). params: overrides
     (a dict as ``params()`` returns, or a TOML file). rtol: the integrator's relative
-    tolerance."""
+    tolerance. stroke: a stroke file (``t_s,p_m``, e.g. ``optimize``'s stroke.csv) instead
+    of kind, freq_hz and tau_s. out: also write ``jump --out``'s folder (trajectory.csv,
+    params.toml, summary.json, jump.png, jump.svg)."""
 
 def sweep(
     kinds: Union[str, Sequence[str]],
@@ -105,17 +122,20 @@ def sweep(
     link: Optional[str] = None,
     gain_lowering: Optional[float] = None,
     threads: Optional[int] = None,
+    out: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
 ) -> SweepResult:
     """Every combination of kinds, models, packing fractions (default 0.57), delays (s,
     default 0) and frequencies (Hz), in parallel with the GIL released, as
     ``sandjumper sweep`` does. An axis is a number, a sequence, or a range ``"A:B:STEP"``
     (inclusive). link: None (the stroke imposed) or ``"sil"`` (through the controller);
     gain_lowering: with ``"sil"``, the position gain factor during a delay, (0, 1];
-    threads: default one per core."""
+    threads: default one per core. out: also write ``sweep --out``'s folder. progress:
+    ``("jumps", done, total)``; Ctrl-C stops the sweep between jumps."""
 
 def hil(
-    kind: str,
-    freq_hz: float,
+    kind: Optional[str] = None,
+    freq_hz: Optional[float] = None,
     link: str = "sil",
     tau_s: Optional[float] = None,
     gain_lowering: Optional[float] = None,
@@ -126,6 +146,8 @@ def hil(
     camera_fps: int = 200,
     encoder_noise: float = 0.0,
     firmware: Optional[PathLike] = None,
+    stroke: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
 ) -> HilResult:
     """One jump through the control loop against the simulated rig, as ``sandjumper hil``
     does, with the GIL released. link: ``"sil"`` (the core in this process), ``"pil"`` (the
@@ -141,20 +163,30 @@ def replay(
     rtol: float = 1e-8,
     window_ms: Optional[float] = None,
     allow_gaps: bool = False,
+    out: Optional[PathLike] = None,
 ) -> JumpResult:
     """Replay a CSV acquisition log's encoder record in the simulator (the paper's method),
     as ``sandjumper replay`` does. phi defaults to the log's; window_ms: the Savitzky-Golay
     window for p'' (default 1 ms); allow_gaps: interpolate missing samples (reported)."""
 
 def track(
-    frames: PathLike, m_per_px: float, out: Optional[PathLike] = None, **options: Any
+    frames: PathLike,
+    m_per_px: float,
+    out: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
+    **options: Any,
 ) -> FolderResult:
     """Track the rod's ball through camera frames and measure the jump height, as
     ``sandjumper track`` does. m_per_px: the camera's scale, m/px. options: the CLI's flags
     by name (``fps=200``, ``log="acquisition.csv"``, ``ball_diameter=0.0127`` (m), ...).
     ``tables["track"]`` holds one row per frame."""
 
-def piv(frames: PathLike, out: Optional[PathLike] = None, **options: Any) -> FolderResult:
+def piv(
+    frames: PathLike,
+    out: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
+    **options: Any,
+) -> FolderResult:
     """PIV of side-wall grain videos, as ``sandjumper piv`` does. options: the CLI's flags by
     name (``windows=[64, 32, 16]`` (px), ``overlap=0.5``, ``fps=500``, ``m_per_px=...``,
     ``origin=[x_px, y_px]``, ``foot=...``, ...). ``arrays`` holds the fields as stacks of
@@ -177,12 +209,17 @@ def dem_collide(
     (kg/m^3), ``force_step=True``. Returns ``restitution``, ``contact_time_s``,
     ``effective_mass_kg``, ``dt_s``, the analytic values and the errors."""
 
-def dem_bed(out: PathLike, **options: Any) -> FolderResult:
+def dem_bed(out: PathLike, progress: Optional[Progress] = None, **options: Any) -> FolderResult:
     """Prepare a DEM bed, as ``sandjumper dem bed --out OUT`` does. options: the CLI's flags
     by name (``width=0.23``, ``height=0.08`` (m), ``pack=0.8``, ``seed=1``, ``threads=2``,
     ...)."""
 
-def dem_intrude(bed: PathLike, out: PathLike, **options: Any) -> FolderResult:
+def dem_intrude(
+    bed: Optional[PathLike],
+    out: PathLike,
+    progress: Optional[Progress] = None,
+    **options: Any,
+) -> FolderResult:
     """Run a DEM intrusion, as ``sandjumper dem intrude --bed BED --out OUT`` does. options:
     the CLI's flags by name (``speed=0.1`` (m/s) or ``trajectory="trajectory.csv"``,
     ``depth=0.03`` (m), ``no_frames=True``, ``threads=2``, ``resume=True``, ...)."""
@@ -192,6 +229,120 @@ def read_log(path: PathLike, allow_gaps: bool = False) -> Dict[str, Any]:
     ``columns`` (as ``HilResult.log``), ``metadata`` and ``summary`` (as
     ``log check --json``)."""
 
-def log_to_mcap(log: PathLike, out: PathLike, allow_gaps: bool = False, force: bool = False) -> None:
+def log_to_mcap(
+    log: PathLike, out: PathLike, allow_gaps: bool = False, force: bool = False
+) -> Dict[str, Any]:
     """Convert an acquisition log (CSV or binary) to MCAP for Foxglove, Lichtblick and
-    PlotJuggler, as ``sandjumper log convert IN OUT --to mcap`` does."""
+    PlotJuggler, as ``sandjumper log convert IN OUT --to mcap`` does. Returns what was
+    written: ``to`` (``"mcap"``), ``output`` and the conversion's counts."""
+
+def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -> FolderResult:
+    """The 3-D intrusion through LAMMPS, as ``sandjumper dem lammps --out OUT`` does (LAMMPS
+    and, for more than one rank, mpiexec installed; ``lmp=`` and ``mpiexec=`` name them).
+    options: the command's options by name (``preset="small"``, ``speed=0.1`` (m/s) or
+    ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``, ...). Ctrl-C
+    stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
+    ``cone``."""
+
+def fit(
+    what: str,
+    file: PathLike,
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    out: Optional[PathLike] = None,
+    **options: Any,
+) -> Dict[str, Any]:
+    """Fit model parameters to measurements, as ``sandjumper fit WHAT FILE --json`` does.
+    what: ``"intrusion"`` (``depth_m,force_n``: k1, k2, delta, or kappa, l_re),
+    ``"added-mass"`` (``depth_m,added_mass_kg``: mu, C), ``"drag"`` (alpha per phi) or
+    ``"inertial"`` (b per phi) from a sweep.csv of measured heights. out: also write the
+    fitted values as a params TOML file. options: ``reintrusion=True``, ``first=True``,
+    ``z_start=...`` (m); ``exclude_deepest=...``; ``model=...``, ``height="jump"`` or
+    ``"final"``, ``rtol=...``. Returns ``fits`` (param, value, stderr, phi) and
+    ``residual_rms``."""
+
+def optimize(
+    out: PathLike,
+    objective: str = "height",
+    model: str = "eq4",
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    progress: Optional[Progress] = None,
+    **options: Any,
+) -> FolderResult:
+    """Search for the best stroke within the rig's limits, as ``sandjumper optimize --out
+    OUT`` does: CMA-ES over the stroke family, beside the best of the paper's strokes, both
+    re-run through the controller on ``verify``'s links. objective: ``"height"``,
+    ``"final-height"``, ``"height-per-peak-power"`` or ``"height-per-energy"``. options: the
+    command's by name (``max_stroke=0.025`` (m), ``evaluations=192000``, ``moves=4``,
+    ``verify="sil"`` or ``["sil", "pil"]`` or ``"none"``, ``threads=...``, ``seed=1``, ...).
+    Ctrl-C stops the search after its current generation; the checkpoint beside ``out``
+    resumes it. ``summary`` is ``optimize --json``'s; ``tables["stroke"]`` the stroke."""
+
+def campaign_run(
+    file: PathLike,
+    out: PathLike,
+    link: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    stop_after: Optional[int] = None,
+    progress: Optional[Progress] = None,
+) -> Dict[str, Any]:
+    """Run a campaign file, as ``sandjumper campaign run FILE --out OUT`` does. link:
+    overrides the file's (``"sil"``, ``"pil"``, ``"f407"``, ``"serial:PATH"``).
+    stop_after: stop after that many points (resumable); Ctrl-C stops after the current
+    point. Returns the session's outcome (``ended``: ``"finished"`` or ``"stopped"``,
+    ``done``, ...)."""
+
+def campaign_resume(
+    dir: PathLike,
+    firmware: Optional[PathLike] = None,
+    stop_after: Optional[int] = None,
+    progress: Optional[Progress] = None,
+) -> Dict[str, Any]:
+    """Resume the campaign in ``dir``, as ``sandjumper campaign resume DIR`` does."""
+
+def campaign_status(dir: PathLike) -> Dict[str, Any]:
+    """Where the campaign in ``dir`` stands, as ``sandjumper campaign status DIR --json``
+    prints it."""
+
+def figures(
+    out: PathLike,
+    quick: bool = False,
+    threads: Optional[int] = None,
+    rtol: float = 1e-8,
+    progress: Optional[Progress] = None,
+) -> FolderResult:
+    """The paper's figures from the model, as ``sandjumper figures --out OUT`` does (quick:
+    coarser sweeps). ``tables`` holds each figure's data."""
+
+def figures_dem(
+    out: PathLike,
+    phi: Optional[float] = None,
+    freq_hz: Optional[float] = None,
+    tau_s: Optional[float] = None,
+    foot_width: Optional[float] = None,
+    full_model: Optional[bool] = None,
+    threads: Optional[int] = None,
+    bed_max_time: Optional[float] = None,
+    progress: Optional[Progress] = None,
+) -> FolderResult:
+    """The supplement's DEM figures, as ``sandjumper figures dem --out OUT`` does; foot_width
+    (m) scales the comparison down. ``summary`` is ``summary.json``."""
+
+def rig_jump(
+    kind: str,
+    freq_hz: float,
+    link: str = "sil",
+    tau_s: Optional[float] = None,
+    model: str = "eq4",
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    camera_fps: int = 200,
+    firmware: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
+) -> HilResult:
+    """One jump through the rig tool, as ``sandjumper rig jump --link LINK`` does: ``"sil"``,
+    ``"pil"``, ``"f407"`` (the F407 release binary on the virtual board) or
+    ``"serial:PATH"`` (a real rig). ``summary`` is ``rig jump --json``'s; ``log`` the
+    acquisition log's columns. out: also write the run's folder."""

@@ -615,7 +615,9 @@ fn drive(
         let Some(point) = state.next_point().cloned() else {
             break;
         };
-        if stop_after.is_some_and(|n| this_session >= n) {
+        // Asked to stop after N points, or stopped by the caller (Ctrl-C): the journal holds
+        // every point done, and `resume` goes on from the next.
+        if stop_after.is_some_and(|n| this_session >= n) || progress.cancelled() {
             progress.finish();
             return Ok(SessionOutcome::Stopped {
                 this_session,

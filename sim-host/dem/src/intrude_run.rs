@@ -457,6 +457,12 @@ fn advance_intrusion(
     let frames = run.spec.frames;
     let seed = run.spec.seed;
     let mut on_sample = |s: &SampleOut| -> Result<(), String> {
+        if progress.cancelled() {
+            return Err(format!(
+                "interrupted at sample {}: the last checkpoint resumes it (--resume)",
+                s.k
+            ));
+        }
         if frames {
             crate::render::side_wall_frame(s.world, &cam, seed)
                 .save(work.join(format!("frames/frame_{:06}.png", s.k)))

@@ -443,12 +443,16 @@ pub fn analyse_pair(
     })
 }
 
+/// The start of the message of a run its caller stopped (Ctrl-C).
+pub const INTERRUPTED: &str = "interrupted";
+
 /// Run the whole analysis: check, pre-process, pair, analyse every pair (calling `on_pair`
-/// after each, e.g. for a progress bar).
+/// after each, e.g. for a progress bar; it returns false to stop the run, which then ends as
+/// [`INTERRUPTED`]).
 pub fn run(
     frames: &Frames,
     opts: &PivOptions,
-    mut on_pair: impl FnMut(),
+    mut on_pair: impl FnMut() -> bool,
 ) -> Result<PivRun, String> {
     check(frames, opts)?;
     let prepared = prepare(frames, &opts.preprocess);
@@ -456,7 +460,13 @@ pub fn run(
     let mut results = Vec::with_capacity(pairs.len());
     for (k, &pair) in pairs.iter().enumerate() {
         results.push(analyse_pair(k, pair, frames, &prepared, opts)?);
-        on_pair();
+        if !on_pair() {
+            return Err(format!(
+                "{INTERRUPTED} after {} of {} pairs",
+                k + 1,
+                pairs.len()
+            ));
+        }
     }
     apply_speed_threshold(&mut results, opts.min_speed_ratio);
     Ok(PivRun { pairs, results })

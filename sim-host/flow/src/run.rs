@@ -292,9 +292,18 @@ fn run_stages(
     };
     let pairs = analysis::frame_pairs(frames.images.len(), opts.pairing, opts.every);
     progress.start("PIV pairs", Some(pairs.len() as u64));
-    let run = analysis::run(&frames, &opts, || progress.advance(1));
+    let run = analysis::run(&frames, &opts, || {
+        progress.advance(1);
+        !progress.cancelled()
+    });
     progress.finish();
-    let run = run.map_err(FlowError::input)?;
+    let run = run.map_err(|e| {
+        if progress.cancelled() {
+            FlowError::Internal(e)
+        } else {
+            FlowError::input(e)
+        }
+    })?;
     let totals = run.totals();
     if totals.replaced > 0 {
         progress.note(&format!(

@@ -194,9 +194,11 @@ impl BallFinder {
                 }
             }
             let area = n as f64 * f64::from(b * b);
+            // Block k covers pixels k b ..= k b + b - 1, centred at k b + (b - 1) / 2 (pixel
+            // (row i, column j) centred at x = j, y = i).
             let (cx, cy) = (
-                f64::from(window.x) + (sx / n as f64 + 0.5) * f64::from(b),
-                f64::from(window.y) + (sy / n as f64 + 0.5) * f64::from(b),
+                f64::from(window.x) + (sx / n as f64 + 0.5) * f64::from(b) - 0.5,
+                f64::from(window.y) + (sy / n as f64 + 0.5) * f64::from(b) - 0.5,
             );
             if area < 0.25 * disc || area > 4.0 * disc {
                 if area >= 0.05 * disc {
@@ -284,14 +286,14 @@ impl BallFinder {
             let mut row = Vec::new();
             for y in ey0..ey1 {
                 frame.row_into(y, ex0, ex1, &mut row);
-                let v = f64::from(y) + 0.5 - cy;
+                let v = f64::from(y) - cy;
                 let inside_rows = y >= y0 && y < y1;
                 for (k, &val) in row.iter().enumerate() {
                     let x = ex0 + k as u32;
                     if inside_rows && x >= x0 && x < x1 {
                         continue;
                     }
-                    let u = f64::from(x) + 0.5 - cx;
+                    let u = f64::from(x) - cx;
                     let basis = [1.0, u, v];
                     for i in 0..3 {
                         for j in 0..3 {
@@ -307,11 +309,11 @@ impl BallFinder {
             let (mut sw, mut su, mut sv) = (0.0_f64, 0.0_f64, 0.0_f64);
             for y in y0..y1 {
                 frame.row_into(y, x0, x1, &mut row);
-                let v = f64::from(y) + 0.5 - cy;
+                let v = f64::from(y) - cy;
                 let base = plane[0] + plane[2] * v;
                 let (mut rw, mut ru) = (0.0_f64, 0.0_f64);
                 for (k, &val) in row.iter().enumerate() {
-                    let u = f64::from(x0 + k as u32) + 0.5 - cx;
+                    let u = f64::from(x0 + k as u32) - cx;
                     let wgt = f64::from(val) - base - plane[1] * u;
                     rw += wgt;
                     ru += wgt * u;

@@ -178,10 +178,11 @@ impl CameraModel {
         }
     }
 
-    /// Background level at pixel `(x, y)`, 8-bit units.
+    /// Background level at the pixel centred at `(x, y)` (column, row), 8-bit units.
     fn background(&self, x: f64, y: f64) -> f64 {
         let (w, h) = (f64::from(self.width_px), f64::from(self.height_px));
-        let (u, v) = (x / w - 0.5, y / h - 0.5);
+        // Relative to the frame's centre, ((w - 1) / 2, (h - 1) / 2), in frame widths.
+        let (u, v) = ((x + 0.5) / w - 0.5, (y + 0.5) / h - 0.5);
         let tilt = 1.0 + self.background_tilt * (u + v);
         let vignette = 1.0 - self.vignetting * 2.0 * (u * u + v * v);
         self.background_level * tilt * vignette
@@ -194,7 +195,7 @@ impl CameraModel {
         let mut out = Vec::with_capacity(w * h);
         for y in 0..h {
             for x in 0..w {
-                out.push(self.background(x as f64 + 0.5, y as f64 + 0.5) as f32);
+                out.push(self.background(x as f64, y as f64) as f32);
             }
         }
         out
@@ -249,9 +250,11 @@ impl CameraModel {
         let (py0, py1) = (clampi(y0, h), clampi(y1 + 1.0, h));
         let scale = self.ball_contrast / subs as f64;
         for y in py0..py1 {
-            let yc = y as f64 + 0.5;
+            // Pixel (row y, column x) is centred at (x, y), as numpy, scikit-image, trackpy
+            // and OpenCV have it.
+            let yc = y as f64;
             for x in px0..px1 {
-                let xc = x as f64 + 0.5;
+                let xc = x as f64;
                 let mut sum = 0.0;
                 for &(cx, cy) in &centres {
                     let d2 = (xc - cx) * (xc - cx) + (yc - cy) * (yc - cy);

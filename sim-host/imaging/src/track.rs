@@ -185,9 +185,10 @@ pub struct TrackedFrame {
     pub frame: u64,
     /// Time, s.
     pub t_s: f64,
-    /// Ball centre, px (NaN when flagged).
+    /// Ball centre, px (NaN when flagged): pixel (row i, column j) is centred at x = j,
+    /// y = i, as numpy, scikit-image, trackpy and OpenCV have it.
     pub x_px: f64,
-    /// Ball centre, px, `y` downward (NaN when flagged).
+    /// Ball centre, px, `y` downward (NaN when flagged); the same pixel convention.
     pub y_px: f64,
     /// Rod height above rest, m (NaN when flagged).
     pub rod_height_m: f64,

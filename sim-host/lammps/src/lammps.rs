@@ -103,14 +103,15 @@ pub struct RunReport {
 
 impl Lammps {
     /// Run `input` in `dir` on `ranks` MPI ranks, its log in `log`; `progress` sees every
-    /// thermo line's step. Errors carry LAMMPS's own ERROR line and the log's name.
+    /// thermo line's step and returns false to stop LAMMPS (killed; the run's error then says
+    /// it was interrupted). Errors carry LAMMPS's own ERROR line and the log's name.
     pub fn run(
         &self,
         dir: &Path,
         input: &str,
         log: &str,
         ranks: u32,
-        progress: &mut dyn FnMut(u64),
+        progress: &mut dyn FnMut(u64) -> bool,
     ) -> Result<RunReport, String> {
         let mut cmd = if ranks > 1 {
             let Some(mpi) = &self.mpiexec else {
@@ -164,7 +165,17 @@ impl Lammps {
                     // A thermo line: the step, then numbers.
                     if t.split_whitespace().count() >= 3 {
                         last_step = step;
-                        progress(step);
+                        if !progress(step) {
+                            // SIGTERM, which mpiexec passes on to its ranks (SIGKILL would
+                            // leave them running).
+                            let _ = Command::new("kill")
+                                .args(["-TERM", &child.id().to_string()])
+                                .status();
+                            let _ = child.wait();
+                            return Err(format!(
+                                "interrupted at step {step}: LAMMPS stopped (its log: {log})"
+                            ));
+                        }
                     }
                 }
             }

@@ -208,12 +208,14 @@ fn stage(progress: &dyn Progress, name: &str, steps: u64) {
     progress.start(if name == "read" { "frames" } else { "steps" }, Some(steps));
 }
 
-/// The LAMMPS step reporter of a stage: `progress` advanced to each step it reports.
-fn stepper(progress: &dyn Progress) -> impl FnMut(u64) + '_ {
+/// The LAMMPS step reporter of a stage: `progress` advanced to each step it reports; false
+/// (LAMMPS is stopped) once the caller asked the run to stop (Ctrl-C).
+fn stepper(progress: &dyn Progress) -> impl FnMut(u64) -> bool + '_ {
     let mut at = 0u64;
     move |s| {
         progress.advance(s.saturating_sub(at));
         at = at.max(s);
+        !progress.cancelled()
     }
 }
 

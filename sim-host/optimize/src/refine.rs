@@ -62,7 +62,7 @@ pub fn refine(
     settings: &RefineSettings,
     checkpoint: Option<&mut Checkpoint>,
     firmware: &Path,
-    progress: &(dyn Fn(usize, usize, f64) + Sync),
+    progress: &(dyn Fn(usize, usize, f64) -> bool + Sync),
 ) -> Result<Refined, String> {
     let fitness = |x: &[f64]| -> f64 {
         let chain = encoding.decode(x);
@@ -111,7 +111,7 @@ pub fn refine(
             if g.best_value > best {
                 best = g.best_value;
             }
-            progress(evaluations, settings.evaluations, best);
+            progress(evaluations, settings.evaluations, best)
         },
     )?;
     let (fitness, point) = match run.pool.first() {

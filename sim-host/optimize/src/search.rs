@@ -152,14 +152,18 @@ fn diverse_best(mut pool: Vec<(f64, u64, Vec<f64>)>, n: usize) -> Vec<(f64, u64,
     kept
 }
 
-/// Run the search from `starts`.
+/// The start of the error of a search its caller stopped (Ctrl-C).
+pub const INTERRUPTED: &str = "interrupted";
+
+/// Run the search from `starts` (`progress` is told after each generation and returns false
+/// to stop the search).
 pub fn search(
     problem: &Problem,
     encoding: &Encoding,
     starts: &[Start],
     settings: &SearchSettings,
     checkpoint: Option<&mut Checkpoint>,
-    progress: &(dyn Fn(Progress) + Sync),
+    progress: &(dyn Fn(Progress) -> bool + Sync),
 ) -> Result<SearchOutcome, String> {
     if starts.is_empty() {
         return Err("no start for the search".into());
@@ -205,7 +209,7 @@ pub fn search(
                     evaluations,
                     budget,
                     best: best_so_far,
-                });
+                })
             },
         )?;
         let (termination, pool) = (run.termination, run.pool);
@@ -287,12 +291,13 @@ pub(crate) struct CmaRun {
 /// Run CMA-ES on `fitness` (minimised; feasible below
 /// [`INFEASIBLE_FITNESS`](crate::evaluate::INFEASIBLE_FITNESS)), candidates in parallel on the
 /// current rayon pool, values read from and appended to the checkpoint, `on_generation` told
-/// after each generation.
+/// after each generation (it returns false to stop the run: the generation's values are in the
+/// checkpoint, and the run ends as an error starting with [`INTERRUPTED`]).
 pub(crate) fn cma_run(
     spec: &CmaSpec<'_>,
     fitness: &(dyn Fn(&[f64]) -> f64 + Sync),
     checkpoint: &Mutex<Option<&mut Checkpoint>>,
-    on_generation: &mut dyn FnMut(&Generation),
+    on_generation: &mut dyn FnMut(&Generation) -> bool,
 ) -> Result<CmaRun, String> {
     use crate::evaluate::INFEASIBLE_FITNESS;
     // Values computed this generation, to append to the checkpoint.
@@ -355,7 +360,7 @@ pub(crate) fn cma_run(
         let best = cmaes
             .current_best_individual()
             .map_or(f64::NAN, |b| b.value);
-        on_generation(&Generation {
+        let go_on = on_generation(&Generation {
             generation,
             evaluations,
             replayed,
@@ -372,6 +377,11 @@ pub(crate) fn cma_run(
             && let Some(c) = c.as_deref_mut()
         {
             c.append(&new)?;
+        }
+        if !go_on {
+            return Err(format!(
+                "{INTERRUPTED} after generation {generation}: the checkpoint resumes the search"
+            ));
         }
         if let Some(t) = done {
             break t;

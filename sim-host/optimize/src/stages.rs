@@ -151,13 +151,14 @@ impl<'a> Position<'a> {
         }
     }
 
-    /// `n` steps are done.
-    fn at(&self, n: usize) {
+    /// `n` steps are done; false when the caller asked the run to stop (Ctrl-C).
+    fn at(&self, n: usize) -> bool {
         let n = n as u64;
         let before = self.at.fetch_max(n, Ordering::Relaxed);
         if n > before {
             self.progress.advance(n - before);
         }
+        !self.progress.cancelled()
     }
 }
 
@@ -278,9 +279,18 @@ impl<'a> Context<'a> {
         let sweep = {
             let at = Position::start(self.progress, "paper strokes", grid.len());
             let moves = self.setup.encoding.moves;
-            self.pool
-                .install(|| sweep(&self.setup.problem, &grid, moves, &|n| at.at(n)))
+            self.pool.install(|| {
+                sweep(&self.setup.problem, &grid, moves, &|n| {
+                    at.at(n);
+                })
+            })
         };
+        if self.progress.cancelled() {
+            return Err(OptimizeError::Internal(format!(
+                "{}: stopped in the sweep of the paper's strokes",
+                crate::search::INTERRUPTED
+            )));
+        }
         let seconds = started.elapsed().as_secs_f64();
         let feasible = sweep
             .points

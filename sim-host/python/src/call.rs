@@ -103,12 +103,7 @@ impl Progress for PyProgress {
     }
 
     fn finish(&self) {
-        {
-            let mut s = self.stage.lock().unwrap_or_else(|e| e.into_inner());
-            if let Some(len) = s.len {
-                s.done = s.done.max(len);
-            }
-        }
+        // The steps done as they were counted: a stage that stopped early ends short.
         self.report(true);
     }
 

@@ -382,3 +382,5 @@ def test_the_notebook_reproduces_height_vs_phi(tmp_path, monkeypatch):
     monkeypatch.setenv("MPLBACKEND", "Agg")
     runpy.run_path(str(REPO / "docs" / "notebook.py"), run_name="__main__")
     assert (tmp_path / "height_vs_phi.png").stat().st_size > 10_000
+    for figure in ["jump.png", "piv_field.png", "optimized_stroke.png"]:
+        assert (tmp_path / figure).stat().st_size > 10_000, figure

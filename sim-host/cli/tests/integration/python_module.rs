@@ -212,3 +212,37 @@ fn the_wheel_resolves_the_features_of_the_test_build() {
         drift.join("\n")
     );
 }
+
+/// The Python module binds the libraries, not this command line: `sandjumper-cli` is nowhere
+/// in its dependency tree (so no argument list can be parsed by the CLI's parser there).
+/// Tried: adding `sandjumper-cli.workspace = true` back to sim-host/python/Cargo.toml.
+#[test]
+fn the_python_module_binds_the_libraries_not_the_cli() {
+    let root = workspace();
+    let out = Command::new(env!("CARGO"))
+        .args([
+            "tree",
+            "-p",
+            "sandjumper-python",
+            "-e",
+            "normal,build",
+            "--prefix",
+            "none",
+            "--offline",
+        ])
+        .current_dir(&root)
+        .output()
+        .expect("run cargo tree");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let tree = String::from_utf8_lossy(&out.stdout);
+    assert!(tree.contains("sandjumper-study"), "{tree}");
+    let cli: Vec<&str> = tree
+        .lines()
+        .filter(|l| l.starts_with("sandjumper-cli "))
+        .collect();
+    assert!(cli.is_empty(), "{cli:?}");
+}

@@ -112,7 +112,12 @@ pub struct WrittenSweep {
     pub plots: Vec<String>,
 }
 
-/// Run the sweep `request` asks for; one `progress` step per jump ("jumps").
+/// The reason of a jump a stopped sweep did not run, and the start of the stopped sweep's error.
+pub const INTERRUPTED: &str = "interrupted";
+
+/// Run the sweep `request` asks for; one `progress` step per jump ("jumps"). When
+/// `progress` says the caller stopped it (Ctrl-C), the jumps not yet started are not run and
+/// the sweep ends as an error saying how many were done.
 pub fn run(request: &SweepRequest, progress: &dyn Progress) -> Result<SweepRunOutcome, StudyError> {
     let (params_by_phi, params_text) = request.resolved_params()?;
     let spec = request.spec.clone();
@@ -128,13 +133,36 @@ pub fn run(request: &SweepRequest, progress: &dyn Progress) -> Result<SweepRunOu
     let outcome = run_driven(
         &combos[slice.clone()],
         threads,
-        &|| progress.advance(1),
+        // The jumps a stop skips are not counted as done.
+        &|| {
+            if !progress.cancelled() {
+                progress.advance(1);
+            }
+        },
         spec.drive,
         spec.rtol,
-        |c| Ok(&params_by_phi[&c.phi.to_bits()]),
+        |c| {
+            // Stopped by the caller (Ctrl-C): the jumps not started are not run.
+            if progress.cancelled() {
+                return Err(INTERRUPTED.to_string());
+            }
+            Ok(&params_by_phi[&c.phi.to_bits()])
+        },
     )
     .map_err(StudyError::Internal)?;
     progress.finish();
+    if progress.cancelled() {
+        let skipped = outcome
+            .failures
+            .iter()
+            .filter(|f| f.error == INTERRUPTED)
+            .count();
+        return Err(StudyError::Internal(format!(
+            "{INTERRUPTED}: {} of {} jumps done",
+            slice.len() - skipped,
+            slice.len()
+        )));
+    }
     let file = request.params.as_ref();
     let meta = SweepMeta {
         format: SweepMeta::FORMAT.into(),

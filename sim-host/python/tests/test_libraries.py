@@ -1,0 +1,264 @@
+"""The module over the libraries: results in memory and folders only when asked, progress
+callbacks, Ctrl-C, and the functions beyond the first twelve (fit, optimize, campaigns,
+figures, LAMMPS, the rig tool), each against the command line where it has one.
+
+The CLI is ``target/debug/sandjumper`` of this workspace (or ``$SANDJUMPER_BIN``).
+"""
+
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import sandjumper
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+CLI = os.environ.get("SANDJUMPER_BIN", str(REPO / "target" / "debug" / "sandjumper"))
+
+
+def cli(*args, check=True):
+    out = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True)
+    if check:
+        assert out.returncode == 0, out.stderr
+    return out
+
+
+def test_a_jump_comes_back_in_memory_and_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = sandjumper.jump("stutter", 11.0)
+    assert list(tmp_path.iterdir()) == []
+    assert isinstance(r.series["t_s"], np.ndarray) and r.series["t_s"].dtype == np.float64
+    assert len(r.series["t_s"]) == len(r.series["x_r_m"]) > 100
+    assert r.summary["jump_height_m"] > 0.0
+
+
+def test_out_writes_what_the_command_writes(tmp_path):
+    r = sandjumper.jump("single", 10.0, out=tmp_path / "j")
+    cli("jump", "--kind", "single", "--freq", 10, "--out", tmp_path / "c")
+    for name in ["trajectory.csv", "params.toml", "summary.json", "jump.png", "jump.svg"]:
+        assert (tmp_path / "j" / name).is_file(), name
+    assert (tmp_path / "j" / "trajectory.csv").read_text() == (
+        tmp_path / "c" / "trajectory.csv").read_text()
+    assert r.summary == json.loads((tmp_path / "j" / "summary.json").read_text())
+    s = sandjumper.sweep("single", [9.0, 10.0], out=tmp_path / "s")
+    assert (tmp_path / "s" / "sweep.csv").is_file()
+    assert len(s.columns["freq_hz"]) == 2
+
+
+def test_a_sweep_reports_its_progress():
+    seen = []
+    sandjumper.sweep("single", "8:12:0.5", progress=lambda *a: seen.append(a))
+    assert seen[0] == ("jumps", 0, 9)
+    assert seen[-1] == ("jumps", 9, 9)
+    assert all(stage == "jumps" and total == 9 for stage, _, total in seen)
+    assert [d for _, d, _ in seen] == sorted(d for _, d, _ in seen)
+
+
+def test_ctrl_c_stops_a_long_sweep():
+    """SIGINT (Ctrl-C in a terminal or a notebook's interrupt) raises KeyboardInterrupt
+    while the sweep runs, and the sweep stops between its jumps: the call returns within a
+    tenth of the time its remaining jumps would take at the rate it reported (both measured in
+    this run, so a busy machine slows them alike)."""
+    started = threading.Event()
+    seen = []
+
+    def progress(stage, done, total):
+        seen.append((time.perf_counter(), done, total))
+        if done > 2000:
+            started.set()
+
+    sent = {}
+
+    def interrupt():
+        if started.wait(300):
+            sent["at"] = time.perf_counter()
+            os.kill(os.getpid(), signal.SIGINT)
+
+    t = threading.Thread(target=interrupt)
+    t.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            # About 470,000 jumps: a minute or more on one thread.
+            sandjumper.sweep(["single", "stutter", "delayed"], "0.5:40:0.001",
+                             taus_s=[0.0, 0.02, 0.05, 0.1], threads=1, progress=progress)
+        returned = time.perf_counter()
+    finally:
+        started.set()
+        t.join()
+    (t0, d0, total), (t1, d1, _) = seen[1], max(
+        (s for s in seen if s[0] <= sent["at"]), key=lambda s: s[1])
+    rate = (d1 - d0) / (t1 - t0)
+    remaining_s = (total - d1) / rate
+    assert d1 < total
+    assert returned - sent["at"] < 0.1 * remaining_s, (returned - sent["at"], remaining_s)
+
+
+def test_an_exception_in_the_progress_callback_stops_the_call():
+    calls = []
+
+    def progress(stage, done, total):
+        calls.append(done)
+        if done > 0:
+            raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        sandjumper.sweep("single", "0.5:40:0.001", threads=1, progress=progress)
+    assert calls[-1] < 39501
+
+
+def test_fit_added_mass_equals_the_cli(tmp_path):
+    # The model's own added mass against depth through one intrusion stroke (depth from
+    # where the added mass starts), as PIV would measure it.
+    j = sandjumper.jump("single", 10.0)
+    depth, mass = -j.series["x_f_m"], j.series["m_a_kg"]
+    deepest = int(np.argmax(depth))
+    first = next(i for i in range(deepest) if mass[i] > 0)
+    rows, last = [], -1.0
+    for d, m in zip(depth[first:deepest + 1] - depth[first - 1], mass[first:deepest + 1]):
+        if d > last:
+            rows.append(f"{float(d)!r},{float(m)!r}\n")
+            last = d
+    data = tmp_path / "ma.csv"
+    data.write_text("depth_m,added_mass_kg\n" + "".join(rows))
+    r = sandjumper.fit("added-mass", data, exclude_deepest=0.0)
+    expected = json.loads(
+        cli("fit", "added-mass", data, "--exclude-deepest", 0, "--json").stdout)
+    assert [f["param"] for f in r["fits"]] == ["mu", "C"]
+    assert r == expected
+    params = tmp_path / "fitted.toml"
+    sandjumper.fit("added-mass", data, exclude_deepest=0.0, out=params)
+    assert "jamming_front_rate = " in params.read_text()
+    with pytest.raises(ValueError, match="what"):
+        sandjumper.fit("nope", data)
+    with pytest.raises(ValueError, match="z_start"):
+        sandjumper.fit("added-mass", data, z_start=0.01)
+
+
+def test_optimize_equals_the_cli(tmp_path):
+    args = dict(evaluations=100, population=4, random_starts=0, refine=0, verify="none",
+                sweep_freq_step=2.0, sweep_tau_step=0.2, threads=1)
+    seen = []
+    r = sandjumper.optimize(tmp_path / "py", progress=lambda *a: seen.append(a), **args)
+    flags = []
+    for k, v in args.items():
+        flags += ["--" + k.replace("_", "-"), v]
+    cli("optimize", *flags, "--out", tmp_path / "cli")
+    expected = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    for key in ["best_height_m", "answer", "paper_answer", "evaluations", "paper_sweep_points"]:
+        assert r.summary[key] == expected[key], key
+    assert r.path == str(tmp_path / "py")
+    assert "stroke" in r.tables
+    assert {stage for stage, _, _ in seen} >= {"evaluations"}
+    with pytest.raises(ValueError) as raised:
+        sandjumper.optimize(tmp_path / "bad", max_stroke=0.05)
+    assert str(raised.value).startswith("max_stroke `0.05` out of range")
+
+
+def test_a_campaign_runs_resumes_and_reports_its_status(tmp_path):
+    plan = REPO / "examples" / "campaign-small.toml"
+    out = tmp_path / "c"
+    stopped = sandjumper.campaign_run(plan, out, link="sil", stop_after=3)
+    assert stopped["ended"] == "stopped" and stopped["done"] == 3, stopped
+    status = sandjumper.campaign_status(out)
+    assert status == json.loads(cli("campaign", "status", out, "--json").stdout)
+    finished = sandjumper.campaign_resume(out)
+    assert finished["ended"] == "finished" and finished["done"] == 8, finished
+    assert finished["sessions"] == 2, finished
+    with pytest.raises(ValueError):
+        sandjumper.campaign_run(tmp_path / "none.toml", tmp_path / "x")
+
+
+def test_quick_figures_write_their_folder(tmp_path):
+    r = sandjumper.figures(tmp_path / "f", quick=True)
+    assert r.path == str(tmp_path / "f")
+    assert "delayed_vs_tau" in r.tables
+    assert (tmp_path / "f" / "summary.txt").is_file()
+
+
+def test_figures_dem_and_lammps_refuse_bad_input(tmp_path):
+    with pytest.raises(ValueError, match="phi"):
+        sandjumper.figures_dem(tmp_path / "d", phi=1.5)
+    with pytest.raises(ValueError, match="speed"):
+        sandjumper.lammps(tmp_path / "l", speed=-0.1)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'spede'"):
+        sandjumper.lammps(tmp_path / "l", spede=0.1)
+
+
+def test_rig_jump_through_sil_equals_the_cli(tmp_path):
+    r = sandjumper.rig_jump("stutter", 11.0, out=tmp_path / "py")
+    cli("rig", "jump", "--link", "sil", "--kind", "stutter", "--freq", 11, "--out",
+        tmp_path / "cli")
+    expected = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    for key in ["link", "kind", "samples", "camera_frames", "completed",
+                "simulated_jump_height_m", "tracking_error_max_m"]:
+        assert r.summary[key] == expected[key], key
+    assert len(r.log["t_s"]) == r.summary["samples"]
+    assert (tmp_path / "py" / "acquisition.csv").is_file()
+
+
+def test_every_function_has_a_stub_with_its_signature():
+    """The shipped stubs name every function and every keyword it takes."""
+    import ast
+    import inspect
+
+    pkg = pathlib.Path(sandjumper.__file__).parent
+    stub = next(p for p in [pkg / "__init__.pyi", pkg.parent / "sandjumper.pyi"] if p.exists())
+    tree = ast.parse(stub.read_text())
+    stubs = {f.name: f for f in tree.body if isinstance(f, ast.FunctionDef)}
+    functions = [n for n in dir(sandjumper)
+                 if callable(getattr(sandjumper, n)) and not n[0].isupper()
+                 and not n.startswith("_") and n != "sandjumper"]
+    assert sorted(functions) == sorted(stubs), set(functions) ^ set(stubs)
+    for name in functions:
+        signature = inspect.signature(getattr(sandjumper, name))
+        args = stubs[name].args
+        stubbed = [a.arg for a in args.args + args.kwonlyargs]
+        real = [p.name for p in signature.parameters.values()
+                if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)]
+        assert stubbed == real, (name, stubbed, real)
+
+
+def test_track_follows_numpy_s_pixel_convention_on_frames_drawn_outside_the_project(tmp_path):
+    """Frames drawn here with numpy (a bright disc on a flat background, each pixel the mean
+    of 8 x 8 samples over its area, pixel (row i, column j) centred at x = j, y = i as numpy,
+    scikit-image, trackpy and OpenCV have it), the ball rising and falling: `track`'s centres
+    equal the drawn ones within 0.05 px on both axes (before the convention was fixed they sat
+    +0.5 px off on both)."""
+    Image = pytest.importorskip("PIL.Image")
+    m_per_px, diameter_m = 2.5e-4, 0.0095
+    radius = 0.5 * diameter_m / m_per_px
+    height, width, fps = 260, 120, 200.0
+    sub = (np.arange(8) + 0.5) / 8 - 0.5
+    truth = []
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    rng = np.random.default_rng(7)
+    for k in range(60):
+        t = k / fps
+        # At rest for 12 frames, then a throw and a fall back (px, y down).
+        lift = 0.0 if k < 12 else 900.0 * (t - 0.06) - 0.5 * 9.81 / m_per_px * (t - 0.06) ** 2
+        cx, cy = 60.3 + 0.01 * k, 200.7 - max(lift, 0.0)
+        truth.append((cx, cy))
+        yy, xx = np.mgrid[0:height, 0:width].astype(float)
+        cover = np.zeros((height, width))
+        for dy in sub:
+            for dx in sub:
+                cover += ((xx + dx - cx) ** 2 + (yy + dy - cy) ** 2 <= radius**2)
+        image = 40.0 + 170.0 * cover / 64.0 + rng.normal(0.0, 1.0, cover.shape)
+        Image.fromarray(np.clip(np.rint(image), 0, 255).astype(np.uint8)).save(
+            frames / f"frame_{k:06d}.png")
+    r = sandjumper.track(frames, m_per_px, fps=fps, ball_diameter=diameter_m)
+    table = r.tables["track"]
+    found = [(x, y, tx, ty) for x, y, (tx, ty) in zip(table["x_px"], table["y_px"], truth)
+             if not np.isnan(x)]
+    assert len(found) > 50
+    dx = np.array([x - tx for x, _, tx, _ in found])
+    dy = np.array([y - ty for _, y, _, ty in found])
+    assert abs(dx.mean()) < 0.05 and abs(dy.mean()) < 0.05, (dx.mean(), dy.mean())
+    assert np.sqrt(np.mean(dx**2 + dy**2)) < 0.1, np.sqrt(np.mean(dx**2 + dy**2))
