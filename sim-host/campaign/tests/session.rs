@@ -146,3 +146,50 @@ fn a_live_views_pace_is_refused_with_the_command_lines_words() {
         })
     ));
 }
+
+/// A caller that stops the session as soon as it is asked (Ctrl-C in a face).
+struct StopNow;
+
+impl sandjumper_output::Progress for StopNow {
+    fn cancelled(&self) -> bool {
+        true
+    }
+}
+
+/// A session its caller stops ends as `stop_after` does, before its next point (the journal
+/// holds every point done; `resume` goes on). Tried: without the session's check, the point
+/// ran and the session finished.
+#[test]
+fn a_session_stopped_by_its_caller_is_resumable() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("one");
+    let request = RunRequest {
+        file: one_point(tmp.path()),
+        link: Some("sil".into()),
+        out: out.clone(),
+        ..RunRequest::default()
+    };
+    let stopped = session::run(&request, Hooks::default(), &StopNow).unwrap();
+    assert_eq!(
+        stopped,
+        SessionOutcome::Stopped {
+            this_session: 0,
+            done: 0,
+            total: 1,
+            out: out.clone()
+        }
+    );
+    let finished = session::resume(
+        &ResumeRequest {
+            dir: out.clone(),
+            ..ResumeRequest::default()
+        },
+        Hooks::default(),
+        &Silent,
+    )
+    .unwrap();
+    assert!(
+        matches!(finished, SessionOutcome::Finished { done: 1, .. }),
+        "{finished:?}"
+    );
+}

@@ -23,11 +23,13 @@ pub struct SideCamera {
 }
 
 impl SideCamera {
-    /// Image position of a world point, px.
+    /// Image position of a world point, px: pixel (row i, column j) is centred at x = j,
+    /// y = i (as numpy, scikit-image, OpenCV and this project's PIV have it), so the frame's
+    /// left edge `left_m` is at x = -0.5 and its top `top_m` at y = -0.5.
     pub fn to_px(&self, x: f64, y: f64) -> (f64, f64) {
         (
-            (x - self.left_m) / self.m_per_px,
-            (self.top_m - y) / self.m_per_px,
+            (x - self.left_m) / self.m_per_px - 0.5,
+            (self.top_m - y) / self.m_per_px - 0.5,
         )
     }
 }
@@ -57,8 +59,8 @@ fn for_each_disk_pixel(w: &World, cam: &SideCamera, mut paint: impl FnMut(usize,
         }
         for py in y0.max(0)..y1.min(hpx) {
             for px in x0.max(0)..x1.min(wpx) {
-                let dx = px as f64 + 0.5 - cx;
-                let dy = py as f64 + 0.5 - cy;
+                let dx = px as f64 - cx;
+                let dy = py as f64 - cy;
                 let d = (dx * dx + dy * dy).sqrt();
                 let cover = (r - d + 0.5).clamp(0.0, 1.0);
                 if cover > 0.0 {

@@ -255,12 +255,15 @@ impl BallFinder {
         );
         let (mut cx, mut cy) = (candidate.x_px, candidate.y_px);
         for _ in 0..PASSES {
+            // Bounds in pixel-edge coordinates (pixel k spans k - 0.5 .. k + 0.5 around its
+            // centre k): the estimate's edge position is its centre plus half a pixel.
+            let (ex, ey) = (cx + 0.5, cy + 0.5);
             // The ball itself (radius plus the streak) must lie inside the region.
             let half_ball_h = r + 0.5 * (streak - b) + 1.0;
-            if cx - r - 1.0 < rx0
-                || cx + r + 1.0 > rx1
-                || cy - half_ball_h < ry0
-                || cy + half_ball_h > ry1
+            if ex - r - 1.0 < rx0
+                || ex + r + 1.0 > rx1
+                || ey - half_ball_h < ry0
+                || ey + half_ball_h > ry1
             {
                 return Err(format!(
                     "the ball (centre near ({cx:.0}, {cy:.0}), radius {r:.0} px) touches the edge of the {}x{} region at ({}, {})",
@@ -269,16 +272,16 @@ impl BallFinder {
             }
             let clamp_x = |v: f64| v.clamp(rx0, rx1) as u32;
             let clamp_y = |v: f64| v.clamp(ry0, ry1) as u32;
-            let (x0, x1) = (clamp_x((cx - hw).floor()), clamp_x((cx + hw).ceil()));
-            let (y0, y1) = (clamp_y((cy - hh).floor()), clamp_y((cy + hh).ceil()));
+            let (x0, x1) = (clamp_x((ex - hw).floor()), clamp_x((ex + hw).ceil()));
+            let (y0, y1) = (clamp_y((ey - hh).floor()), clamp_y((ey + hh).ceil()));
             let ring = f64::from(RING_PX);
             let (ex0, ex1) = (
-                clamp_x((cx - hw).floor() - ring),
-                clamp_x((cx + hw).ceil() + ring),
+                clamp_x((ex - hw).floor() - ring),
+                clamp_x((ex + hw).ceil() + ring),
             );
             let (ey0, ey1) = (
-                clamp_y((cy - hh).floor() - ring),
-                clamp_y((cy + hh).ceil() + ring),
+                clamp_y((ey - hh).floor() - ring),
+                clamp_y((ey + hh).ceil() + ring),
             );
             // Background plane a + b u + c v on the ring (u, v relative to the estimate).
             let mut m = [[0.0_f64; 3]; 3];

@@ -150,6 +150,7 @@ impl Lammps {
         let mut last_step = 0;
         let mut halted = false;
         let mut error_line = None;
+        let mut stopped_at = None;
         if let Some(out) = child.stdout.take() {
             for line in BufReader::new(out).lines().map_while(Result::ok) {
                 let t = line.trim_start();
@@ -166,19 +167,29 @@ impl Lammps {
                     if t.split_whitespace().count() >= 3 {
                         last_step = step;
                         if !progress(step) {
-                            // SIGTERM, which mpiexec passes on to its ranks (SIGKILL would
-                            // leave them running).
-                            let _ = Command::new("kill")
-                                .args(["-TERM", &child.id().to_string()])
-                                .status();
-                            let _ = child.wait();
-                            return Err(format!(
-                                "interrupted at step {step}: LAMMPS stopped (its log: {log})"
-                            ));
+                            stopped_at = Some(step);
+                            break;
                         }
                     }
                 }
             }
+            // Its output pipe is closed here: a LAMMPS still writing cannot block on it.
+        }
+        if let Some(step) = stopped_at {
+            // SIGTERM, which mpiexec passes on to its ranks (SIGKILL would leave them
+            // running); SIGKILL if it cannot be sent.
+            let termed = Command::new("kill")
+                .args(["-TERM", &child.id().to_string()])
+                .status()
+                .is_ok_and(|s| s.success());
+            if !termed {
+                let _ = child.kill();
+            }
+            let _ = child.wait();
+            let _ = err_thread.join();
+            return Err(format!(
+                "interrupted at step {step}: LAMMPS stopped (its log: {log})"
+            ));
         }
         let status = child
             .wait()

@@ -278,7 +278,14 @@ const PIV_OPTIONS: [(&str, Setter<PivRequest>); 22] = [
         Ok(())
     }),
     ("every", |r, v| {
-        r.every = count::<usize>("every", v)?.max(1);
+        r.every = count::<usize>("every", v)?;
+        if r.every == 0 {
+            return Err(crate::errors::invalid_value(
+                "every",
+                0,
+                "0 is not in 1..4294967296",
+            ));
+        }
         Ok(())
     }),
     ("windows", |r, v| {

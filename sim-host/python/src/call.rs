@@ -57,6 +57,15 @@ impl PyProgress {
         let Some(callback) = &self.callback else {
             return;
         };
+        // Once the callback raised, it is not called again.
+        if self
+            .error
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .is_some()
+        {
+            return;
+        }
         let (what, done, len) = {
             let mut s = self.stage.lock().unwrap_or_else(|e| e.into_inner());
             let now = Instant::now();

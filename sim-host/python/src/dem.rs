@@ -359,6 +359,12 @@ pub fn dem_intrude(
     if request.bed.is_none() && !request.resume {
         return Err(crate::errors::required("bed"));
     }
+    trajectory_options(
+        request.trajectory.is_some(),
+        request.speed_m_s.is_some(),
+        request.episode.is_some(),
+        request.from_s.is_some() || request.to_s.is_some(),
+    )?;
     let dir = request.out.clone();
     let outcome = long_call(py, progress, |progress| {
         sandjumper_dem::intrude_run::run(&request, progress)
@@ -373,6 +379,23 @@ pub fn dem_intrude(
             path: Some(dir.display().to_string()),
         }),
     }
+}
+
+/// The command line's rules for a trajectory file and its episode: `speed` cannot be used
+/// with `trajectory`, `episode` needs `trajectory`, and `from_s`/`to_s` cannot be used with
+/// `episode`.
+fn trajectory_options(trajectory: bool, speed: bool, episode: bool, window: bool) -> PyResult<()> {
+    let refuse = |m: &str| Err(pyo3::exceptions::PyValueError::new_err(m.to_string()));
+    if trajectory && speed {
+        return refuse("speed cannot be used with trajectory (the file gives the motion)");
+    }
+    if episode && !trajectory {
+        return refuse("episode needs trajectory (the file whose episode is driven)");
+    }
+    if episode && window {
+        return refuse("from_s and to_s cannot be used with episode");
+    }
+    Ok(())
 }
 
 /// `lammps`'s options by name.
@@ -485,6 +508,12 @@ pub fn lammps(
         ..LammpsRequest::default()
     };
     apply(&mut request, options, &LAMMPS_OPTIONS, &mut options::none)?;
+    trajectory_options(
+        request.trajectory.is_some(),
+        request.speed_m_s.is_some(),
+        request.episode.is_some(),
+        false,
+    )?;
     let names = [
         ("--speed", "speed"),
         ("--depth", "depth"),

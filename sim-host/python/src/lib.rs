@@ -27,9 +27,16 @@ use pyo3::prelude::*;
 #[pyo3(name = "sandjumper")]
 fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    // The libraries' notes (a partial output a killed run left beside `out`) on stderr, as the
-    // command line has them.
-    sandjumper_output::set_note_sink(|line| eprintln!("{line}"));
+    // The libraries' notes (a partial output a killed run left beside `out`) to Python's
+    // logging, as every call's own notes ([`call::PyProgress`]): the module prints nothing.
+    sandjumper_output::set_note_sink(|line| {
+        Python::attach(|py| {
+            let _ = py
+                .import("logging")
+                .and_then(|l| l.call_method1("getLogger", ("sandjumper",)))
+                .and_then(|l| l.call_method1("info", (line,)));
+        });
+    });
     m.add_class::<simulate::JumpResult>()?;
     m.add_class::<simulate::SweepResult>()?;
     m.add_class::<simulate::HilResult>()?;

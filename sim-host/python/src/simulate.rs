@@ -304,7 +304,7 @@ pub fn jump(
 /// The one-cycle sine a jump asks for: its kind, frequency and delay, each checked as the
 /// command line checks them (`kind` and `freq_hz` required unless a stroke file replaces the
 /// sine; a delayed stutter needs `tau_s`).
-fn sine(
+pub fn sine(
     kind_name: &str,
     freq_name: &str,
     kind: Option<String>,
@@ -493,11 +493,17 @@ pub fn sweep(
         shard: None,
     };
     request.validate().map_err(|e| lib_err(e, &[]))?;
-    let out = out_arg(out)?;
+    // The folder is claimed before the jumps (as the command line does): one that cannot be
+    // written is refused before the sweep, not after it.
+    let staged = out_arg(out)?
+        .map(|dir| sandjumper_output::StagedDir::create(&dir))
+        .transpose()
+        .map_err(|e| lib_err(e, &[]))?;
     let outcome = long_call(py, progress, |progress| {
         let outcome = sandjumper_study::sweep::run(&request, progress)?;
-        if let Some(dir) = &out {
-            outcome.write(dir)?;
+        if let Some(staged) = staged {
+            outcome.write_into(&staged)?;
+            staged.commit()?;
         }
         Ok(outcome)
     })?

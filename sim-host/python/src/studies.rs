@@ -19,7 +19,7 @@ use crate::call::long_call;
 use crate::convert::{json_to_py, out_arg, params_source, path_arg, summary_to_py};
 use crate::errors::{choice, invalid_value, lib_err};
 use crate::options::{self, Setter, apply, count, flag, number, path};
-use crate::simulate::{KINDS, models};
+use crate::simulate::models;
 use crate::typed;
 
 /// A checked number.
@@ -85,6 +85,11 @@ pub fn fit(
         ("reintrusion", |k, v| match k {
             FitKind::Intrusion { curve, .. } => {
                 if flag("reintrusion", v)? {
+                    if *curve == CurveKind::First {
+                        return Err(PyValueError::new_err(
+                            "reintrusion cannot be used with first",
+                        ));
+                    }
                     *curve = CurveKind::Re;
                 }
                 Ok(())
@@ -412,7 +417,10 @@ pub fn figures(
     long_call(py, progress, |progress| {
         sandjumper_study::figures::run(&request, progress)
     })?
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    .map_err(|e| match e {
+        sandjumper_study::figures::FiguresError::Output(e) => lib_err(e, &[]),
+        internal => pyo3::exceptions::PyRuntimeError::new_err(internal.to_string()),
+    })?;
     load_folder(py, &request.out, None, true)
 }
 
@@ -498,11 +506,8 @@ pub fn rig_jump(
     use sandjumper_rig::tool::jump::{self as lib, JumpRequest};
     use sandjumper_rig::tool::target::Target;
     let link = crate::errors::checked("link", &link, sandjumper_rig::hil::open::parse_link)?;
-    let kind = choice("kind", &kind, &KINDS)?;
-    let freq_hz = checked_number("freq_hz", freq_hz, check_freq)?;
-    let tau_s = tau_s
-        .map(|t| checked_number("tau_s", t, check_tau))
-        .transpose()?;
+    let (kind, freq_hz, tau_s) =
+        crate::simulate::sine("kind", "freq_hz", Some(kind), Some(freq_hz), tau_s, false)?;
     let phi = checked_number("phi", phi, check_phi)?;
     let file = params_source("params", params)?;
     let mut target = Target::on(link);
@@ -527,11 +532,15 @@ pub fn rig_jump(
         ("--firmware", "firmware"),
     ];
     request.validate().map_err(|e| lib_err(e, &names))?;
-    let out = out_arg(out)?;
+    // The folder is claimed before the run (as the command line does): one that cannot be
+    // written is refused before the jump, not after it.
+    let staged = out_arg(out)?
+        .map(|dir| sandjumper_output::StagedDir::create(&dir))
+        .transpose()
+        .map_err(|e| lib_err(e, &[]))?;
     let (json, log) = long_call(py, progress, |progress| {
         let outcome = lib::run(&request, progress)?;
-        if let Some(dir) = &out {
-            let staged = sandjumper_output::StagedDir::create(dir)?;
+        if let Some(staged) = staged {
             outcome.write(staged, false)?;
         }
         Ok((outcome.json()?, outcome.log.clone()))

@@ -91,8 +91,9 @@ def test_ctrl_c_stops_a_long_sweep():
     finally:
         started.set()
         t.join()
-    (t0, d0, total), (t1, d1, _) = seen[1], max(
+    (t0, d0, total), (t1, d1, _) = seen[0], max(
         (s for s in seen if s[0] <= sent["at"]), key=lambda s: s[1])
+    assert t1 > t0, seen
     rate = (d1 - d0) / (t1 - t0)
     remaining_s = (total - d1) / rate
     assert d1 < total
@@ -188,6 +189,16 @@ def test_figures_dem_and_lammps_refuse_bad_input(tmp_path):
         sandjumper.lammps(tmp_path / "l", speed=-0.1)
     with pytest.raises(TypeError, match="unexpected keyword argument 'spede'"):
         sandjumper.lammps(tmp_path / "l", spede=0.1)
+    with pytest.raises(ValueError, match="speed cannot be used with trajectory"):
+        sandjumper.lammps(tmp_path / "l", speed=0.1, trajectory=tmp_path / "t.csv")
+    with pytest.raises(ValueError, match="episode needs trajectory"):
+        sandjumper.dem_intrude(tmp_path / "bed", tmp_path / "i", episode="push-off")
+    with pytest.raises(ValueError, match="tau_s"):
+        sandjumper.rig_jump("delayed", 10.0)
+    with pytest.raises(ValueError, match="every"):
+        sandjumper.piv(tmp_path, every=0)
+    with pytest.raises(ValueError, match="reintrusion cannot be used with first"):
+        sandjumper.fit("intrusion", tmp_path / "f.csv", first=True, reintrusion=True)
 
 
 def test_rig_jump_through_sil_equals_the_cli(tmp_path):

@@ -316,3 +316,33 @@ fn a_final_height_that_is_not_positive_is_explained() {
     assert!(json.get("final_jump_note").is_none(), "{json}");
     assert!(!readme_first.to_string().contains(NOTE));
 }
+
+/// A caller that asks the call to stop once `after` steps are done (Ctrl-C in a face).
+struct StopAfter {
+    after: u64,
+    done: std::sync::atomic::AtomicU64,
+}
+
+impl sandjumper_output::Progress for StopAfter {
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, std::sync::atomic::Ordering::SeqCst);
+    }
+    fn cancelled(&self) -> bool {
+        self.done.load(std::sync::atomic::Ordering::SeqCst) >= self.after
+    }
+}
+
+/// A sweep its caller stops (`Progress::cancelled`) runs no further jump: one thread, 36
+/// combinations, stopped after 5: the error says 5 of 36 were done, and only 5 were counted.
+/// Tried: without the sweep's check, all 36 ran ("36 of 36").
+#[test]
+fn a_sweep_stopped_by_its_caller_runs_no_further_jump() {
+    let stop = StopAfter {
+        after: 5,
+        done: std::sync::atomic::AtomicU64::new(0),
+    };
+    let e = sweep::run(&sweep_request(1), &stop).unwrap_err();
+    assert_eq!(e.to_string(), "interrupted: 5 of 36 jumps done");
+    assert_eq!(e.blame(), Blame::Internal);
+    assert_eq!(stop.done.load(std::sync::atomic::Ordering::SeqCst), 5);
+}
