@@ -346,3 +346,25 @@ def rig_jump(
     ``"pil"``, ``"f407"`` (the F407 release binary on the virtual board) or
     ``"serial:PATH"`` (a real rig). ``summary`` is ``rig jump --json``'s; ``log`` the
     acquisition log's columns. out: also write the run's folder."""
+
+def sweep_merge(dirs: List[PathLike], out: PathLike) -> SweepResult:
+    """Merge the folders of a sweep's shards (``sweep --shard K/N``) into ``out``, as
+    ``sandjumper merge DIR... --out OUT`` does (every combination present once, the shards of
+    one sweep only); returns the merged sweep."""
+
+def camera_scale(
+    frames: PathLike,
+    log: PathLike,
+    ball_px: float,
+    roi: Optional[Sequence[int]] = None,
+    progress: Optional[Progress] = None,
+) -> Dict[str, Any]:
+    """The camera's scale (m/px) from a slow motor move, as ``sandjumper camera-scale FRAMES
+    --log LOG --ball-px PX --json`` does: the ball tracked through the frames against the
+    encoder. ball_px: the ball's diameter in the frames, px; roi: ``[x, y, w, h]``."""
+
+def piv_synthetic(out: PathLike, **options: Any) -> str:
+    """Grain images with a known motion, as ``sandjumper piv-synthetic --out OUT`` does:
+    ``field`` (``"shift"``, ``"shear"``, ``"rotation"``, ``"cone"``), ``magnitude`` (px),
+    ``size`` (``"WxH"`` or ``(w, h)``), ``frames``, ``grain_px``, ``noise``, ``seed``; or a
+    real ``image`` moved by ``shift=[dx, dy]`` px. Returns the folder written."""

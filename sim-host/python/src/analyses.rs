@@ -465,3 +465,144 @@ pub fn log_to_mcap(
         .map_err(|e| lib_err(e, &[("--force", "force"), ("--allow-gaps", "allow_gaps")]))?;
     Ok(crate::convert::summary_to_py(py, &outcome)?.unbind())
 }
+
+/// The camera's scale from a slow motor move, as `sandjumper camera-scale FRAMES --log LOG
+/// --ball-px PX` does: the ball tracked through the frames against the encoder's positions.
+/// `ball_px`: the ball's diameter in the frames, px; `roi`: `[x, y, w, h]`. Returns the
+/// dict `camera-scale --json` prints (`m_per_px`, its standard error, the fit's residuals).
+#[pyfunction]
+#[pyo3(signature = (frames, log, ball_px, roi = None, progress = None))]
+pub fn camera_scale(
+    py: Python<'_>,
+    frames: &Bound<'_, PyAny>,
+    log: &Bound<'_, PyAny>,
+    ball_px: f64,
+    roi: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    use sandjumper_imaging::camera_scale::ScaleRequest;
+    let request = ScaleRequest {
+        frames: path_arg("frames", frames)?.display().to_string(),
+        log: path_arg("log", log)?,
+        ball_px: checked("ball_px", ball_px, sandjumper_imaging::run::parse_px)?,
+        roi: roi
+            .filter(|r| !r.is_none())
+            .map(|r| {
+                checked(
+                    "roi",
+                    list_text("roi", r)?,
+                    sandjumper_imaging::run::parse_roi,
+                )
+            })
+            .transpose()?,
+    };
+    let json = long_call(py, progress, |progress| {
+        sandjumper_imaging::camera_scale::run(&request, progress)?.summary_json()
+    })?
+    .map_err(|e| {
+        lib_err(
+            e,
+            &[("--log", "log"), ("--ball-px", "ball_px"), ("--roi", "roi")],
+        )
+    })?;
+    Ok(json_to_py(py, &json)?.unbind())
+}
+
+/// `piv_synthetic`'s options by name.
+const SYNTHETIC_OPTIONS: [(
+    &str,
+    Setter<sandjumper_flow::piv_synthetic::SyntheticRequest>,
+); 9] = [
+    ("field", |r, v| {
+        r.field = choice("field", v)?;
+        Ok(())
+    }),
+    ("magnitude", |r, v| {
+        r.magnitude_px = number("magnitude", v, parse_number)?;
+        Ok(())
+    }),
+    ("size", |r, v| {
+        let text = match v.extract::<String>() {
+            Ok(s) => s,
+            Err(_) => {
+                let (w, h): (u32, u32) = v.extract().map_err(|_| {
+                    pyo3::exceptions::PyTypeError::new_err(
+                        "size: expected \"WxH\" or a pair of integers (width, height)",
+                    )
+                })?;
+                format!("{w}x{h}")
+            }
+        };
+        r.size_px = checked("size", text, sandjumper_flow::piv_synthetic::parse_size)?;
+        Ok(())
+    }),
+    ("frames", |r, v| {
+        let n: u32 = count("frames", v)?;
+        if !(2..=10_000).contains(&n) {
+            return Err(crate::errors::invalid_value(
+                "frames",
+                n,
+                &format!("{n} is not in 2..=10000"),
+            ));
+        }
+        r.frames = n;
+        Ok(())
+    }),
+    ("grain_px", |r, v| {
+        r.grain_px = number("grain_px", v, parse_positive)?;
+        Ok(())
+    }),
+    ("noise", |r, v| {
+        r.noise = number("noise", v, parse_number)?;
+        Ok(())
+    }),
+    ("seed", |r, v| {
+        r.seed = count("seed", v)?;
+        Ok(())
+    }),
+    ("image", |r, v| {
+        r.image = Some(path("image", v)?);
+        Ok(())
+    }),
+    ("shift", |r, v| {
+        r.shift_px = Some(checked(
+            "shift",
+            list_text("shift", v)?,
+            sandjumper_flow::piv_synthetic::parse_shift,
+        )?);
+        Ok(())
+    }),
+];
+
+/// Grain images with a known motion for testing PIV, as `sandjumper piv-synthetic --out OUT`
+/// does: `field` (`"shift"`, `"shear"`, `"rotation"` or `"cone"`), `magnitude` (px),
+/// `size` (`"WxH"` or `(w, h)`), `frames`, `grain_px`, `noise`, `seed`, or a real `image`
+/// moved by `shift=[dx, dy]` px. Returns the folder written (its path).
+#[pyfunction]
+#[pyo3(signature = (out, **options))]
+pub fn piv_synthetic(
+    py: Python<'_>,
+    out: &Bound<'_, PyAny>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<String> {
+    let mut request = sandjumper_flow::piv_synthetic::SyntheticRequest::default();
+    apply(
+        &mut request,
+        options,
+        &SYNTHETIC_OPTIONS,
+        &mut options::none,
+    )?;
+    let out = path_arg("out", out)?;
+    let names = [
+        ("--image", "image"),
+        ("--shift", "shift"),
+        ("--field", "field"),
+    ];
+    let dir = py
+        .detach(|| {
+            request.validate()?;
+            sandjumper_flow::piv_synthetic::run(&request, &Silent)?.write(&out)
+        })
+        .map_err(|e| lib_err(e, &names))?;
+    Ok(dir.display().to_string())
+}

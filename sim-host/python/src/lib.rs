@@ -48,6 +48,9 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::replay, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::track, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::piv, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::piv_synthetic, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::camera_scale, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::sweep_merge, m)?)?;
     m.add_function(wrap_pyfunction!(dem::dem_collide, m)?)?;
     m.add_function(wrap_pyfunction!(dem::dem_bed, m)?)?;
     m.add_function(wrap_pyfunction!(dem::dem_intrude, m)?)?;

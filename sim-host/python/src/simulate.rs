@@ -509,8 +509,17 @@ pub fn sweep(
     })?
     .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[]))?;
 
+    sweep_result(py, &outcome.outcome)
+}
+
+/// A sweep's rows and failures as [`SweepResult`] (`sweep.csv`'s and `failures.csv`'s
+/// columns).
+fn sweep_result(
+    py: Python<'_>,
+    outcome: &sandjumper_study::sweep::SweepOutcome,
+) -> PyResult<SweepResult> {
     let columns = PyDict::new(py);
-    let rows = &outcome.outcome.rows;
+    let rows = &outcome.rows;
     // Each row once as JSON: its numeric columns by name, as `sweep.csv` writes them.
     let as_json: Vec<serde_json::Value> = rows
         .iter()
@@ -536,7 +545,7 @@ pub fn sweep(
         columns.set_item(name, column)?;
     }
     let failures = PyList::empty(py);
-    for f in &outcome.outcome.failures {
+    for f in &outcome.failures {
         let text = serde_json::to_string(f)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         failures.append(json_to_py(py, &text)?)?;
@@ -545,6 +554,29 @@ pub fn sweep(
         columns: columns.into_any().unbind(),
         failures: failures.into_any().unbind(),
     })
+}
+
+/// Merge the folders of a sweep's shards (each `sweep --shard K/N`'s `out`) into `out`, as
+/// `sandjumper merge DIR... --out OUT` does: every combination checked present once, the
+/// shards of one sweep only. Returns the merged sweep as [`SweepResult`].
+#[pyfunction]
+pub fn sweep_merge(
+    py: Python<'_>,
+    dirs: Vec<std::path::PathBuf>,
+    out: &Bound<'_, PyAny>,
+) -> PyResult<SweepResult> {
+    let request = sandjumper_study::sweep::MergeRequest {
+        dirs,
+        out: crate::convert::path_arg("out", out)?,
+    };
+    let merged = py
+        .detach(|| {
+            let merged = sandjumper_study::sweep::merge(&request, &sandjumper_output::Silent)?;
+            merged.write(&request.out)?;
+            Ok(merged)
+        })
+        .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[("--out", "out")]))?;
+    sweep_result(py, &merged.outcome)
 }
 
 /// Run one jump through the control loop against the simulated rig, as `sandjumper hil`

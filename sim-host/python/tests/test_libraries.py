@@ -273,3 +273,49 @@ def test_track_follows_numpy_s_pixel_convention_on_frames_drawn_outside_the_proj
     dy = np.array([y - ty for _, y, _, ty in found])
     assert abs(dx.mean()) < 0.05 and abs(dy.mean()) < 0.05, (dx.mean(), dy.mean())
     assert np.sqrt(np.mean(dx**2 + dy**2)) < 0.1, np.sqrt(np.mean(dx**2 + dy**2))
+
+
+def test_sweep_shards_merge_as_the_cli_merges_them(tmp_path):
+    args = ["--kind", "single,stutter", "--freq", "8:12:1"]
+    cli("sweep", *args, "--shard", "1/2", "--out", tmp_path / "a")
+    cli("sweep", *args, "--shard", "2/2", "--out", tmp_path / "b")
+    merged = sandjumper.sweep_merge([tmp_path / "a", tmp_path / "b"], tmp_path / "py")
+    cli("merge", tmp_path / "a", tmp_path / "b", "--out", tmp_path / "cli")
+    assert (tmp_path / "py" / "sweep.csv").read_text() == (
+        tmp_path / "cli" / "sweep.csv").read_text()
+    whole = sandjumper.sweep(["single", "stutter"], "8:12:1")
+    for name, column in whole.columns.items():
+        assert list(merged.columns[name]) == list(column), name
+    with pytest.raises(ValueError):
+        sandjumper.sweep_merge([tmp_path / "a"], tmp_path / "half")
+
+
+def test_synthetic_grains_equal_the_cli_s_and_piv_measures_their_shift(tmp_path):
+    out = sandjumper.piv_synthetic(tmp_path / "py", field="shift", magnitude=2.5,
+                                   size=(256, 256), seed=3)
+    assert out == str(tmp_path / "py")
+    cli("piv-synthetic", "--field", "shift", "--magnitude", 2.5, "--size", "256x256",
+        "--seed", 3, "--out", tmp_path / "cli")
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == names
+    for name in [n for n in names if n.endswith((".png", ".csv", ".toml"))]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    assert any(n.endswith(".png") for n in names)
+    field = sandjumper.piv(tmp_path / "py", windows=[64, 32])
+    u = field.arrays["u_px"][0]
+    assert abs(np.nanmedian(u) - 2.5) < 0.05, np.nanmedian(u)
+    with pytest.raises(ValueError, match="frames"):
+        sandjumper.piv_synthetic(tmp_path / "bad", frames=1)
+
+
+def test_camera_scale_refuses_what_the_cli_refuses(tmp_path):
+    with pytest.raises(ValueError) as raised:
+        sandjumper.camera_scale(tmp_path, tmp_path / "log.csv", 0.0)
+    message = str(raised.value)
+    assert message.startswith("invalid value '0' for 'ball_px'"), message
+    out = cli("camera-scale", tmp_path, "--log", tmp_path / "log.csv", "--ball-px", 0,
+              check=False)
+    assert out.returncode == 2 and "a diameter in pixels" in out.stderr and (
+        "a diameter in pixels" in message)
+    with pytest.raises(ValueError, match="no frames"):
+        sandjumper.camera_scale(tmp_path, tmp_path / "no-such-log.csv", 80.0)
