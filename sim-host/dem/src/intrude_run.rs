@@ -196,12 +196,41 @@ impl fmt::Display for IntrudeOutcome {
     }
 }
 
+/// The command line's rules for the intruder's motion from a trajectory file (which the
+/// command line's parser also enforces): `--speed` cannot be used with `--trajectory`,
+/// `--episode` needs `--trajectory`, and `--from`/`--to` cannot be used with `--episode`.
+/// `window`: `--from` or `--to` given.
+pub fn check_motion(
+    trajectory: bool,
+    speed: bool,
+    episode: bool,
+    window: bool,
+) -> Result<(), String> {
+    if trajectory && speed {
+        return Err("--speed cannot be used with --trajectory (the file gives the motion)".into());
+    }
+    if episode && !trajectory {
+        return Err("--episode needs --trajectory (the file whose episode is driven)".into());
+    }
+    if episode && window {
+        return Err("--from and --to cannot be used with --episode".into());
+    }
+    Ok(())
+}
+
 impl IntrudeRequest {
     /// The checks that need no file: a bed unless resuming, and the intruder's motion.
     pub fn validate(&self) -> Result<(), DemError> {
         if !self.resume && self.bed.is_none() {
             return Err(DemError::input("--bed BED is required (or --resume)"));
         }
+        check_motion(
+            self.trajectory.is_some(),
+            self.speed_m_s.is_some(),
+            self.episode.is_some(),
+            self.from_s.is_some() || self.to_s.is_some(),
+        )
+        .map_err(DemError::Input)?;
         if !self.resume && self.trajectory.is_none() && self.speed_m_s.is_none() {
             return Err(DemError::input(
                 "give the intruder's motion: --trajectory CSV or --speed M_PER_S",

@@ -309,6 +309,13 @@ impl LammpsRequest {
 
     /// [`LammpsRequest::validate`], giving back the run and the motion it checked.
     fn checked(&self) -> Result<(LammpsSpec, Trajectory), LammpsError> {
+        sandjumper_dem::intrude_run::check_motion(
+            self.trajectory.is_some(),
+            self.speed_m_s.is_some(),
+            self.episode.is_some(),
+            false,
+        )
+        .map_err(LammpsError::input)?;
         if !(0.0..=1.0).contains(&self.min_speed_ratio) {
             return Err(LammpsError::input(format!(
                 "--min-speed-ratio {} not allowed (allowed: 0 to 1)",

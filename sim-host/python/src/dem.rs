@@ -22,7 +22,11 @@ use crate::options::{self, Setter, apply, choice, count, flag, number, path};
 use crate::typed;
 
 /// The DEM's flags whose names differ from the Python arguments', for the libraries' messages.
-const DEM_NAMES: [(&str, &str); 10] = [
+const DEM_NAMES: [(&str, &str); 14] = [
+    ("--trajectory", "trajectory"),
+    ("--episode", "episode"),
+    ("--from", "from_s"),
+    ("--to", "to_s"),
     ("--kn", "kn"),
     ("--d1", "d1_m"),
     ("--d2", "d2_m"),
@@ -359,12 +363,7 @@ pub fn dem_intrude(
     if request.bed.is_none() && !request.resume {
         return Err(crate::errors::required("bed"));
     }
-    trajectory_options(
-        request.trajectory.is_some(),
-        request.speed_m_s.is_some(),
-        request.episode.is_some(),
-        request.from_s.is_some() || request.to_s.is_some(),
-    )?;
+    request.validate().map_err(|e| lib_err(e, &DEM_NAMES))?;
     let dir = request.out.clone();
     let outcome = long_call(py, progress, |progress| {
         sandjumper_dem::intrude_run::run(&request, progress)
@@ -381,22 +380,20 @@ pub fn dem_intrude(
     }
 }
 
-/// The command line's rules for a trajectory file and its episode: `speed` cannot be used
-/// with `trajectory`, `episode` needs `trajectory`, and `from_s`/`to_s` cannot be used with
-/// `episode`.
-fn trajectory_options(trajectory: bool, speed: bool, episode: bool, window: bool) -> PyResult<()> {
-    let refuse = |m: &str| Err(pyo3::exceptions::PyValueError::new_err(m.to_string()));
-    if trajectory && speed {
-        return refuse("speed cannot be used with trajectory (the file gives the motion)");
-    }
-    if episode && !trajectory {
-        return refuse("episode needs trajectory (the file whose episode is driven)");
-    }
-    if episode && window {
-        return refuse("from_s and to_s cannot be used with episode");
-    }
-    Ok(())
-}
+/// `dem lammps`'s flags whose names differ from the Python arguments'.
+const LAMMPS_NAMES: [(&str, &str); 11] = [
+    ("--speed", "speed"),
+    ("--depth", "depth"),
+    ("--trajectory", "trajectory"),
+    ("--episode", "episode"),
+    ("--lmp", "lmp"),
+    ("--mpiexec", "mpiexec"),
+    ("--ranks", "ranks"),
+    ("--out", "out"),
+    ("--min-speed-ratio", "min_speed_ratio"),
+    ("--foot-diameter", "foot_diameter"),
+    ("--bed-width", "bed_width"),
+];
 
 /// `lammps`'s options by name.
 const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 19] = [
@@ -508,26 +505,11 @@ pub fn lammps(
         ..LammpsRequest::default()
     };
     apply(&mut request, options, &LAMMPS_OPTIONS, &mut options::none)?;
-    trajectory_options(
-        request.trajectory.is_some(),
-        request.speed_m_s.is_some(),
-        request.episode.is_some(),
-        false,
-    )?;
-    let names = [
-        ("--speed", "speed"),
-        ("--depth", "depth"),
-        ("--trajectory", "trajectory"),
-        ("--episode", "episode"),
-        ("--lmp", "lmp"),
-        ("--mpiexec", "mpiexec"),
-        ("--ranks", "ranks"),
-        ("--out", "out"),
-    ];
+    request.validate().map_err(|e| lib_err(e, &LAMMPS_NAMES))?;
     let dir = request.out.clone();
     long_call(py, progress, |progress| {
         sandjumper_lammps::run::run(&request, progress)
     })?
-    .map_err(|e| lib_err(e, &names))?;
+    .map_err(|e| lib_err(e, &LAMMPS_NAMES))?;
     load_folder(py, &dir, None, true)
 }
