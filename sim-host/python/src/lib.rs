@@ -7,7 +7,7 @@
 //! checks, so the error messages are the command line's: bad input raises `ValueError` (the
 //! flag written as the Python argument's name), a wrong type raises `TypeError` naming the
 //! argument, and a failure after the input was accepted raises `RuntimeError`. Long calls run
-//! with the GIL released, report to a `progress` callback and stop on Ctrl-C ([`call`]).
+//! with the GIL released, report to a `progress` callback and stop on Ctrl-C (the `call` module).
 
 mod analyses;
 mod call;
