@@ -223,7 +223,9 @@ const TRACK_OPTIONS: [(&str, Setter<TrackRequest>); 7] = [
 
 /// Track the rod's ball through camera frames and measure the jump height the paper's way,
 /// as `sandjumper track FRAMES --m-per-px X` does. `frames`: a folder or glob of images;
-/// `m_per_px`: the camera's scale, m/px; `out`: the output folder (temporary if None);
+/// `m_per_px`: the camera's scale, m/px; `out`: also write `track --out`'s folder (without
+/// it nothing is written: `tables["track"]` comes from memory, `frame` int64, positions and
+/// heights float64 with NaN where a frame is flagged, `status` and `reason` str);
 /// `options`: the command's other options by name (`fps=200` or `log="acquisition.csv"`,
 /// `ball_diameter=0.0095`, `roi=[x, y, w, h]`, `rest_frames=10`, `apex_window=0.02`,
 /// `exposure=0`). Returns `summary` (as `track --json`) and `tables["track"]` (per frame).
@@ -262,14 +264,59 @@ pub fn track(
             },
         ));
     }
-    let (dir, tmp) = output_folder(out)?;
-    let json = long_call(py, progress, |progress| {
-        let (outcome, _) = sandjumper_imaging::run::run_into(&request, &dir, progress)?;
-        outcome.summary_json()
+    if out.is_some_and(|o| !o.is_none()) {
+        let (dir, _) = output_folder(out)?;
+        let json = long_call(py, progress, |progress| {
+            let (outcome, _) = sandjumper_imaging::run::run_into(&request, &dir, progress)?;
+            outcome.summary_json()
+        })?
+        .map_err(|e| lib_err(e, &FRAME_NAMES))?;
+        return load_folder(py, &dir, Some(&json), true);
+    }
+    // In memory: `track.csv`'s columns from the outcome, nothing written.
+    let outcome = long_call(py, progress, |progress| {
+        sandjumper_imaging::run::run(&request, progress)
     })?
     .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-    load_folder(py, &dir, Some(&json), tmp.is_none())
+    let json = outcome.summary_json().map_err(|e| lib_err(e, &[]))?;
+    let rows = &outcome.result.frames;
+    let table = PyDict::new(py);
+    table.set_item(
+        "frame",
+        crate::convert::i64_array(py, rows.iter().map(|f| f.frame as i64).collect()),
+    )?;
+    let floats: [(&str, FrameValue); 4] = [
+        ("t_s", |f| f.t_s),
+        ("x_px", |f| f.x_px),
+        ("y_px", |f| f.y_px),
+        ("rod_height_m", |f| f.rod_height_m),
+    ];
+    for (name, get) in floats {
+        table.set_item(name, f64_array(py, rows.iter().map(get).collect()))?;
+    }
+    table.set_item(
+        "status",
+        str_array(
+            py,
+            rows.iter().map(|f| f.status.as_str().to_string()).collect(),
+        )?,
+    )?;
+    table.set_item(
+        "reason",
+        str_array(py, rows.iter().map(|f| f.reason.clone()).collect())?,
+    )?;
+    let tables = PyDict::new(py);
+    tables.set_item("track", table)?;
+    Ok(FolderResult {
+        summary: json_to_py(py, &json)?.unbind(),
+        tables: tables.into_any().unbind(),
+        arrays: PyDict::new(py).into_any().unbind(),
+        path: None,
+    })
 }
+
+/// Reads one number of a tracked frame.
+type FrameValue = fn(&sandjumper_imaging::track::TrackedFrame) -> f64;
 
 /// `piv`'s options by name.
 const PIV_OPTIONS: [(&str, Setter<PivRequest>); 22] = [

@@ -319,3 +319,19 @@ def test_camera_scale_refuses_what_the_cli_refuses(tmp_path):
         "a diameter in pixels" in message)
     with pytest.raises(ValueError, match="no frames"):
         sandjumper.camera_scale(tmp_path, tmp_path / "no-such-log.csv", 80.0)
+
+
+def test_track_in_memory_equals_the_folder_it_writes_with_out(tmp_path):
+    cli("hil", "--kind", "single", "--freq", 10, "--out", tmp_path / "h")
+    frames, log = tmp_path / "h" / "frames", tmp_path / "h" / "acquisition.csv"
+    memory = sandjumper.track(frames, 0.00012, log=log)
+    folder = sandjumper.track(frames, 0.00012, log=log, out=tmp_path / "t")
+    assert memory.path is None and memory.summary == folder.summary
+    mine, written = memory.tables["track"], folder.tables["track"]
+    assert list(mine) == list(written)
+    assert mine["frame"].dtype == np.int64
+    assert list(mine["frame"]) == [int(f) for f in written["frame"]]
+    for name in ["t_s", "x_px", "y_px", "rod_height_m"]:
+        np.testing.assert_array_equal(mine[name], written[name])
+    assert list(mine["status"]) == list(written["status"])
+    assert all(r == "" for r in mine["reason"]) or list(mine["reason"]) == list(written["reason"])
