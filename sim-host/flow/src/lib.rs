@@ -22,3 +22,4 @@ pub mod shift;
 pub mod synthetic;
 
 pub use error::FlowError;
+pub use outputs::{NamedArray, arrays};

@@ -134,44 +134,73 @@ fn write_field_tables(
     Ok(())
 }
 
-/// The stacked arrays for numpy, `(pairs, rows, columns)`: displacements, flags and peak
-/// ratios, and the SI fields when every pair has them.
-fn write_arrays(staged: &StagedDir, run: &PivRun) -> Result<(), FlowError> {
-    let f0 = &run.results[0].field;
-    let (nx, ny, np) = (f0.nx as u64, f0.ny as u64, run.results.len() as u64);
-    let write_npy = |name: &str, shape: &[u64], data: Vec<f64>| -> Result<(), FlowError> {
-        sandjumper_output::write_npy(&staged.file(name), shape, data).map_err(FlowError::internal)
+/// One array of a PIV run for numpy: its name (the `.npy` file's stem), shape and values in
+/// row-major order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedArray {
+    /// `u_px`, `v_px`, `flag`, `s2n`, `x_px`, `y_px`, and with a scale `u_m_s`, `v_m_s`,
+    /// `vorticity_1_s`, `shear_rate_1_s`.
+    pub name: &'static str,
+    /// `(pairs, rows, columns)` for the fields, `(columns,)` and `(rows,)` for the grid.
+    pub shape: Vec<u64>,
+    /// Values, row-major.
+    pub values: Vec<f64>,
+}
+
+/// The stacked arrays of `run` for numpy, `(pairs, rows, columns)`: the grid (px), the
+/// displacements (px per pair), flags and peak ratios, and the SI fields when every pair has
+/// them (what `piv --out` writes as `.npy` files, and the Python module returns in memory).
+pub fn arrays(run: &PivRun) -> Vec<NamedArray> {
+    let Some(first) = run.results.first() else {
+        return Vec::new();
     };
-    write_npy("x_px.npy", &[nx], f0.xs.clone())?;
-    write_npy("y_px.npy", &[ny], f0.ys.clone())?;
+    let f0 = &first.field;
+    let (nx, ny, np) = (f0.nx as u64, f0.ny as u64, run.results.len() as u64);
+    let field = |name, values| NamedArray {
+        name,
+        shape: vec![np, ny, nx],
+        values,
+    };
     let stack = |get: &dyn Fn(&VectorField) -> Vec<f64>| -> Vec<f64> {
         run.results.iter().flat_map(|r| get(&r.field)).collect()
     };
-    write_npy("u_px.npy", &[np, ny, nx], stack(&|f| f.u.clone()))?;
-    write_npy("v_px.npy", &[np, ny, nx], stack(&|f| f.v.clone()))?;
-    write_npy(
-        "flag.npy",
-        &[np, ny, nx],
-        stack(&|f| f.flag.iter().map(|&x| f64::from(x)).collect()),
-    )?;
-    write_npy("s2n.npy", &[np, ny, nx], stack(&|f| f.peak_ratio.clone()))?;
+    let mut out = vec![
+        NamedArray {
+            name: "x_px",
+            shape: vec![nx],
+            values: f0.xs.clone(),
+        },
+        NamedArray {
+            name: "y_px",
+            shape: vec![ny],
+            values: f0.ys.clone(),
+        },
+        field("u_px", stack(&|f| f.u.clone())),
+        field("v_px", stack(&|f| f.v.clone())),
+        field(
+            "flag",
+            stack(&|f| f.flag.iter().map(|&x| f64::from(x)).collect()),
+        ),
+        field("s2n", stack(&|f| f.peak_ratio.clone())),
+    ];
     let si: Vec<&SiFields> = run.results.iter().filter_map(|r| r.si.as_ref()).collect();
     if si.len() == run.results.len() {
         let pick = |get: &dyn Fn(&SiFields) -> &Vec<f64>| -> Vec<f64> {
             si.iter().flat_map(|s| get(s).iter().copied()).collect()
         };
-        write_npy("u_m_s.npy", &[np, ny, nx], pick(&|s| &s.u.values))?;
-        write_npy("v_m_s.npy", &[np, ny, nx], pick(&|s| &s.v.values))?;
-        write_npy(
-            "vorticity_1_s.npy",
-            &[np, ny, nx],
-            pick(&|s| &s.vorticity.values),
-        )?;
-        write_npy(
-            "shear_rate_1_s.npy",
-            &[np, ny, nx],
-            pick(&|s| &s.shear_rate.values),
-        )?;
+        out.push(field("u_m_s", pick(&|s| &s.u.values)));
+        out.push(field("v_m_s", pick(&|s| &s.v.values)));
+        out.push(field("vorticity_1_s", pick(&|s| &s.vorticity.values)));
+        out.push(field("shear_rate_1_s", pick(&|s| &s.shear_rate.values)));
+    }
+    out
+}
+
+/// The stacked arrays for numpy ([`arrays`]), one `.npy` file each.
+fn write_arrays(staged: &StagedDir, run: &PivRun) -> Result<(), FlowError> {
+    for a in arrays(run) {
+        sandjumper_output::write_npy(&staged.file(&format!("{}.npy", a.name)), &a.shape, a.values)
+            .map_err(FlowError::internal)?;
     }
     Ok(())
 }

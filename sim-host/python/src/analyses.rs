@@ -426,7 +426,8 @@ const PIV_OPTIONS: [(&str, Setter<PivRequest>); 22] = [
 
 /// PIV of side-wall grain videos, as `sandjumper piv FRAMES` does: multipass FFT correlation
 /// with window deformation, validation, shear rate, grain momentum and added mass. `frames`:
-/// a folder or glob; `out`: the output folder (temporary if None); `progress`:
+/// a folder or glob; `out`: also write `piv --out`'s folder (without it nothing is written:
+/// the arrays and tables come from memory); `progress`:
 /// `progress(stage, done, total)` as the pairs are analysed (Ctrl-C stops the run between
 /// pairs); `options`: the command's other options by name (`windows=[64, 32, 16]`,
 /// `overlap=0.5`, `fps=500`, `m_per_px=…`, `origin=[x, y]`, `foot=…`, …). Returns `summary`
@@ -453,13 +454,52 @@ pub fn piv(
         ));
     }
     request.validate().map_err(|e| lib_err(e, &FRAME_NAMES))?;
-    let (dir, tmp) = output_folder(out)?;
-    let json = long_call(py, progress, |progress| {
-        let (outcome, _) = sandjumper_flow::run::run_into(&request, &dir, progress)?;
-        outcome.summary_json()
+    if out.is_some_and(|o| !o.is_none()) {
+        let (dir, _) = output_folder(out)?;
+        let json = long_call(py, progress, |progress| {
+            let (outcome, _) = sandjumper_flow::run::run_into(&request, &dir, progress)?;
+            outcome.summary_json()
+        })?
+        .map_err(|e| lib_err(e, &FRAME_NAMES))?;
+        return load_folder(py, &dir, Some(&json), true);
+    }
+    // In memory: the arrays `piv --out` writes as .npy files and its two tables, nothing
+    // written.
+    let outcome = long_call(py, progress, |progress| {
+        sandjumper_flow::run::run(&request, progress)
     })?
     .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-    load_folder(py, &dir, Some(&json), tmp.is_none())
+    let json = outcome.summary_json().map_err(|e| lib_err(e, &[]))?;
+    let arrays = PyDict::new(py);
+    for a in sandjumper_flow::arrays(&outcome.run) {
+        let shape: Vec<usize> = a.shape.iter().map(|&n| n as usize).collect();
+        let array = numpy::PyArrayMethods::reshape(&numpy::PyArray1::from_vec(py, a.values), shape)
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        arrays.set_item(a.name, array)?;
+    }
+    let flow = PyDict::new(py);
+    let rows: Vec<serde_json::Value> = outcome
+        .flow
+        .iter()
+        .map(|r| serde_json::to_value(r).unwrap_or_default())
+        .collect();
+    for name in sandjumper_flow::analysis::FLOW_HEADER {
+        let column = crate::convert::number_column(&rows, name);
+        flow.set_item(name, f64_array(py, column))?;
+    }
+    let (depth, mass): (Vec<f64>, Vec<f64>) = outcome.run.added_mass_points().into_iter().unzip();
+    let added_mass = PyDict::new(py);
+    added_mass.set_item("depth_m", f64_array(py, depth))?;
+    added_mass.set_item("added_mass_kg", f64_array(py, mass))?;
+    let tables = PyDict::new(py);
+    tables.set_item("flow", flow)?;
+    tables.set_item("added_mass", added_mass)?;
+    Ok(FolderResult {
+        summary: json_to_py(py, &json)?.unbind(),
+        tables: tables.into_any().unbind(),
+        arrays: arrays.into_any().unbind(),
+        path: None,
+    })
 }
 
 /// Read and check an acquisition log (CSV or binary), as `sandjumper log check` does:

@@ -84,6 +84,18 @@ pub fn summary_to_py<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<
     json_to_py(py, &text)
 }
 
+/// The numbers of column `name` of rows serialised as JSON objects (a library's CSV rows),
+/// NaN where a row has no number there.
+pub fn number_column(rows: &[serde_json::Value], name: &str) -> Vec<f64> {
+    rows.iter()
+        .map(|r| {
+            r.get(name)
+                .and_then(serde_json::Value::as_f64)
+                .unwrap_or(f64::NAN)
+        })
+        .collect()
+}
+
 /// An optional `out=` folder argument.
 pub fn out_arg(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<std::path::PathBuf>> {
     out.filter(|o| !o.is_none())

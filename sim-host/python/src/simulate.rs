@@ -530,17 +530,7 @@ fn sweep_result(
             "kind" => str_array(py, rows.iter().map(|r| r.kind.clone()).collect())?,
             "model" => str_array(py, rows.iter().map(|r| r.model.clone()).collect())?,
             "drive" => str_array(py, rows.iter().map(|r| r.drive.clone()).collect())?,
-            _ => {
-                let values = as_json
-                    .iter()
-                    .map(|r| {
-                        r.get(name)
-                            .and_then(serde_json::Value::as_f64)
-                            .unwrap_or(f64::NAN)
-                    })
-                    .collect();
-                f64_array(py, values)
-            }
+            _ => f64_array(py, crate::convert::number_column(&as_json, name)),
         };
         columns.set_item(name, column)?;
     }

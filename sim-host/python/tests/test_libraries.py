@@ -335,3 +335,19 @@ def test_track_in_memory_equals_the_folder_it_writes_with_out(tmp_path):
         np.testing.assert_array_equal(mine[name], written[name])
     assert list(mine["status"]) == list(written["status"])
     assert all(r == "" for r in mine["reason"]) or list(mine["reason"]) == list(written["reason"])
+
+
+def test_piv_in_memory_equals_the_folder_it_writes_with_out(tmp_path):
+    frames = tmp_path / "frames"
+    sandjumper.piv_synthetic(frames, field="rotation", size=(192, 160), frames=3)
+    memory = sandjumper.piv(frames, windows=[32, 16])
+    folder = sandjumper.piv(frames, windows=[32, 16], out=tmp_path / "p")
+    assert memory.path is None and memory.summary == folder.summary
+    assert sorted(memory.arrays) == sorted(folder.arrays)
+    for name, array in memory.arrays.items():
+        assert array.shape == folder.arrays[name].shape, name
+        np.testing.assert_array_equal(array, folder.arrays[name])
+    for table in ["flow", "added_mass"]:
+        assert list(memory.tables[table]) == list(folder.tables[table]), table
+        for name, column in memory.tables[table].items():
+            np.testing.assert_array_equal(column, folder.tables[table][name])
