@@ -89,6 +89,11 @@ impl PivRequest {
     /// Check what can be checked without reading a file: a scale needs the foot's axis and a
     /// clock. ([`run`] checks the passes against the frames' size once it has read them.)
     pub fn validate(&self) -> Result<(), FlowError> {
+        if self.every == 0 {
+            return Err(FlowError::input(
+                "--every 0 not allowed (allowed: 1 or more)",
+            ));
+        }
         if self.m_per_px.is_some() {
             if self.origin_px.is_none() {
                 return Err(FlowError::input(

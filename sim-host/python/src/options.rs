@@ -88,6 +88,13 @@ pub fn count<T: for<'a, 'py> FromPyObject<'a, 'py>>(
             "{name}: expected an integer, got bool"
         )));
     }
+    if let Ok(v) = obj.extract::<i64>()
+        && v < 0
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}: {v} is negative (allowed: 0 or more)"
+        )));
+    }
     obj.extract().map_err(|_| {
         PyTypeError::new_err(format!(
             "{name}: expected a non-negative integer, got {}",

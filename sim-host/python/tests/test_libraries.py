@@ -197,6 +197,8 @@ def test_figures_dem_and_lammps_refuse_bad_input(tmp_path):
         sandjumper.rig_jump("delayed", 10.0)
     with pytest.raises(ValueError, match="every"):
         sandjumper.piv(tmp_path, every=0)
+    with pytest.raises(ValueError, match="seed: -1 is negative"):
+        sandjumper.piv_synthetic(tmp_path / "s", seed=-1)
     with pytest.raises(ValueError, match="reintrusion cannot be used with first"):
         sandjumper.fit("intrusion", tmp_path / "f.csv", first=True, reintrusion=True)
 
