@@ -18,7 +18,7 @@ use sandjumper_output::Silent;
 use sandjumper_output::parse::{parse_number, parse_phi, parse_positive};
 
 use crate::call::long_call;
-use crate::convert::{f64_array, json_to_py, path_arg, str_array};
+use crate::convert::{f64_array, json_to_py, out_arg, path_arg, str_array};
 use crate::errors::{checked, lib_err};
 use crate::options::{self, Setter, apply, choice, count, flag, list_text, number, path};
 use crate::simulate::{log_columns, log_metadata};
@@ -64,19 +64,6 @@ impl FolderResult {
             keys(&self.tables),
             keys(&self.arrays),
         )
-    }
-}
-
-/// The output folder: `out` as given, or a new temporary one.
-fn output_folder(out: Option<&Bound<'_, PyAny>>) -> PyResult<(PathBuf, Option<tempfile::TempDir>)> {
-    match out.filter(|o| !o.is_none()) {
-        Some(o) => Ok((path_arg("out", o)?, None)),
-        None => {
-            let tmp = tempfile::tempdir().map_err(|e| {
-                PyRuntimeError::new_err(format!("cannot make a temporary folder: {e}"))
-            })?;
-            Ok((tmp.path().join("out"), Some(tmp)))
-        }
     }
 }
 
@@ -129,7 +116,6 @@ pub fn load_folder(
     py: Python<'_>,
     dir: &Path,
     summary_json: Option<&str>,
-    keep: bool,
 ) -> PyResult<FolderResult> {
     let tables = PyDict::new(py);
     let arrays = PyDict::new(py);
@@ -164,7 +150,7 @@ pub fn load_folder(
         summary: summary.unbind(),
         tables: tables.into_any().unbind(),
         arrays: arrays.into_any().unbind(),
-        path: keep.then(|| dir.display().to_string()),
+        path: Some(dir.display().to_string()),
     })
 }
 
@@ -246,13 +232,7 @@ pub fn track(
             m_per_px,
             sandjumper_imaging::run::parse_m_per_px,
         )?,
-        fps: None,
-        log: None,
-        roi: None,
-        ball_diameter_m: 0.0095,
-        rest_frames: 10,
-        exposure_s: 0.0,
-        apex_window_s: 0.02,
+        ..TrackRequest::default()
     };
     apply(&mut request, options, &TRACK_OPTIONS, &mut options::none)?;
     if request.fps.is_some() == request.log.is_some() {
@@ -264,14 +244,13 @@ pub fn track(
             },
         ));
     }
-    if out.is_some_and(|o| !o.is_none()) {
-        let (dir, _) = output_folder(out)?;
+    if let Some(dir) = out_arg(out)? {
         let json = long_call(py, progress, |progress| {
             let (outcome, _) = sandjumper_imaging::run::run_into(&request, &dir, progress)?;
             outcome.summary_json()
         })?
         .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-        return load_folder(py, &dir, Some(&json), true);
+        return load_folder(py, &dir, Some(&json));
     }
     // In memory: `track.csv`'s columns from the outcome, nothing written.
     let outcome = long_call(py, progress, |progress| {
@@ -454,14 +433,13 @@ pub fn piv(
         ));
     }
     request.validate().map_err(|e| lib_err(e, &FRAME_NAMES))?;
-    if out.is_some_and(|o| !o.is_none()) {
-        let (dir, _) = output_folder(out)?;
+    if let Some(dir) = out_arg(out)? {
         let json = long_call(py, progress, |progress| {
             let (outcome, _) = sandjumper_flow::run::run_into(&request, &dir, progress)?;
             outcome.summary_json()
         })?
         .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-        return load_folder(py, &dir, Some(&json), true);
+        return load_folder(py, &dir, Some(&json));
     }
     // In memory: the arrays `piv --out` writes as .npy files and its two tables, nothing
     // written.

@@ -96,6 +96,15 @@ pub fn number_column(rows: &[serde_json::Value], name: &str) -> Vec<f64> {
         .collect()
 }
 
+/// The `out=` folder claimed before a run (as the command line claims `--out`): one that
+/// cannot be written is refused before the run, not after it.
+pub fn claim_out(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<sandjumper_output::StagedDir>> {
+    out_arg(out)?
+        .map(|dir| sandjumper_output::StagedDir::create(&dir))
+        .transpose()
+        .map_err(|e| crate::errors::lib_err(e, &[]))
+}
+
 /// An optional `out=` folder argument.
 pub fn out_arg(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<std::path::PathBuf>> {
     out.filter(|o| !o.is_none())

@@ -242,7 +242,7 @@ pub fn dem_bed(
         sandjumper_dem::bed_run::run(&request, progress)
     })?
     .map_err(|e| lib_err(e, &DEM_NAMES))?;
-    load_folder(py, &dir, None, true)
+    load_folder(py, &dir, None)
 }
 
 /// `dem intrude`'s options by name (besides the contact model's).
@@ -370,7 +370,7 @@ pub fn dem_intrude(
     })?
     .map_err(|e| lib_err(e, &DEM_NAMES))?;
     match outcome {
-        IntrudeOutcome::Finished(_) => load_folder(py, &dir, None, true),
+        IntrudeOutcome::Finished(_) => load_folder(py, &dir, None),
         stopped => Ok(FolderResult {
             summary: crate::convert::summary_to_py(py, &stopped)?.unbind(),
             tables: PyDict::new(py).into_any().unbind(),
@@ -511,5 +511,5 @@ pub fn lammps(
         sandjumper_lammps::run::run(&request, progress)
     })?
     .map_err(|e| lib_err(e, &LAMMPS_NAMES))?;
-    load_folder(py, &dir, None, true)
+    load_folder(py, &dir, None)
 }

@@ -36,6 +36,16 @@ pub fn checked<T, V: Display>(
     parse(&raw).map_err(|reason| invalid_value(name, &raw, &reason))
 }
 
+/// `value` through the library's check `check` of a number (a frequency, a packing fraction),
+/// or the refusal as [`invalid_value`].
+pub fn checked_number(
+    name: &str,
+    value: f64,
+    check: fn(f64) -> Result<f64, String>,
+) -> PyResult<f64> {
+    check(value).map_err(|reason| invalid_value(name, value, &reason))
+}
+
 /// One of the names `allowed` offers (a jump kind, a ground model), or the command line's
 /// refusal: "invalid value 'hop' for 'kind' [possible values: single, stutter, delayed]".
 pub fn choice<T: Copy>(name: &str, value: &str, allowed: &[(&str, T)]) -> PyResult<T> {

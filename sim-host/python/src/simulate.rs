@@ -15,7 +15,7 @@ use sandjumper_study::sweep::{ROW_HEADER, SweepDrive, SweepSpec, ValueRange};
 
 use crate::call::long_call;
 use crate::convert::{f64_array, i64_array, json_to_py, out_arg, params_source, str_array};
-use crate::errors::{checked, choice, invalid_value, lib_err, required};
+use crate::errors::{checked, checked_number, choice, lib_err, required};
 use crate::typed;
 
 /// The jump kinds by their command-line names.
@@ -40,11 +40,6 @@ const JUMP_NAMES: [(&str, &str); 7] = [
     ("--rtol", "rtol"),
     ("--params", "params"),
 ];
-
-/// A checked number: `check` refuses it as the command line's value parser does.
-fn number(name: &str, value: f64, check: fn(f64) -> Result<f64, String>) -> PyResult<f64> {
-    check(value).map_err(|reason| invalid_value(name, value, &reason))
-}
 
 /// One simulated jump: `summary` (the dict `sandjumper jump --json` prints) and `series`
 /// (the columns of `trajectory.csv`, same names, as numpy arrays).
@@ -109,6 +104,17 @@ pub struct HilResult {
     pub log: Py<PyAny>,
     /// The log's metadata, values as text.
     pub log_metadata: Py<PyAny>,
+}
+
+impl HilResult {
+    /// A run's summary (its `--json` text) and its acquisition log.
+    pub fn new(py: Python<'_>, json: &str, log: &AcqLog) -> PyResult<Self> {
+        Ok(Self {
+            summary: json_to_py(py, json)?.unbind(),
+            log: log_columns(py, log)?.into_any().unbind(),
+            log_metadata: log_metadata(py, log)?.into_any().unbind(),
+        })
+    }
 }
 
 #[pymethods]
@@ -239,7 +245,7 @@ pub fn params(
     #[pyo3(from_py_with = typed::phi)] phi: f64,
     overrides: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
-    let phi = number("phi", phi, check_phi)?;
+    let phi = checked_number("phi", phi, check_phi)?;
     let file = params_source("overrides", overrides)?;
     let p = resolve_params(phi, file.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let value: serde_json::Value = toml::from_str(&p.to_toml())
@@ -281,7 +287,7 @@ pub fn jump(
         tau_s,
         stroke,
         model: choice("model", &model, &models())?,
-        phi: number("phi", phi, check_phi)?,
+        phi: checked_number("phi", phi, check_phi)?,
         params: params_source("params", params)?,
         rtol: checked("rtol", rtol, parse_rtol)?,
         record_series: true,
@@ -323,8 +329,10 @@ pub fn sine(
     let kind = kind.ok_or_else(|| required(kind_name))?;
     let kind = choice(kind_name, &kind, &KINDS)?;
     let freq_hz = freq_hz.ok_or_else(|| required(freq_name))?;
-    let freq_hz = number(freq_name, freq_hz, check_freq)?;
-    let tau_s = tau_s.map(|t| number("tau_s", t, check_tau)).transpose()?;
+    let freq_hz = checked_number(freq_name, freq_hz, check_freq)?;
+    let tau_s = tau_s
+        .map(|t| checked_number("tau_s", t, check_tau))
+        .transpose()?;
     if kind == JumpKind::DelayedStutter && tau_s.is_none() {
         return Err(required("tau_s"));
     }
@@ -493,12 +501,7 @@ pub fn sweep(
         shard: None,
     };
     request.validate().map_err(|e| lib_err(e, &[]))?;
-    // The folder is claimed before the jumps (as the command line does): one that cannot be
-    // written is refused before the sweep, not after it.
-    let staged = out_arg(out)?
-        .map(|dir| sandjumper_output::StagedDir::create(&dir))
-        .transpose()
-        .map_err(|e| lib_err(e, &[]))?;
+    let staged = crate::convert::claim_out(out)?;
     let outcome = long_call(py, progress, |progress| {
         let outcome = sandjumper_study::sweep::run(&request, progress)?;
         if let Some(staged) = staged {
@@ -615,7 +618,7 @@ pub fn hil(
         .map(|g| checked("gain_lowering", g, lib::parse_gain_lowering))
         .transpose()?;
     let model = choice("model", &model, &models())?;
-    let phi = number("phi", phi, check_phi)?;
+    let phi = checked_number("phi", phi, check_phi)?;
     let rtol = rtol
         .map(|r| checked("rtol", r, lib::parse_rtol))
         .transpose()?;
@@ -654,11 +657,7 @@ pub fn hil(
         Ok((jump.json()?, jump.acquisition_log()))
     })?
     .map_err(|e: sandjumper_rig::RigError| lib_err(e, &names))?;
-    Ok(HilResult {
-        summary: json_to_py(py, &json)?.unbind(),
-        log: log_columns(py, &log)?.into_any().unbind(),
-        log_metadata: log_metadata(py, &log)?.into_any().unbind(),
-    })
+    HilResult::new(py, &json, &log)
 }
 
 /// Replay an acquisition log's encoder record in the simulator (the paper's method), as
@@ -694,7 +693,9 @@ pub fn replay(
     let request = ReplayRequest {
         log: path,
         model: choice("model", &model, &models())?,
-        phi: phi.map(|p| number("phi", p, check_phi)).transpose()?,
+        phi: phi
+            .map(|p| checked_number("phi", p, check_phi))
+            .transpose()?,
         params: params_source("params", params)?,
         rtol: checked("rtol", rtol, parse_rtol)?,
         window_s: window_ms.map_or(ReplayRequest::default().window_s, |w| w * 1e-3),

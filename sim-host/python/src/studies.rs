@@ -17,15 +17,10 @@ use sandjumper_study::fit::{FitKind, FitRequest};
 use crate::analyses::{FolderResult, load_folder};
 use crate::call::long_call;
 use crate::convert::{json_to_py, out_arg, params_source, path_arg, summary_to_py};
-use crate::errors::{choice, invalid_value, lib_err};
+use crate::errors::{checked_number, choice, lib_err};
 use crate::options::{self, Setter, apply, count, flag, number, path};
 use crate::simulate::models;
 use crate::typed;
-
-/// A checked number.
-fn checked_number(name: &str, value: f64, check: fn(f64) -> Result<f64, String>) -> PyResult<f64> {
-    check(value).map_err(|reason| invalid_value(name, value, &reason))
-}
 
 /// Fit the model's parameters to measurements, as `sandjumper fit WHAT FILE` does: `what`
 /// is `"intrusion"` (k1, k2, delta or kappa, l_re from `depth_m,force_n`), `"added-mass"`
@@ -317,7 +312,7 @@ pub fn optimize(
         sandjumper_optimize::run(&request, progress)?.json()
     })?
     .map_err(|e| lib_err(e, &names))?;
-    load_folder(py, &dir, Some(&json), true)
+    load_folder(py, &dir, Some(&json))
 }
 
 /// Run a campaign file (a plan of jumps and beds), as `sandjumper campaign run FILE --out
@@ -421,7 +416,7 @@ pub fn figures(
         sandjumper_study::figures::FiguresError::Output(e) => lib_err(e, &[]),
         internal => pyo3::exceptions::PyRuntimeError::new_err(internal.to_string()),
     })?;
-    load_folder(py, &request.out, None, true)
+    load_folder(py, &request.out, None)
 }
 
 /// The supplement's DEM figures, as `sandjumper figures dem --out OUT` does: the jumps'
@@ -477,7 +472,7 @@ pub fn figures_dem(
             .map_err(|e| sandjumper_figures_dem::FiguresDemError::internal(e.to_string()))
     })?
     .map_err(|e| lib_err(e, &names))?;
-    load_folder(py, &request.out, Some(&json), true)
+    load_folder(py, &request.out, Some(&json))
 }
 
 /// One jump through the rig tool, as `sandjumper rig jump --link LINK --out OUT` does: the
@@ -532,12 +527,7 @@ pub fn rig_jump(
         ("--firmware", "firmware"),
     ];
     request.validate().map_err(|e| lib_err(e, &names))?;
-    // The folder is claimed before the run (as the command line does): one that cannot be
-    // written is refused before the jump, not after it.
-    let staged = out_arg(out)?
-        .map(|dir| sandjumper_output::StagedDir::create(&dir))
-        .transpose()
-        .map_err(|e| lib_err(e, &[]))?;
+    let staged = crate::convert::claim_out(out)?;
     let (json, log) = long_call(py, progress, |progress| {
         let outcome = lib::run(&request, progress)?;
         if let Some(staged) = staged {
@@ -546,9 +536,5 @@ pub fn rig_jump(
         Ok((outcome.json()?, outcome.log.clone()))
     })?
     .map_err(|e: sandjumper_rig::RigError| lib_err(e, &names))?;
-    Ok(crate::simulate::HilResult {
-        summary: json_to_py(py, &json)?.unbind(),
-        log: crate::simulate::log_columns(py, &log)?.into_any().unbind(),
-        log_metadata: crate::simulate::log_metadata(py, &log)?.into_any().unbind(),
-    })
+    crate::simulate::HilResult::new(py, &json, &log)
 }
