@@ -10,8 +10,8 @@ written as the argument's name); a wrong type raises ``TypeError`` naming the ar
 failure after the input was accepted raises ``RuntimeError``. Units are SI unless a name
 says otherwise (``freq_hz``, ``window_ms``).
 
-Long calls (``sweep``, ``hil``, ``track``, ``piv``, the DEM, ``lammps``, ``optimize``,
-campaigns, figures, ``rig_jump``) run with the GIL released, so other Python threads run
+Long calls (``sweep``, ``sweep_slurm``, ``hil``, ``track``, ``piv``, the DEM, ``lammps``,
+``optimize``, campaigns, figures, the rig programs) run with the GIL released, so other Python threads run
 meanwhile; ``progress`` (a callable ``progress(stage, done, total)``, ``total`` None when
 unknown) is told as they go, at most about ten times a second; Ctrl-C (or a notebook's
 interrupt) stops them between their steps and raises ``KeyboardInterrupt`` (``sweep``,
@@ -70,6 +70,18 @@ class HilResult:
     ``camera_frame``, ``rod_height_m`` (m) as float64 with NaN where the log has no value."""
     log_metadata: Dict[str, str]
     """The log's ``# key: value`` lines."""
+    tables: Dict[str, Dict[str, npt.NDArray[np.float64]]]
+    """What a rig program measured besides its log, columns named like its CSV's header:
+    ``rig_intrude``'s ``intrusion`` and ``reintrusion`` (``depth_m``, ``force_n``),
+    ``rig_replay``'s ``table`` (``t_s``, ``p_m``: what was uploaded); empty for a jump."""
+
+class RunNotCompleted(RuntimeError):
+    """A rig program the controller did not complete cleanly (a fault, or the program cut
+    short): the command line's exit status 1. ``result`` is what the run recorded; its
+    folder is written first when ``out`` was given. A lockstep ``hil`` run lists its faults
+    in its summary instead."""
+
+    result: HilResult
 
 class FolderResult:
     """What a folder-writing analysis wrote, loaded."""
@@ -133,6 +145,33 @@ def sweep(
     threads: default one per core. out: also write ``sweep --out``'s folder. progress:
     ``("jumps", done, total)``; Ctrl-C stops the sweep between jumps."""
 
+def sweep_slurm(
+    tasks: int,
+    kinds: Union[str, Sequence[str]],
+    freqs_hz: Axis,
+    out: PathLike,
+    phis: Optional[Axis] = None,
+    taus_s: Optional[Axis] = None,
+    models: Optional[Union[str, Sequence[str]]] = None,
+    params: Optional[Params] = None,
+    rtol: float = 1e-8,
+    link: Optional[str] = None,
+    gain_lowering: Optional[float] = None,
+    cpus_per_task: int = 1,
+    partition: Optional[str] = None,
+    time: str = "1:00:00",
+    wait: bool = True,
+    program: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
+) -> Dict[str, Any]:
+    """``sweep`` on a Slurm cluster, as ``sandjumper sweep --slurm TASKS --out OUT`` does: a
+    job array of ``tasks`` tasks, one shard each with ``cpus_per_task`` threads, run by
+    ``program`` (the ``sandjumper`` binary on the cluster's shared file system; default: the
+    one on PATH), in ``partition`` with the time limit ``time`` (Slurm's format). With
+    ``wait`` the call waits for the job (Ctrl-C stops waiting; the job runs on) and merges
+    the shards into ``out``. Returns ``{"job_id", "dir": the job's folder, "result": the
+    merged SweepResult, or None without wait}``."""
+
 def hil(
     kind: Optional[str] = None,
     freq_hz: Optional[float] = None,
@@ -148,12 +187,19 @@ def hil(
     firmware: Optional[PathLike] = None,
     stroke: Optional[PathLike] = None,
     progress: Optional[Progress] = None,
+    camera: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+    mcap: bool = False,
 ) -> HilResult:
     """One jump through the control loop against the simulated rig, as ``sandjumper hil``
     does, with the GIL released. link: ``"sil"`` (the core in this process), ``"pil"`` (the
-    firmware ELF ``firmware`` in QEMU) or ``"serial:PATH"`` (a board). rtol: the plant's
-    tolerance inside each control period (default 1e-6). camera_fps: frames/s (0: none).
-    encoder_noise: counts (standard deviation, seeded)."""
+    firmware ELF ``firmware`` in QEMU), ``"f407"`` (the F407 binary on the virtual board) or
+    ``"serial:PATH"`` (a board). rtol: the plant's tolerance inside each control period
+    (default 1e-6). camera_fps: frames/s (0: none); camera: the rod camera's
+    ``camera.toml``. encoder_noise: counts (standard deviation, seeded). out: also write
+    ``hil --out``'s folder (mcap: ``acquisition.mcap`` too). A setting that does nothing
+    (gain_lowering outside a delay) is a warning on the ``sandjumper`` logger. On the virtual
+    board a jump with a fault raises ``RunNotCompleted``."""
 
 def replay(
     log: PathLike,
@@ -244,6 +290,17 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
     ``cone``."""
 
+def lammps_read(
+    run: PathLike,
+    out: PathLike,
+    min_speed_ratio: float = 0.3,
+    progress: Optional[Progress] = None,
+) -> FolderResult:
+    """Read a finished LAMMPS run's dumps back into a new folder ``out`` (apart from the
+    run), as ``sandjumper dem lammps-read RUN --out OUT`` does: the column's momentum, added
+    mass and cone again (min_speed_ratio: the added mass's speed rule). Returns the folder,
+    as ``lammps``'s."""
+
 def fit(
     what: str,
     file: PathLike,
@@ -329,10 +386,24 @@ def figures_dem(
     """The supplement's DEM figures, as ``sandjumper figures dem --out OUT`` does; foot_width
     (m) scales the comparison down. ``summary`` is ``summary.json``."""
 
+def rig_status(
+    link: Optional[str] = None,
+    port: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+    drive_calibration: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """The controller's state, phase, latched fault and counters, as ``sandjumper rig status
+    --json`` prints them. The controller: ``link`` (``"sil"``, the default, ``"pil"``,
+    ``"f407"`` or ``"serial:PATH"``) or a board's serial ``port``; firmware: the ELF (pil,
+    f407); virtual_board: its program; board_pace: the virtual board's pace (factor of real
+    time); drive_calibration: a calibration file loaded at start."""
+
 def rig_jump(
     kind: str,
     freq_hz: float,
-    link: str = "sil",
+    link: Optional[str] = None,
     tau_s: Optional[float] = None,
     model: str = "eq4",
     phi: float = 0.57,
@@ -341,11 +412,105 @@ def rig_jump(
     firmware: Optional[PathLike] = None,
     out: Optional[PathLike] = None,
     progress: Optional[Progress] = None,
+    port: Optional[str] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+    drive_calibration: Optional[PathLike] = None,
+    mcap: bool = False,
 ) -> HilResult:
-    """One jump through the rig tool, as ``sandjumper rig jump --link LINK`` does: ``"sil"``,
-    ``"pil"``, ``"f407"`` (the F407 release binary on the virtual board) or
-    ``"serial:PATH"`` (a real rig). ``summary`` is ``rig jump --json``'s; ``log`` the
-    acquisition log's columns. out: also write the run's folder."""
+    """One jump through the rig tool, as ``sandjumper rig jump`` does, on the controller
+    ``rig_status`` describes. ``summary`` is ``rig jump --json``'s; ``log`` the acquisition
+    log's columns. out: also write the run's folder (mcap: ``acquisition.mcap`` too). A jump
+    with a fault raises ``RunNotCompleted``."""
+
+def rig_intrude(
+    link: Optional[str] = None,
+    start: float = -0.02,
+    depth: float = 0.02,
+    withdraw: float = 0.005,
+    reintrusion_depth: float = 0.03,
+    speed: float = 0.01,
+    hold: float = 0.5,
+    bin: float = 0.00025,
+    model: str = "eq4",
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    out: Optional[PathLike] = None,
+    mcap: bool = False,
+    progress: Optional[Progress] = None,
+    port: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+    drive_calibration: Optional[PathLike] = None,
+) -> HilResult:
+    """The slow-intrusion program (the paper's ``F_p(z)`` measurement), as ``sandjumper rig
+    intrude`` does: from ``start`` (m, the surface) down ``depth`` (m), back ``withdraw``
+    (m), down to ``reintrusion_depth`` (m), at ``speed`` (m/s), ``hold`` (s) between, force
+    binned every ``bin`` (m). ``tables["intrusion"]`` and ``tables["reintrusion"]`` are the
+    curves (``depth_m``, ``force_n``). A run with a fault raises ``RunNotCompleted``."""
+
+def rig_replay(
+    log: Optional[PathLike] = None,
+    stroke: Optional[PathLike] = None,
+    link: Optional[str] = None,
+    scale: float = 1.0,
+    time_stretch: float = 1.0,
+    clip: Optional[Sequence[float]] = None,
+    table_rate: Optional[int] = None,
+    allow_gaps: bool = False,
+    model: str = "eq4",
+    phi: float = 0.57,
+    params: Optional[Params] = None,
+    out: Optional[PathLike] = None,
+    mcap: bool = False,
+    progress: Optional[Progress] = None,
+    port: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+    drive_calibration: Optional[PathLike] = None,
+) -> HilResult:
+    """A recorded motor trajectory (an acquisition ``log``) or a ``stroke`` file run on the
+    rig, as ``sandjumper rig replay`` does: edited by ``scale``, ``time_stretch`` and
+    ``clip`` (``(start_s, end_s)``), resampled at ``table_rate`` (Hz, 10..=10000), checked
+    against the rig's limits before anything is sent. ``tables["table"]`` is what was
+    uploaded (``t_s``, ``p_m``). A run with a fault raises ``RunNotCompleted``."""
+
+def rig_calibrate_drive(
+    zero_code: int,
+    codes_per_newton: float,
+    link: Optional[str] = None,
+    port: Optional[str] = None,
+    save: Optional[PathLike] = None,
+    firmware: Optional[PathLike] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Set the drive's force calibration on the controller, as ``sandjumper rig
+    calibrate-drive`` does (save: also write it as a calibration file). Returns ``{"link",
+    "zero_code", "codes_per_newton"}``."""
+
+def rig_acknowledge_reset(
+    link: Optional[str] = None,
+    port: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    virtual_board: Optional[PathLike] = None,
+    board_pace: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Acknowledge the controller's reset so that it allows Arm again, as ``sandjumper rig
+    acknowledge-reset`` does. Returns ``{"link", "reset_cause"}``."""
+
+def rig_flash(
+    port: Optional[str] = None,
+    link: Optional[str] = None,
+    firmware: Optional[PathLike] = None,
+    probe_rs: Optional[PathLike] = None,
+) -> Dict[str, Any]:
+    """Write the F407 firmware (``firmware``, the release ELF by default) to the board on
+    ``port`` with probe-rs (``probe_rs``: its path), as ``sandjumper rig flash`` does.
+    Returns ``{"flashed", "elf", "port", "why"}``; a simulated link has nothing to flash
+    (``why`` says so)."""
 
 def sweep_merge(dirs: List[PathLike], out: PathLike) -> SweepResult:
     """Merge the folders of a sweep's shards (``sweep --shard K/N``) into ``out``, as

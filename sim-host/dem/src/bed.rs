@@ -145,11 +145,15 @@ pub fn area_fraction(g: &Grains, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     a / ((x1 - x0) * (y1 - y0)).max(f64::MIN_POSITIVE)
 }
 
-/// Prepare a bed. `progress(done_fraction)` is called now and then.
+/// What [`prepare`] returns when its caller stopped it.
+pub const STOPPED: &str = "stopped by its caller before the bed was prepared (nothing written)";
+
+/// Prepare a bed. `progress(done_fraction)` is called now and then; when it returns false the
+/// preparation stops there ([`STOPPED`]).
 pub fn prepare(
     p: &DemParams,
     spec: &BedSpec,
-    mut progress: impl FnMut(f64),
+    mut progress: impl FnMut(f64) -> bool,
 ) -> Result<(World, BedReport), String> {
     spec.check(p)?;
     let n = spec.grain_count(p);
@@ -219,7 +223,9 @@ pub fn prepare(
             while world.steps < max_steps {
                 world.step();
                 if world.steps % check_every == 0 {
-                    progress(world.steps as f64 / max_steps as f64);
+                    if !progress(world.steps as f64 / max_steps as f64) {
+                        return Err(STOPPED.into());
+                    }
                     if world.steps >= min_steps && world.agitation() < spec.rest_agitation {
                         settled = true;
                         break;
@@ -242,15 +248,22 @@ pub fn prepare(
                     world.g.radius[i] = s * full[id];
                 }
                 world.rebuild();
-                for _ in 0..stage_steps {
+                for k in 0..stage_steps {
                     world.step();
+                    if k % check_every == 0 && !progress(0.5 * (stage - 1) as f64 / 10.0) {
+                        return Err(STOPPED.into());
+                    }
                 }
-                progress(0.5 * stage as f64 / 10.0);
+                if !progress(0.5 * stage as f64 / 10.0) {
+                    return Err(STOPPED.into());
+                }
             }
             while world.steps < max_steps {
                 world.step();
                 if world.steps % check_every == 0 {
-                    progress(0.5 + 0.5 * world.steps as f64 / max_steps as f64);
+                    if !progress(0.5 + 0.5 * world.steps as f64 / max_steps as f64) {
+                        return Err(STOPPED.into());
+                    }
                     if world.agitation() < spec.rest_agitation && world.max_overlap_ratio() < 0.02 {
                         settled = true;
                         break;

@@ -154,8 +154,15 @@ fn run_here(a: &BedRequest, progress: &dyn Progress) -> Result<BedOutcome, DemEr
         let now = (f * 1000.0) as u64;
         progress.advance(now.saturating_sub(at));
         at = at.max(now);
+        !progress.cancelled()
     })
-    .map_err(DemError::Input)?;
+    .map_err(|e| {
+        if e == crate::bed::STOPPED {
+            DemError::internal(e)
+        } else {
+            DemError::Input(e)
+        }
+    })?;
     progress.finish();
     crate::checkpoint::save(
         &staged.file("bed.ckpt"),

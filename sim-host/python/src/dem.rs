@@ -513,3 +513,32 @@ pub fn lammps(
     .map_err(|e| lib_err(e, &LAMMPS_NAMES))?;
     load_folder(py, &dir, None)
 }
+
+/// Read a finished LAMMPS run's dumps back into a new folder `out`, as `sandjumper dem
+/// lammps-read RUN --out OUT` does (`run`: the run's folder or its `lammps/` folder; `out`
+/// apart from it): the column's momentum, added mass and cone again, e.g. with another
+/// `min_speed_ratio` (the added mass's speed rule). The GIL is released meanwhile. Returns
+/// the folder loaded, as [`lammps`]'s.
+#[pyfunction]
+#[pyo3(signature = (run, out, min_speed_ratio = 0.3, progress = None))]
+pub fn lammps_read(
+    py: Python<'_>,
+    run: &Bound<'_, PyAny>,
+    out: &Bound<'_, PyAny>,
+    #[pyo3(from_py_with = typed::min_speed_ratio)] min_speed_ratio: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<FolderResult> {
+    use sandjumper_lammps::run::LammpsReadRequest;
+    let request = LammpsReadRequest {
+        run: path_arg("run", run)?,
+        min_speed_ratio: crate::errors::checked("min_speed_ratio", min_speed_ratio, parse_share)?,
+        out: path_arg("out", out)?,
+    };
+    let names = [("--out", "out"), ("--min-speed-ratio", "min_speed_ratio")];
+    request.validate().map_err(|e| lib_err(e, &names))?;
+    let outcome = long_call(py, progress, |progress| {
+        sandjumper_lammps::run::read(&request, progress)
+    })?
+    .map_err(|e| lib_err(e, &names))?;
+    load_folder(py, &outcome.out, None)
+}

@@ -15,6 +15,7 @@ mod convert;
 mod dem;
 mod errors;
 mod options;
+mod rig;
 mod simulate;
 mod studies;
 mod typed;
@@ -44,6 +45,7 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::params, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::jump, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::sweep_slurm, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::hil, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::replay, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::track, m)?)?;
@@ -55,6 +57,7 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dem::dem_bed, m)?)?;
     m.add_function(wrap_pyfunction!(dem::dem_intrude, m)?)?;
     m.add_function(wrap_pyfunction!(dem::lammps, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::lammps_read, m)?)?;
     m.add_function(wrap_pyfunction!(studies::fit, m)?)?;
     m.add_function(wrap_pyfunction!(studies::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(studies::campaign_run, m)?)?;
@@ -62,7 +65,14 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(studies::campaign_status, m)?)?;
     m.add_function(wrap_pyfunction!(studies::figures, m)?)?;
     m.add_function(wrap_pyfunction!(studies::figures_dem, m)?)?;
-    m.add_function(wrap_pyfunction!(studies::rig_jump, m)?)?;
+    m.add("RunNotCompleted", m.py().get_type::<rig::RunNotCompleted>())?;
+    m.add_function(wrap_pyfunction!(rig::rig_status, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_jump, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_intrude, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_replay, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_calibrate_drive, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_acknowledge_reset, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_flash, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::read_log, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::log_to_mcap, m)?)?;
     Ok(())

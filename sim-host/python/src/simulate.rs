@@ -104,15 +104,38 @@ pub struct HilResult {
     pub log: Py<PyAny>,
     /// The log's metadata, values as text.
     pub log_metadata: Py<PyAny>,
+    /// What the program measured besides its log, each a dict of float64 arrays named like
+    /// its CSV's header: `rig_intrude`'s `intrusion` and `reintrusion` (`depth_m`, `force_n`),
+    /// `rig_replay`'s `table` (`t_s`, `p_m`: what was uploaded); empty for a jump.
+    pub tables: Py<PyAny>,
 }
 
 impl HilResult {
     /// A run's summary (its `--json` text) and its acquisition log.
     pub fn new(py: Python<'_>, json: &str, log: &AcqLog) -> PyResult<Self> {
+        Self::with_tables(py, json, log, Vec::new())
+    }
+
+    /// [`HilResult::new`] with the `tables` the program measured (name, columns).
+    pub fn with_tables(
+        py: Python<'_>,
+        json: &str,
+        log: &AcqLog,
+        tables: Vec<crate::rig::Table>,
+    ) -> PyResult<Self> {
+        let dict = PyDict::new(py);
+        for (name, columns) in tables {
+            let table = PyDict::new(py);
+            for (column, values) in columns {
+                table.set_item(column, crate::convert::f64_array(py, values))?;
+            }
+            dict.set_item(name, table)?;
+        }
         Ok(Self {
             summary: json_to_py(py, json)?.unbind(),
             log: log_columns(py, log)?.into_any().unbind(),
             log_metadata: log_metadata(py, log)?.into_any().unbind(),
+            tables: dict.into_any().unbind(),
         })
     }
 }
@@ -447,6 +470,45 @@ pub fn sweep(
     out: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<SweepResult> {
+    let request = sweep_request(
+        (kinds, freqs_hz, phis, taus_s, models, params),
+        rtol,
+        link,
+        gain_lowering,
+        threads,
+    )?;
+    let staged = crate::convert::claim_out(out)?;
+    let outcome = long_call(py, progress, |progress| {
+        let outcome = sandjumper_study::sweep::run(&request, progress)?;
+        if let Some(staged) = staged {
+            outcome.write_into(&staged)?;
+            staged.commit()?;
+        }
+        Ok(outcome)
+    })?
+    .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[]))?;
+
+    sweep_result(py, &outcome.outcome)
+}
+
+/// The axes of a sweep as Python gives them: kinds, freqs_hz, phis, taus_s, models, params.
+type SweepAxes<'a, 'py> = (
+    &'a Bound<'py, PyAny>,
+    &'a Bound<'py, PyAny>,
+    Option<&'a Bound<'py, PyAny>>,
+    Option<&'a Bound<'py, PyAny>>,
+    Option<&'a Bound<'py, PyAny>>,
+    Option<&'a Bound<'py, PyAny>>,
+);
+
+/// [`sweep`]'s arguments as the library's checked request.
+fn sweep_request(
+    (kinds, freqs_hz, phis, taus_s, models, params): SweepAxes<'_, '_>,
+    rtol: f64,
+    link: Option<String>,
+    gain_lowering: Option<f64>,
+    threads: Option<usize>,
+) -> PyResult<SweepRequest> {
     let kinds: Vec<JumpKind> = names("kinds", "jump kind", kinds, &KINDS)?;
     let models: Vec<ModelName> = match models {
         Some(m) => names("models", "ground model", m, &self::models())?,
@@ -501,18 +563,103 @@ pub fn sweep(
         shard: None,
     };
     request.validate().map_err(|e| lib_err(e, &[]))?;
-    let staged = crate::convert::claim_out(out)?;
-    let outcome = long_call(py, progress, |progress| {
-        let outcome = sandjumper_study::sweep::run(&request, progress)?;
-        if let Some(staged) = staged {
-            outcome.write_into(&staged)?;
-            staged.commit()?;
-        }
-        Ok(outcome)
-    })?
-    .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[]))?;
+    Ok(request)
+}
 
-    sweep_result(py, &outcome.outcome)
+/// [`sweep`] on a Slurm cluster, as `sandjumper sweep --slurm TASKS --out OUT` does: a job
+/// array of `tasks` tasks, each running one shard with `cpus_per_task` threads through
+/// `program` (the `sandjumper` binary on the cluster's shared file system; default: the one
+/// on `PATH`), in `partition` with the time limit `time` (Slurm's format, e.g. `"30"`,
+/// `"1:00:00"`). With `wait` (the default) the call waits for the job (the GIL released;
+/// Ctrl-C stops waiting, the job runs on) and merges the shards into `out`. Returns
+/// `{"job_id", "dir": the job's folder, "result": the merged SweepResult, or None without
+/// wait}`.
+#[pyfunction]
+#[pyo3(signature = (tasks, kinds, freqs_hz, out, phis = None, taus_s = None, models = None, params = None, rtol = 1e-8, link = None, gain_lowering = None, cpus_per_task = 1, partition = None, time = "1:00:00".to_string(), wait = true, program = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_slurm(
+    py: Python<'_>,
+    tasks: u32,
+    kinds: &Bound<'_, PyAny>,
+    freqs_hz: &Bound<'_, PyAny>,
+    out: &Bound<'_, PyAny>,
+    phis: Option<&Bound<'_, PyAny>>,
+    taus_s: Option<&Bound<'_, PyAny>>,
+    models: Option<&Bound<'_, PyAny>>,
+    params: Option<&Bound<'_, PyAny>>,
+    #[pyo3(from_py_with = typed::rtol)] rtol: f64,
+    #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
+    #[pyo3(from_py_with = typed::gain_lowering)] gain_lowering: Option<f64>,
+    cpus_per_task: u32,
+    partition: Option<String>,
+    time: String,
+    wait: bool,
+    program: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    use sandjumper_study::sweep::cluster::{SlurmSweepOutcome, SlurmSweepRequest, run_on_slurm};
+    let sweep = sweep_request(
+        (kinds, freqs_hz, phis, taus_s, models, params),
+        rtol,
+        link,
+        gain_lowering,
+        None,
+    )?;
+    let program = match program.filter(|p| !p.is_none()) {
+        Some(p) => crate::convert::path_arg("program", p)?,
+        None => {
+            let found = py
+                .import("shutil")?
+                .call_method1("which", ("sandjumper",))?;
+            if found.is_none() {
+                return Err(PyValueError::new_err(
+                    "program: no `sandjumper` on PATH for the tasks to run (give program= the                      binary's path on the cluster's shared file system)",
+                ));
+            }
+            found.extract::<String>()?.into()
+        }
+    };
+    let request = SlurmSweepRequest {
+        sweep,
+        tasks,
+        cpus_per_task,
+        queue: sandjumper_slurm::QueueOptions {
+            partition,
+            time,
+            no_wait: !wait,
+        },
+        program,
+        out: crate::convert::path_arg("out", out)?,
+    };
+    let names = [
+        ("--slurm-cpus", "cpus_per_task"),
+        ("--slurm-partition", "partition"),
+        ("--slurm-time", "time"),
+        ("--slurm", "tasks"),
+        ("--shard", "shard"),
+        ("--out", "out"),
+    ];
+    let outcome = long_call(py, progress, |progress| run_on_slurm(&request, progress))?
+        .map_err(|e| lib_err(e, &names))?;
+    let d = PyDict::new(py);
+    match outcome {
+        SlurmSweepOutcome::Queued { id, dir } => {
+            d.set_item("job_id", id)?;
+            d.set_item("dir", dir.display().to_string())?;
+            d.set_item("result", py.None())?;
+        }
+        SlurmSweepOutcome::Merged { id, merged, .. } => {
+            d.set_item("job_id", id)?;
+            d.set_item(
+                "dir",
+                sandjumper_slurm::job_dir(&request.out)
+                    .display()
+                    .to_string(),
+            )?;
+            d.set_item("result", Py::new(py, sweep_result(py, &merged.outcome)?)?)?;
+        }
+    }
+    Ok(d.into_any().unbind())
 }
 
 /// A sweep's rows and failures as [`SweepResult`] (`sweep.csv`'s and `failures.csv`'s
@@ -580,7 +727,7 @@ pub fn sweep_merge(
 /// inside each control period (default 1e-6); `camera_fps`: frames/s (0: none);
 /// `encoder_noise`: counts (standard deviation, seeded).
 #[pyfunction]
-#[pyo3(signature = (kind = None, freq_hz = None, link = "sil".to_string(), tau_s = None, gain_lowering = None, model = "eq4".to_string(), phi = 0.57, params = None, rtol = None, camera_fps = 200, encoder_noise = 0.0, firmware = None, stroke = None, progress = None))]
+#[pyo3(signature = (kind = None, freq_hz = None, link = "sil".to_string(), tau_s = None, gain_lowering = None, model = "eq4".to_string(), phi = 0.57, params = None, rtol = None, camera_fps = 200, encoder_noise = 0.0, firmware = None, stroke = None, progress = None, camera = None, out = None, mcap = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hil(
     py: Python<'_>,
@@ -598,8 +745,12 @@ pub fn hil(
     firmware: Option<&Bound<'_, PyAny>>,
     stroke: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    camera: Option<&Bound<'_, PyAny>>,
+    out: Option<&Bound<'_, PyAny>>,
+    #[pyo3(from_py_with = typed::mcap)] mcap: bool,
 ) -> PyResult<HilResult> {
     use sandjumper_rig::hil_command::{self as lib, HilRequest, NamedStroke};
+    use sandjumper_rig::tool::output::ProgramOutcome;
     let names = [
         ("--link", "link"),
         ("--gain-lowering", "gain_lowering"),
@@ -607,6 +758,7 @@ pub fn hil(
         ("--encoder-noise", "encoder_noise"),
         ("--firmware", "firmware"),
         ("--stroke", "stroke"),
+        ("--camera", "camera"),
     ];
     let link = checked("link", &link, sandjumper_rig::hil::open::parse_link)?;
     let stroke = stroke
@@ -636,7 +788,11 @@ pub fn hil(
         .map(NamedStroke::read)
         .transpose()
         .map_err(|e| lib_err(e, &names))?;
-    let request = HilRequest {
+    let camera = camera
+        .filter(|c| !c.is_none())
+        .map(|c| crate::convert::path_arg("camera", c))
+        .transpose()?;
+    let mut request = HilRequest {
         link,
         kind,
         freq_hz,
@@ -651,13 +807,27 @@ pub fn hil(
         stroke,
         ..HilRequest::default()
     };
-    let (json, log) = long_call(py, progress, |progress| {
-        request.validate()?;
+    request.validate().map_err(|e| lib_err(e, &names))?;
+    if request.uses_camera() {
+        request.camera = sandjumper_rig::hil::camera::read_camera(camera.as_deref())
+            .map_err(|e| lib_err(e, &names))?;
+    }
+    let staged = crate::convert::claim_out(out)?;
+    let (json, log, clean, dir) = long_call(py, progress, |progress| {
+        // The warning a setting that does nothing deserves, to Python's logging.
+        request.check(progress)?;
         let jump = lib::run_checked(&request, progress, None)?;
-        Ok((jump.json()?, jump.acquisition_log()))
+        let dir = staged.map(|s| jump.write(s, mcap)).transpose()?;
+        Ok((
+            jump.json()?,
+            jump.acquisition_log(),
+            jump.completed_cleanly(),
+            dir,
+        ))
     })?
     .map_err(|e: sandjumper_rig::RigError| lib_err(e, &names))?;
-    HilResult::new(py, &json, &log)
+    let result = HilResult::new(py, &json, &log)?;
+    crate::rig::concluded(py, "jump", result, clean, dir)
 }
 
 /// Replay an acquisition log's encoder record in the simulator (the paper's method), as

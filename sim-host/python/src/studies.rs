@@ -1,5 +1,5 @@
 //! Whole studies from Python: `fit`, `optimize`, `campaign_run`, `campaign_resume`,
-//! `campaign_status`, `figures`, `figures_dem` and the rig tool's `rig_jump`, each a call of
+//! `campaign_status`, `figures` and `figures_dem`, each a call of
 //! its library with the command line's defaults and checks.
 
 use pyo3::exceptions::PyValueError;
@@ -473,68 +473,4 @@ pub fn figures_dem(
     })?
     .map_err(|e| lib_err(e, &names))?;
     load_folder(py, &request.out, Some(&json))
-}
-
-/// One jump through the rig tool, as `sandjumper rig jump --link LINK --out OUT` does: the
-/// robot's program on `link` (`"sil"`, `"pil"`, `"f407"`: the F407 release binary on the
-/// virtual board, or `"serial:PATH"`: a real rig), the plant (or the rig) answering, the
-/// acquisition log recorded. `out`: also write the run's folder. Returns `summary` (the
-/// dict `rig jump --json` prints, with `jump_height_m`), `log` (the acquisition log's
-/// columns) and `log_metadata`, as [`crate::simulate::HilResult`].
-#[pyfunction]
-#[pyo3(signature = (kind, freq_hz, link = "sil".to_string(), tau_s = None, model = "eq4".to_string(), phi = 0.57, params = None, camera_fps = 200, firmware = None, out = None, progress = None))]
-#[allow(clippy::too_many_arguments)]
-pub fn rig_jump(
-    py: Python<'_>,
-    #[pyo3(from_py_with = typed::kind)] kind: String,
-    #[pyo3(from_py_with = typed::freq_hz)] freq_hz: f64,
-    #[pyo3(from_py_with = typed::link)] link: String,
-    #[pyo3(from_py_with = typed::tau_s)] tau_s: Option<f64>,
-    #[pyo3(from_py_with = typed::model)] model: String,
-    #[pyo3(from_py_with = typed::phi)] phi: f64,
-    params: Option<&Bound<'_, PyAny>>,
-    #[pyo3(from_py_with = typed::camera_fps)] camera_fps: i64,
-    firmware: Option<&Bound<'_, PyAny>>,
-    out: Option<&Bound<'_, PyAny>>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<crate::simulate::HilResult> {
-    use sandjumper_rig::tool::jump::{self as lib, JumpRequest};
-    use sandjumper_rig::tool::target::Target;
-    let link = crate::errors::checked("link", &link, sandjumper_rig::hil::open::parse_link)?;
-    let (kind, freq_hz, tau_s) =
-        crate::simulate::sine("kind", "freq_hz", Some(kind), Some(freq_hz), tau_s, false)?;
-    let phi = checked_number("phi", phi, check_phi)?;
-    let file = params_source("params", params)?;
-    let mut target = Target::on(link);
-    if let Some(f) = firmware.filter(|f| !f.is_none()) {
-        target.firmware = Some(path_arg("firmware", f)?);
-    }
-    let request = JumpRequest {
-        tau_s,
-        camera_fps: crate::errors::checked(
-            "camera_fps",
-            camera_fps,
-            sandjumper_rig::hil_command::parse_camera_fps,
-        )?,
-        model: choice("model", &model, &models())?,
-        params: resolve_params(phi, file.as_ref())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?,
-        ..JumpRequest::new(target, kind, freq_hz)
-    };
-    let names = [
-        ("--link", "link"),
-        ("--tau", "tau_s"),
-        ("--firmware", "firmware"),
-    ];
-    request.validate().map_err(|e| lib_err(e, &names))?;
-    let staged = crate::convert::claim_out(out)?;
-    let (json, log) = long_call(py, progress, |progress| {
-        let outcome = lib::run(&request, progress)?;
-        if let Some(staged) = staged {
-            outcome.write(staged, false)?;
-        }
-        Ok((outcome.json()?, outcome.log.clone()))
-    })?
-    .map_err(|e: sandjumper_rig::RigError| lib_err(e, &names))?;
-    crate::simulate::HilResult::new(py, &json, &log)
 }

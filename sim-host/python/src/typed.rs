@@ -59,6 +59,16 @@ extractors! {
     wall: bool, "a bool";
     allow_gaps: bool, "a bool";
     force: bool, "a bool";
+    mcap: bool, "a bool";
+    start: f64, "a number (m)";
+    depth: f64, "a number (m)";
+    withdraw: f64, "a number (m)";
+    reintrusion_depth: f64, "a number (m)";
+    hold: f64, "a number (s)";
+    bin: f64, "a number (m)";
+    scale: f64, "a number (factor)";
+    time_stretch: f64, "a number (factor)";
+    min_speed_ratio: f64, "a number (share of the foot's speed)";
 }
 
 optional_extractors! {
@@ -72,4 +82,7 @@ optional_extractors! {
     kind_opt("kind"): String, "a jump kind name (str)";
     freq_hz_opt("freq_hz"): f64, "a number (Hz)";
     threads("threads"): usize, "a positive integer";
+    board_pace("board_pace"): f64, "a number (factor of real time)";
+    clip("clip"): (f64, f64), "a (start_s, end_s) pair of numbers";
+    table_rate("table_rate"): i64, "an integer (Hz)";
 }

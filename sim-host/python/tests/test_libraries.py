@@ -215,6 +215,110 @@ def test_rig_jump_through_sil_equals_the_cli(tmp_path):
     assert (tmp_path / "py" / "acquisition.csv").is_file()
 
 
+def test_the_rig_tool_programs_through_sil_equal_the_cli(tmp_path):
+    """rig status, intrude, replay, calibrate-drive, acknowledge-reset and flash from Python,
+    each against the command line's output."""
+    status = sandjumper.rig_status(link="sil")
+    printed = json.loads(cli("rig", "status", "--link", "sil", "--json").stdout)
+    assert status == printed
+    assert status["link"] == "sil" and status["fault_code"] is None
+
+    program = dict(start=-0.01, depth=0.006, withdraw=0.002, reintrusion_depth=0.008,
+                   speed=0.02, hold=0.1)
+    r = sandjumper.rig_intrude(**program)
+    cli("rig", "intrude", "--link", "sil", "--start", -0.01, "--depth", 0.006, "--withdraw",
+        0.002, "--reintrusion-depth", 0.008, "--speed", 0.02, "--hold", 0.1, "--out",
+        tmp_path / "intrude")
+    expected = json.loads((tmp_path / "intrude" / "summary.json").read_text())
+    for key in ["samples", "intrusion_points", "reintrusion_points", "force_at_depth_n",
+                "completed", "tracking_error_max_m"]:
+        assert r.summary[key] == expected[key], key
+    for table in ["intrusion", "reintrusion"]:
+        written = np.loadtxt(tmp_path / "intrude" / f"{table}.csv", delimiter=",", skiprows=1,
+                             ndmin=2)
+        assert np.array_equal(r.tables[table]["depth_m"], written[:, 0]), table
+        assert np.array_equal(r.tables[table]["force_n"], written[:, 1]), table
+    assert len(r.log["t_s"]) == r.summary["samples"]
+    with pytest.raises(ValueError, match="invalid value '0.2' for 'depth'"):
+        sandjumper.rig_intrude(depth=0.2)
+
+    # The jump's log replayed, clipped and slowed, as `rig replay LOG` does.
+    sandjumper.rig_jump("single", 10.0, out=tmp_path / "jump", mcap=True)
+    assert (tmp_path / "jump" / "acquisition.mcap").is_file()
+    log = tmp_path / "jump" / "acquisition.csv"
+    r = sandjumper.rig_replay(log=log, clip=(0.0, 0.3), time_stretch=1.5,
+                              out=tmp_path / "replay-py")
+    cli("rig", "replay", log, "--link", "sil", "--clip", "0:0.3", "--time-stretch", 1.5,
+        "--out", tmp_path / "replay")
+    expected = json.loads((tmp_path / "replay" / "summary.json").read_text())
+    for key in ["table_samples", "table_rate_hz", "checksum", "samples", "completed",
+                "reproduction_error_max_m", "simulated_jump_height_m"]:
+        assert r.summary[key] == expected[key], key
+    table = np.loadtxt(tmp_path / "replay" / "table.csv", delimiter=",", skiprows=1)
+    assert len(r.tables["table"]["p_m"]) == r.summary["table_samples"] == len(table)
+    assert np.allclose(r.tables["table"]["p_m"], table[:, -1], atol=1e-9)
+    assert (tmp_path / "replay-py" / "table.csv").read_text() == \
+        (tmp_path / "replay" / "table.csv").read_text()
+    with pytest.raises(ValueError, match="'log' cannot be used with 'stroke'"):
+        sandjumper.rig_replay(log=log, stroke=log)
+    with pytest.raises(ValueError, match="clip"):
+        sandjumper.rig_replay(log=log, clip=(0.3, 0.1))
+
+    calibrated = sandjumper.rig_calibrate_drive(2050, 6.8, save=tmp_path / "drive.toml")
+    assert calibrated == {"link": "sil", "zero_code": 2050,
+                          "codes_per_newton": pytest.approx(6.8)}
+    assert "zero_code = 2050" in (tmp_path / "drive.toml").read_text()
+    with pytest.raises(ValueError, match="leaves the DAC's codes"):
+        sandjumper.rig_calibrate_drive(2050, 6.9)
+    assert sandjumper.rig_acknowledge_reset()["link"] == "sil"
+    flashed = sandjumper.rig_flash(link="sil")
+    assert flashed["flashed"] is False and "this process" in flashed["why"]
+    with pytest.raises(ValueError, match="'link' cannot be used with 'port'"):
+        sandjumper.rig_status(link="sil", port="/dev/null")
+    assert issubclass(sandjumper.RunNotCompleted, RuntimeError)
+
+
+def test_hil_writes_its_folder_when_asked_and_warns_through_logging(tmp_path, caplog):
+    with caplog.at_level("INFO", logger="sandjumper"):
+        r = sandjumper.hil("stutter", 11.0, gain_lowering=0.5, out=tmp_path / "py", mcap=True)
+    assert any("--gain-lowering only acts during a delayed stutter" in m
+               for m in caplog.messages), caplog.messages
+    cli("hil", "--kind", "stutter", "--freq", 11, "--gain-lowering", 0.5, "--out",
+        tmp_path / "cli")
+    assert (tmp_path / "py" / "acquisition.mcap").is_file()
+    assert (tmp_path / "py" / "acquisition.csv").read_text() == \
+        (tmp_path / "cli" / "acquisition.csv").read_text()
+    assert r.summary["jump_height_m"] == json.loads(
+        (tmp_path / "cli" / "summary.json").read_text())["jump_height_m"]
+    with pytest.raises(ValueError, match="camera"):
+        sandjumper.hil("stutter", 11.0, camera=tmp_path / "missing.toml")
+
+
+def test_a_lammps_run_is_read_back_into_a_new_folder(tmp_path):
+    """lammps_read's refusals (the run itself as out); the real read-back runs where LAMMPS
+    is (sim-host/lammps's real_lammps test reads a real run back through the same call)."""
+    run = tmp_path / "run"
+    run.mkdir()
+    with pytest.raises(ValueError, match="out .* is the run"):
+        sandjumper.lammps_read(run, run)
+    with pytest.raises(ValueError, match="min_speed_ratio"):
+        sandjumper.lammps_read(run, tmp_path / "again", min_speed_ratio=2.0)
+    with pytest.raises(ValueError, match="run.toml"):
+        sandjumper.lammps_read(run, tmp_path / "again")
+    assert not (tmp_path / "again").exists()
+
+
+def test_a_slurm_sweep_refuses_what_the_command_line_refuses(tmp_path):
+    with pytest.raises(ValueError, match="tasks 0 not allowed"):
+        sandjumper.sweep_slurm(0, "single", 10.0, tmp_path / "s", program="/bin/true")
+    with pytest.raises(ValueError, match="cpus_per_task 0 not allowed"):
+        sandjumper.sweep_slurm(2, "single", 10.0, tmp_path / "s", cpus_per_task=0,
+                               program="/bin/true")
+    with pytest.raises(ValueError, match="phis"):
+        sandjumper.sweep_slurm(2, "single", 10.0, tmp_path / "s", phis=2.0,
+                               program="/bin/true")
+
+
 def test_every_function_has_a_stub_with_its_signature():
     """The shipped stubs name every function and every keyword it takes."""
     import ast
@@ -353,3 +457,23 @@ def test_piv_in_memory_equals_the_folder_it_writes_with_out(tmp_path):
         assert list(memory.tables[table]) == list(folder.tables[table]), table
         for name, column in memory.tables[table].items():
             np.testing.assert_array_equal(column, folder.tables[table][name])
+
+
+def test_a_slurm_sweep_submits_its_job_array(tmp_path, monkeypatch):
+    """Submitted without waiting through a stand-in `sbatch` (the real one-node cluster runs
+    `sweep --slurm` in sim-host/cli's slurm test): the job's script runs one shard per task
+    through the program given."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    sbatch = bin_dir / "sbatch"
+    sbatch.write_text("#!/bin/sh\n[ \"$1\" = --version ] && { echo 'slurm 0'; exit 0; }\n"
+                      "echo 4242\n")
+    sbatch.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_dir}:{os.environ['PATH']}")
+    job = sandjumper.sweep_slurm(3, "single", [9.0, 10.0, 11.0], tmp_path / "s", wait=False,
+                                 cpus_per_task=2, time="30", program="/opt/sj/sandjumper")
+    assert job["job_id"] == "4242" and job["result"] is None
+    script = (pathlib.Path(job["dir"]) / "job.sbatch").read_text()
+    assert "#SBATCH --array=1-3" in script
+    assert "#SBATCH --cpus-per-task=2" in script and "#SBATCH --time=30" in script
+    assert "/opt/sj/sandjumper" in script and "--shard" in script

@@ -585,6 +585,17 @@ impl ProgramOutcome for HilJump {
             Self::Board(BoardRecord::Replay(r)) => r.check(dir),
         }
     }
+    /// A lockstep run ends as the loop ran it: its summary lists its faults.
+    fn completed_cleanly(&self) -> bool {
+        match self {
+            Self::Loop(_) => true,
+            Self::Board(BoardRecord::Jump(j)) => j.completed_cleanly(),
+            Self::Board(BoardRecord::Replay(r)) => r.completed_cleanly(),
+        }
+    }
+    fn acquisition_log(&self) -> AcqLog {
+        HilJump::acquisition_log(self)
+    }
     /// A lockstep run's summary lists its faults itself.
     fn printed(&self, as_json: bool) -> Result<String, RigError> {
         match self {

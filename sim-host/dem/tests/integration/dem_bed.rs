@@ -18,7 +18,7 @@ fn prepared(
     c.sizes = sizes;
     c.overlap = 0.02;
     let p = c.resolve(false).unwrap();
-    prepare(&p, spec, |_| {}).unwrap()
+    prepare(&p, spec, |_| true).unwrap()
 }
 
 fn settled(

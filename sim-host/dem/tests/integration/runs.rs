@@ -33,20 +33,21 @@ fn model() -> ModelRequest {
     }
 }
 
+/// A small packed bed into `out`.
+fn small_bed_request(out: std::path::PathBuf) -> BedRequest {
+    BedRequest {
+        model: model(),
+        width_m: 0.016,
+        height_m: 0.008,
+        pack: Some(0.8),
+        threads: 1,
+        out,
+        ..BedRequest::default()
+    }
+}
+
 fn small_bed(dir: &std::path::Path) -> bed_run::BedOutcome {
-    bed_run::run(
-        &BedRequest {
-            model: model(),
-            width_m: 0.016,
-            height_m: 0.008,
-            pack: Some(0.8),
-            threads: 1,
-            out: dir.join("bed"),
-            ..BedRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap()
+    bed_run::run(&small_bed_request(dir.join("bed")), &Silent).unwrap()
 }
 
 #[test]
@@ -170,4 +171,57 @@ fn a_collisions_json_has_the_keys_dem_collide_prints_and_a_share_is_0_to_1() {
         intrude_run::parse_share("1.1"),
         Err("`1.1` not allowed (allowed: 0 to 1)".into())
     );
+}
+
+/// A progress whose caller stops the run at its `after`-th step report.
+struct StopAfter {
+    after: u64,
+    reports: Mutex<u64>,
+}
+
+impl Progress for StopAfter {
+    fn advance(&self, _: u64) {
+        *self.reports.lock().unwrap() += 1;
+    }
+    fn cancelled(&self) -> bool {
+        *self.reports.lock().unwrap() >= self.after
+    }
+}
+
+#[test]
+fn a_bed_and_an_intrusion_stopped_by_their_caller_stop_there() {
+    let dir = tempfile::tempdir().unwrap();
+    // The bed: stopped at its second report, an error and no folder.
+    let stop = StopAfter {
+        after: 2,
+        reports: Mutex::new(0),
+    };
+    let out = dir.path().join("stopped-bed");
+    let e = bed_run::run(&small_bed_request(out.clone()), &stop).unwrap_err();
+    assert!(e.to_string().contains("stopped by its caller"), "{e}");
+    assert_eq!(e.blame(), Blame::Internal);
+    assert_eq!(*stop.reports.lock().unwrap(), 2, "no step after the stop");
+    assert!(!out.exists());
+
+    // The intrusion: stopped at its third sample, resumable from its checkpoint.
+    let bed = small_bed(dir.path());
+    let stop = StopAfter {
+        after: 3,
+        reports: Mutex::new(0),
+    };
+    let request = IntrudeRequest {
+        bed: Some(bed.out.clone()),
+        speed_m_s: Some(0.3),
+        depth_m: 0.002,
+        foot_width_m: 0.006,
+        model: model(),
+        frames: false,
+        threads: 1,
+        out: dir.path().join("run"),
+        ..IntrudeRequest::default()
+    };
+    let e = intrude_run::run(&request, &stop).unwrap_err();
+    assert!(e.to_string().contains("interrupted at sample"), "{e}");
+    assert!(*stop.reports.lock().unwrap() <= 4);
+    assert!(!request.out.join("summary.json").exists());
 }

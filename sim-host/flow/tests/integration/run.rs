@@ -273,3 +273,39 @@ fn run_into_claims_the_folder_before_decoding_a_frame() {
     assert_ne!(folder, decode);
     assert!(!decode.contains("theirs"), "{decode}");
 }
+
+/// A progress whose caller stops the run after `after` pairs.
+struct StopAfter {
+    after: u64,
+    pairs: std::sync::Mutex<u64>,
+}
+
+impl sandjumper_output::Progress for StopAfter {
+    fn advance(&self, n: u64) {
+        *self.pairs.lock().unwrap() += n;
+    }
+    fn cancelled(&self) -> bool {
+        *self.pairs.lock().unwrap() >= self.after
+    }
+}
+
+#[test]
+fn a_sequence_stopped_by_its_caller_stops_after_the_pair_it_was_on() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    synthetic(
+        &frames,
+        SyntheticField::Shift,
+        (64, 64),
+        6,
+        Some((1.0, 0.5)),
+    );
+    let stop = StopAfter {
+        after: 2,
+        pairs: std::sync::Mutex::new(0),
+    };
+    let e = run::run(&two_passes(&frames), &stop).unwrap_err();
+    assert_eq!(e.blame(), Blame::Internal, "{e}");
+    assert!(e.to_string().contains("after 2 of 5 pairs"), "{e}");
+    assert_eq!(*stop.pairs.lock().unwrap(), 2, "no pair after the stop");
+}

@@ -189,6 +189,11 @@ pub trait ProgramOutcome: std::fmt::Display {
     /// Whether the controller completed the program cleanly, once its folder `dir` is written
     /// (an internal error, exit 1, naming the folder, when it did not).
     fn check(&self, dir: &Path) -> Result<(), RigError>;
+    /// Whether the controller completed the program with no fault ([`ProgramOutcome::check`]'s
+    /// test, for a caller that wrote no folder).
+    fn completed_cleanly(&self) -> bool;
+    /// The acquisition log the run recorded (what acquisition.csv holds).
+    fn acquisition_log(&self) -> AcqLog;
 
     /// What the command prints on stdout: the JSON (`as_json`) or the summary and one line
     /// per fault, each ending in a newline.
@@ -233,6 +238,12 @@ macro_rules! program_outcome {
             }
             fn check(&self, dir: &std::path::Path) -> Result<(), RigError> {
                 <$t>::check(self, dir)
+            }
+            fn completed_cleanly(&self) -> bool {
+                self.completed && self.faults.is_empty()
+            }
+            fn acquisition_log(&self) -> sandjumper_acqlog::AcqLog {
+                self.log.clone()
             }
         }
     };
