@@ -200,9 +200,36 @@ print(sandjumper.campaign_resume(camp))
 # ## The rig tool, the paper's figures, the DEM
 
 # %%
-rig = sandjumper.rig_jump("stutter", 11.0, link="sil")
+print("controller:", sandjumper.rig_status(link="sil")["status"]["state"])
+rig = sandjumper.rig_jump("stutter", 11.0, link="sil", out=os.path.join(WORK, "rig-jump"))
 print(f"rig jump through sil: {rig.summary['samples']} samples, "
       f"{1e3 * rig.summary['simulated_jump_height_m']:.1f} mm")
+# The jump's motor trajectory replayed at 80 % of its amplitude.
+again = sandjumper.rig_replay(log=os.path.join(WORK, "rig-jump", "acquisition.csv"), scale=0.8)
+print(f"replayed {again.summary['table_samples']} table samples: "
+      f"{1e3 * again.summary['simulated_jump_height_m']:.1f} mm")
+# The slow intrusion (the paper's F_p(z)), its curves in memory.
+slow = sandjumper.rig_intrude(depth=0.01, reintrusion_depth=0.012, withdraw=0.003, speed=0.02,
+                              hold=0.1, start=-0.01)
+fig, ax = plt.subplots(figsize=(5, 3))
+for name in ["intrusion", "reintrusion"]:
+    curve = slow.tables[name]
+    ax.plot(1e3 * curve["depth_m"], curve["force_n"], label=name)
+ax.set_xlabel("depth (mm)")
+ax.set_ylabel("force (N)")
+ax.legend()
+fig.savefig(os.path.join(WORK, "intrusion.png"), dpi=80)
+print(sandjumper.rig_calibrate_drive(2050, 6.8))
+print(sandjumper.rig_acknowledge_reset())
+print(sandjumper.rig_flash(link="sil")["why"])
+try:
+    sandjumper.lammps_read(WORK, WORK)
+except ValueError as e:  # a LAMMPS run to read back takes minutes: only the check here
+    print("lammps_read:", e)
+try:
+    sandjumper.sweep_slurm(0, "single", 10.0, os.path.join(WORK, "slurm"), program="sandjumper")
+except ValueError as e:  # a cluster is not here: only the check
+    print("sweep_slurm:", e)
 quick = sandjumper.figures(os.path.join(WORK, "figures"), quick=True)
 print(sorted(quick.tables)[:4], "...")
 hit = sandjumper.dem_collide(0.001, kn=2e4, damping=2e-3, speed=0.3, wall=True)

@@ -119,13 +119,14 @@ impl PaperSweep {
 }
 
 /// Sweep `grid` under `problem` (in parallel on the current rayon pool), `moves` moves per
-/// chain, calling `progress(done)` as points finish.
+/// chain, calling `progress(done)` as points finish; when it returns false no further point
+/// starts and the sweep is `None`.
 pub fn sweep(
     problem: &Problem,
     grid: &PaperGrid,
     moves: usize,
-    progress: &(dyn Fn(usize) + Sync),
-) -> PaperSweep {
+    progress: &(dyn Fn(usize) -> bool + Sync),
+) -> Option<PaperSweep> {
     let mut strokes = Vec::with_capacity(grid.len());
     for kind in [
         JumpKind::Single,
@@ -151,21 +152,27 @@ pub fn sweep(
         }
     }
     let done = std::sync::atomic::AtomicUsize::new(0);
+    let stopped = std::sync::atomic::AtomicBool::new(false);
     let points: Vec<SweptPoint> = strokes
         .par_iter()
         .map(|s| {
+            if stopped.load(std::sync::atomic::Ordering::Relaxed) {
+                return None;
+            }
             let evaluation = problem.evaluate(&s.chain(moves));
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if n.is_multiple_of(256) {
-                progress(n);
+            if (n.is_multiple_of(16) || n == strokes.len()) && !progress(n) {
+                stopped.store(true, std::sync::atomic::Ordering::Relaxed);
             }
-            SweptPoint {
+            Some(SweptPoint {
                 stroke: *s,
                 evaluation,
-            }
+            })
         })
-        .collect();
-    progress(points.len());
+        .collect::<Option<Vec<_>>>()?;
+    if stopped.into_inner() {
+        return None;
+    }
     let best_by_kind = ["single", "stutter", "delayed"]
         .iter()
         .filter_map(|k| {
@@ -180,8 +187,8 @@ pub fn sweep(
                 .cloned()
         })
         .collect();
-    PaperSweep {
+    Some(PaperSweep {
         points,
         best_by_kind,
-    }
+    })
 }

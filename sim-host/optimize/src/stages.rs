@@ -279,18 +279,15 @@ impl<'a> Context<'a> {
         let sweep = {
             let at = Position::start(self.progress, "paper strokes", grid.len());
             let moves = self.setup.encoding.moves;
-            self.pool.install(|| {
-                sweep(&self.setup.problem, &grid, moves, &|n| {
-                    at.at(n);
-                })
-            })
+            self.pool
+                .install(|| sweep(&self.setup.problem, &grid, moves, &|n| at.at(n)))
         };
-        if self.progress.cancelled() {
+        let Some(sweep) = sweep.filter(|_| !self.progress.cancelled()) else {
             return Err(OptimizeError::Internal(format!(
                 "{}: stopped in the sweep of the paper's strokes",
                 crate::search::INTERRUPTED
             )));
-        }
+        };
         let seconds = started.elapsed().as_secs_f64();
         let feasible = sweep
             .points

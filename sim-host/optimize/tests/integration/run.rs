@@ -288,16 +288,35 @@ fn the_value_parsers_name_the_flag_and_what_is_allowed() {
 
 /// Stops the search once `after` of its evaluations are counted (Ctrl-C in a face).
 struct StopAfter {
+    /// The stage it stops.
+    stage: &'static str,
     after: u64,
     searching: std::sync::atomic::AtomicBool,
     done: std::sync::atomic::AtomicU64,
+    /// The length of the stage it stops.
+    len: std::sync::atomic::AtomicU64,
+}
+
+impl StopAfter {
+    fn new(stage: &'static str, after: u64) -> Self {
+        Self {
+            stage,
+            after,
+            searching: std::sync::atomic::AtomicBool::new(false),
+            done: std::sync::atomic::AtomicU64::new(0),
+            len: std::sync::atomic::AtomicU64::new(0),
+        }
+    }
 }
 
 impl Progress for StopAfter {
-    fn start(&self, what: &str, _: Option<u64>) {
+    fn start(&self, what: &str, len: Option<u64>) {
         use std::sync::atomic::Ordering::SeqCst;
-        self.searching.store(what == "evaluations", SeqCst);
+        self.searching.store(what == self.stage, SeqCst);
         self.done.store(0, SeqCst);
+        if what == self.stage {
+            self.len.store(len.unwrap_or(0), SeqCst);
+        }
     }
     fn advance(&self, n: u64) {
         self.done.fetch_add(n, std::sync::atomic::Ordering::SeqCst);
@@ -308,6 +327,28 @@ impl Progress for StopAfter {
     }
 }
 
+/// The sweep of the paper's strokes its caller stops ends there: no further stroke starts,
+/// nothing is written. Tried: with the sweep ignoring the stop, every stroke ran.
+#[test]
+fn a_paper_sweep_stopped_by_its_caller_runs_no_further_stroke() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("stopped");
+    let stop = StopAfter::new("paper strokes", 16);
+    let e = run(&tiny(&out), &stop).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("stopped in the sweep of the paper's strokes"),
+        "{e}"
+    );
+    let (done, len) = (
+        stop.done.load(std::sync::atomic::Ordering::SeqCst),
+        stop.len.load(std::sync::atomic::Ordering::SeqCst),
+    );
+    assert!(len > 64, "{len} strokes");
+    assert!(done < 48, "{done} of {len} strokes ran after a stop at 16");
+    assert!(!out.exists());
+}
+
 /// A search its caller stops ends after the generation it is in, its checkpoint kept beside
 /// the folder and no folder written; the same request again resumes it to the answer of a
 /// search never stopped. Tried: with `cma_run` ignoring the stop, the search ran to its end.
@@ -315,11 +356,7 @@ impl Progress for StopAfter {
 fn a_search_stopped_by_its_caller_keeps_its_checkpoint_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("stopped");
-    let stop = StopAfter {
-        after: 40,
-        searching: std::sync::atomic::AtomicBool::new(false),
-        done: std::sync::atomic::AtomicU64::new(0),
-    };
+    let stop = StopAfter::new("evaluations", 40);
     let e = run(&tiny(&out), &stop).unwrap_err();
     assert!(
         e.to_string().starts_with("interrupted after generation"),
