@@ -343,9 +343,11 @@ def campaign_run(
     firmware: Optional[PathLike] = None,
     stop_after: Optional[int] = None,
     progress: Optional[Progress] = None,
+    port: Optional[PathLike] = None,
 ) -> Dict[str, Any]:
     """Run a campaign file, as ``sandjumper campaign run FILE --out OUT`` does. link:
-    overrides the file's (``"sil"``, ``"pil"``, ``"f407"``, ``"serial:PATH"``).
+    the controller with the simulated bed (``"sil"`` or ``"pil"``, the ELF ``firmware`` in
+    QEMU); port: instead, the rig's board on a serial port with its bed apparatus.
     stop_after: stop after that many points (resumable); Ctrl-C stops after the current
     point. Returns the session's outcome (``ended``: ``"finished"`` or ``"stopped"``,
     ``done``, ...)."""

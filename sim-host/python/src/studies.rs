@@ -316,12 +316,14 @@ pub fn optimize(
 }
 
 /// Run a campaign file (a plan of jumps and beds), as `sandjumper campaign run FILE --out
-/// OUT` does: `link` overrides the file's (`"sil"`, `"pil"`, `"f407"` or
-/// `"serial:PATH"`); `stop_after` stops after that many points (resumable); `progress`:
+/// OUT` does: `link` is the controller with the simulated bed (`"sil"` or `"pil"`, the
+/// firmware `firmware` in QEMU), `port` instead the rig's board on a serial port with its bed
+/// apparatus; `stop_after` stops after that many points (resumable); `progress`:
 /// `progress(stage, done, total)` as the points finish. Returns the session's outcome as a
 /// dict (what `campaign run --json` prints).
 #[pyfunction]
-#[pyo3(signature = (file, out, link = None, firmware = None, stop_after = None, progress = None))]
+#[pyo3(signature = (file, out, link = None, firmware = None, stop_after = None, progress = None, port = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn campaign_run(
     py: Python<'_>,
     file: &Bound<'_, PyAny>,
@@ -330,10 +332,21 @@ pub fn campaign_run(
     firmware: Option<&Bound<'_, PyAny>>,
     stop_after: Option<usize>,
     progress: Option<Py<PyAny>>,
+    port: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
+    let port = port
+        .filter(|p| !p.is_none())
+        .map(|p| path_arg("port", p))
+        .transpose()?;
+    if link.is_some() && port.is_some() {
+        return Err(PyValueError::new_err(
+            "the argument 'link' cannot be used with 'port'",
+        ));
+    }
     let mut request = RunRequest {
         file: path_arg("file", file)?,
         link,
+        port,
         out: path_arg("out", out)?,
         stop_after,
         ..RunRequest::default()
@@ -343,6 +356,7 @@ pub fn campaign_run(
     }
     let names = [
         ("--link", "link"),
+        ("--port", "port"),
         ("--out", "out"),
         ("--stop-after", "stop_after"),
     ];

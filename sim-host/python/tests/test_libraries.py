@@ -199,6 +199,9 @@ def test_figures_dem_and_lammps_refuse_bad_input(tmp_path):
         sandjumper.piv(tmp_path, every=0)
     with pytest.raises(ValueError, match="seed: -1 is negative"):
         sandjumper.piv_synthetic(tmp_path / "s", seed=-1)
+    with pytest.raises(ValueError, match="'link' cannot be used with 'port'"):
+        sandjumper.campaign_run(tmp_path / "c.toml", tmp_path / "c", link="sil",
+                                port="/dev/ttyACM0")
     with pytest.raises(ValueError, match="reintrusion cannot be used with first"):
         sandjumper.fit("intrusion", tmp_path / "f.csv", first=True, reintrusion=True)
 
