@@ -94,7 +94,7 @@ class FolderResult:
     arrays: Dict[str, npt.NDArray[np.float64]]
     """Each ``.npy`` file of the folder by stem."""
     path: Optional[str]
-    """The output folder, or None when it was temporary (and is gone)."""
+    """The output folder, or None when nothing was written (``out`` not given)."""
 
 def params(phi: float = 0.57, overrides: Optional[Params] = None) -> Dict[str, Dict[str, Any]]:
     """The resolved parameters for packing fraction ``phi`` (presets 0.57..=0.62) with
@@ -419,6 +419,7 @@ def rig_jump(
     board_pace: Optional[float] = None,
     drive_calibration: Optional[PathLike] = None,
     mcap: bool = False,
+    camera: Optional[PathLike] = None,
 ) -> HilResult:
     """One jump through the rig tool, as ``sandjumper rig jump`` does, on the controller
     ``rig_status`` describes. ``summary`` is ``rig jump --json``'s; ``log`` the acquisition

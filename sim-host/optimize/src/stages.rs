@@ -65,8 +65,11 @@ pub fn run_with_board(
     let searched = cx.search(&starts, &mut checkpoint)?;
     let mut ranking = cx.rank(cx.candidates(&paper, &searched));
     ranking.ranked = cx.runs_through(&ranking)?;
+    cx.go_on("after the runs through the controller")?;
     cx.refine(&mut ranking, &mut checkpoint)?;
+    cx.go_on("after the refinement")?;
     let verified = cx.verify(&ranking, board)?;
+    cx.go_on("in the verification")?;
     let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
     outcome.write_into(&staged)?;
     outcome.dir = staged.commit()?;
@@ -266,6 +269,18 @@ impl<'a> Context<'a> {
         self.progress.note(&line);
     }
 
+    /// An error when the caller asked the run to stop (Ctrl-C), `stage` naming where it
+    /// stopped; the checkpoint resumes the search.
+    fn go_on(&self, stage: &str) -> Result<(), OptimizeError> {
+        if self.progress.cancelled() {
+            return Err(OptimizeError::Internal(format!(
+                "{}: stopped {stage} (the same request resumes it from its checkpoint)",
+                crate::search::INTERRUPTED
+            )));
+        }
+        Ok(())
+    }
+
     /// Stage 1: the paper's strokes swept on the kinematic model.
     fn paper_sweep(&self) -> Result<PaperStage, OptimizeError> {
         let r = self.request;
@@ -453,6 +468,9 @@ impl<'a> Context<'a> {
                 use rayon::prelude::*;
                 pool.par_iter()
                     .map(|c| {
+                        if self.progress.cancelled() {
+                            return Ok(None);
+                        }
                         let r = run_through(
                             link,
                             &problem.params,
@@ -535,7 +553,10 @@ impl<'a> Context<'a> {
             ranking.best(false, &self.setup),
             ranking.best(true, &self.setup),
         );
-        let result = |i: usize| self.result(ranking, i, board);
+        let result = |i: usize| {
+            self.go_on("in the verification")?;
+            self.result(ranking, i, board)
+        };
         let answer = result(answer_i)?;
         let paper_answer = result(paper_i)?;
         let pool = &ranking.pool;

@@ -2,9 +2,9 @@
 //! `log_to_mcap`), each a call of its library (`sandjumper_imaging`, `sandjumper_flow`,
 //! `sandjumper_acqlog`).
 //!
-//! `track` and `piv` write their folder (into `out`, or a temporary folder removed afterwards
-//! when `out` is None) and their results come back loaded: the JSON summary as a dict, every
-//! CSV table as numpy columns, every `.npy` array as a numpy array.
+//! `track` and `piv` return their results from the outcome in memory (the JSON summary as a
+//! dict, `track.csv`'s and PIV's tables as numpy columns, PIV's fields as the arrays its folder
+//! holds as `.npy` files), the same with `out` as without; `out` also writes the folder.
 
 use std::path::{Path, PathBuf};
 
@@ -244,17 +244,13 @@ pub fn track(
             },
         ));
     }
-    if let Some(dir) = out_arg(out)? {
-        let json = long_call(py, progress, |progress| {
-            let (outcome, _) = sandjumper_imaging::run::run_into(&request, &dir, progress)?;
-            outcome.summary_json()
-        })?
-        .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-        return load_folder(py, &dir, Some(&json));
-    }
-    // In memory: `track.csv`'s columns from the outcome, nothing written.
-    let outcome = long_call(py, progress, |progress| {
-        sandjumper_imaging::run::run(&request, progress)
+    // The same typed table either way (`track.csv`'s columns from the outcome); the folder
+    // is written only with `out`.
+    let dir = out_arg(out)?;
+    let (outcome, written) = long_call(py, progress, |progress| match &dir {
+        Some(dir) => sandjumper_imaging::run::run_into(&request, dir, progress)
+            .map(|(outcome, dir)| (outcome, Some(dir))),
+        None => sandjumper_imaging::run::run(&request, progress).map(|o| (o, None)),
     })?
     .map_err(|e| lib_err(e, &FRAME_NAMES))?;
     let json = outcome.summary_json().map_err(|e| lib_err(e, &[]))?;
@@ -290,7 +286,7 @@ pub fn track(
         summary: json_to_py(py, &json)?.unbind(),
         tables: tables.into_any().unbind(),
         arrays: PyDict::new(py).into_any().unbind(),
-        path: None,
+        path: written.map(|d| d.display().to_string()),
     })
 }
 
@@ -433,18 +429,13 @@ pub fn piv(
         ));
     }
     request.validate().map_err(|e| lib_err(e, &FRAME_NAMES))?;
-    if let Some(dir) = out_arg(out)? {
-        let json = long_call(py, progress, |progress| {
-            let (outcome, _) = sandjumper_flow::run::run_into(&request, &dir, progress)?;
-            outcome.summary_json()
-        })?
-        .map_err(|e| lib_err(e, &FRAME_NAMES))?;
-        return load_folder(py, &dir, Some(&json));
-    }
-    // In memory: the arrays `piv --out` writes as .npy files and its two tables, nothing
-    // written.
-    let outcome = long_call(py, progress, |progress| {
-        sandjumper_flow::run::run(&request, progress)
+    // The arrays `piv --out` writes as .npy files and its two tables, from the outcome the same
+    // with `out` as without; the folder is written only with `out`.
+    let dir = out_arg(out)?;
+    let (outcome, written) = long_call(py, progress, |progress| match &dir {
+        Some(dir) => sandjumper_flow::run::run_into(&request, dir, progress)
+            .map(|(outcome, dir)| (outcome, Some(dir))),
+        None => sandjumper_flow::run::run(&request, progress).map(|o| (o, None)),
     })?
     .map_err(|e| lib_err(e, &FRAME_NAMES))?;
     let json = outcome.summary_json().map_err(|e| lib_err(e, &[]))?;
@@ -476,7 +467,7 @@ pub fn piv(
         summary: json_to_py(py, &json)?.unbind(),
         tables: tables.into_any().unbind(),
         arrays: arrays.into_any().unbind(),
-        path: None,
+        path: written.map(|d| d.display().to_string()),
     })
 }
 

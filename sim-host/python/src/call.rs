@@ -118,11 +118,7 @@ impl Progress for PyProgress {
 
     fn note(&self, line: &str) {
         Python::attach(|py| {
-            let logged = py
-                .import("logging")
-                .and_then(|l| l.call_method1("getLogger", ("sandjumper",)))
-                .and_then(|l| l.call_method1("info", (line,)));
-            if let Err(e) = logged {
+            if let Err(e) = log_note(py, line) {
                 self.fail(e);
             }
         });
@@ -186,4 +182,18 @@ where
     result.ok_or_else(|| {
         pyo3::exceptions::PyRuntimeError::new_err("the call's worker thread panicked")
     })
+}
+
+/// A library's note `line` on the `sandjumper` logger: a line the command line prints as
+/// `warning: ...` at WARNING (shown by Python's default logging), any other at INFO.
+pub fn log_note(py: Python<'_>, line: &str) -> PyResult<()> {
+    let level = if line.starts_with("warning:") {
+        "warning"
+    } else {
+        "info"
+    };
+    py.import("logging")?
+        .call_method1("getLogger", ("sandjumper",))?
+        .call_method1(level, (line,))?;
+    Ok(())
 }

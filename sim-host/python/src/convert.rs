@@ -149,3 +149,11 @@ pub fn i64_array(py: Python<'_>, values: Vec<i64>) -> Bound<'_, PyAny> {
 pub fn str_array<'py>(py: Python<'py>, values: Vec<String>) -> PyResult<Bound<'py, PyAny>> {
     py.import("numpy")?.call_method1("asarray", (values,))
 }
+
+/// A board's serial port (`port=`): a `str` or `os.PathLike`, or None.
+pub fn port_opt(obj: &Bound<'_, PyAny>) -> PyResult<Option<String>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    Ok(Some(path_arg("port", obj)?.to_string_lossy().into_owned()))
+}

@@ -32,10 +32,7 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // logging, as every call's own notes ([`call::PyProgress`]): the module prints nothing.
     sandjumper_output::set_note_sink(|line| {
         Python::attach(|py| {
-            let _ = py
-                .import("logging")
-                .and_then(|l| l.call_method1("getLogger", ("sandjumper",)))
-                .and_then(|l| l.call_method1("info", (line,)));
+            let _ = call::log_note(py, line);
         });
     });
     m.add_class::<simulate::JumpResult>()?;

@@ -117,6 +117,7 @@ where
     R::Outcome: Send,
 {
     let checked = request.check().map_err(|e| lib_err(e, names))?;
+    mcap_needs_out(mcap, out)?;
     let staged = claim_out(out)?;
     let (json, log, tables, clean, dir) = long_call(py, progress, |progress| {
         let outcome = request.run_checked(checked, progress, None)?;
@@ -132,6 +133,17 @@ where
     .map_err(|e: RigError| lib_err(e, names))?;
     let result = HilResult::with_tables(py, &json, &log, tables)?;
     concluded(py, what, result, clean, dir)
+}
+
+/// `mcap=True` without `out`: refused, as the command line refuses `--mcap` without `--out`
+/// (acquisition.mcap is written into the run's folder).
+pub fn mcap_needs_out(mcap: bool, out: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    if mcap && out.is_none_or(|o| o.is_none()) {
+        return Err(PyValueError::new_err(
+            "mcap needs out (acquisition.mcap is written into the run's folder)",
+        ));
+    }
+    Ok(())
 }
 
 /// `result` as the call's return when the controller completed the program cleanly (`clean`),
@@ -162,7 +174,7 @@ pub fn concluded(
 pub fn rig_status(
     py: Python<'_>,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
     virtual_board: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::board_pace)] board_pace: Option<f64>,
@@ -187,7 +199,7 @@ pub fn rig_status(
 /// `summary` (the dict `rig jump --json` prints, with `jump_height_m`), `log` and
 /// `log_metadata`, as [`HilResult`]; a jump with a fault raises [`RunNotCompleted`].
 #[pyfunction]
-#[pyo3(signature = (kind, freq_hz, link = None, tau_s = None, model = "eq4".to_string(), phi = 0.57, params = None, camera_fps = 200, firmware = None, out = None, progress = None, port = None, virtual_board = None, board_pace = None, drive_calibration = None, mcap = false))]
+#[pyo3(signature = (kind, freq_hz, link = None, tau_s = None, model = "eq4".to_string(), phi = 0.57, params = None, camera_fps = 200, firmware = None, out = None, progress = None, port = None, virtual_board = None, board_pace = None, drive_calibration = None, mcap = false, camera = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn rig_jump(
     py: Python<'_>,
@@ -202,11 +214,12 @@ pub fn rig_jump(
     firmware: Option<&Bound<'_, PyAny>>,
     out: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     virtual_board: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::board_pace)] board_pace: Option<f64>,
     drive_calibration: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::mcap)] mcap: bool,
+    camera: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<HilResult> {
     use sandjumper_rig::tool::jump::JumpRequest;
     let target = target(
@@ -218,6 +231,12 @@ pub fn rig_jump(
     let (kind, freq_hz, tau_s) =
         crate::simulate::sine("kind", "freq_hz", Some(kind), Some(freq_hz), tau_s, false)?;
     let (model, params) = rig_params(&model, phi, params)?;
+    let mut names = TARGET_NAMES.to_vec();
+    names.extend([("--tau", "tau_s"), ("--camera", "camera")]);
+    let camera = camera
+        .filter(|c| !c.is_none())
+        .map(|c| path_arg("camera", c))
+        .transpose()?;
     let request = JumpRequest {
         tau_s,
         camera_fps: checked(
@@ -225,12 +244,12 @@ pub fn rig_jump(
             camera_fps,
             sandjumper_rig::hil_command::parse_camera_fps,
         )?,
+        camera: sandjumper_rig::hil::camera::read_camera(camera.as_deref())
+            .map_err(|e| lib_err(e, &names))?,
         model,
         params,
         ..JumpRequest::new(target, kind, freq_hz)
     };
-    let mut names = TARGET_NAMES.to_vec();
-    names.push(("--tau", "tau_s"));
     run_program(py, "jump", &request, out, mcap, progress, &names, |_| {
         Vec::new()
     })
@@ -262,7 +281,7 @@ pub fn rig_intrude(
     out: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::mcap)] mcap: bool,
     progress: Option<Py<PyAny>>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
     virtual_board: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::board_pace)] board_pace: Option<f64>,
@@ -308,6 +327,7 @@ pub fn rig_intrude(
         ("--reintrusion-depth", "reintrusion_depth"),
         ("--speed", "speed"),
         ("--hold", "hold"),
+        ("--bin", "bin"),
     ]);
     fn curve(points: &[CurvePoint]) -> Vec<(&'static str, Vec<f64>)> {
         vec![
@@ -358,7 +378,7 @@ pub fn rig_replay(
     out: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::mcap)] mcap: bool,
     progress: Option<Py<PyAny>>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
     virtual_board: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::board_pace)] board_pace: Option<f64>,
@@ -429,12 +449,12 @@ pub fn rig_replay(
         progress,
         &names,
         |o: &ReplayOutcome| {
-            let dt = 1.0 / o.plan.rate_hz;
+            let rate = o.plan.rate_hz;
             let n = o.plan.samples.len();
             vec![(
                 "table",
                 vec![
-                    ("t_s", (0..n).map(|i| i as f64 * dt).collect()),
+                    ("t_s", (0..n).map(|i| i as f64 / rate).collect()),
                     (
                         "p_m",
                         o.plan.samples.iter().map(|&p| f64::from(p)).collect(),
@@ -454,10 +474,10 @@ pub fn rig_replay(
 #[allow(clippy::too_many_arguments)]
 pub fn rig_calibrate_drive(
     py: Python<'_>,
-    zero_code: u16,
+    #[pyo3(from_py_with = typed::zero_code)] zero_code: i64,
     codes_per_newton: f32,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     save: Option<&Bound<'_, PyAny>>,
     firmware: Option<&Bound<'_, PyAny>>,
     virtual_board: Option<&Bound<'_, PyAny>>,
@@ -466,7 +486,9 @@ pub fn rig_calibrate_drive(
     use sandjumper_rig::tool::calibrate::{CalibrateRequest, calibrate};
     let request = CalibrateRequest {
         target: target((link, port), (firmware, virtual_board), board_pace, None)?,
-        zero_code,
+        zero_code: u16::try_from(zero_code).map_err(|_| {
+            crate::errors::invalid_value("zero_code", zero_code, "a DAC code, 0..=4095")
+        })?,
         codes_per_newton,
         save: save
             .filter(|s| !s.is_none())
@@ -496,7 +518,7 @@ pub fn rig_calibrate_drive(
 pub fn rig_acknowledge_reset(
     py: Python<'_>,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
     virtual_board: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = typed::board_pace)] board_pace: Option<f64>,
@@ -521,7 +543,7 @@ pub fn rig_acknowledge_reset(
 #[pyo3(signature = (port = None, link = None, firmware = None, probe_rs = None))]
 pub fn rig_flash(
     py: Python<'_>,
-    port: Option<String>,
+    #[pyo3(from_py_with = crate::convert::port_opt)] port: Option<String>,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
     probe_rs: Option<&Bound<'_, PyAny>>,

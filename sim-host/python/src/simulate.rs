@@ -484,6 +484,10 @@ pub fn sweep(
             outcome.write_into(&staged)?;
             staged.commit()?;
         }
+        // What the command line prints after its report (a drive near its peak force).
+        for line in outcome.warnings() {
+            sandjumper_output::Progress::note(progress, &line);
+        }
         Ok(outcome)
     })?
     .map_err(|e: sandjumper_study::StudyError| lib_err(e, &[]))?;
@@ -579,7 +583,7 @@ fn sweep_request(
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_slurm(
     py: Python<'_>,
-    tasks: u32,
+    #[pyo3(from_py_with = typed::tasks)] tasks: i64,
     kinds: &Bound<'_, PyAny>,
     freqs_hz: &Bound<'_, PyAny>,
     out: &Bound<'_, PyAny>,
@@ -590,7 +594,7 @@ pub fn sweep_slurm(
     #[pyo3(from_py_with = typed::rtol)] rtol: f64,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
     #[pyo3(from_py_with = typed::gain_lowering)] gain_lowering: Option<f64>,
-    cpus_per_task: u32,
+    #[pyo3(from_py_with = typed::cpus_per_task)] cpus_per_task: i64,
     partition: Option<String>,
     time: String,
     wait: bool,
@@ -613,16 +617,20 @@ pub fn sweep_slurm(
                 .call_method1("which", ("sandjumper",))?;
             if found.is_none() {
                 return Err(PyValueError::new_err(
-                    "program: no `sandjumper` on PATH for the tasks to run (give program= the                      binary's path on the cluster's shared file system)",
+                    "program: no `sandjumper` on PATH for the tasks to run (give program= the \
+                     binary's path on the cluster's shared file system)",
                 ));
             }
             found.extract::<String>()?.into()
         }
     };
+    let count = |name: &str, v: i64| {
+        u32::try_from(v).map_err(|_| crate::errors::invalid_value(name, v, "a count, 1 or more"))
+    };
     let request = SlurmSweepRequest {
         sweep,
-        tasks,
-        cpus_per_task,
+        tasks: count("tasks", tasks)?,
+        cpus_per_task: count("cpus_per_task", cpus_per_task)?,
         queue: sandjumper_slurm::QueueOptions {
             partition,
             time,
@@ -632,6 +640,9 @@ pub fn sweep_slurm(
         out: crate::convert::path_arg("out", out)?,
     };
     let names = [
+        ("--phi", "phis"),
+        ("--freq", "freqs_hz"),
+        ("--tau", "taus_s"),
         ("--slurm-cpus", "cpus_per_task"),
         ("--slurm-partition", "partition"),
         ("--slurm-time", "time"),
@@ -652,7 +663,8 @@ pub fn sweep_slurm(
             d.set_item("job_id", id)?;
             d.set_item(
                 "dir",
-                sandjumper_slurm::job_dir(&request.out)
+                std::path::absolute(sandjumper_slurm::job_dir(&request.out))
+                    .unwrap_or_else(|_| sandjumper_slurm::job_dir(&request.out))
                     .display()
                     .to_string(),
             )?;
@@ -812,6 +824,7 @@ pub fn hil(
         request.camera = sandjumper_rig::hil::camera::read_camera(camera.as_deref())
             .map_err(|e| lib_err(e, &names))?;
     }
+    crate::rig::mcap_needs_out(mcap, out)?;
     let staged = crate::convert::claim_out(out)?;
     let (json, log, clean, dir) = long_call(py, progress, |progress| {
         // The warning a setting that does nothing deserves, to Python's logging.

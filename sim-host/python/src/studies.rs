@@ -330,7 +330,7 @@ pub fn campaign_run(
     out: &Bound<'_, PyAny>,
     #[pyo3(from_py_with = typed::link_opt)] link: Option<String>,
     firmware: Option<&Bound<'_, PyAny>>,
-    stop_after: Option<usize>,
+    #[pyo3(from_py_with = typed::stop_after)] stop_after: Option<usize>,
     progress: Option<Py<PyAny>>,
     port: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
@@ -375,7 +375,7 @@ pub fn campaign_resume(
     py: Python<'_>,
     dir: &Bound<'_, PyAny>,
     firmware: Option<&Bound<'_, PyAny>>,
-    stop_after: Option<usize>,
+    #[pyo3(from_py_with = typed::stop_after)] stop_after: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     let mut request = ResumeRequest {
@@ -417,6 +417,13 @@ pub fn figures(
     #[pyo3(from_py_with = typed::rtol)] rtol: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<FolderResult> {
+    if let Some(0 | 1025..) = threads {
+        return Err(crate::errors::invalid_value(
+            "threads",
+            threads.unwrap_or(0),
+            "1..=1024",
+        ));
+    }
     let request = sandjumper_study::figures::FiguresRequest {
         out: path_arg("out", out)?,
         quick,
@@ -424,7 +431,17 @@ pub fn figures(
         rtol: crate::errors::checked("rtol", rtol, sandjumper_output::parse::parse_rtol)?,
     };
     long_call(py, progress, |progress| {
-        sandjumper_study::figures::run(&request, progress)
+        let report = sandjumper_study::figures::run(&request, progress)?;
+        if report.failures > 0 {
+            sandjumper_output::Progress::note(
+                progress,
+                &format!(
+                    "warning: {} jumps failed; see failures.csv",
+                    report.failures
+                ),
+            );
+        }
+        Ok(report)
     })?
     .map_err(|e| match e {
         sandjumper_study::figures::FiguresError::Output(e) => lib_err(e, &[]),

@@ -68,6 +68,9 @@ extractors! {
     bin: f64, "a number (m)";
     scale: f64, "a number (factor)";
     time_stretch: f64, "a number (factor)";
+    tasks: i64, "an integer (tasks)";
+    cpus_per_task: i64, "an integer (CPUs)";
+    zero_code: i64, "an integer (DAC code)";
     min_speed_ratio: f64, "a number (share of the foot's speed)";
 }
 
@@ -85,4 +88,16 @@ optional_extractors! {
     board_pace("board_pace"): f64, "a number (factor of real time)";
     clip("clip"): (f64, f64), "a (start_s, end_s) pair of numbers";
     table_rate("table_rate"): i64, "an integer (Hz)";
+}
+
+/// `stop_after`: a count of points (0 or more), or None; a negative one is refused as the
+/// command line refuses it.
+pub fn stop_after(obj: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+    if obj.is_none() {
+        return Ok(None);
+    }
+    let n: i64 = typed(obj, "stop_after", "an integer (points) or None")?;
+    usize::try_from(n)
+        .map(Some)
+        .map_err(|_| crate::errors::invalid_value("stop_after", n, "a count of points, 0 or more"))
 }

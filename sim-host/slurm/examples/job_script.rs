@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ..script
             },
         )?;
-        job.wait()?;
+        job.wait(&sandjumper_output::Silent)?;
         println!("job {} done; its log is in {}", job.id, dir.display());
     }
     Ok(())

@@ -194,8 +194,9 @@ impl Job {
 
     /// Wait until nothing of the job is pending, running or completing: `squeue` every 0.5 s
     /// at first, then less often (up to every 30 s); a failing `squeue` is retried, five
-    /// failures in a row end the wait.
-    pub fn wait(&self) -> Result<(), SlurmError> {
+    /// failures in a row end the wait. When `progress`'s caller asks to stop (Ctrl-C), the
+    /// wait ends within [`STOP_CHECK`] with an error naming the job, which runs on.
+    pub fn wait(&self, progress: &dyn sandjumper_output::Progress) -> Result<(), SlurmError> {
         let job = &self.id;
         let mut every = Duration::from_millis(500);
         let mut failures = 0;
@@ -216,11 +217,26 @@ impl Job {
                     }
                 }
             }
-            std::thread::sleep(every);
+            let until = std::time::Instant::now() + every;
+            while std::time::Instant::now() < until {
+                if progress.cancelled() {
+                    return Err(SlurmError::Internal(format!(
+                        "stopped waiting for Slurm job {job}: it runs on (`squeue -j {job}`; \
+                         `scancel {job}` ends it); its script, logs and outputs are in {}",
+                        self.dir.display()
+                    )));
+                }
+                std::thread::sleep(
+                    STOP_CHECK.min(until.saturating_duration_since(std::time::Instant::now())),
+                );
+            }
             every = (every * 3 / 2).min(Duration::from_secs(30));
         }
     }
 }
+
+/// How often a wait for a job looks at whether its caller asked to stop.
+pub const STOP_CHECK: Duration = Duration::from_millis(200);
 
 /// The last `n` lines of a log, indented for a message.
 pub fn log_tail(path: &Path, n: usize) -> String {
@@ -408,7 +424,7 @@ pub fn submit_command(
     if job.queue.no_wait {
         return Ok(CommandJobOutcome::Queued { id: submitted.id });
     }
-    submitted.wait()?;
+    submitted.wait(progress)?;
     let complete = job.expect.iter().all(|f| job.out.join(f).is_file());
     if let Some((st, code)) = submitted.unsuccessful(None, complete) {
         let log = dir.join("logs").join("job.out");
@@ -538,7 +554,7 @@ pub fn submit_sharded(
             dir,
         });
     }
-    submitted.wait()?;
+    submitted.wait(progress)?;
     let shards: Vec<PathBuf> = (1..=tasks)
         .map(|i| dir.join(format!("shard-{i}")))
         .collect();

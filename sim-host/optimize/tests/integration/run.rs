@@ -349,6 +349,31 @@ fn a_paper_sweep_stopped_by_its_caller_runs_no_further_stroke() {
     assert!(!out.exists());
 }
 
+/// A run its caller stops while it runs the candidates through the controller starts no
+/// further candidate there and writes nothing. Tried: without the checks after the search,
+/// every candidate ran and the folder was written.
+#[test]
+fn a_run_stopped_among_the_controller_runs_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("stopped");
+    let stop = StopAfter::new("runs through the controller", 1);
+    let request = OptimizeRequest {
+        verify: vec![sandjumper_rig::hil::open::LinkArg::Sil],
+        refine: 0,
+        ..tiny(&out)
+    };
+    let Err(e) = run(&request, &stop) else {
+        panic!("the run went on to its end");
+    };
+    assert!(e.to_string().starts_with("interrupted: stopped"), "{e}");
+    let (done, len) = (
+        stop.done.load(std::sync::atomic::Ordering::SeqCst),
+        stop.len.load(std::sync::atomic::Ordering::SeqCst),
+    );
+    assert!(len >= 3 && done < len, "{done} of {len} candidates ran");
+    assert!(!out.exists());
+}
+
 /// A search its caller stops ends after the generation it is in, its checkpoint kept beside
 /// the folder and no folder written; the same request again resumes it to the answer of a
 /// search never stopped. Tried: with `cma_run` ignoring the stop, the search ran to its end.
