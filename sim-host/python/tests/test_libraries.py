@@ -304,6 +304,32 @@ def test_hil_writes_its_folder_when_asked_and_warns_through_logging(tmp_path, ca
         sandjumper.hil("stutter", 11.0, camera=tmp_path / "missing.toml")
 
 
+def test_a_small_lammps_run_and_its_read_back(tmp_path):
+    """A real LAMMPS run (`$SANDJUMPER_LMP` or `lmp` on PATH; .ci/run installs it), one rank,
+    about 40 s: its tables in memory, then read back with the same and another speed rule."""
+    import shutil
+
+    if not (os.environ.get("SANDJUMPER_LMP") or shutil.which("lmp")):
+        message = "no LAMMPS (set SANDJUMPER_LMP or put lmp on PATH)"
+        if os.environ.get("CI"):
+            pytest.fail(message + ": under CI it must run")
+        pytest.skip(message)
+    run = sandjumper.lammps(tmp_path / "run", preset="small", bed_width=0.04, bed_depth=0.02,
+                            speed=0.2, depth=0.005, ranks=1)
+    assert run.summary["frames"] == len(run.tables["flow"]["depth_m"]) > 5
+    assert run.summary["lammps_version"].startswith("LAMMPS (")
+    assert np.nanmax(run.tables["force_depth"]["force_n"]) > 0.0
+    again = sandjumper.lammps_read(tmp_path / "run", tmp_path / "again")
+    for name, column in run.tables["flow"].items():
+        np.testing.assert_array_equal(column, again.tables["flow"][name], err_msg=name)
+    stricter = sandjumper.lammps_read(tmp_path / "run", tmp_path / "stricter",
+                                      min_speed_ratio=0.6)
+    assert stricter.path == str(tmp_path / "stricter")
+    moving = np.isfinite(run.tables["flow"]["added_mass_kg"])
+    assert np.nansum(stricter.tables["flow"]["added_mass_kg"][moving]) <= \
+        np.nansum(run.tables["flow"]["added_mass_kg"][moving])
+
+
 def test_a_lammps_run_is_read_back_into_a_new_folder(tmp_path):
     """lammps_read's refusals (the run itself as out); the real read-back runs where LAMMPS
     is (sim-host/lammps's real_lammps test reads a real run back through the same call)."""
