@@ -146,7 +146,14 @@ impl F407 {
         });
         // No frequency from the pin from now on either: a PLL set up on it gets no clock.
         self.part.rcc.attach_crystals(0, 0);
+        self.clock_the_tick_timer();
         noticed
+    }
+
+    /// TIM7's input clock from the clock tree as it is now (RM0090 6.2: APB1's timer clock).
+    fn clock_the_tick_timer(&mut self) {
+        let (rcc, regs) = self.part.clocks();
+        self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
     }
 
     /// Whether the system clock comes from the crystal: `SWS` on the HSE, or on the PLL with
@@ -207,12 +214,17 @@ impl Mcu for F407 {
             let sr = registers.get(FlashRegister::Sr);
             registers.set(FlashRegister::Sr, flash_sr::BSY.set(sr, 1));
         }
+        if slot == s.rcc {
+            // The clock tree as the last access left it (the firmware reads RCC back after each
+            // change it makes): the tick's next period is counted on it.
+            self.clock_the_tick_timer();
+        }
         let block = if slot == s.tim7 {
-            let (rcc, regs) = self.part.clocks();
-            self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
+            self.clock_the_tick_timer();
             return (self.part.bus_mut(), Some(&mut self.tim7));
         } else if slot == s.dac {
             self.dac.tick_ns = self.tim7.last_update_ns;
+            self.dac.tim7_trgo_ns = self.tim7.last_trgo_ns;
             return (self.part.bus_mut(), Some(&mut self.dac));
         } else if slot == s.otg_global {
             OtgBlock::Global

@@ -127,6 +127,7 @@ fn shaker_duty(part: &mut Stm32f427) -> f64 {
 pub fn outputs(mcu: &mut F407) -> Outputs {
     let part = &mut mcu.part;
     let drive_enable = high(part, PORT_E, 7);
+    mcu.dac.tim7_trgo_ns = mcu.tim7.last_trgo_ns;
     let force_dac_v = mcu.dac.volts(0);
     let half = VDDA_V / 2.0;
     let force_n = if drive_enable {

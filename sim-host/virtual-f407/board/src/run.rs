@@ -282,6 +282,8 @@ struct BoardDriver<H> {
     in_brown_out: bool,
     brown_outs: Vec<u64>,
     flash_violations: Vec<String>,
+    /// The (HCLK, flash wait states) the last stop saw: a change is a clock change to check.
+    flash_clock_seen: (u64, u64),
     pending_host_bytes: Vec<u8>,
     robot_released: bool,
     heartbeat_edges: u64,
@@ -358,6 +360,15 @@ pub fn brown_out_thresholds_mv(bor_lev: u64) -> (u32, u32) {
     }
 }
 
+/// HCLK, Hz, and the flash's wait states (`FLASH_ACR.LATENCY`) as the part has them now.
+fn flash_clock(s: &mut Session<VirtualF407>) -> (u64, u64) {
+    let acr = s.board().mcu.part.bus().registers("FLASH").map_or(0, |r| {
+        r.get(rigless::soc::stm32f427::generated::flash::Register::Acr)
+    });
+    let (rcc, regs) = s.board_mut().mcu.part.clocks();
+    (rcc.hclk(regs), acr & 0xF)
+}
+
 /// The fewest flash wait states RM0090 table 12 allows at `hclk_hz` on a `supply_mv` rail
 /// (`None`: no count does).
 pub fn minimum_wait_states(hclk_hz: u64, supply_mv: u32) -> Option<u64> {
@@ -374,18 +385,26 @@ pub fn minimum_wait_states(hclk_hz: u64, supply_mv: u32) -> Option<u64> {
 impl<H> BoardDriver<H> {
     /// Table 12 checked whenever the supply changes (rigless 0.4 checks it only when `ACR` is
     /// written or `HCLK` changes).
+    /// RM0090 3.5.1 (table 12): the flash's wait states (`FLASH_ACR.LATENCY`) against HCLK on
+    /// the supply; too few is a violation of the run, reported with when it was seen. Checked
+    /// on every supply change and at every stop where the clock or the wait states changed
+    /// ([`Run::check_clock_change`]), so a clock raised before its wait states is caught.
     fn check_flash_latency(&mut self, s: &mut Session<VirtualF407>, at: u64) {
-        let acr = s.board().mcu.part.bus().registers("FLASH").map_or(0, |r| {
-            r.get(rigless::soc::stm32f427::generated::flash::Register::Acr)
-        });
-        let (rcc, regs) = s.board_mut().mcu.part.clocks();
-        let hclk = rcc.hclk(regs);
-        let latency = acr & 0xF;
+        let (hclk, latency) = flash_clock(s);
         if minimum_wait_states(hclk, self.supply_mv).is_none_or(|min| latency < min) {
             self.flash_violations.push(format!(
                 "at {at} ns: {latency} flash wait states at {hclk} Hz on {} mV (RM0090 table 12)",
                 self.supply_mv
             ));
+        }
+    }
+
+    /// The flash latency checked when HCLK or the wait states changed since the last stop.
+    fn check_clock_change(&mut self, s: &mut Session<VirtualF407>, at: u64) {
+        let now = flash_clock(s);
+        if now != self.flash_clock_seen {
+            self.flash_clock_seen = now;
+            self.check_flash_latency(s, at);
         }
     }
 
@@ -443,6 +462,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.probe_full_pending = false;
         }
         self.brown_out(s, host, stop);
+        self.check_clock_change(s, now);
         if self.hold_when_watchdog_runs {
             let (_, regs) = s.board_mut().mcu.part.clocks();
             let csr = regs.get(rigless::soc::stm32f427::generated::rcc::Register::Csr);
@@ -639,6 +659,7 @@ pub fn run<H: HostPort + Send + 'static>(
         in_brown_out: false,
         brown_outs: Vec::new(),
         flash_violations: Vec::new(),
+        flash_clock_seen: (0, 0),
         pending_host_bytes: Vec::new(),
         robot_released: false,
         heartbeat_edges: 0,

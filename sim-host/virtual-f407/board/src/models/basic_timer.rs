@@ -1,10 +1,17 @@
 //! TIM6 and TIM7, the basic timers of RM0090 chapter 20 (rigless binds no model to them): the
 //! prescaler and auto-reload count the APB1 timer clock, and every update sets `UIF` and, with
 //! `UIE`, raises the instance's one interrupt line (TIM7: IRQ 55). Update events are scheduled in
-//! virtual time, so a 10 kHz tick is exactly 100,000 ns apart.
+//! virtual time, so a 10 kHz tick is exactly 100,000 ns apart. Each period is counted on the
+//! clock the timer has when it starts (RM0090 6.2, the timer clock is APB1's, doubled when
+//! APB1's prescaler divides): a clock-security fall-back to the 16 MHz HSI (6.2.7) slows the
+//! tick from the next update on, as on silicon (10 kHz on the 84 MHz timer clock becomes about
+//! 952 Hz on 8 MHz).
+//!
+//! Its master-mode output (TRGO, RM0090 20.4.2): with `MMS` 010 every update event is a TRGO,
+//! which the DAC can take as its trigger ([`BasicTimer::last_trgo_ns`]).
 //!
 //! Left out: one-pulse mode, `URS`, `ARPE` buffering (a new `ARR` applies at once), the counter's
-//! own value (`CNT` reads the register file), the master-mode output to the DAC.
+//! own value (`CNT` reads the register file), the other master modes (reset, enable).
 
 use rigless::device::{Device, DeviceContext, RegisterFile};
 use rigless::soc::stm32f427::generated::tim6;
@@ -24,6 +31,10 @@ pub struct BasicTimer {
     pub last_update_ns: u64,
     /// Stopped by a fault ([`BasicTimer::halt`]) until the next reset.
     halted: bool,
+    /// `CR2.MMS` is 010: each update event is a TRGO.
+    trgo_on_update: bool,
+    /// Virtual time of the last TRGO, ns.
+    pub last_trgo_ns: Option<u64>,
 }
 
 impl BasicTimer {
@@ -74,6 +85,9 @@ impl Device for BasicTimer {
                 }
             }
             tim6::Register::Egr => r.set(tim6::Register::Egr, 0),
+            tim6::Register::Cr2 => {
+                self.trgo_on_update = (r.get(tim6::Register::Cr2) >> 4) & 0b111 == 0b010;
+            }
             _ => {}
         }
     }
@@ -83,11 +97,15 @@ impl Device for BasicTimer {
         }
         self.updates += 1;
         self.last_update_ns = cx.now().0;
+        if self.trgo_on_update {
+            self.last_trgo_ns = Some(self.last_update_ns);
+        }
         r.set(tim6::Register::Sr, 1);
         if r.get(tim6::Register::Dier) & 1 != 0 {
             cx.raise(0);
         }
-        self.next = Some(cx.schedule(VirtualNanos(cx.now().0 + self.period_ns.max(1))));
+        // The next period on the clock the timer has now (the board keeps `clock_hz` current).
+        self.reschedule(r, cx);
     }
     fn reset(&mut self) {
         *self = Self {
