@@ -169,4 +169,60 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
         "the virtual board's tests failed:\n{out}\n{err}"
     );
     assert!(out.contains("test result: ok"), "no test ran:\n{out}");
+    cargo_run_without_a_probe_runs_on_the_virtual_board(root);
+}
+
+/// `cargo run` of the F407 release firmware with no debug probe (`PROBE_RS` names none): the
+/// runner says so on its first line and the virtual board prints the firmware's boot line, its
+/// log decoded as `probe-rs run` shows a board's. The run goes on until stopped: the test stops
+/// it (its process group) once the boot line is in.
+fn cargo_run_without_a_probe_runs_on_the_virtual_board(root: &Path) {
+    use std::io::BufRead;
+    let mut child = BackgroundBuild(
+        Command::new(env!("CARGO"))
+            .args([
+                "run",
+                "--release",
+                "-p",
+                "sandjumper-firmware",
+                "--target",
+                "thumbv7em-none-eabihf",
+            ])
+            .current_dir(root)
+            .env("PROBE_RS", root.join("target/no-probe-rs-here"))
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .process_group(0)
+            .spawn()
+            .expect("cargo run"),
+    );
+    let stdout = child.0.stdout.take().expect("its stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut lines = Vec::new();
+    // Wall time, generous: cargo checks the build first; the board boots in 2 virtual ms.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(600);
+    while !lines
+        .iter()
+        .any(|l: &String| l.starts_with("sandjumper firmware: STM32F407"))
+    {
+        let left = deadline.saturating_duration_since(std::time::Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(line) => lines.push(line),
+            Err(_) => panic!("no boot line from `cargo run` without a probe: {lines:?}"),
+        }
+    }
+    assert!(
+        lines[0].starts_with("no debug probe attached: running ")
+            && lines[0].contains("on the virtual STM32F407 board"),
+        "{lines:?}"
+    );
+    drop(child);
 }

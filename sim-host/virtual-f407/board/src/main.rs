@@ -1,10 +1,13 @@
 //! `virtual-f407`: the rig's F407 firmware ELF on the virtual board.
 //!
 //! ```text
-//! virtual-f407 --elf ELF [--ms N] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
+//! virtual-f407 --elf ELF [--ms N] [--run] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
 //!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
 //!              [--intrusion PARAMS.toml --model eq4|... --surface-p M]
 //! ```
+//! `--run`: as `probe-rs run` runs a board: at real time (unless `--pace`), the firmware's log on
+//! stdout line by line as it comes, until Ctrl-C (or `--ms`); what the firmware's `cargo run`
+//! does when no debug probe is attached (firmware/runner.sh).
 //! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
 //! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
 //! `--ms`). The firmware's log goes to stderr. Exit status 2 on bad input.
@@ -127,6 +130,7 @@ fn main() {
     let mut emergency_stop = EmergencyStopLoop::Closed;
     let mut pace = None;
     let mut stdio = false;
+    let mut live = false;
     let mut robot_params: Option<PathBuf> = None;
     let mut intrusion_params: Option<PathBuf> = None;
     let mut surface_p = 0.0;
@@ -173,6 +177,7 @@ fn main() {
                 pace = Some(x);
             }
             "--stdio" => stdio = true,
+            "--run" => live = true,
             "--robot" => robot_params = Some(value("--robot").into()),
             "--intrusion" => intrusion_params = Some(value("--intrusion").into()),
             "--surface-p" => {
@@ -211,8 +216,13 @@ fn main() {
             "--elf ELF is required (the F407 release build: target/thumbv7em-none-eabihf/release/sandjumper-firmware)",
         )
     };
-    if !stdio && ms.is_none() {
-        fail("give --ms N (virtual milliseconds) or --stdio");
+    if !stdio && !live && ms.is_none() {
+        fail("give --ms N (virtual milliseconds), --run or --stdio");
+    }
+    if stdio && live {
+        fail(
+            "--run and --stdio are exclusive: --run prints the log on stdout, --stdio carries USB there",
+        );
     }
     let mut cfg = RunConfig::new(elf);
     cfg.until_ns = ms.map(|m| {
@@ -234,7 +244,8 @@ fn main() {
     }
     cfg.bed = bed;
     cfg.emergency_stop = emergency_stop;
-    cfg.pace = pace;
+    cfg.pace = pace.or(live.then_some(1.0));
+    cfg.echo_log = live;
     if let Some(path) = robot_params {
         let params = read_params(&path, "--robot");
         let model: sandjumper_model::params::ModelName = model

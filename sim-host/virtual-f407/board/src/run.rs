@@ -5,6 +5,7 @@
 //! exchanged, the firmware's RTT log is drained, and [`Action`]s due are applied. Everything is
 //! a function of virtual time: two runs with the same inputs are identical.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -150,6 +151,9 @@ pub struct RunConfig {
     pub flash_stuck_busy: bool,
     /// The PLL never locks ([`crate::board::F407::pll_never_locks`]).
     pub pll_never_locks: bool,
+    /// Print each line of the firmware's log on stdout as it is decoded (as `probe-rs run`
+    /// shows a board's), not only in the report.
+    pub echo_log: bool,
 }
 
 impl RunConfig {
@@ -171,6 +175,7 @@ impl RunConfig {
             drive_powered: true,
             flash_stuck_busy: false,
             pll_never_locks: false,
+            echo_log: false,
         }
     }
 }
@@ -267,6 +272,8 @@ struct BoardDriver<H> {
     trace: Vec<TraceRow>,
     last: Option<TraceRow>,
     rtt: RttLog,
+    /// Log lines printed so far with [`RunConfig::echo_log`] (None: not echoed).
+    echoed: Option<usize>,
     host: H,
     host_closed: bool,
     wall: Instant,
@@ -472,6 +479,14 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
                 self.apply(s, host, now, Action::Hold(true));
             }
         }
+        if let Some(printed) = self.echoed.as_mut() {
+            let mut out = std::io::stdout().lock();
+            for line in &self.rtt.lines[*printed..] {
+                let _ = writeln!(out, "{line}");
+            }
+            let _ = out.flush();
+            *printed = self.rtt.lines.len();
+        }
         if self.hold_at_first_log_line && !self.rtt.lines.is_empty() {
             self.hold_at_first_log_line = false;
             self.apply(s, host, now, Action::Hold(true));
@@ -644,6 +659,7 @@ pub fn run<H: HostPort + Send + 'static>(
         trace: Vec::new(),
         last: None,
         rtt,
+        echoed: cfg.echo_log.then_some(0),
         host,
         host_closed: false,
         wall: Instant::now(),

@@ -25,6 +25,10 @@ fn bad_arguments_exit_2_with_a_message() {
     for (args, says) in [
         (vec!["--ms", "5"], "--elf ELF is required"),
         (vec!["--elf", &not_elf], "give --ms N"),
+        (
+            vec!["--elf", &not_elf, "--run", "--stdio"],
+            "--run and --stdio are exclusive",
+        ),
         (vec!["--elf", &not_elf, "--ms", "x"], "--ms: a whole number"),
         (vec!["--elf", &not_elf, "--ms", "0"], "1 to"),
         (
