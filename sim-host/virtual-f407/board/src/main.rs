@@ -1,13 +1,18 @@
 //! `virtual-f407`: the rig's F407 firmware ELF on the virtual board.
 //!
 //! ```text
-//! virtual-f407 --elf ELF [--ms N] [--run] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
+//! virtual-f407 --elf ELF [--ms N] [--run] [--gdb ADDR [--gdb-wait]] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
 //!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
 //!              [--intrusion PARAMS.toml --model eq4|... --surface-p M]
 //! ```
 //! `--run`: as `probe-rs run` runs a board: at real time (unless `--pace`), the firmware's log on
 //! stdout line by line as it comes, until Ctrl-C (or `--ms`); what the firmware's `cargo run`
 //! does when no debug probe is attached (firmware/runner.sh).
+//! `--gdb ADDR`: serve GDB's remote protocol on ADDR (`127.0.0.1:3333`; port 0: any free port)
+//! for the ELF as it runs: `gdb-multiarch ELF -ex 'target remote ADDR'` breaks, steps, reads
+//! registers and memory while the robot runs on the other side of the pins (virtual time stands
+//! still while the debugger holds the core). The address served is the first line on stderr.
+//! `--gdb-wait`: the core waits before its first instruction until the debugger continues.
 //! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
 //! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
 //! `--ms`). The firmware's log goes to stderr. Exit status 2 on bad input.
@@ -131,6 +136,8 @@ fn main() {
     let mut pace = None;
     let mut stdio = false;
     let mut live = false;
+    let mut gdb: Option<String> = None;
+    let mut gdb_wait = false;
     let mut robot_params: Option<PathBuf> = None;
     let mut intrusion_params: Option<PathBuf> = None;
     let mut surface_p = 0.0;
@@ -178,6 +185,8 @@ fn main() {
             }
             "--stdio" => stdio = true,
             "--run" => live = true,
+            "--gdb" => gdb = Some(value("--gdb")),
+            "--gdb-wait" => gdb_wait = true,
             "--robot" => robot_params = Some(value("--robot").into()),
             "--intrusion" => intrusion_params = Some(value("--intrusion").into()),
             "--surface-p" => {
@@ -224,7 +233,7 @@ fn main() {
             "--run and --stdio are exclusive: --run prints the log on stdout, --stdio carries USB there",
         );
     }
-    let mut cfg = RunConfig::new(elf);
+    let mut cfg = RunConfig::new(elf.clone());
     cfg.until_ns = ms.map(|m| {
         m.checked_mul(1_000_000)
             .filter(|&ns| ns > 0)
@@ -246,6 +255,30 @@ fn main() {
     cfg.emergency_stop = emergency_stop;
     cfg.pace = pace.or(live.then_some(1.0));
     cfg.echo_log = live;
+    if gdb_wait && gdb.is_none() {
+        fail("--gdb-wait needs --gdb ADDR");
+    }
+    if let Some(addr) = gdb {
+        let listener = std::net::TcpListener::bind(&addr).unwrap_or_else(|e| {
+            fail(format!(
+                "--gdb {addr}: cannot listen there ({e}; allowed: HOST:PORT, e.g. 127.0.0.1:3333)"
+            ))
+        });
+        let served = listener
+            .local_addr()
+            .map_or(addr.clone(), |a| a.to_string());
+        eprintln!(
+            "virtual-f407: GDB server on {served}: gdb-multiarch {} -ex 'target remote {served}'{}",
+            elf.display(),
+            if gdb_wait {
+                " (the core waits for it)"
+            } else {
+                ""
+            }
+        );
+        cfg.debugger = Some(listener);
+        cfg.wait_for_debugger = gdb_wait;
+    }
     if let Some(path) = robot_params {
         let params = read_params(&path, "--robot");
         let model: sandjumper_model::params::ModelName = model

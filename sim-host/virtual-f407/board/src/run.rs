@@ -154,6 +154,12 @@ pub struct RunConfig {
     /// Print each line of the firmware's log on stdout as it is decoded (as `probe-rs run`
     /// shows a board's), not only in the report.
     pub echo_log: bool,
+    /// Serve GDB's remote protocol on this listener (rigless's debugger server: breakpoints,
+    /// stepping, registers and memory, virtual time standing still while the core is held).
+    pub debugger: Option<std::net::TcpListener>,
+    /// With a debugger: hold the core before its first instruction until a debugger continues,
+    /// steps, detaches or kills it.
+    pub wait_for_debugger: bool,
 }
 
 impl RunConfig {
@@ -176,6 +182,8 @@ impl RunConfig {
             flash_stuck_busy: false,
             pll_never_locks: false,
             echo_log: false,
+            debugger: None,
+            wait_for_debugger: false,
         }
     }
 }
@@ -641,6 +649,7 @@ pub fn run<H: HostPort + Send + 'static>(
         .map_err(|e| format!("the emulator session: {e}"))?;
     let mut actions = cfg.actions;
     actions.sort_by_key(|(t, _)| *t);
+    let (debugger, wait_for_debugger) = (cfg.debugger, cfg.wait_for_debugger);
     let driver = BoardDriver {
         cfg_period: cfg.period_ns,
         until: cfg.until_ns,
@@ -682,8 +691,11 @@ pub fn run<H: HostPort + Send + 'static>(
         last_heartbeat_edge_ns: None,
         drive_powered: cfg.drive_powered,
     };
-    let finished = emulator::run(session, &Start::new(&images), driver)
-        .map_err(|e| format!("the emulator stopped: {e}"))?;
+    let mut start = Start::new(&images);
+    start.debugger = debugger.as_ref();
+    start.wait_for_debugger = wait_for_debugger;
+    let finished =
+        emulator::run(session, &start, driver).map_err(|e| format!("the emulator stopped: {e}"))?;
     let mut session = finished.session;
     let d = finished.driver;
     let wall_s = d.wall.elapsed().as_secs_f64();

@@ -29,6 +29,14 @@ fn bad_arguments_exit_2_with_a_message() {
             vec!["--elf", &not_elf, "--run", "--stdio"],
             "--run and --stdio are exclusive",
         ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--gdb-wait"],
+            "--gdb-wait needs --gdb ADDR",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--gdb", "nowhere"],
+            "--gdb nowhere: cannot listen there",
+        ),
         (vec!["--elf", &not_elf, "--ms", "x"], "--ms: a whole number"),
         (vec!["--elf", &not_elf, "--ms", "0"], "1 to"),
         (
