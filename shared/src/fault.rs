@@ -107,4 +107,33 @@ mod tests {
         assert_eq!(FaultCode::from_code(0), None);
         assert_eq!(FaultCode::from_code(11), None);
     }
+
+    /// The names the logs, the host and the README's table use: snake_case, one per code, and
+    /// the display that carries them. Found by `cargo mutants` (`name` replaced by a constant
+    /// passed the core's tests).
+    #[test]
+    fn names_are_the_tables_and_the_display_carries_them() {
+        extern crate std;
+        use std::string::ToString;
+        let names = FaultCode::ALL.map(FaultCode::name);
+        assert_eq!(
+            names,
+            [
+                "stroke_limit",
+                "tracking_error",
+                "encoder_fault",
+                "command_watchdog",
+                "deadline_overrun",
+                "invalid_configuration",
+                "link_corrupted",
+                "link_lost",
+                "emergency_stop",
+                "bed_watchdog",
+            ]
+        );
+        assert_eq!(
+            FaultCode::TrackingError.to_string(),
+            "fault 2 (tracking_error)"
+        );
+    }
 }

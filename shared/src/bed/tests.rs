@@ -437,3 +437,63 @@ fn each_actuator_alone_is_watched() {
         assert_eq!(r.bed().outputs(), BedOutputs::default(), "{cmd:?} alone");
     }
 }
+
+/// What the apparatus reports of itself (the board's status, the rig's checks and the firmware's
+/// outputs read these): absent until its inputs are read, then the inputs as read; the outputs
+/// as commanded; tripped, everything off, until cleared. Found by `cargo mutants` (each accessor
+/// replaced by a constant passed the core's tests).
+#[test]
+fn the_apparatus_reports_what_it_read_what_it_drives_and_its_trip() {
+    let mut bed = BedApparatus::new();
+    assert!(!bed.present() && !bed.tripped());
+    assert_eq!(bed.outputs(), BedOutputs::default());
+    let lifted = BedInputs {
+        lift_down_limit: false,
+        height_raw: 1234,
+        ..READY
+    };
+    bed.read_inputs(lifted);
+    assert!(bed.present());
+    assert_eq!(bed.inputs(), lifted);
+    bed.command(&BedCommand::Blower { volts: 5.0 }, false)
+        .unwrap();
+    bed.command(&BedCommand::Lift(LiftMove::Down), false)
+        .unwrap();
+    let out = bed.outputs();
+    assert_eq!(out.blower_v, 5.0);
+    assert!(out.lift_enable && !out.lift_up, "{out:?}");
+    assert!(!bed.tripped());
+    bed.trip();
+    assert!(bed.tripped());
+    assert_eq!(bed.outputs(), BedOutputs::default(), "everything off");
+    bed.clear().unwrap();
+    assert!(!bed.tripped());
+}
+
+/// Each refusal says what it is, in its own words (the host prints them).
+#[test]
+fn each_bed_refusal_has_its_own_message() {
+    extern crate std;
+    use std::string::{String, ToString};
+    use std::vec::Vec;
+    let all = [
+        BedError::JumpActive,
+        BedError::Tripped,
+        BedError::EmergencyStop,
+        BedError::OutOfRange,
+        BedError::LiftNotDown,
+        BedError::BlowerOn,
+        BedError::ShakerOn,
+        BedError::LiftAtLimit,
+        BedError::Absent,
+    ];
+    let texts: Vec<String> = all.iter().map(ToString::to_string).collect();
+    for (e, text) in all.iter().zip(&texts) {
+        assert!(text.len() > 10, "{e:?}: {text:?}");
+    }
+    let mut distinct = texts.clone();
+    distinct.sort();
+    distinct.dedup();
+    assert_eq!(distinct.len(), all.len(), "{texts:?}");
+    assert!(texts[1].contains("tripped"), "{}", texts[1]);
+}
