@@ -277,3 +277,66 @@ proptest! {
         prop_assert_eq!(decode_frame::<HostMessage>(&mut f[..n]), Ok(msg));
     }
 }
+
+/// `MAX_FRAME` is COBS's worst case for the largest body, delimiter included: a body of
+/// `MAX_BODY` bytes with no zero encodes to one byte less. Found by `cargo mutants` (its
+/// arithmetic changed passed every test).
+#[test]
+fn max_frame_is_coboss_worst_case_for_the_largest_body() {
+    let body = [0x55u8; MAX_BODY];
+    let mut enc = [0u8; MAX_FRAME + 16];
+    let n = cobs::try_encode(&body, &mut enc).unwrap();
+    assert_eq!(n + 1, MAX_FRAME, "encoded {n} bytes + the delimiter");
+}
+
+/// Each frame error says what it is, in its own words (the host counts and prints them).
+#[test]
+fn each_frame_error_has_its_own_message() {
+    extern crate std;
+    use std::string::{String, ToString};
+    use std::vec::Vec;
+    let all = [
+        FrameError::BufferTooSmall,
+        FrameError::Empty,
+        FrameError::TooLong,
+        FrameError::Cobs,
+        FrameError::Truncated,
+        FrameError::Crc,
+        FrameError::Version { got: 9 },
+        FrameError::Malformed,
+    ];
+    let texts: Vec<String> = all.iter().map(ToString::to_string).collect();
+    let mut distinct = texts.clone();
+    distinct.sort();
+    distinct.dedup();
+    assert_eq!(distinct.len(), all.len(), "{texts:?}");
+    assert!(texts.iter().all(|t| t.len() > 8), "{texts:?}");
+    assert!(texts[2].contains(&MAX_FRAME.to_string()), "{}", texts[2]);
+    assert!(texts[6].contains('9'), "{}", texts[6]);
+}
+
+/// A frame whose CRC does not match is refused as such and counted under `crc` (the link's
+/// health the host shows), not under `other`. Found by `cargo mutants` (the count's arm deleted
+/// passed every test).
+#[test]
+fn a_crc_mismatch_is_counted_as_one() {
+    let good = encode_frame_vec(&sample_messages()[0]).unwrap();
+    let mut body = [0u8; MAX_BODY];
+    let n = cobs::decode(&good[..good.len() - 1], &mut body)
+        .unwrap()
+        .frame_size();
+    body[n - 1] ^= 0xFF; // the CRC's last byte
+    let mut enc = [0u8; MAX_FRAME];
+    let m = cobs::try_encode(&body[..n], &mut enc).unwrap();
+    let mut dec = FrameDecoder::new();
+    let got: heapless::Vec<Result<HostMessage, FrameError>, 2> = enc[..=m]
+        .iter()
+        .filter_map(|&b| dec.push::<HostMessage>(b))
+        .collect();
+    assert_eq!(got.as_slice(), &[Err(FrameError::Crc)]);
+    let s = dec.stats();
+    assert_eq!(
+        (s.ok, s.rejected, s.crc, s.too_long, s.other),
+        (0, 1, 1, 0, 0)
+    );
+}
