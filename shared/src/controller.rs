@@ -527,4 +527,139 @@ mod tests {
         }
         assert!((v.velocity_m_s() - 0.3).abs() < 1e-4);
     }
+
+    /// The field a refusal names.
+    fn refused(r: Result<(), ConfigError>) -> Option<&'static str> {
+        match r {
+            Err(ConfigError::Field { what, .. }) => Some(what),
+            _ => None,
+        }
+    }
+
+    /// Each gain within its range passes, each just outside it (or not a number) is refused
+    /// naming itself. Found by `cargo mutants` (the check replaced by `Ok(())` passed every
+    /// test of the core).
+    #[test]
+    fn gains_are_checked_field_by_field() {
+        assert_eq!(Gains::default().validate(), Ok(()));
+        type Field = fn(&mut Gains) -> &mut f32;
+        let limits: [(&str, f32, Field); 5] = [
+            ("kp_n_per_m", 1e7, |g| &mut g.kp_n_per_m),
+            ("kd_n_s_per_m", 1e5, |g| &mut g.kd_n_s_per_m),
+            ("ki_n_per_m_s", 1e9, |g| &mut g.ki_n_per_m_s),
+            ("integral_limit_n", 1e4, |g| &mut g.integral_limit_n),
+            ("feedforward_mass_kg", 100.0, |g| &mut g.feedforward_mass_kg),
+        ];
+        for (name, max, field) in limits {
+            for ok in [0.0, max] {
+                let mut g = Gains::default();
+                *field(&mut g) = ok;
+                assert_eq!(g.validate(), Ok(()), "{name} = {ok}");
+            }
+            for bad in [-1e-3, max * 1.001, f32::NAN, f32::INFINITY] {
+                let mut g = Gains::default();
+                *field(&mut g) = bad;
+                assert_eq!(refused(g.validate()), Some(name), "{name} = {bad}");
+            }
+        }
+    }
+
+    /// Factors in (0, 1], the ramp in (0, 2.5] s: each bound, either side. Found by `cargo
+    /// mutants` (the check replaced by `Ok(())`, or a bound moved, passed every test).
+    #[test]
+    fn gain_lowering_is_checked_at_its_bounds() {
+        let ok = GainLowering {
+            kp_factor: 1.0,
+            kd_factor: 1.0,
+            ramp_s: 2.5,
+        };
+        assert_eq!(ok.validate(), Ok(()));
+        let cases: [(&str, GainLowering); 6] = [
+            (
+                "kp_factor",
+                GainLowering {
+                    kp_factor: 0.0,
+                    ..ok
+                },
+            ),
+            (
+                "kp_factor",
+                GainLowering {
+                    kp_factor: 1.001,
+                    ..ok
+                },
+            ),
+            (
+                "kd_factor",
+                GainLowering {
+                    kd_factor: 0.0,
+                    ..ok
+                },
+            ),
+            (
+                "kd_factor",
+                GainLowering {
+                    kd_factor: 1.001,
+                    ..ok
+                },
+            ),
+            ("ramp_s", GainLowering { ramp_s: 0.0, ..ok }),
+            (
+                "ramp_s",
+                GainLowering {
+                    ramp_s: 2.501,
+                    ..ok
+                },
+            ),
+        ];
+        for (name, lowering) in cases {
+            assert_eq!(refused(lowering.validate()), Some(name), "{lowering:?}");
+        }
+        let smallest = GainLowering {
+            kp_factor: 1e-6,
+            kd_factor: 1e-6,
+            ramp_s: 1e-6,
+        };
+        assert_eq!(smallest.validate(), Ok(()));
+    }
+
+    /// Halfway through a ramp the factors are halfway between full and low (the smootherstep
+    /// at one half is one half). Found by `cargo mutants` (the ramp's formula changed passed
+    /// every test).
+    #[test]
+    fn halfway_through_the_ramp_the_gains_are_halfway_down() {
+        let lowering = GainLowering {
+            kp_factor: 0.2,
+            kd_factor: 0.6,
+            ramp_s: 0.01,
+        };
+        // A delay of 1,000 ticks from tick 100, ramps of 100 ticks at 10 kHz.
+        let s = GainSchedule::new(&lowering, 100, 1100, 10_000);
+        let half = s.scale(150);
+        assert!((half.position - 0.6).abs() < 1e-6, "{half:?}");
+        assert!((half.velocity - 0.8).abs() < 1e-6, "{half:?}");
+        assert_eq!(s.scale(99), GainScale::FULL);
+        assert_eq!(
+            s.scale(600),
+            GainScale {
+                position: 0.2,
+                velocity: 0.6
+            }
+        );
+        assert_eq!(s.scale(1100), GainScale::FULL);
+    }
+
+    /// A reset forgets the filtered velocity (a new jump starts from rest). Found by `cargo
+    /// mutants` (`reset` emptied passed every test).
+    #[test]
+    fn a_reset_velocity_estimator_starts_from_rest() {
+        let mut v = VelocityEstimator::new(1e-5, 10_000, 200.0);
+        for _ in 0..50 {
+            v.update(10);
+        }
+        assert!(v.update(10) > 0.5, "moving at about 1 m/s");
+        v.reset();
+        let after = v.update(0);
+        assert_eq!(after, 0.0, "from rest, no motion: {after}");
+    }
 }
