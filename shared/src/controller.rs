@@ -662,4 +662,80 @@ mod tests {
         let after = v.update(0);
         assert_eq!(after, 0.0, "from rest, no motion: {after}");
     }
+
+    /// The integrator (the slow intrusion's controller runs with one): it sums `ki e dt` each
+    /// tick into the force, is held at its limit (and says so), is not wound further into a
+    /// saturated drive, and a reset zeroes it. Found by `cargo mutants` (the integrating terms
+    /// changed, or `reset` emptied, passed every test: the jump's default gains have no
+    /// integrator).
+    #[test]
+    fn the_integrator_sums_holds_at_its_limit_and_resets() {
+        let gains = Gains {
+            kp_n_per_m: 0.0,
+            kd_n_s_per_m: 0.0,
+            ki_n_per_m_s: 1000.0,
+            integral_limit_n: 3.0,
+            feedforward_mass_kg: 0.0,
+        };
+        let mut c = PositionController::new(gains, 300.0, 1000);
+        // 1 mm of error: 1000 * 0.001 * 0.001 = 1 mN a tick.
+        let mut last = c.update(&sp(0.001), 0.0, 0.0, GainScale::FULL);
+        assert_eq!(
+            last.force_n, 0.0,
+            "the integral enters the force from the next tick"
+        );
+        for _ in 0..9 {
+            last = c.update(&sp(0.001), 0.0, 0.0, GainScale::FULL);
+        }
+        assert!((c.integral_n() - 0.010).abs() < 1e-6, "{}", c.integral_n());
+        assert!((last.force_n - 0.009).abs() < 1e-6, "{last:?}");
+        assert!(!last.integrator_held && !last.saturated);
+        // Half the position gain scales the integration too.
+        let before = c.integral_n();
+        c.update(
+            &sp(0.001),
+            0.0,
+            0.0,
+            GainScale {
+                position: 0.5,
+                velocity: 1.0,
+            },
+        );
+        assert!((c.integral_n() - before - 0.0005).abs() < 1e-7);
+        // A large error: held at 3 N, and said.
+        for _ in 0..10 {
+            last = c.update(&sp(1.0), 0.0, 0.0, GainScale::FULL);
+        }
+        assert_eq!(c.integral_n(), 3.0);
+        assert!(last.integrator_held, "{last:?}");
+        c.reset();
+        assert_eq!(c.integral_n(), 0.0);
+        // Saturated the same way as the error: not wound further.
+        let strong = Gains {
+            kp_n_per_m: 1e6,
+            ..gains
+        };
+        let mut c = PositionController::new(strong, 300.0, 1000);
+        let out = c.update(&sp(0.01), 0.0, 0.0, GainScale::FULL);
+        assert!(out.saturated && out.integrator_held, "{out:?}");
+        assert_eq!(out.force_n, 300.0);
+        assert_eq!(c.integral_n(), 0.0);
+        // Saturated against the error (the feedforward pushes the other way): it integrates.
+        let mut c = PositionController::new(
+            Gains {
+                feedforward_mass_kg: 100.0,
+                ..gains
+            },
+            300.0,
+            1000,
+        );
+        let against = crate::profile::Setpoint {
+            position_m: 0.001,
+            velocity_m_s: 0.0,
+            accel_m_s2: -100.0,
+        };
+        let out = c.update(&against, 0.0, 0.0, GainScale::FULL);
+        assert!(out.saturated && !out.integrator_held, "{out:?}");
+        assert!(c.integral_n() > 0.0);
+    }
 }
