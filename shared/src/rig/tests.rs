@@ -857,3 +857,48 @@ fn arming_away_from_the_start_approaches_without_a_step_and_start_waits_for_it()
         "started at tick {started_at}"
     );
 }
+
+/// A limit of zero turns its check off: the tick's deadline (0 cycles) and the corrupted-frame
+/// burst (0 frames). Found by `cargo mutants` (`> 0` as `>= 0` passed every test).
+#[test]
+fn a_zero_limit_turns_its_check_off() {
+    let mut r: Rig<64> = Rig::new(RigConfig {
+        deadline_cycles: 0,
+        corrupted_frame_limit: 0,
+        ..RigConfig::default()
+    })
+    .unwrap();
+    let out = r.tick(&TickInput {
+        timing: TickTiming::Cycles(1_000_000),
+        ..input(0)
+    });
+    assert_eq!(out.fault, None);
+    for _ in 0..100 {
+        r.note_frame_rejected();
+    }
+    assert_eq!(r.fault(), None);
+    assert_eq!(r.counters().frames_rejected, 100);
+}
+
+/// The status the host reads: the jump configured, and the samples produced and dropped (a
+/// host that stops reading loses the oldest, counted). Found by `cargo mutants` (each
+/// replaced by a constant passed every test).
+#[test]
+fn the_configuration_and_the_sample_counts_are_reported() {
+    let mut r = rig();
+    assert!(r.jump_config().is_none());
+    let jc = sine(JumpKind::Stutter, 10.0, 0.0);
+    r.handle(&Command::Configure(jc)).unwrap();
+    assert_eq!(r.jump_config(), Some(&jc));
+    for _ in 0..100 {
+        r.tick(&input(0));
+    }
+    let mut kept = 0u32;
+    while r.samples().pop().is_some() {
+        kept += 1;
+    }
+    let c = r.counters();
+    assert_eq!(c.samples_produced, 100);
+    assert!(kept > 0 && kept < 100, "{kept}");
+    assert_eq!(c.samples_dropped, 100 - kept);
+}
