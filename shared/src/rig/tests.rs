@@ -644,6 +644,9 @@ fn lockstep_entered_after_thousands_of_free_running_ticks_arms_cleanly() {
         r.tick(&input(2_000_000 + k % 7));
     }
     assert_eq!(r.fault(), None);
+    // Not in lockstep before the first sensor frame (cargo mutants: `in_lockstep` as `true`
+    // passed every test).
+    assert!(!r.in_lockstep());
     r.handle(&Command::Configure(sine(JumpKind::Stutter, 10.0, 0.0)))
         .unwrap();
     let start = 18_750u32; // p(0) = +A for a stutter
