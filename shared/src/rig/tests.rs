@@ -905,3 +905,37 @@ fn the_configuration_and_the_sample_counts_are_reported() {
     assert!(kept > 0 && kept < 100, "{kept}");
     assert_eq!(c.samples_dropped, 100 - kept);
 }
+
+/// `GAINS_LOWERED` marks a delay's ticks when either gain is lowered, the position's alone or
+/// the velocity's alone, and no tick outside the delay. Found by `cargo mutants` (the flag's
+/// condition changed passed every test: the lowering above lowers both).
+#[test]
+fn gains_lowered_is_flagged_when_either_gain_is_lowered() {
+    for (kp_factor, kd_factor) in [(0.5, 1.0), (1.0, 0.5)] {
+        let mut jc = sine(JumpKind::DelayedStutter, 8.0, 0.75);
+        jc.gain_lowering = Some(GainLowering {
+            kp_factor,
+            kd_factor,
+            ramp_s: 0.05,
+        });
+        let mut plant = Plant::new(0.0);
+        let mut r = armed_and_started(jc, &mut plant);
+        let (_, samples) = run_to_end(&mut r, &mut plant, 20_000);
+        let lowered = |s: &&SampleRecord| s.flags & flags::GAINS_LOWERED != 0;
+        let delay: std::vec::Vec<&SampleRecord> = samples
+            .iter()
+            .filter(|s| s.flags & flags::DELAY != 0)
+            .collect();
+        assert!(
+            delay[1000..6000].iter().all(&lowered),
+            "kp {kp_factor}, kd {kd_factor}"
+        );
+        assert!(
+            !samples
+                .iter()
+                .filter(|s| s.flags & flags::DELAY == 0)
+                .any(|s| lowered(&s)),
+            "flagged outside the delay: kp {kp_factor}, kd {kd_factor}"
+        );
+    }
+}
