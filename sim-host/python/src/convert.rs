@@ -107,8 +107,16 @@ pub fn claim_out(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<sandjumper_o
 
 /// An optional `out=` folder argument.
 pub fn out_arg(out: Option<&Bound<'_, PyAny>>) -> PyResult<Option<std::path::PathBuf>> {
-    out.filter(|o| !o.is_none())
-        .map(|o| path_arg("out", o))
+    opt_path("out", out)
+}
+
+/// An optional path argument `name` ([`path_arg`]); left out or None: `None`.
+pub fn opt_path(
+    name: &str,
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<std::path::PathBuf>> {
+    obj.filter(|o| !o.is_none())
+        .map(|o| path_arg(name, o))
         .transpose()
 }
 

@@ -17,7 +17,7 @@ use sandjumper_rig::tool::output::{ProgramOutcome, ProgramRequest};
 use sandjumper_rig::tool::target::{Target, parse_board_pace};
 
 use crate::call::long_call;
-use crate::convert::{claim_out, params_source, path_arg, summary_to_py};
+use crate::convert::{claim_out, opt_path, params_source, path_arg, summary_to_py};
 use crate::errors::{checked, checked_number, choice, lib_err};
 use crate::simulate::{HilResult, models};
 use crate::typed;
@@ -61,19 +61,14 @@ fn target(
         (Some(link), None) => checked("link", link, parse_link)?,
         (None, None) => LinkArg::Sil,
     };
-    let path = |name: &str, obj: Option<&Bound<'_, PyAny>>| {
-        obj.filter(|o| !o.is_none())
-            .map(|o| path_arg(name, o))
-            .transpose()
-    };
     Ok(Target {
         link,
-        firmware: path("firmware", firmware)?,
-        virtual_board: path("virtual_board", virtual_board)?,
+        firmware: opt_path("firmware", firmware)?,
+        virtual_board: opt_path("virtual_board", virtual_board)?,
         board_pace: board_pace
             .map(|p| checked("board_pace", p, parse_board_pace))
             .transpose()?,
-        drive_calibration: path("drive_calibration", drive_calibration)?,
+        drive_calibration: opt_path("drive_calibration", drive_calibration)?,
     })
 }
 
@@ -233,10 +228,7 @@ pub fn rig_jump(
     let (model, params) = rig_params(&model, phi, params)?;
     let mut names = TARGET_NAMES.to_vec();
     names.extend([("--tau", "tau_s"), ("--camera", "camera")]);
-    let camera = camera
-        .filter(|c| !c.is_none())
-        .map(|c| path_arg("camera", c))
-        .transpose()?;
+    let camera = opt_path("camera", camera)?;
     let request = JumpRequest {
         tau_s,
         camera_fps: checked(
@@ -393,12 +385,7 @@ pub fn rig_replay(
         board_pace,
         drive_calibration,
     )?;
-    let path = |name: &str, obj: Option<&Bound<'_, PyAny>>| {
-        obj.filter(|o| !o.is_none())
-            .map(|o| path_arg(name, o))
-            .transpose()
-    };
-    let (log, stroke) = (path("log", log)?, path("stroke", stroke)?);
+    let (log, stroke) = (opt_path("log", log)?, opt_path("stroke", stroke)?);
     match (&log, &stroke) {
         (Some(_), Some(_)) => {
             return Err(PyValueError::new_err(
@@ -490,10 +477,7 @@ pub fn rig_calibrate_drive(
             crate::errors::invalid_value("zero_code", zero_code, "a DAC code, 0..=4095")
         })?,
         codes_per_newton,
-        save: save
-            .filter(|s| !s.is_none())
-            .map(|s| path_arg("save", s))
-            .transpose()?,
+        save: opt_path("save", save)?,
     };
     let mut names = TARGET_NAMES.to_vec();
     names.extend([

@@ -299,10 +299,7 @@ pub fn jump(
     stroke: Option<&Bound<'_, PyAny>>,
     out: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<JumpResult> {
-    let stroke = stroke
-        .filter(|s| !s.is_none())
-        .map(|s| crate::convert::path_arg("stroke", s))
-        .transpose()?;
+    let stroke = crate::convert::opt_path("stroke", stroke)?;
     let (kind, freq_hz, tau_s) = sine("kind", "freq_hz", kind, freq_hz, tau_s, stroke.is_some())?;
     let request = sandjumper_study::jump::JumpRequest {
         kind,
@@ -773,10 +770,7 @@ pub fn hil(
         ("--camera", "camera"),
     ];
     let link = checked("link", &link, sandjumper_rig::hil::open::parse_link)?;
-    let stroke = stroke
-        .filter(|s| !s.is_none())
-        .map(|s| crate::convert::path_arg("stroke", s))
-        .transpose()?;
+    let stroke = crate::convert::opt_path("stroke", stroke)?;
     let (kind, freq_hz, tau_s) = sine("kind", "freq_hz", kind, freq_hz, tau_s, stroke.is_some())?;
     let gain_lowering = gain_lowering
         .map(|g| checked("gain_lowering", g, lib::parse_gain_lowering))
@@ -800,10 +794,7 @@ pub fn hil(
         .map(NamedStroke::read)
         .transpose()
         .map_err(|e| lib_err(e, &names))?;
-    let camera = camera
-        .filter(|c| !c.is_none())
-        .map(|c| crate::convert::path_arg("camera", c))
-        .transpose()?;
+    let camera = crate::convert::opt_path("camera", camera)?;
     let mut request = HilRequest {
         link,
         kind,

@@ -334,10 +334,7 @@ pub fn campaign_run(
     progress: Option<Py<PyAny>>,
     port: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
-    let port = port
-        .filter(|p| !p.is_none())
-        .map(|p| path_arg("port", p))
-        .transpose()?;
+    let port = crate::convert::opt_path("port", port)?;
     if link.is_some() && port.is_some() {
         return Err(PyValueError::new_err(
             "the argument 'link' cannot be used with 'port'",

@@ -487,7 +487,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
                 self.apply(s, host, now, Action::Hold(true));
             }
         }
-        if let Some(printed) = self.echoed.as_mut() {
+        if let Some(printed) = self.echoed.as_mut().filter(|p| **p < self.rtt.lines.len()) {
             let mut out = std::io::stdout().lock();
             for line in &self.rtt.lines[*printed..] {
                 let _ = writeln!(out, "{line}");
