@@ -12,7 +12,9 @@
 //!   drive on. What it would have said is counted in the core's `Status`.
 //! - 1 `host_link` (OTG_FS interrupt, also pended by the tick): USB CDC, frame decoding,
 //!   replies, telemetry batches. It talks to the tick only through lock-free single-producer
-//!   single-consumer queues, so nothing it does can delay or block the tick.
+//!   single-consumer queues, so nothing it does can block the tick. The USB driver's own
+//!   critical sections mask every interrupt (the HAL's single-core implementation), which
+//!   delays the tick's entry by up to ~6 us at 168 MHz (the board's `bring_up.rs` bounds it).
 //!
 //! Losses are counted: sample records that find the telemetry queue full stay in the core's
 //! queue, whose overflow the core counts (`samples_dropped` in every `Status`, and as gaps in

@@ -2,7 +2,8 @@
 # rigless 0.4.0 as the virtual board builds it: the crate from crates.io (its sha256 checked
 # against the one below), with rigless-0.4.0.patch applied, in patched/rigless-0.4.0 (what
 # Cargo.toml's [patch.crates-io] names). The patch is two corrections of the STM32F427's tables
-# the USB model needs and the core's NMI input (see README.md): never a vendored copy. Idempotent.
+# the USB model needs, the core's NMI input and its rate following the clock (see README.md):
+# never a vendored copy. Idempotent.
 set -euo pipefail
 cd "$(dirname "$0")"
 version=0.4.0

@@ -35,6 +35,13 @@ pub const OTG_FS_IRQ: u16 = 67;
 /// emulator numbers); the clock security system raises it (RM0090 6.2.7).
 pub const NMI_INPUT: u16 = rigless::emulator::INTERRUPT_LINES - 1;
 
+/// The core's instructions a second out of reset: one a cycle of the 16 MHz HSI, the system
+/// clock after any reset (RM0090 6.2.2). The run then follows HCLK as the firmware sets the
+/// clock tree up (`run::BoardDriver::follow_the_clock`, through rigless-0.4.0.patch's
+/// `Host::set_instruction_rate`).
+pub const RESET_INSTRUCTION_RATE: NonZeroU64 =
+    NonZeroU64::new(rigless::soc::stm32f427::peripherals::rcc::HSI_HZ).expect("a running clock");
+
 #[derive(Debug, Clone, Copy)]
 struct Slots {
     rcc: usize,
@@ -288,7 +295,7 @@ impl Board for VirtualF407 {
                 .expect("lines"),
             priority_bits: 4,
             refclk_divider: NonZeroU32::new(8).expect("non-zero"),
-            instructions_per_second: armv7m::INSTRUCTIONS_PER_SECOND,
+            instructions_per_second: RESET_INSTRUCTION_RATE,
             boot: "flash",
         }
         .spec_with_parts(

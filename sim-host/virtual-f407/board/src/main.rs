@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! virtual-f407 --elf ELF [--ms N] [--run] [--gdb ADDR [--gdb-wait]] [--bed ready|unwired] [--estop closed|open] [--pace X] [--stdio] [--clock FILE]
+//!              [--crystal-stops-at MS]
 //!              [--robot PARAMS.toml --model hard|eq4|... [--p0 M]] [--summary FILE.json]
 //!              [--intrusion PARAMS.toml --model eq4|... --surface-p M]
 //! ```
@@ -13,6 +14,9 @@
 //! registers and memory while the robot runs on the other side of the pins (virtual time stands
 //! still while the debugger holds the core). The address served is the first line on stderr.
 //! `--gdb-wait`: the core waits before its first instruction until the debugger continues.
+//! `--crystal-stops-at MS`: the 8 MHz crystal stops for good at MS virtual milliseconds (the
+//! clock security system's fall-back to the HSI and its NMI, RM0090 6.2.7): rehearse the
+//! firmware's handling of it, under GDB if you like.
 //! `--stdio`: the USB CDC port's bytes are this process's stdin (host to board) and stdout
 //! (board to host), as a serial port would carry them; the run ends when stdin closes (or at
 //! `--ms`). The firmware's log goes to stderr. Exit status 2 on bad input.
@@ -145,6 +149,7 @@ fn main() {
     let mut p0 = 0.0;
     let mut summary: Option<PathBuf> = None;
     let mut clock: Option<PathBuf> = None;
+    let mut crystal_stops_at_ns: Option<u64> = None;
     while let Some(a) = args.next() {
         let mut value = |name: &str| {
             args.next()
@@ -204,6 +209,17 @@ fn main() {
             }
             "--summary" => summary = Some(value("--summary").into()),
             "--clock" => clock = Some(value("--clock").into()),
+            "--crystal-stops-at" => {
+                const MS: &str = "--crystal-stops-at: whole virtual milliseconds, 1 or more";
+                let m: u64 = value("--crystal-stops-at")
+                    .parse()
+                    .unwrap_or_else(|_| fail(MS));
+                crystal_stops_at_ns = Some(
+                    m.checked_mul(1_000_000)
+                        .filter(|&ns| ns > 0)
+                        .unwrap_or_else(|| fail(MS)),
+                );
+            }
             "-h" | "--help" => {
                 println!(
                     "{}",
@@ -253,6 +269,9 @@ fn main() {
     }
     cfg.bed = bed;
     cfg.emergency_stop = emergency_stop;
+    if let Some(at_ns) = crystal_stops_at_ns {
+        cfg.actions.push((at_ns, run::Action::CrystalStops));
+    }
     cfg.pace = pace.or(live.then_some(1.0));
     cfg.echo_log = live;
     if gdb_wait && gdb.is_none() {

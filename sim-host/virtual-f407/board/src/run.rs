@@ -17,6 +17,7 @@ use rigless::session::Session;
 use rigless::time::VirtualNanos;
 
 use crate::board::VirtualF407;
+use crate::core_clock::{CoreClock, clock_access_at};
 use crate::encoder::QuadratureEncoder;
 use crate::rig::{self, BedWiring, EmergencyStopLoop, METRES_PER_COUNT, Outputs, Robot};
 use crate::rtt::RttLog;
@@ -193,6 +194,8 @@ impl RunConfig {
 pub struct TraceRow {
     /// Virtual time, ns.
     pub t_ns: u64,
+    /// Instructions the core retired so far (across resets).
+    pub instructions: u64,
     /// The board's outputs.
     pub out: Outputs,
     /// The encoder count the edges amount to.
@@ -250,6 +253,12 @@ pub struct RunReport {
     pub told: Vec<String>,
     /// Flash wait states short of table 12 after a supply change ([`Action::Supply`]).
     pub flash_violations: Vec<String>,
+    /// The core's instruction rate as it followed HCLK (virtual time ns, instructions per
+    /// second): one instruction a cycle, the 16 MHz HSI from reset (RM0090 6.2.2).
+    pub instruction_rates: Vec<(u64, u64)>,
+    /// The core's NMI input is high at the end: `RCC_CIR.CSSF` set and not yet cleared by
+    /// `CSSC` (RM0090 6.2.7).
+    pub nmi_input_high: bool,
     /// (shortest, longest) interval between two writes of the force DAC, ns: the control
     /// tick's output jitter (100,000 ns apart when nothing delays the tick).
     pub force_dac_interval_ns: Option<(u64, u64)>,
@@ -297,8 +306,9 @@ struct BoardDriver<H> {
     in_brown_out: bool,
     brown_outs: Vec<u64>,
     flash_violations: Vec<String>,
-    /// The (HCLK, flash wait states) the last stop saw: a change is a clock change to check.
+    /// The (HCLK, flash wait states) the last look saw: a change is a clock change to check.
     flash_clock_seen: (u64, u64),
+    core_clock: CoreClock,
     pending_host_bytes: Vec<u8>,
     robot_released: bool,
     heartbeat_edges: u64,
@@ -343,14 +353,11 @@ impl<H> BoardDriver<H> {
             Action::BusError { from, to } => s.fail_next(from, to),
             Action::CrystalStops => {
                 let clock_lost = mcu.system_clock_from_the_crystal();
-                if mcu.stop_crystal(VirtualNanos(at)) {
-                    let line = emulator::InterruptLine::new(crate::board::NMI_INPUT)
-                        .expect("the NMI input is a line the emulator numbers");
-                    host.set_interrupt(line, rigless::device::Level::High);
-                    host.set_interrupt(line, rigless::device::Level::Low);
-                } else if clock_lost {
+                if !mcu.stop_crystal(VirtualNanos(at)) && clock_lost {
                     self.apply(s, host, at, Action::Hold(true));
                 }
+                // The NMI (CSSF set) and the core's rate on the HSI it fell back to.
+                self.follow_the_clock(s, host, at);
             }
             Action::ResetButton => {
                 let instructions = 0;
@@ -402,8 +409,8 @@ impl<H> BoardDriver<H> {
     /// written or `HCLK` changes).
     /// RM0090 3.5.1 (table 12): the flash's wait states (`FLASH_ACR.LATENCY`) against HCLK on
     /// the supply; too few is a violation of the run, reported with when it was seen. Checked
-    /// on every supply change and at every stop where the clock or the wait states changed
-    /// ([`Run::check_clock_change`]), so a clock raised before its wait states is caught.
+    /// on every supply change and wherever the clock or the wait states changed (see
+    /// `follow_the_clock`), so a clock raised before its wait states is caught.
     fn check_flash_latency(&mut self, s: &mut Session<VirtualF407>, at: u64) {
         let (hclk, latency) = flash_clock(s);
         if minimum_wait_states(hclk, self.supply_mv).is_none_or(|min| latency < min) {
@@ -414,13 +421,16 @@ impl<H> BoardDriver<H> {
         }
     }
 
-    /// The flash latency checked when HCLK or the wait states changed since the last stop.
-    fn check_clock_change(&mut self, s: &mut Session<VirtualF407>, at: u64) {
+    /// After every access to the RCC or the flash interface, and at every stop: the flash
+    /// latency, checked when HCLK or the wait states changed (RM0090 3.5.1), and the core's
+    /// rate and NMI input ([`CoreClock::follow`]).
+    fn follow_the_clock(&mut self, s: &mut Session<VirtualF407>, host: &mut dyn Host, at: u64) {
         let now = flash_clock(s);
         if now != self.flash_clock_seen {
             self.flash_clock_seen = now;
             self.check_flash_latency(s, at);
         }
+        self.core_clock.follow(&mut s.board_mut().mcu, host, at);
     }
 
     fn brown_out(&mut self, s: &mut Session<VirtualF407>, host: &mut dyn Host, stop: Stop) {
@@ -454,6 +464,17 @@ impl<H> BoardDriver<H> {
 }
 
 impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
+    fn on_settled(
+        &mut self,
+        s: &mut Session<VirtualF407>,
+        host: &mut dyn Host,
+        settled: emulator::Settled,
+    ) {
+        if let Some(at) = clock_access_at(&settled) {
+            self.follow_the_clock(s, host, at);
+        }
+    }
+
     fn on_stop(
         &mut self,
         s: &mut Session<VirtualF407>,
@@ -477,7 +498,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.probe_full_pending = false;
         }
         self.brown_out(s, host, stop);
-        self.check_clock_change(s, now);
+        self.follow_the_clock(s, host, now);
         if self.hold_when_watchdog_runs {
             let (_, regs) = s.board_mut().mcu.part.clocks();
             let csr = regs.get(rigless::soc::stm32f427::generated::rcc::Register::Csr);
@@ -581,6 +602,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         rig::drive_bed_inputs(&mut mcu.part, stop.at, self.bed, self.emergency_stop, 1650);
         let row = TraceRow {
             t_ns: now,
+            instructions: stop.instruction_count,
             out,
             encoder_count: self.encoder.count(),
             p_m: p,
@@ -685,6 +707,7 @@ pub fn run<H: HostPort + Send + 'static>(
         brown_outs: Vec::new(),
         flash_violations: Vec::new(),
         flash_clock_seen: (0, 0),
+        core_clock: CoreClock::default(),
         pending_host_bytes: Vec::new(),
         robot_released: false,
         heartbeat_edges: 0,
@@ -737,6 +760,8 @@ pub fn run<H: HostPort + Send + 'static>(
         brown_outs: d.brown_outs,
         told,
         flash_violations: d.flash_violations,
+        instruction_rates: d.core_clock.rates.clone(),
+        nmi_input_high: d.core_clock.nmi_high(),
         force_dac_interval_ns: mcu.dac.ch1_interval_ns,
         force_dac_offset_ns: mcu.dac.ch1_offset_ns,
         usb_serial: mcu.otg.device_info().serial.clone(),

@@ -7,6 +7,14 @@ mod common;
 use sandjumper_virtual_f407::rig::{BedWiring, EmergencyStopLoop};
 use sandjumper_virtual_f407::run::{Action, NoHost, RunConfig, RunReport, run};
 
+/// How far two force DAC writes may be from the tick's 100 us, ns. At one instruction a cycle of
+/// HCLK (the board's rate since issue 51; rigless's fixed 250 M a second before) the USB
+/// driver's critical sections (synopsys-usb-otg's `critical_section::with`, every interrupt
+/// masked: stm32f4xx-hal switches on cortex-m's single-core implementation, which no crate can
+/// replace) delay the tick's entry by up to ~6 us while commands stream: measured 95.4-106.0 us
+/// (the old bound, 5 us, was set at the old rate).
+const TICK_ENTRY_JITTER_NS: u64 = 7_000;
+
 fn run_for(ms: u64, bed: BedWiring, trace_every: u64) -> Option<RunReport> {
     run_wired(ms, bed, EmergencyStopLoop::Closed, vec![], trace_every)
 }
@@ -33,6 +41,43 @@ fn clocks_from_the_registers_and_an_exact_10_khz_tick() {
     let Some(r) = run_for(1000, BedWiring::READY, 1) else {
         return;
     };
+    // The core's rate follows HCLK (RM0090 6.2), one instruction a cycle: the 16 MHz HSI from
+    // reset, then the PLL's 168 MHz once the start-up switches to it (a few ms: the crystal's
+    // start-up and the PLL's lock). The start-up's wait loops run busy, so a period there retires
+    // exactly its cycles.
+    let [(switched_ns, 168_000_000)] = r.instruction_rates[..] else {
+        panic!("one change of rate, to 168 MHz: {:?}", r.instruction_rates);
+    };
+    assert!(
+        (1_000_000..10_000_000).contains(&switched_ns),
+        "{switched_ns}"
+    );
+    let retired = |w: &[sandjumper_virtual_f407::run::TraceRow]| {
+        (w[1].instructions - w[0].instructions, w[1].t_ns - w[0].t_ns)
+    };
+    let on_the_hsi: Vec<_> = r
+        .trace
+        .windows(2)
+        .filter(|w| w[1].t_ns < switched_ns)
+        .map(retired)
+        .collect();
+    assert!(on_the_hsi.len() > 5, "{on_the_hsi:?}");
+    assert!(
+        on_the_hsi.iter().all(|&(n, dt)| n == dt * 16 / 1000),
+        "16 instructions a microsecond on the HSI: {on_the_hsi:?}"
+    );
+    // Busy on the PLL just after the switch (the rest of `init`): 168 a microsecond.
+    let on_the_pll = r
+        .trace
+        .windows(2)
+        .find(|w| w[0].t_ns > switched_ns)
+        .map(retired)
+        .expect("the run went on");
+    assert_eq!(
+        on_the_pll,
+        (16_800, 100_000),
+        "168 instructions a microsecond on the PLL"
+    );
     assert_eq!(
         r.clocks_hz,
         (168_000_000, 48_000_000),
@@ -327,7 +372,8 @@ fn the_tick_keeps_its_rhythm_while_usb_streams_and_commands_arrive() {
     let (lo, hi) = r.force_dac_interval_ns.expect("the force DAC was written");
     eprintln!("force DAC writes {lo}..{hi} ns apart");
     assert!(
-        lo >= 95_000 && hi <= 105_000,
+        (100_000 - TICK_ENTRY_JITTER_NS..=100_000 + TICK_ENTRY_JITTER_NS).contains(&lo)
+            && (100_000 - TICK_ENTRY_JITTER_NS..=100_000 + TICK_ENTRY_JITTER_NS).contains(&hi),
         "force DAC writes {lo}..{hi} ns apart"
     );
     assert!(r.last.expect("ran").usb_configured, "USB did not stream");
@@ -590,7 +636,8 @@ fn a_probe_that_stops_reading_with_its_buffer_full_never_stalls_the_board() {
     assert!(ticks > 5_000, "the tick ran {ticks} times in 600 ms");
     let (lo, hi) = r.force_dac_interval_ns.expect("the force DAC was written");
     assert!(
-        lo >= 95_000 && hi <= 105_000,
+        (100_000 - TICK_ENTRY_JITTER_NS..=100_000 + TICK_ENTRY_JITTER_NS).contains(&lo)
+            && (100_000 - TICK_ENTRY_JITTER_NS..=100_000 + TICK_ENTRY_JITTER_NS).contains(&hi),
         "force DAC writes {lo}..{hi} ns apart"
     );
 }

@@ -13,6 +13,7 @@ use rigless::time::VirtualNanos;
 use sandjumper_core::protocol::{FrameDecoder, encode_frame_vec};
 use sandjumper_core::{Command, HostMessage, Reply, RigMessage, Status};
 use sandjumper_virtual_f407::board::VirtualF407;
+use sandjumper_virtual_f407::core_clock::{CoreClock, clock_access_at};
 use sandjumper_virtual_f407::models::otg_fs::UsbStats;
 
 mod common;
@@ -69,6 +70,8 @@ struct Script {
     stopped_reading_bytes: Option<usize>,
     /// (virtual ms, configured) at every change.
     configured: Vec<(u64, bool)>,
+    /// The core's rate and NMI input, following the clock tree as `run.rs`'s driver does.
+    core_clock: CoreClock,
 }
 
 impl Script {
@@ -89,18 +92,31 @@ impl Script {
             probe_ms: u64::MAX,
             stopped_reading_bytes: None,
             configured: Vec::new(),
+            core_clock: CoreClock::default(),
         }
     }
 }
 
 impl Driver<VirtualF407> for Script {
+    fn on_settled(
+        &mut self,
+        s: &mut Session<VirtualF407>,
+        host: &mut dyn Host,
+        settled: emulator::Settled,
+    ) {
+        if let Some(at) = clock_access_at(&settled) {
+            self.core_clock.follow(&mut s.board_mut().mcu, host, at);
+        }
+    }
+
     fn on_stop(
         &mut self,
         s: &mut Session<VirtualF407>,
         stop: Stop,
-        _: &mut dyn Host,
+        host: &mut dyn Host,
     ) -> Option<VirtualNanos> {
         let now = stop.at.0;
+        self.core_clock.follow(&mut s.board_mut().mcu, host, now);
         let otg = &mut s.board_mut().mcu.otg;
         let mut stopped_reading = false;
         while let Some((at, act)) = self.acts.get(self.next).cloned() {
