@@ -438,7 +438,8 @@ impl<const Q: usize> Rig<Q> {
                     };
                 }
             }
-            RigState::Done => self.phase = Phase::Finished,
+            // Done keeps the `Finished` its transition above set: only Arm and a stop change
+            // the phase.
             RigState::Armed => {
                 if let Some(a) = self.approach.as_mut() {
                     target.setpoint = a.advance();

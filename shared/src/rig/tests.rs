@@ -486,6 +486,11 @@ fn replay_uploaded_in_chunks_is_followed() {
     for k in 0..299 {
         assert_eq!(samples[start + 10 * k].commanded_position_m, xs[k]);
     }
+    // Done holds the table's last position at rest: no velocity or acceleration feedforward
+    // pushes on after it, and its phase stays Finished.
+    assert_eq!(r.hold.position_m, xs[299]);
+    assert_eq!((r.hold.velocity_m_s, r.hold.accel_m_s2), (0.0, 0.0));
+    assert_eq!(r.status().phase, Phase::Finished);
 }
 
 #[test]
@@ -938,4 +943,76 @@ fn gains_lowered_is_flagged_when_either_gain_is_lowered() {
             "flagged outside the delay: kp {kp_factor}, kd {kd_factor}"
         );
     }
+}
+
+/// A saturated drive and a held integrator reach the tick's sample record, and neither flag is
+/// set while the loop is within its limits. Found by `cargo mutants` (both flags' `|=` made
+/// `&=` passed every test).
+#[test]
+fn saturation_and_a_held_integrator_are_flagged_in_the_records() {
+    let mut jc = sine(JumpKind::Stutter, 10.0, 0.0);
+    // 2 mm of error asks 400 N of a 300 N drive; the integrator winds with it.
+    jc.gains.kp_n_per_m = 200_000.0;
+    jc.gains.ki_n_per_m_s = 1_000.0;
+    let (mut r, raw) = armed_with(jc);
+    let mut flags_at = |raw: u32| {
+        let out = fresh_tick(&mut r, input(raw));
+        assert_eq!(out.fault, None);
+        r.samples().pop().expect("a record every tick").flags
+    };
+    let both = flags::SATURATED | flags::INTEGRATOR_HELD;
+    assert_eq!(flags_at(raw) & both, 0, "on the setpoint");
+    // Down 2 mm in steps the encoder check takes.
+    for k in 1..=4 {
+        flags_at(raw - 500 * k);
+    }
+    assert_eq!(
+        flags_at(raw - 2_000) & both,
+        both,
+        "2 mm below the setpoint"
+    );
+}
+
+/// New gains reach the loop at once while it holds a position (Armed, Done): the force for the
+/// same error changes with them. Found by `cargo mutants` (the state check's three mutants
+/// passed every test).
+#[test]
+fn gains_set_while_armed_or_done_reach_the_loop_at_once() {
+    let stiffer = |jc: &JumpConfig| Gains {
+        kp_n_per_m: 2.0 * jc.gains.kp_n_per_m,
+        ..jc.gains
+    };
+    // Armed: 1 mm below the start.
+    let jc = sine(JumpKind::Stutter, 10.0, 0.0);
+    let (mut r, raw) = armed_with(jc);
+    let off = raw - 1_000;
+    r.tick(&input(raw - 500));
+    // Held off until the velocity estimate has settled: kp's 11 N a millimetre alone.
+    let steady = (0..500)
+        .map(|_| r.tick(&input(off)).force_n)
+        .last()
+        .unwrap();
+    r.handle(&Command::SetGains(stiffer(&jc))).unwrap();
+    let after = r.tick(&input(off)).force_n;
+    assert!(
+        after > steady + 5.0,
+        "Armed: {steady} N, then {after} N with kp doubled"
+    );
+    // Done: the same off its hold.
+    let mut plant = Plant::new(0.0);
+    let mut r = armed_and_started(jc, &mut plant);
+    run_to_end(&mut r, &mut plant, 20_000);
+    assert_eq!(r.state(), RigState::Done);
+    let hold = (r.hold.position_m as f64 / plant.metres_per_count).round() as u32;
+    r.tick(&input(hold - 500));
+    let steady = (0..500)
+        .map(|_| r.tick(&input(hold - 1_000)).force_n)
+        .last()
+        .unwrap();
+    r.handle(&Command::SetGains(stiffer(&jc))).unwrap();
+    let after = r.tick(&input(hold - 1_000)).force_n;
+    assert!(
+        after > steady + 5.0,
+        "Done: {steady} N, then {after} N with kp doubled"
+    );
 }
