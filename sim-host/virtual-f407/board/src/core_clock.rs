@@ -1,6 +1,6 @@
 //! What the clock tree does to the core: its instruction rate and its NMI input, followed after
-//! every access to the RCC or the flash interface and at every stop by whichever driver runs
-//! the board (`run.rs`'s, and the USB tests' own).
+//! every access to the RCC or the flash interface and at every stop, resets included, by
+//! whichever driver runs the board (`run.rs`'s, and the USB tests' own).
 
 use std::num::NonZeroU64;
 
@@ -14,10 +14,13 @@ use crate::board::{F407, NMI_INPUT, RESET_INSTRUCTION_RATE};
 /// the clock.
 pub const CLOCK_REGISTERS: std::ops::Range<u64> = 0x4002_3800..0x4002_4000;
 
-/// When `settled` is an access to [`CLOCK_REGISTERS`]: its virtual time, ns (the driver then
-/// follows the clock, [`CoreClock::follow`]).
-pub fn clock_access_at(settled: &emulator::Settled) -> Option<u64> {
+/// When the clock tree may have changed at `settled`, its virtual time, ns: at every stop (a
+/// reset's among them: rigless settles the stop after the models' reset, so the core is back on
+/// the HSI's rate before its first instruction) and after every access to [`CLOCK_REGISTERS`].
+/// The driver then follows the clock ([`CoreClock::follow`]).
+pub fn clock_may_have_changed_at(settled: &emulator::Settled) -> Option<u64> {
     match settled {
+        emulator::Settled::Stop(stop) => Some(stop.at.0),
         emulator::Settled::Access { access, .. } if CLOCK_REGISTERS.contains(&access.address) => {
             Some(access.virtual_time.0)
         }

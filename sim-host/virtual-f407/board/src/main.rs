@@ -387,6 +387,12 @@ fn print_report(r: &RunReport) {
     for (t, c) in &r.resets {
         let _ = writeln!(err, "virtual-f407: reset at {t} ns: {c}");
     }
+    for v in &r.flash_violations {
+        let _ = writeln!(err, "virtual-f407: flash wait states too few {v}");
+    }
+    for t in &r.told {
+        let _ = writeln!(err, "virtual-f407: the part told: {t}");
+    }
 }
 
 fn summary_json(r: &RunReport) -> String {
@@ -399,7 +405,7 @@ fn summary_json(r: &RunReport) -> String {
             .map_or("null".to_string(), |v| format!("{v}"))
     };
     format!(
-        "{{\n  \"virtual_s\": {},\n  \"wall_s\": {},\n  \"jump_height_m\": {},\n  \"plant_error\": {},\n  \"encoder_deferred_counts\": {},\n  \"log_lines\": {}\n}}\n",
+        "{{\n  \"virtual_s\": {},\n  \"wall_s\": {},\n  \"jump_height_m\": {},\n  \"plant_error\": {},\n  \"encoder_deferred_counts\": {},\n  \"log_lines\": {},\n  \"flash_violations\": {}\n}}\n",
         r.end_ns as f64 * 1e-9,
         r.wall_s,
         num(jump),
@@ -407,6 +413,7 @@ fn summary_json(r: &RunReport) -> String {
             .as_ref()
             .map_or("null".into(), |e| format!("{e:?}")),
         r.encoder_deferred_counts,
-        r.log.len()
+        r.log.len(),
+        r.flash_violations.len()
     )
 }

@@ -17,7 +17,7 @@ use rigless::session::Session;
 use rigless::time::VirtualNanos;
 
 use crate::board::VirtualF407;
-use crate::core_clock::{CoreClock, clock_access_at};
+use crate::core_clock::{CoreClock, clock_may_have_changed_at};
 use crate::encoder::QuadratureEncoder;
 use crate::rig::{self, BedWiring, EmergencyStopLoop, METRES_PER_COUNT, Outputs, Robot};
 use crate::rtt::RttLog;
@@ -362,6 +362,8 @@ impl<H> BoardDriver<H> {
             Action::ResetButton => {
                 let instructions = 0;
                 s.reset_by_pin(VirtualNanos(at), instructions, host);
+                // Back on the HSI (RM0090 6.2.2), before the first instruction.
+                self.follow_the_clock(s, host, at);
             }
             Action::Supply(mv) => {
                 s.board_mut().mcu.part.set_supply(mv);
@@ -405,12 +407,11 @@ pub fn minimum_wait_states(hclk_hz: u64, supply_mv: u32) -> Option<u64> {
 }
 
 impl<H> BoardDriver<H> {
-    /// Table 12 checked whenever the supply changes (rigless 0.4 checks it only when `ACR` is
-    /// written or `HCLK` changes).
     /// RM0090 3.5.1 (table 12): the flash's wait states (`FLASH_ACR.LATENCY`) against HCLK on
     /// the supply; too few is a violation of the run, reported with when it was seen. Checked
     /// on every supply change and wherever the clock or the wait states changed (see
-    /// `follow_the_clock`), so a clock raised before its wait states is caught.
+    /// `follow_the_clock`), so a clock raised before its wait states is caught (rigless 0.4
+    /// checks neither).
     fn check_flash_latency(&mut self, s: &mut Session<VirtualF407>, at: u64) {
         let (hclk, latency) = flash_clock(s);
         if minimum_wait_states(hclk, self.supply_mv).is_none_or(|min| latency < min) {
@@ -459,6 +460,7 @@ impl<H> BoardDriver<H> {
             self.in_brown_out = false;
             host.hold(false);
             s.reset_by_pin(stop.at, stop.instruction_count, host);
+            self.follow_the_clock(s, host, stop.at.0);
         }
     }
 }
@@ -470,7 +472,7 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
         host: &mut dyn Host,
         settled: emulator::Settled,
     ) {
-        if let Some(at) = clock_access_at(&settled) {
+        if let Some(at) = clock_may_have_changed_at(&settled) {
             self.follow_the_clock(s, host, at);
         }
     }
@@ -498,7 +500,6 @@ impl<H: HostPort + Send + 'static> Driver<VirtualF407> for BoardDriver<H> {
             self.probe_full_pending = false;
         }
         self.brown_out(s, host, stop);
-        self.follow_the_clock(s, host, now);
         if self.hold_when_watchdog_runs {
             let (_, regs) = s.board_mut().mcu.part.clocks();
             let csr = regs.get(rigless::soc::stm32f427::generated::rcc::Register::Csr);

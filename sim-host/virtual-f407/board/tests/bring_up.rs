@@ -247,6 +247,25 @@ fn a_stalled_tick_is_reset_by_the_watchdog_and_the_reset_cause_reported() {
         last.out.drive_and_lift_safe() && !last.out.led_fault,
         "{last:?}"
     );
+    // The reset puts the core back on the HSI's 16 MHz before its first instruction (RM0090
+    // 6.2.2), and the restarted start-up switches to the PLL again. The first period after the
+    // reset retires the HSI's 1,600 instructions (the start-up runs busy there).
+    let rates: Vec<_> = r
+        .instruction_rates
+        .iter()
+        .filter(|(t, _)| *t >= at)
+        .collect();
+    assert!(
+        matches!(rates[..], [&(t0, 16_000_000), &(_, 168_000_000)] if t0 == at),
+        "the rates from the reset at {at} ns: {:?}",
+        r.instruction_rates
+    );
+    let first = r
+        .trace
+        .windows(2)
+        .find(|w| w[0].t_ns >= at)
+        .expect("the run went on");
+    assert_eq!(first[1].instructions - first[0].instructions, 1_600);
 }
 
 #[test]
@@ -340,8 +359,9 @@ fn a_sagging_supply_never_runs_the_flash_out_of_its_table() {
 
 /// The control tick's outputs keep their rhythm while USB streams telemetry to a reading host
 /// and the host sends bursts of configurations: the force DAC is written every 100 us give or
-/// take 5 us (measured 96.9-103.1 us: the USB driver's interrupt-masked sections, at 4 ns per
-/// instruction; silicon's wait states and bus stalls come on top). A regression bound, not the
+/// take [`TICK_ENTRY_JITTER_NS`] (measured 95.4-106.0 us: the USB driver's interrupt-masked
+/// sections, at one instruction a cycle of HCLK; silicon's extra cycles for loads, stores and
+/// branches, its wait states and bus stalls come on top). A regression bound, not the
 /// test of items 5 and 7: the binary before them measures the same here (USB's flow control
 /// keeps the inbound queue from overflowing, so its link task never logged).
 #[test]
@@ -568,8 +588,9 @@ fn a_pll_that_does_not_lock_is_reported_and_nothing_runs() {
 /// brown-out programming gives up after its bound (0.2 s at the HSI, inside the early
 /// watchdog's shortest window), says so, and the board starts anyway, with no watchdog reset.
 /// (The binary before bounded its wait by 16 M loop turns, 4-5 s on silicon, past the
-/// watchdog: reset over and over without a word. The virtual board, at 4 ns an instruction,
-/// runs those turns faster than the watchdog, so this shows the bound, not the old failure.)
+/// watchdog: reset over and over without a word. Until issue 51 the virtual board ran 250 M
+/// instructions a second whatever the clock, faster than the watchdog over those turns; it now
+/// runs the HSI's 16 M, so they take seconds there too.)
 #[test]
 fn an_option_byte_write_that_never_ends_is_reported_and_the_board_starts() {
     let Some(elf) = common::firmware_elf() else {

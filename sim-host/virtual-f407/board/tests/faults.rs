@@ -276,6 +276,15 @@ fn a_crystal_that_stops_while_armed_is_caught_by_the_clock_security_system() {
         (800.0..1100.0).contains(&rate_hz),
         "the tick timer on the HSI: {rate_hz} Hz"
     );
+    // The core falls back with it: one instruction a cycle of the HSI from the fault on.
+    let fell_back = r.instruction_rates.last().copied();
+    assert!(
+        fell_back
+            .is_some_and(|(t, rate)| rate == 16_000_000 && (FAULT_AT..FAULT_AT + MS).contains(&t)),
+        "{:?}",
+        r.instruction_rates
+    );
+    the_watchdog_restarts_after_the_fault(&r);
 }
 
 /// The virtual board is deterministic through a fault too: a property of the board (virtual

@@ -13,7 +13,7 @@ use rigless::time::VirtualNanos;
 use sandjumper_core::protocol::{FrameDecoder, encode_frame_vec};
 use sandjumper_core::{Command, HostMessage, Reply, RigMessage, Status};
 use sandjumper_virtual_f407::board::VirtualF407;
-use sandjumper_virtual_f407::core_clock::{CoreClock, clock_access_at};
+use sandjumper_virtual_f407::core_clock::{CoreClock, clock_may_have_changed_at};
 use sandjumper_virtual_f407::models::otg_fs::UsbStats;
 
 mod common;
@@ -104,7 +104,7 @@ impl Driver<VirtualF407> for Script {
         host: &mut dyn Host,
         settled: emulator::Settled,
     ) {
-        if let Some(at) = clock_access_at(&settled) {
+        if let Some(at) = clock_may_have_changed_at(&settled) {
             self.core_clock.follow(&mut s.board_mut().mcu, host, at);
         }
     }
@@ -113,10 +113,9 @@ impl Driver<VirtualF407> for Script {
         &mut self,
         s: &mut Session<VirtualF407>,
         stop: Stop,
-        host: &mut dyn Host,
+        _: &mut dyn Host,
     ) -> Option<VirtualNanos> {
         let now = stop.at.0;
-        self.core_clock.follow(&mut s.board_mut().mcu, host, now);
         let otg = &mut s.board_mut().mcu.otg;
         let mut stopped_reading = false;
         while let Some((at, act)) = self.acts.get(self.next).cloned() {
