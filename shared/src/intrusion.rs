@@ -105,6 +105,11 @@ impl SlowIntrusion {
         self.start_m
     }
 
+    /// The speed of every moving segment, m/s.
+    pub fn speed_m_s(&self) -> f64 {
+        self.speed_m_s
+    }
+
     /// The seven segments: intrude, hold, withdraw, hold, re-intrude, hold, withdraw to start.
     pub fn segments(&self) -> [Segment; SEGMENTS] {
         let v = self.speed_m_s;
@@ -142,6 +147,48 @@ impl SlowIntrusion {
             d = target;
         }
         out
+    }
+
+    /// The segments as the control tick needs them at `ticks_per_s`: where each starts, in
+    /// ticks, its start position, m (f32, as the tick evaluates it), and its direction (-1, 0,
+    /// +1), with the end, in ticks.
+    /// The same corners as [`SlowIntrusion::segments`], in as few f64 operations as the
+    /// firmware can afford inside the tick that receives `Configure` (every one a software
+    /// routine on the Cortex-M4F: one division for the whole program).
+    pub(crate) fn corners_in_ticks(&self, ticks_per_s: f64) -> ([(f64, f32, f64); SEGMENTS], f64) {
+        let ticks_per_m = ticks_per_s / self.speed_m_s;
+        let hold = self.hold_s * ticks_per_s;
+        let withdrawn = self.depth_m - self.withdraw_m;
+        // Each depth once in f32 too, for the positions.
+        let (depth, withdrawn_f, reintrusion) = (
+            self.depth_m as f32,
+            withdrawn as f32,
+            self.reintrusion_depth_m as f32,
+        );
+        let depths = [
+            ((self.depth_m, depth), true),
+            ((self.depth_m, depth), false),
+            ((withdrawn, withdrawn_f), true),
+            ((withdrawn, withdrawn_f), false),
+            ((self.reintrusion_depth_m, reintrusion), true),
+            ((self.reintrusion_depth_m, reintrusion), false),
+            ((0.0, 0.0), true),
+        ];
+        let mut out = [(0.0, 0.0, 0.0); SEGMENTS];
+        let start = self.start_m as f32;
+        let (mut at, mut d, mut d_f) = (0.0, 0.0, 0.0);
+        for (corner, ((target, target_f), moving)) in out.iter_mut().zip(depths) {
+            let (direction, length) = if moving {
+                let travel: f64 = target - d;
+                (travel.signum(), travel.abs() * ticks_per_m)
+            } else {
+                (0.0, hold)
+            };
+            *corner = (at, start + d_f, direction);
+            at += length;
+            (d, d_f) = (target, target_f);
+        }
+        (out, at)
     }
 
     /// Total length, s.

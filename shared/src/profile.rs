@@ -58,11 +58,17 @@ pub enum Phase {
 
 /// First tick at or after time `t_s` (the tolerance absorbs f64 rounding of exact products).
 fn first_tick_at(t_s: f64, tick_hz: u32) -> Result<u32, TrajectoryError> {
-    let x = libm::ceil(t_s * tick_hz as f64 - 1e-6);
+    first_tick_of(t_s * tick_hz as f64, Some(t_s), tick_hz)
+}
+
+/// [`first_tick_at`] with the time already in ticks; `t_s` in seconds when the caller has it
+/// (otherwise worked out for the error only: a division the control tick can do without).
+fn first_tick_of(ticks: f64, t_s: Option<f64>, tick_hz: u32) -> Result<u32, TrajectoryError> {
+    let x = libm::ceil(ticks - 1e-6);
     let max = (u32::MAX / 2) as f64;
     if x.is_nan() || x > max {
         return Err(TrajectoryError::TooLong {
-            end_s: t_s,
+            end_s: t_s.unwrap_or(ticks / tick_hz as f64),
             max_s: max / tick_hz as f64,
         });
     }
@@ -202,21 +208,50 @@ impl IntrusionTicks {
     /// Sample `program` at `tick_hz`.
     pub fn new(program: &SlowIntrusion, tick_hz: u32) -> Result<Self, TrajectoryError> {
         check_tick_hz(tick_hz)?;
-        let dt = 1.0 / tick_hz as f64;
+        // The firmware builds this inside the control tick that receives `Configure`, where
+        // every f64 operation is a software routine (the Cortex-M4F's FPU is single
+        // precision): the corners come in ticks from one pass over the program, each segment's
+        // first tick in f64 (exact to the tick whatever the program's length), and what is
+        // measured from there in f32, as the tick evaluates it.
+        let hz = f64::from(tick_hz);
+        let (corners, end) = program.corners_in_ticks(hz);
+        // The end is checked; every corner comes before it.
+        let n_end = first_tick_of(end, None, tick_hz)?;
+        let (speed, dt) = (program.speed_m_s() as f32, 1.0 / tick_hz as f32);
         let mut lines = [LineTicks::default(); SEGMENTS];
-        for (line, seg) in lines.iter_mut().zip(program.segments()) {
-            let n0 = first_tick_at(seg.t0_s, tick_hz)?;
-            *line = LineTicks {
-                n0,
-                p0: (seg.p0_m + seg.velocity_m_s * (n0 as f64 * dt - seg.t0_s)) as f32,
-                dp: (seg.velocity_m_s * dt) as f32,
-                v: seg.velocity_m_s as f32,
+        for (line, &(at, p0_m, direction)) in lines.iter_mut().zip(&corners) {
+            // ceil(at - 1e-6) as `first_tick_at` takes it, from the whole ticks below (the
+            // conversion saturates: a corner at or before 0 starts at tick 0).
+            let x = at - 1e-6;
+            let below = x as u32;
+            let n0 = if f64::from(below) < x {
+                below + 1
+            } else {
+                below
+            };
+            let v = direction as f32 * speed;
+            *line = if v == 0.0 {
+                LineTicks {
+                    n0,
+                    p0: p0_m,
+                    dp: 0.0,
+                    v,
+                }
+            } else {
+                // From the corner to tick n0: under one tick.
+                let late = (f64::from(n0) - at) as f32 * dt;
+                LineTicks {
+                    n0,
+                    p0: p0_m + v * late,
+                    dp: v * dt,
+                    v,
+                }
             };
         }
         Ok(Self {
             lines,
             start: program.start_m() as f32,
-            n_end: first_tick_at(program.end_s(), tick_hz)?,
+            n_end,
         })
     }
 
@@ -405,11 +440,29 @@ mod tests {
             let withdraw = depth * withdraw_frac;
             let prog = SlowIntrusion::new(start_m, depth, withdraw, room * 0.95, speed_m_s, hold_s).unwrap();
             let ticks = IntrusionTicks::new(&prog, 10_000).unwrap();
+            // The corners in ticks (the firmware's cheap pass) start where the segments do.
+            for (line, seg) in ticks.lines.iter().zip(prog.segments()) {
+                prop_assert_eq!(line.n0, first_tick_at(seg.t0_s, 10_000).unwrap());
+            }
+            prop_assert_eq!(ticks.n_end, first_tick_at(prog.end_s(), 10_000).unwrap());
             for n in (0..ticks.n_end + 20).step_by(7) {
                 let (sp, _) = ticks.eval(n);
                 let exact = prog.eval(n as f64 / 10_000.0);
                 prop_assert!((sp.position_m as f64 - exact.position_m).abs() <= 1e-7, "n={}", n);
             }
+        }
+    }
+
+    /// A program too long to count in ticks is refused with its length in seconds (worked out
+    /// from the ticks only for the error).
+    #[test]
+    fn an_intrusion_too_long_for_the_tick_counter_is_refused_with_its_length() {
+        let prog = SlowIntrusion::new(-0.02, 0.02, 0.0, 0.03, 1e-9, 0.0).unwrap();
+        match IntrusionTicks::new(&prog, 10_000) {
+            Err(TrajectoryError::TooLong { end_s, .. }) => {
+                assert!((end_s / prog.end_s() - 1.0).abs() < 1e-12, "{end_s}");
+            }
+            other => panic!("{other:?}"),
         }
     }
 

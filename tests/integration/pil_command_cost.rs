@@ -77,3 +77,75 @@ fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
     let report = link.finish().expect("the firmware exits");
     assert_eq!(report.exit_code, Some(0));
 }
+
+/// The costliest command a rig program sends, `Configure`, fits the budget for every kind of
+/// trajectory: a delayed stutter with its gain lowering (the jump `rig jump` configures) and
+/// the slow intrusion `rig intrude` configures with its defaults. Found on the virtual F407
+/// once its core ran at one instruction a cycle (issue 51): the intrusion's `Configure`, all
+/// in software f64 on the Cortex-M4F, overran the tick's 13,440-cycle budget and latched
+/// `DeadlineOverrun` before `Arm`.
+#[test]
+fn every_trajectorys_configure_fits_the_tick_budget() {
+    use sandjumper_core::controller::GainLowering;
+    use sandjumper_core::trajectory::JumpKind;
+    use sandjumper_core::{JumpConfig, TrajectorySpec};
+    if emulated_firmware::test_prerequisites("the PIL command-cost test")
+        .map_err(|skip| eprintln!("{skip}"))
+        .is_err()
+    {
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let elf = emulated_firmware::build_once(root).unwrap_or_else(|e| panic!("{e}"));
+    let intrusion = sandjumper_rig::tool::intrude::IntrudeRequest::default();
+    let mut jump = JumpConfig::new(TrajectorySpec::Sine {
+        kind: JumpKind::DelayedStutter,
+        amplitude_m: 0.01875,
+        freq_hz: 10.0,
+        tau_s: 0.75,
+    });
+    jump.gain_lowering = Some(GainLowering {
+        kp_factor: 0.5,
+        kd_factor: 0.5,
+        ramp_s: 0.05,
+    });
+    let configs = [
+        ("a delayed stutter", jump),
+        (
+            "the default slow intrusion",
+            JumpConfig::new(TrajectorySpec::SlowIntrusion {
+                start_m: intrusion.start_m,
+                depth_m: intrusion.depth_m,
+                withdraw_m: intrusion.withdraw_m,
+                reintrusion_depth_m: intrusion.reintrusion_depth_m,
+                speed_m_s: intrusion.speed_m_s,
+                hold_s: intrusion.hold_s,
+            }),
+        ),
+    ];
+    for (what, config) in configs {
+        let mut link = pil::start(&PilConfig::new(elf)).expect("QEMU starts and answers");
+        link.command(&Command::Configure(config))
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        link.exchange(&SensorFrame {
+            frame: 1,
+            encoder_count: 0,
+            current_a: None,
+            overrun: false,
+            bed: None,
+        })
+        .expect("lockstep answer");
+        let Reply::Status(status) = link.command(&Command::StatusQuery).expect("status") else {
+            panic!("StatusQuery answered without a status");
+        };
+        let cost = status.counters.max_tick_cycles;
+        eprintln!("Configure of {what}: {cost} instructions");
+        assert_eq!(status.fault, None, "after configuring {what}: {status:?}");
+        assert!(
+            cost <= COMMAND_LIMIT_INSTRUCTIONS,
+            "Configure of {what} took {cost} instructions (limit {COMMAND_LIMIT_INSTRUCTIONS})"
+        );
+        let report = link.finish().expect("the firmware exits");
+        assert_eq!(report.exit_code, Some(0));
+    }
+}

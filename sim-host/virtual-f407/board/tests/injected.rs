@@ -42,6 +42,20 @@ fn armed(elf: PathBuf) -> RunReport {
     run(cfg, NoHost::default()).expect("the run").0
 }
 
+/// The control tick the images fire their fault at (`firmware/src/inject_f407.rs`,
+/// `INJECT_AT_TICK`): 2 s of ticks after the tick starts.
+const INJECT_AT_TICK: u64 = 20_000;
+
+/// When the fault fires, ns: the stop where TIM7 has counted [`INJECT_AT_TICK`] updates (2 s of
+/// ticks after the start-up, which itself takes a few ms on the HSI and the PLL's lock).
+fn injection_at(r: &RunReport) -> u64 {
+    r.trace
+        .iter()
+        .find(|row| row.ticks >= INJECT_AT_TICK)
+        .map(|row| row.t_ns)
+        .expect("the tick reached the injection")
+}
+
 /// The drive on until the fault, the whole safe state within 100 us of it, the report, and the
 /// watchdog's restart.
 fn check(kind: &str, report: &str) {
@@ -53,9 +67,10 @@ fn check(kind: &str, report: &str) {
         .find(|w| w[0].out.drive_enable && !w[1].out.drive_enable)
         .map(|w| w[1].t_ns)
         .unwrap_or_else(|| panic!("{kind}: the drive never went off; log {:?}", r.log));
+    let injected = injection_at(&r);
     assert!(
-        (1_990 * MS..2_010 * MS).contains(&fault_at),
-        "{kind}: the drive went off at {fault_at} ns, not at the 2 s fault"
+        (injected - 10 * MS..injected + 10 * MS).contains(&fault_at),
+        "{kind}: the drive went off at {fault_at} ns, not at the fault at {injected} ns"
     );
     let row = common::at(&r, fault_at);
     assert!(
@@ -104,7 +119,8 @@ fn check_bed(kind: &str) {
     cfg.actions
         .extend(common::heartbeats(220 * MS, 2_050 * MS, 4));
     let r = run(cfg, NoHost::default()).expect("the run").0;
-    let running = common::at(&r, 1_990 * MS);
+    let injected = injection_at(&r);
+    let running = common::at(&r, injected - 10 * MS);
     assert!(
         running.out.lift_enable && running.out.blower_dac_v > 1.0 && running.out.shaker_duty > 0.4,
         "{kind}: the bed did not run before the fault: {running:?}; log {:?}",
@@ -117,8 +133,8 @@ fn check_bed(kind: &str) {
         .map(|w| w[1].t_ns)
         .unwrap_or_else(|| panic!("{kind}: the lift never went off; log {:?}", r.log));
     assert!(
-        (1_999 * MS..2_001 * MS).contains(&off_at),
-        "{kind}: the lift went off at {off_at} ns, not at the 2 s fault"
+        (injected - MS..injected + MS).contains(&off_at),
+        "{kind}: the lift went off at {off_at} ns, not at the fault at {injected} ns"
     );
     // The lift, the blower and the drive at once; the shaker's new duty (0) loads at the end
     // of its PWM period (TIM3's compare preload, 50 us at 20 kHz): by the next 100 us stop.
@@ -189,9 +205,10 @@ fn a_stack_overflow_locks_the_core_up_the_enable_gate_drops_the_drive_and_the_wa
     assert!(cause.contains("IWDG"), "{cause}");
     // The overflow comes at the 2 s tick; the heartbeat's last edge is then; the gate closes
     // one monostable period later, long before the watchdog.
+    let injected = injection_at(&r);
     assert!(
-        (2_000 * MS..2_003 * MS).contains(&gate_closed),
-        "the gate closed at {gate_closed} ns"
+        (injected..injected + 3 * MS).contains(&gate_closed),
+        "the gate closed at {gate_closed} ns, the fault at {injected} ns"
     );
     assert!(
         reset_at > gate_closed + 3 * MS && reset_at < gate_closed + 25 * MS,
