@@ -22,11 +22,16 @@ probe_rs=${PROBE_RS:-probe-rs}
 if command -v "$probe_rs" >/dev/null 2>&1 && "$probe_rs" list 2>/dev/null | grep -q '^\[0\]'; then
   exec "$probe_rs" run --chip STM32F407VGTx "$@"
 fi
+if command -v "$probe_rs" >/dev/null 2>&1; then
+  why="no debug probe attached"
+else
+  why="no $probe_rs to reach a debug probe with"
+fi
 board=${VIRTUAL_F407:-$here/../sim-host/virtual-f407/target/release/virtual-f407}
 if [[ ! -x $board ]]; then
-  echo "no debug probe attached, and no virtual board at $board to run $elf on instead:" \
+  echo "$why, and no virtual board at $board to run $elf on instead:" \
     "build it with sim-host/virtual-f407/build.sh (rustc 1.98.0, see sim-host/virtual-f407/README.md)" >&2
   exit 2
 fi
-echo "no debug probe attached: running $elf on the virtual STM32F407 board (sim-host/virtual-f407), not on hardware; Ctrl-C stops it"
+echo "$why: running $elf on the virtual STM32F407 board (sim-host/virtual-f407), not on hardware; Ctrl-C stops it"
 exec "$board" --elf "$elf" --run

@@ -172,12 +172,23 @@ fn the_f407_binary_passes_its_tests_on_the_virtual_board() {
     cargo_run_without_a_probe_runs_on_the_virtual_board(root);
 }
 
-/// `cargo run` of the F407 release firmware with no debug probe (`PROBE_RS` names none): the
-/// runner says so on its first line and the virtual board prints the firmware's boot line, its
-/// log decoded as `probe-rs run` shows a board's. The run goes on until stopped: the test stops
-/// it (its process group) once the boot line is in.
+/// `cargo run` of the F407 release firmware with probe-rs installed and no debug probe
+/// attached (`PROBE_RS` names a stand-in that lists none, as probe-rs does, and fails if asked
+/// to run): the runner says so on its first line and the virtual board prints the firmware's
+/// boot line, its log decoded as `probe-rs run` shows a board's. The run goes on until
+/// stopped: the test stops it (its process group) once the boot line is in.
 fn cargo_run_without_a_probe_runs_on_the_virtual_board(root: &Path) {
     use std::io::BufRead;
+    use std::os::unix::fs::PermissionsExt;
+    let probe_rs = root.join("target/probe-rs-with-no-probe");
+    std::fs::write(
+        &probe_rs,
+        "#!/bin/sh\ncase $1 in\n  list) echo 'No debug probes were found.' ;;\n  \
+         *) echo \"probe-rs stand-in: $1 with no probe\" >&2; exit 3 ;;\nesac\n",
+    )
+    .expect("the stand-in is written");
+    std::fs::set_permissions(&probe_rs, std::fs::Permissions::from_mode(0o755))
+        .expect("the stand-in runs");
     let mut child = BackgroundBuild(
         Command::new(env!("CARGO"))
             .args([
@@ -189,7 +200,7 @@ fn cargo_run_without_a_probe_runs_on_the_virtual_board(root: &Path) {
                 "thumbv7em-none-eabihf",
             ])
             .current_dir(root)
-            .env("PROBE_RS", root.join("target/no-probe-rs-here"))
+            .env("PROBE_RS", &probe_rs)
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
             .process_group(0)

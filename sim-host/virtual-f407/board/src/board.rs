@@ -157,8 +157,10 @@ impl F407 {
         noticed
     }
 
-    /// TIM7's input clock from the clock tree as it is now (RM0090 6.2: APB1's timer clock).
-    fn clock_the_tick_timer(&mut self) {
+    /// TIM7's input clock from the clock tree as it is now (RM0090 6.2: APB1's timer clock):
+    /// before every access to the RCC or TIM7, and after every access that may change the
+    /// clock (`core_clock::CoreClock::follow`).
+    pub fn clock_the_tick_timer(&mut self) {
         let (rcc, regs) = self.part.clocks();
         self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
     }

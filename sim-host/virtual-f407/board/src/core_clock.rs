@@ -65,6 +65,8 @@ impl CoreClock {
     ///   6.2.7: "the NMI is executed indefinitely unless the CSS interrupt pending bit is
     ///   cleared"); the core pends the NMI again at each return while it stays high.
     pub fn follow(&mut self, mcu: &mut F407, host: &mut dyn Host, at_ns: u64) {
+        // TIM7's next period on the clock as this access left it.
+        mcu.clock_the_tick_timer();
         let (rcc, regs) = mcu.part.clocks();
         let hclk = rcc.hclk(regs);
         let css_pending = cir::CSSF.is_set(regs.get(RccRegister::Cir));

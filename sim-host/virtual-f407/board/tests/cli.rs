@@ -64,6 +64,14 @@ fn bad_arguments_exit_2_with_a_message() {
             "unknown argument",
         ),
         (
+            vec!["--elf", &not_elf, "--ms", "5", "--crystal-stops-at", "0"],
+            "--crystal-stops-at: whole virtual milliseconds, 1 or more",
+        ),
+        (
+            vec!["--elf", &not_elf, "--ms", "5", "--crystal-stops-at", "soon"],
+            "--crystal-stops-at: whole virtual milliseconds, 1 or more",
+        ),
+        (
             vec!["--elf", &not_elf, "--ms", "5", "--clock"],
             "--clock needs a value",
         ),

@@ -35,7 +35,8 @@ pub const TSEL_TIM7: u8 = 0b010;
 pub struct Dac {
     /// The output registers (`DORx`) as last transferred.
     codes: [u16; 2],
-    /// The holding registers (`DHRx`) and when each was written, ns.
+    /// The holding registers (`DHRx`) and when each was written (or `CR` last written after
+    /// that), ns: a TIM7 trigger at or after it moves the holding register out.
     held: [u16; 2],
     held_ns: [u64; 2],
     /// TIM7's last TRGO, ns (its update event while its master mode selects it): the board sets
@@ -132,6 +133,15 @@ impl Device for Dac {
     ) {
         let ch = match reg {
             dac::Register::Cr => {
+                // A transfer TIM7's trigger made under the old settings stays made, and only a
+                // trigger after this write counts under the new ones (RM0090 14.3.7).
+                let now = cx.now().0;
+                for ch in 0..2 {
+                    if self.code(ch) != self.codes[ch] {
+                        self.transfer(ch, r);
+                    }
+                    self.held_ns[ch] = self.held_ns[ch].max(now);
+                }
                 self.cr = r.get(dac::Register::Cr);
                 return;
             }
@@ -290,5 +300,30 @@ mod tests {
         write(mcu, 250_000, DHR12R1, 7);
         assert_eq!(mcu.dac.code(0), 4000);
         assert_eq!(read(mcu, DOR1), 4000);
+    }
+
+    /// A transfer TIM7's TRGO made stays made when `CR` changes after it (the trigger turned
+    /// off, or another source selected), and a TRGO from before TIM7 was selected is no
+    /// trigger for a write waiting now.
+    #[test]
+    fn a_control_write_keeps_what_the_trigger_moved_and_waits_for_a_new_one() {
+        let mut board = board();
+        let mcu = &mut board.mcu;
+        write(mcu, 1_000, CR, cr(true, TSEL_TIM7));
+        write(mcu, 2_000, DHR12R1, 1234);
+        trgo(mcu, Some(100_000));
+        assert_eq!(mcu.dac.code(0), 1234);
+        // The trigger off: the output keeps what the TRGO moved.
+        write(mcu, 150_000, CR, cr(true, TSEL_SOFTWARE));
+        assert_eq!(mcu.dac.code(0), 1234);
+        assert_eq!(read(mcu, DOR1), 1234);
+        // A write waiting for the software trigger, then TIM7 selected again after a TRGO
+        // that came before the selection: the write waits for the next TRGO.
+        write(mcu, 160_000, DHR12R1, 99);
+        trgo(mcu, Some(170_000));
+        write(mcu, 180_000, CR, cr(true, TSEL_TIM7));
+        assert_eq!(mcu.dac.code(0), 1234, "a TRGO before the selection is no trigger");
+        trgo(mcu, Some(200_000));
+        assert_eq!(mcu.dac.code(0), 99);
     }
 }
