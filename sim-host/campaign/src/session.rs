@@ -5,7 +5,6 @@
 //! (`journal.jsonl`) is locked while a session runs, so two sessions cannot drive one
 //! campaign; the lock dies with its process, so a killed session leaves nothing to clean.
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -18,7 +17,7 @@ use super::point::{Connect, Link, run_point, run_point_on_board};
 use super::records::{State, write_documents, write_results};
 use super::result_row::ResultRow;
 use sandjumper_live::{CampaignRecord, LiveBus};
-use sandjumper_output::Progress;
+use sandjumper_output::{LockError, Progress, WriterLock};
 use sandjumper_rig::hil::open::LinkArg;
 
 /// `campaign run`: a new campaign from its file.
@@ -203,21 +202,16 @@ fn link_arg(name: &str) -> Result<LinkArg, CampaignError> {
     }
 }
 
-/// Lock the journal for this session.
-fn lock(journal: &Path) -> Result<File, CampaignError> {
-    let f = File::open(journal)
-        .map_err(|e| CampaignError::input(format!("cannot open {}: {e}", journal.display())))?;
-    match f.try_lock() {
-        Ok(()) => Ok(f),
-        Err(std::fs::TryLockError::WouldBlock) => Err(CampaignError::input(format!(
-            "{} is being run by another session (its journal is locked); `campaign status` shows where it stands",
+/// Lock the journal for this session (one session writes a campaign at a time).
+fn lock(journal: &Path) -> Result<WriterLock, CampaignError> {
+    WriterLock::take(journal).map_err(|e| match e {
+        LockError::Held { holder, .. } => CampaignError::input(format!(
+            "{} is being run by another session ({holder} holds its journal); `campaign status` \
+             shows where it stands",
             journal.parent().unwrap_or(journal).display()
-        ))),
-        Err(std::fs::TryLockError::Error(e)) => Err(CampaignError::internal(format!(
-            "cannot lock {}: {e}",
-            journal.display()
-        ))),
-    }
+        )),
+        LockError::Io { .. } => CampaignError::internal(e.to_string()),
+    })
 }
 
 /// Run a new campaign: plan it from its file into `<out>.incomplete`, run its points (or
@@ -413,7 +407,7 @@ fn plan(
 }
 
 /// A stopped campaign: its file, work folder, journal, the journal's lock and its link.
-type Reopened = (CampaignFile, PathBuf, Journal, File, String);
+type Reopened = (CampaignFile, PathBuf, Journal, WriterLock, String);
 
 /// A stopped campaign's file, work folder, journal (the point in progress recorded as
 /// interrupted) and its lock.
@@ -783,9 +777,7 @@ pub fn status(request: &StatusRequest) -> Result<StatusReport, CampaignError> {
     }
     let (records, dropped) = read(&jpath).map_err(CampaignError::Input)?;
     let st = State::from_records(&records).map_err(CampaignError::Input)?;
-    let running = File::open(&jpath)
-        .map(|f| matches!(f.try_lock_shared(), Err(std::fs::TryLockError::WouldBlock)))
-        .unwrap_or(false);
+    let running = WriterLock::is_held(&jpath);
     let state = if finished_dir {
         "finished"
     } else if running {

@@ -56,6 +56,28 @@ fn a_one_point_campaign_stops_resumes_and_finishes_with_typed_outcomes() {
     );
     assert_eq!((status.link.as_str(), status.sessions), ("sil", 1));
 
+    // One session at a time: while another process holds the journal, the status says it is
+    // running and a resume is refused, naming the holder.
+    let journal = tmp.path().join("one.incomplete/journal.jsonl");
+    let held = sandjumper_output::WriterLock::take(&journal).unwrap();
+    let status = session::status(&StatusRequest { dir: out.clone() }).unwrap();
+    assert_eq!(status.state, "running");
+    let busy = ResumeRequest {
+        dir: out.clone(),
+        ..ResumeRequest::default()
+    };
+    let e = session::resume(&busy, Hooks::default(), &Silent).unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert!(
+        e.to_string().contains("is being run by another session"),
+        "{e}"
+    );
+    if Path::new("/proc/locks").exists() {
+        let holder = format!("process {} (", std::process::id());
+        assert!(e.to_string().contains(&holder), "{e}");
+    }
+    drop(held);
+
     let mut lines = Vec::new();
     let hooks = Hooks {
         live: None,

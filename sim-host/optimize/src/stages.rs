@@ -10,7 +10,7 @@ use std::time::Instant;
 use sandjumper_model::SimOptions;
 use sandjumper_model::jump::simulate_stroke;
 use sandjumper_model::record::SeriesRow;
-use sandjumper_output::{Progress, StagedDir};
+use sandjumper_output::{Progress, StagedDir, WriterLock, unfinished_beside};
 use sandjumper_rig::hil::open::LinkArg;
 
 use crate::checkpoint::Checkpoint;
@@ -43,7 +43,8 @@ pub fn run_with_board(
     board: &dyn StrokeOnBoard,
 ) -> Result<OptimizeOutcome, OptimizeError> {
     let cx = Context::new(request, progress)?;
-    let staged = prepare_output(&request.out)?;
+    let lock = lock_the_checkpoint(&request.out)?;
+    let staged = prepare_output(&request.out, &cx)?;
     let started = Instant::now();
     cx.say(format!(
         "optimize: {} on {} at phi {}, {} moves, {} evaluations on {} thread(s)",
@@ -73,40 +74,45 @@ pub fn run_with_board(
     let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
     outcome.write_into(&staged)?;
     outcome.dir = staged.commit()?;
-    // The answer is safe in the folder: the checkpoint has done its job.
+    // The answer is safe in the folder: the checkpoint has done its job, and its lock.
     drop(checkpoint);
     let _ = std::fs::remove_file(&ckpt_path);
+    let _ = std::fs::remove_file(lock.path());
+    drop(lock);
     Ok(outcome)
 }
 
-/// A resumed search's killed runs left their half-written output folders
-/// (`.DIR.partial-*` beside DIR): removed, then the folder is staged (refused early when it
-/// cannot be written).
-fn prepare_output(out: &Path) -> Result<StagedDir, OptimizeError> {
-    if checkpoint_path(out).exists() {
-        remove_stale_partials(out);
+/// One search writes a checkpoint at a time: the lock beside it (`DIR.checkpoint.lock`), held
+/// until the search ends and released by the OS however it ends. A second search on the same
+/// folder is refused, naming the process that holds it.
+fn lock_the_checkpoint(out: &Path) -> Result<WriterLock, OptimizeError> {
+    let mut path = checkpoint_path(out).into_os_string();
+    path.push(".lock");
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| {
+            OptimizeError::Checkpoint(format!("cannot create {}: {e}", parent.display()))
+        })?;
     }
-    Ok(StagedDir::create(out)?)
+    WriterLock::take(Path::new(&path)).map_err(|e| OptimizeError::Checkpoint(e.to_string()))
 }
 
-/// Remove `.DIR.partial-*` beside `out`.
-fn remove_stale_partials(out: &Path) {
-    let (Some(parent), Some(name)) = (out.parent(), out.file_name()) else {
-        return;
-    };
-    let parent = if parent.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        parent
-    };
-    let prefix = format!(".{}.partial-", name.to_string_lossy());
-    if let Ok(entries) = std::fs::read_dir(parent) {
-        for e in entries.flatten() {
-            if e.file_name().to_string_lossy().starts_with(&prefix) && e.path().is_dir() {
-                let _ = std::fs::remove_dir_all(e.path());
+/// A resumed search's killed run left its half-written output folder (`.DIR.partial-*` beside
+/// DIR, whose marker names a process that is gone, [`unfinished_beside`]): removed, saying
+/// so, since the checkpoint holds what it had. A partial output of a live process, of another
+/// machine or of unknown origin is left as it is. Then the folder is staged (refused early
+/// when it cannot be written).
+fn prepare_output(out: &Path, cx: &Context<'_>) -> Result<StagedDir, OptimizeError> {
+    if checkpoint_path(out).exists() {
+        for stale in unfinished_beside(out) {
+            if std::fs::remove_dir_all(&stale).is_ok() {
+                cx.say(format!(
+                    "  removed {}: the partial output of the killed search this one resumes",
+                    stale.display()
+                ));
             }
         }
     }
+    Ok(StagedDir::create(out)?)
 }
 
 /// The starts: the paper's best of each kind, then seeded random points.
@@ -434,14 +440,14 @@ impl<'a> Context<'a> {
         pool
     }
 
-    /// The ranking of `pool`, before any run: through sil if asked, else the first link.
+    /// The ranking of `pool`, before any run: through sil whenever the request verifies through
+    /// any link (sil runs the controller core pil and the F407 run, at thousands of runs a
+    /// second, so the candidates rank and the answer refines there; pil and the F407 then run
+    /// the answer), through none without. Ranking through pil or the F407 instead refined
+    /// nothing, and an F407 that could not run left the ranking on the kinematic model without
+    /// a word.
     fn rank(&self, pool: Vec<Candidate>) -> Ranking {
-        let verify = &self.request.verify;
-        let link = verify
-            .iter()
-            .find(|l| **l == LinkArg::Sil)
-            .or(verify.first())
-            .cloned();
+        let link = (!self.request.verify.is_empty()).then_some(LinkArg::Sil);
         Ranking {
             ranked: vec![None; pool.len()],
             pool,
@@ -566,6 +572,19 @@ impl<'a> Context<'a> {
             Some(result(0)?)
         };
         let basis = ranking.basis(&self.setup);
+        if let Some(link) = ranking.link.as_ref().filter(|_| basis == "kinematic") {
+            self.say(format!(
+                "warning: no candidate kept its limits through {link} (every run faulted or \
+                 stopped): the answer and its heights are the kinematic model's"
+            ));
+        }
+        for run in [&answer, &paper_answer]
+            .into_iter()
+            .flat_map(|r| &r.links)
+            .filter_map(|l| l.skipped.as_ref().map(|why| (&l.link, why)))
+        {
+            self.say(format!("warning: --verify {}: not run: {}", run.0, run.1));
+        }
         let verified = Verified {
             answer_i,
             paper_i,

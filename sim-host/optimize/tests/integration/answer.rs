@@ -190,7 +190,8 @@ fn killed_at(request: &OptimizeRequest, lines: usize) -> bool {
 /// A search killed three times (twice in the kinematic search, once in the refinement through
 /// sil, whose values follow the search's in the checkpoint), a half-written line left at the
 /// end once, resumes to the answer of the search run whole; a killed run's half-written folder
-/// goes with the resumed run; a checkpoint of other settings is refused, naming it. (A kill is
+/// goes with the resumed run, a live run's stays; a checkpoint of other settings is refused,
+/// naming it. (A kill is
 /// a panic out of the run's progress here; the command line's test killed the process.)
 #[test]
 fn a_search_killed_mid_way_resumes_to_the_same_answer() {
@@ -228,10 +229,25 @@ fn a_search_killed_mid_way_resumes_to_the_same_answer() {
             .collect()
     };
     // A process killed by a signal leaves its half-written folder (a panic unwinding here
-    // removes it): as one would.
-    let left_by_a_kill = dir.path().join(".resumed.partial-kill9");
-    std::fs::create_dir(&left_by_a_kill).unwrap();
-    std::fs::write(left_by_a_kill.join("stroke.csv"), "t_s,p_m\n").unwrap();
+    // removes it), its marker naming a process that is gone (above any pid_max): the resumed
+    // run removes it. Another live run's staging folder beside it (this process's) is left as
+    // it is.
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|h| h.trim().to_string())
+        .unwrap_or_default();
+    let staging = |name: &str, pid: u64| {
+        let d = dir.path().join(format!(".resumed.partial-{name}"));
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join("stroke.csv"), "t_s,p_m\n").unwrap();
+        std::fs::write(
+            d.join(sandjumper_output::MARKER_FILE),
+            format!("written by the sandjumper CLI (process {pid} on {host})\n"),
+        )
+        .unwrap();
+        d
+    };
+    let left_by_a_kill = staging("kill9", 99_999_999);
+    let live = staging("live", u64::from(std::process::id()));
     let o = run(&args(&out), &Silent).unwrap();
     assert!(o.evaluations_resumed >= 199, "{}", o.evaluations_resumed);
     assert_eq!(o.refine_runs, 96);
@@ -242,8 +258,10 @@ fn a_search_killed_mid_way_resumes_to_the_same_answer() {
         assert_eq!(read(&whole_dir.join(f)), read(&out.join(f)), "{f}");
     }
     assert!(!ckpt.exists());
-    let left = partials(dir.path());
-    assert!(left.is_empty(), "{left:?}");
+    let left: Vec<_> = partials(dir.path()).into_iter().map(|e| e.path()).collect();
+    assert_eq!(left, vec![live.clone()], "killed: {left_by_a_kill:?}");
+    assert!(live.join("stroke.csv").is_file());
+    std::fs::remove_dir_all(&live).unwrap();
     // A checkpoint made with other settings is refused, not silently reused.
     std::fs::write(&ckpt, "sandjumper-optimize-checkpoint 1 {\"seed\":99}\n").unwrap();
     let e = run(&args(&out), &Silent).unwrap_err();
@@ -278,4 +296,37 @@ fn other_objectives_and_hard_ground_run() {
         assert!(o.best_value.is_finite(), "{name}: {}", o.best_value);
         assert!(o.value_ratio >= 1.0, "{name}: {}", o.value_ratio);
     }
+}
+
+/// A checkpoint has one writer: a second search into the same folder while the first holds
+/// its checkpoint's lock is refused before it starts, naming the process that holds it, and
+/// runs once the lock is let go.
+#[test]
+fn a_second_search_on_a_checkpoint_in_use_is_refused_naming_its_holder() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("busy");
+    let mut lock_path = checkpoint_path(&out).into_os_string();
+    lock_path.push(".lock");
+    let held = sandjumper_output::WriterLock::take(Path::new(&lock_path)).unwrap();
+    let e = run(&small(&out), &Silent).unwrap_err();
+    assert!(matches!(e, OptimizeError::Checkpoint(_)), "{e:?}");
+    assert_eq!(e.blame(), Blame::Input);
+    let m = e.to_string();
+    assert!(
+        m.contains("busy.checkpoint.lock") && m.contains("is locked by"),
+        "{m}"
+    );
+    if Path::new("/proc/locks").exists() {
+        assert!(
+            m.contains(&format!("process {} (", std::process::id())),
+            "{m}"
+        );
+    }
+    assert!(!out.exists(), "nothing written");
+    drop(held);
+    run(&small(&out), &Silent).unwrap();
+    assert!(
+        !Path::new(&lock_path).exists(),
+        "the lock goes with the checkpoint"
+    );
 }

@@ -403,3 +403,47 @@ fn a_search_stopped_by_its_caller_keeps_its_checkpoint_and_resumes() {
     assert_eq!(resumed.stroke, whole.stroke);
     assert_eq!(resumed.best_value, whole.best_value);
 }
+
+/// Verification through pil or the F407 alone still ranks and refines through sil (the same
+/// controller core, thousands of runs a second) and runs the answer through the link asked
+/// for: pil alone refined nothing before, and the F407 alone ranked through a board run that
+/// could not happen, leaving the answer on the kinematic model without a word. A run that
+/// cannot happen says why, in the outcome and as a warning.
+#[test]
+fn verifying_through_pil_or_the_f407_alone_ranks_and_refines_through_sil() {
+    struct Notes(Mutex<Vec<String>>);
+    impl Progress for Notes {
+        fn note(&self, line: &str) {
+            self.0.lock().unwrap().push(line.to_string());
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for link in [LinkArg::Pil, LinkArg::F407] {
+        let request = OptimizeRequest {
+            verify: vec![link.clone()],
+            refine: 12,
+            ..tiny(&dir.path().join(link.to_string()))
+        };
+        let notes = Notes(Mutex::new(Vec::new()));
+        let o = run_with_board(&request, &notes, &NoBoard).unwrap();
+        assert_eq!(o.height_basis, "sil", "{link}");
+        assert_eq!(o.refine_runs, 12, "{link}");
+        let asked = o
+            .answer
+            .links
+            .iter()
+            .find(|l| l.link == link.to_string())
+            .unwrap_or_else(|| panic!("{link}: {:?}", o.answer.links));
+        if link == LinkArg::F407 {
+            let why = asked.skipped.as_deref().unwrap_or_default();
+            assert!(why.contains("no virtual board"), "{why}");
+            let notes = notes.0.lock().unwrap();
+            assert!(
+                notes
+                    .iter()
+                    .any(|n| n.starts_with("warning: --verify f407: not run: ")),
+                "{notes:?}"
+            );
+        }
+    }
+}
