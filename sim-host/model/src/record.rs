@@ -18,6 +18,11 @@ pub struct JumpSummary {
     pub peak_added_mass_kg: f64,
     /// Time of the first lift-off, s, if the foot left the ground.
     pub liftoff_time_s: Option<f64>,
+    /// Highest rise of the robot's centre of mass (motor, rod and foot) above where it
+    /// started, m: the jump as a jump, where the rod's apex also counts a motor lowered in
+    /// flight. Exact in flight (the ballistic apex from each lift-off); elsewhere the highest
+    /// at any integration step's end.
+    pub com_rise_m: f64,
     /// Time of the first lift-off after the push-off half began, s.
     pub final_liftoff_time_s: Option<f64>,
     /// Time at which `jump_height_m` is reached, s.

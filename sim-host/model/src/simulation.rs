@@ -58,6 +58,10 @@ struct Metrics {
     final_time_s: f64,
     first_liftoff_s: Option<f64>,
     final_liftoff_s: Option<f64>,
+    /// The robot's centre of mass at the start, m.
+    com0_m: f64,
+    /// Highest centre of mass above `com0_m` so far, m.
+    com_rise_m: f64,
     peak_added_mass_kg: f64,
     peak_motor_force_n: f64,
     peak_motor_power_w: f64,
@@ -125,6 +129,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         };
         sim.refresh_guards();
         sim.begin_final_metrics(push_off_start_s);
+        sim.metrics.com0_m = sim.centre_of_mass(0.0, &y0).0;
         sim.observe(0.0, &y0);
         sim.sample(0.0, &y0);
         sim
@@ -356,6 +361,12 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.metrics.mode_switches += 1;
         }
         if kind == EventKind::LiftOff {
+            // In flight only gravity moves the centre of mass (the motor's force, the spring's
+            // and its damper's are internal): its apex is ballistic, exact.
+            let (x, v) = self.centre_of_mass(self.t, &self.y);
+            let apex = x + v.max(0.0).powi(2) / (2.0 * self.robot.gravity_m_s2());
+            let m = &mut self.metrics;
+            m.com_rise_m = m.com_rise_m.max(apex - m.com0_m);
             self.metrics.first_liftoff_s.get_or_insert(self.t);
             if self.t >= self.push_off_start_s {
                 self.metrics.final_liftoff_s.get_or_insert(self.t);
@@ -375,8 +386,24 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
         }
     }
 
+    /// The robot's centre of mass and its velocity, m and m/s: motor (at `x_r + p`), rod and
+    /// foot.
+    fn centre_of_mass(&self, t: f64, y: &SVector<f64, N>) -> (f64, f64) {
+        let r = &self.robot;
+        let (m_m, m_r, m_f) = (r.motor_mass_kg(), r.rod_mass_kg(), r.foot_mass_kg());
+        let total = m_m + m_r + m_f;
+        let p = self.actuation.motor_position(t, y);
+        let dp = self.actuation.motor_velocity(t, y);
+        (
+            (m_m * (y[0] + p) + m_r * y[0] + m_f * y[2]) / total,
+            (m_m * (y[1] + dp) + m_r * y[1] + m_f * y[3]) / total,
+        )
+    }
+
     /// Metrics at a step end or event.
     fn observe(&mut self, t: f64, y: &SVector<f64, N>) {
+        let com = self.centre_of_mass(t, y).0 - self.metrics.com0_m;
+        self.metrics.com_rise_m = self.metrics.com_rise_m.max(com);
         let f_s = self.spring_force(y);
         let m_a = self.contact.added_mass(&self.sand, y[2]);
         let f_m = self.actuation.motor_force(&self.robot, t, y, f_s);
@@ -455,6 +482,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             peak_added_mass_kg: copy.peak_added_mass_kg,
             liftoff_time_s: copy.first_liftoff_s,
             final_liftoff_time_s: copy.final_liftoff_s,
+            com_rise_m: copy.com_rise_m,
             apex_time_s: copy.best_time_s,
             final_apex_time_s: copy.final_time_s,
             peak_motor_force_n: copy.peak_motor_force_n,

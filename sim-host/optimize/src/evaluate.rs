@@ -18,6 +18,9 @@ pub enum Objective {
     Height,
     /// The highest apex after the push-off begins (the final hop), m.
     FinalHeight,
+    /// The highest rise of the robot's centre of mass (motor, rod and foot), m: the jump as a
+    /// jump, where the rod's apex also rewards a motor lowered in flight.
+    ComRise,
     /// Jump height over the motor's peak mechanical power, m/W.
     HeightPerPeakPower,
     /// Jump height over the motor's positive mechanical work, m/J.
@@ -30,6 +33,7 @@ impl Objective {
         match self {
             Self::Height => "height",
             Self::FinalHeight => "final-height",
+            Self::ComRise => "com-rise",
             Self::HeightPerPeakPower => "height-per-peak-power",
             Self::HeightPerEnergy => "height-per-energy",
         }
@@ -38,7 +42,7 @@ impl Objective {
     /// Unit of the objective's value.
     pub fn unit(self) -> &'static str {
         match self {
-            Self::Height | Self::FinalHeight => "m",
+            Self::Height | Self::FinalHeight | Self::ComRise => "m",
             Self::HeightPerPeakPower => "m/W",
             Self::HeightPerEnergy => "m/J",
         }
@@ -88,6 +92,8 @@ pub struct Evaluation {
     pub jump_height_m: f64,
     /// Highest apex after the push-off begins, m.
     pub final_jump_height_m: f64,
+    /// Highest rise of the robot's centre of mass, m.
+    pub com_rise_m: f64,
     /// Largest motor force of the kinematic run, `m_m (x_r'' + p'' + g)`, N.
     pub model_peak_force_n: f64,
     /// The rig check's force estimate `m_m (p'' + g)` on the table, N.
@@ -132,6 +138,7 @@ impl Evaluation {
         Self {
             jump_height_m: f64::NAN,
             final_jump_height_m: f64::NAN,
+            com_rise_m: f64::NAN,
             model_peak_force_n: f64::NAN,
             table_peak_force_n: f64::NAN,
             peak_power_w: f64::NAN,
@@ -219,6 +226,7 @@ impl Problem {
         let mut e = Evaluation {
             jump_height_m: s.jump_height_m,
             final_jump_height_m: s.final_jump_height_m,
+            com_rise_m: s.com_rise_m,
             model_peak_force_n: s.peak_motor_force_n,
             table_peak_force_n: check.peak_force_n,
             peak_power_w: s.peak_motor_power_w,
@@ -255,6 +263,7 @@ impl Problem {
         e.value = match self.objective {
             Objective::Height => s.jump_height_m,
             Objective::FinalHeight => s.final_jump_height_m,
+            Objective::ComRise => s.com_rise_m,
             Objective::HeightPerPeakPower => s.jump_height_m / s.peak_motor_power_w,
             Objective::HeightPerEnergy => {
                 s.jump_height_m / (s.motor_work_j + self.released_energy_j(chain))

@@ -70,6 +70,8 @@ pub struct CandidateRow {
     pub kinematic_height_m: f64,
     /// Highest apex after the push-off begins, kinematic, m.
     pub kinematic_final_height_m: f64,
+    /// Highest rise of the robot's centre of mass, kinematic, m.
+    pub kinematic_com_rise_m: f64,
     /// Largest motor force of the kinematic run, N.
     pub model_peak_force_n: f64,
     /// The rig check's force estimate on the table, N.
@@ -95,6 +97,7 @@ struct SweepRow<'a> {
     value: f64,
     jump_height_m: f64,
     final_jump_height_m: f64,
+    com_rise_m: f64,
     model_peak_force_n: f64,
     table_peak_force_n: f64,
     violation: &'a str,
@@ -263,6 +266,7 @@ impl OptimizeOutcome {
                 value: p.evaluation.value,
                 jump_height_m: p.evaluation.jump_height_m,
                 final_jump_height_m: p.evaluation.final_jump_height_m,
+                com_rise_m: p.evaluation.com_rise_m,
                 model_peak_force_n: p.evaluation.model_peak_force_n,
                 table_peak_force_n: p.evaluation.table_peak_force_n,
                 violation: p.evaluation.violation.as_deref().unwrap_or_default(),
@@ -331,9 +335,11 @@ impl OptimizeOutcome {
             t += &format!("    stroke: {}\n", chain_text(c));
         }
         t += &format!(
-            "    kinematic {} (its table {}), peak force {:.0} N (table estimate {:.0} N)\n",
+            "    kinematic {} (its table {}; centre of mass {}), peak force {:.0} N (table \
+             estimate {:.0} N)\n",
             mm(s.kinematic.jump_height_m),
             mm(s.table_jump_height_m),
+            mm(s.kinematic.com_rise_m),
             s.kinematic.model_peak_force_n,
             s.kinematic.table_peak_force_n
         );
@@ -341,8 +347,11 @@ impl OptimizeOutcome {
             match (&l.skipped, l.jump_height_m) {
                 (Some(why), _) => t += &format!("    {}: not run ({why})\n", l.link),
                 (None, Some(h)) => {
+                    let com = l
+                        .com_rise_m
+                        .map_or(String::new(), |c| format!(" (centre of mass {})", mm(c)));
                     t += &format!(
-                        "    {}: {} through the controller, {} fault(s){}\n",
+                        "    {}: {}{com} through the controller, {} fault(s){}\n",
                         l.link,
                         mm(h),
                         l.faults.len(),

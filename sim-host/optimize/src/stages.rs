@@ -805,6 +805,7 @@ impl Ranking {
                     kinematic_value: c.kinematic.value,
                     kinematic_height_m: c.kinematic.jump_height_m,
                     kinematic_final_height_m: c.kinematic.final_jump_height_m,
+                    kinematic_com_rise_m: c.kinematic.com_rise_m,
                     model_peak_force_n: c.kinematic.model_peak_force_n,
                     table_peak_force_n: c.kinematic.table_peak_force_n,
                     peak_power_w: c.kinematic.peak_power_w,

@@ -31,6 +31,9 @@ pub struct LinkRun {
     pub jump_height_m: Option<f64>,
     /// Highest apex after the push-off begins, m.
     pub final_jump_height_m: Option<f64>,
+    /// Highest rise of the robot's centre of mass, m (None where the link does not report it:
+    /// the F407 board's replay).
+    pub com_rise_m: Option<f64>,
     /// Faults the controller latched, by name.
     pub faults: Vec<String>,
     /// Largest |p_cmd - p| until the drive first saturated, m.
@@ -64,6 +67,7 @@ impl LinkRun {
         let v = match objective {
             Objective::Height => h,
             Objective::FinalHeight => self.final_jump_height_m?,
+            Objective::ComRise => self.com_rise_m?,
             Objective::HeightPerPeakPower => h / self.peak_power_w?,
             Objective::HeightPerEnergy => h / (self.work_j? + released_j),
         };
@@ -77,6 +81,7 @@ impl LinkRun {
             skipped: Some(why),
             jump_height_m: None,
             final_jump_height_m: None,
+            com_rise_m: None,
             faults: Vec::new(),
             tracking_error_max_m: None,
             saturated_periods: None,
@@ -119,6 +124,7 @@ pub fn run_through(
         skipped: None,
         jump_height_m: Some(o.summary.jump_height_m),
         final_jump_height_m: Some(o.summary.final_jump_height_m),
+        com_rise_m: Some(o.summary.com_rise_m),
         faults: o.faults.iter().map(|f| f.code.name().to_string()).collect(),
         tracking_error_max_m: Some(o.tracking_error_until_saturation().0),
         saturated_periods: Some(
@@ -179,6 +185,7 @@ fn board_run(o: &ReplayOutcome) -> LinkRun {
         skipped: None,
         jump_height_m: o.simulated_jump_height_m,
         final_jump_height_m: None,
+        com_rise_m: None,
         faults: o.fault_names().into_iter().map(str::to_string).collect(),
         tracking_error_max_m: Some(o.tracking_error_max_m),
         saturated_periods: None,

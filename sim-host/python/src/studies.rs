@@ -177,9 +177,10 @@ pub fn fit(
 }
 
 /// The objectives of the stroke search by their command-line names.
-const OBJECTIVES: [(&str, Objective); 4] = [
+const OBJECTIVES: [(&str, Objective); 5] = [
     ("height", Objective::Height),
     ("final-height", Objective::FinalHeight),
+    ("com-rise", Objective::ComRise),
     ("height-per-peak-power", Objective::HeightPerPeakPower),
     ("height-per-energy", Objective::HeightPerEnergy),
 ];
@@ -273,7 +274,7 @@ const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 19] = [
 /// the best of the paper's strokes beside it, both re-run through the controller on the links
 /// of `verify`. `out`: the output folder (stroke.csv for `jump(stroke=…)`, `hil` and `rig
 /// replay`); a search stopped by Ctrl-C leaves its checkpoint beside it and the same call
-/// resumes it. `objective`: `"height"`, `"final-height"`, `"height-per-peak-power"` or
+/// resumes it. `objective`: `"height"`, `"final-height"`, `"com-rise"`, `"height-per-peak-power"` or
 /// `"height-per-energy"`; options: the command's by name (`max_stroke=0.025`,
 /// `evaluations=…`, `moves=4`, `verify="sil"`, `threads=…`, `seed=…`, …). Returns
 /// `summary` (as `optimize --json`) and the folder's tables (`stroke`, …).

@@ -24,6 +24,8 @@ pub enum ObjectiveArg {
     Height,
     /// The highest apex after the push-off begins (the final hop).
     FinalHeight,
+    /// The highest rise of the robot's centre of mass (motor, rod and foot).
+    ComRise,
     /// Jump height per peak motor power (m/W).
     HeightPerPeakPower,
     /// Jump height per positive motor work (m/J).
@@ -35,6 +37,7 @@ impl From<ObjectiveArg> for Objective {
         match o {
             ObjectiveArg::Height => Objective::Height,
             ObjectiveArg::FinalHeight => Objective::FinalHeight,
+            ObjectiveArg::ComRise => Objective::ComRise,
             ObjectiveArg::HeightPerPeakPower => Objective::HeightPerPeakPower,
             ObjectiveArg::HeightPerEnergy => Objective::HeightPerEnergy,
         }

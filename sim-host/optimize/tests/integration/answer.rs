@@ -330,3 +330,38 @@ fn a_second_search_on_a_checkpoint_in_use_is_refused_naming_its_holder() {
         "the lock goes with the checkpoint"
     );
 }
+
+/// The centre of mass's rise as the objective (`--objective com-rise`): the answer's value is
+/// its rise through the controller, at least the paper's; every answer and every candidate
+/// reports the rod's apex and the centre of mass's rise side by side, and under the height
+/// objective the centre of mass rises less than the rod (a motor lowered in flight counts for
+/// the rod only).
+#[test]
+fn the_centre_of_mass_objective_runs_and_every_answer_reports_both_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let com = run(
+        &OptimizeRequest {
+            objective: Objective::ComRise,
+            ..small(&dir.path().join("com"))
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(com.value_ratio >= 1.0, "{}", com.value_ratio);
+    let sil = &com.answer.links[0];
+    assert_eq!(sil.link, "sil");
+    assert_eq!(Some(com.best_value), sil.com_rise_m);
+    assert!(com.answer.kinematic.com_rise_m > 0.01);
+    let height = run(&small(&dir.path().join("height")), &Silent).unwrap();
+    for s in [&height.answer, &height.paper_answer] {
+        let k = &s.kinematic;
+        assert!(k.com_rise_m.is_finite() && k.jump_height_m.is_finite());
+        assert!(k.com_rise_m < k.jump_height_m, "{k:?}");
+        assert!(s.links[0].com_rise_m.is_some_and(f64::is_finite));
+    }
+    let csv = read(&dir.path().join("height/candidates.csv"));
+    assert!(
+        csv.lines().next().unwrap().contains("kinematic_com_rise_m"),
+        "{csv}"
+    );
+}
