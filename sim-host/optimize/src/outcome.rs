@@ -18,7 +18,7 @@ use crate::evaluate::{Evaluation, SearchLimits};
 use crate::family::{Encoding, MoveChain};
 use crate::figure::{Shown, search_figure};
 use crate::paper_sweep::SweptPoint;
-use crate::search::{HistoryRow, SearchSettings};
+use crate::search::{HistoryRow, RestartRow, SearchSettings};
 use crate::verify::LinkRun;
 
 /// A stroke of the result: its description, its kinematic evaluation and its runs through
@@ -183,6 +183,14 @@ pub struct OptimizeOutcome {
     /// One row per generation of the search (history.csv).
     #[serde(skip)]
     pub history: Vec<HistoryRow>,
+    /// Every CMA-ES run of the kinematic search, in order: each start's first and its IPOP
+    /// restarts (population doubled each time CMA-ES stopped by its own criteria with budget
+    /// left).
+    pub restarts: Vec<RestartRow>,
+    /// How far the runs agree: of the runs whose best was feasible, how many came within 1 %
+    /// of the search's best, and the spread (best minus worst) of their best values, in the
+    /// objective's unit. The search's uncertainty.
+    pub restart_agreement: RestartAgreement,
     /// The answer's kinematic jump, for the figure.
     #[serde(skip)]
     pub answer_series: Vec<SeriesRow>,
@@ -192,6 +200,38 @@ pub struct OptimizeOutcome {
     /// The folder the run wrote (empty until written).
     #[serde(skip)]
     pub dir: PathBuf,
+}
+
+/// How far a search's CMA-ES runs agree ([`OptimizeOutcome::restart_agreement`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RestartAgreement {
+    /// Runs whose best candidate kept the limits.
+    pub feasible_runs: usize,
+    /// Of those, the runs within 1 % of the best value.
+    pub within_1_percent: usize,
+    /// Best minus worst of the feasible runs' best values (0 for one run).
+    pub spread: f64,
+}
+
+impl RestartAgreement {
+    /// The agreement of `runs`.
+    pub fn of(runs: &[RestartRow]) -> Self {
+        let values: Vec<f64> = runs
+            .iter()
+            .map(|r| r.best_value)
+            .filter(|v| v.is_finite())
+            .collect();
+        let best = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let worst = values.iter().copied().fold(f64::INFINITY, f64::min);
+        Self {
+            feasible_runs: values.len(),
+            within_1_percent: values
+                .iter()
+                .filter(|&&v| v >= best - 0.01 * best.abs())
+                .count(),
+            spread: if values.is_empty() { 0.0 } else { best - worst },
+        }
+    }
 }
 
 /// The files of an outcome's folder ([`OptimizeOutcome::write`]).
@@ -389,6 +429,16 @@ impl fmt::Display for OptimizeOutcome {
             value(self.best_value),
             value(self.best_paper_value),
             self.value_ratio
+        )?;
+        let a = &self.restart_agreement;
+        writeln!(
+            f,
+            "  search: {} CMA-ES runs (IPOP restarts), {} of {} feasible within 1 % of the best, \
+             their bests spread over {}",
+            self.restarts.len(),
+            a.within_1_percent,
+            a.feasible_runs,
+            value(a.spread)
         )?;
         let heads = ["answer", "the paper's best", "the kinematic model's best"];
         for (s, head) in [&self.answer, &self.paper_answer]

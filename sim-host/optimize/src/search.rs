@@ -61,6 +61,8 @@ pub struct Start {
 pub struct HistoryRow {
     /// Start index.
     pub start: usize,
+    /// Restart of that start (0: its first run).
+    pub restart: usize,
     /// Generation within the start.
     pub generation: usize,
     /// Evaluations so far, all starts.
@@ -72,6 +74,26 @@ pub struct HistoryRow {
     /// The step size after the generation.
     pub sigma: f64,
 }
+
+/// One CMA-ES run of a start: its first (restart 0) or a restart with a larger population.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RestartRow {
+    /// Start index.
+    pub start: usize,
+    /// Restart (0: the start's first run).
+    pub restart: usize,
+    /// Candidates per generation.
+    pub population: usize,
+    /// Evaluations it made.
+    pub evaluations: usize,
+    /// Its best objective value (NaN when none was feasible).
+    pub best_value: f64,
+    /// Why CMA-ES stopped.
+    pub stopped_because: String,
+}
+
+/// Added to a start's seed for each restart, so no two runs share a sampler.
+const RESTART_SEED_STEP: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// The best candidate of one start.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -118,6 +140,8 @@ pub struct SearchOutcome {
     pub elites: Vec<Elite>,
     /// One row per generation.
     pub history: Vec<HistoryRow>,
+    /// One row per CMA-ES run: each start's first and its restarts.
+    pub restarts: Vec<RestartRow>,
     /// Evaluations done (simulated or read from the checkpoint).
     pub evaluations: usize,
     /// Of which read from the checkpoint.
@@ -176,63 +200,113 @@ pub fn search(
     let mut best_so_far = f64::NEG_INFINITY;
     let checkpoint = Mutex::new(checkpoint);
     let mut elites = Vec::new();
+    let mut restarts = Vec::new();
     for (i, start) in starts.iter().enumerate() {
         let fitness = |x: &[f64]| problem.evaluate(&encoding.decode(x)).fitness();
-        let run = cma_run(
-            &CmaSpec {
-                x0: &start.x,
-                sigma: start.sigma,
-                seed: settings.seed.wrapping_add(i as u64),
-                population: settings.population,
-                budget: per_start,
-                elites: settings.elites_per_start,
-                salt: 0,
-            },
-            &fitness,
-            &checkpoint,
-            &mut |g: &Generation| {
-                evaluations += g.evaluations;
-                replayed += g.replayed;
-                infeasible += g.infeasible;
-                if g.best_value > best_so_far {
-                    best_so_far = g.best_value;
-                }
-                history.push(HistoryRow {
-                    start: i,
-                    generation: g.generation,
-                    evaluations,
-                    generation_best: g.best_value,
-                    best_so_far,
-                    sigma: g.sigma,
-                });
-                progress(Progress {
-                    evaluations,
-                    budget,
-                    best: best_so_far,
-                })
-            },
-        )?;
-        let (termination, pool) = (run.termination, run.pool);
-        elites.extend(pool.into_iter().map(|(fitness, _, x)| Elite {
-            start: i,
-            chain: encoding.decode(&x),
-            fitness,
-        }));
-        let best = termination
-            .overall_best
-            .ok_or_else(|| format!("start {}: CMA-ES stopped with no candidate", start.label))?;
-        let chain = encoding.decode(best.point.as_slice());
+        // IPOP: once CMA-ES stops by its own criteria (converged or stalled) with budget left,
+        // it starts again from the same point with twice the population, until the start's
+        // budget is spent; a run that stops at the budget ends the start.
+        let (mut left, mut population) = (per_start, settings.population);
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let mut reasons = Vec::new();
+        for restart in 0.. {
+            if left < population {
+                break;
+            }
+            let mut used = 0usize;
+            let run = cma_run(
+                &CmaSpec {
+                    x0: &start.x,
+                    sigma: start.sigma,
+                    seed: settings
+                        .seed
+                        .wrapping_add(i as u64)
+                        .wrapping_add((restart as u64).wrapping_mul(RESTART_SEED_STEP)),
+                    population,
+                    // Whole generations: CMA-ES ends on the generation that reaches its budget.
+                    budget: left - left % population,
+                    elites: settings.elites_per_start,
+                    salt: 0,
+                },
+                &fitness,
+                &checkpoint,
+                &mut |g: &Generation| {
+                    used += g.evaluations;
+                    evaluations += g.evaluations;
+                    replayed += g.replayed;
+                    infeasible += g.infeasible;
+                    if g.best_value > best_so_far {
+                        best_so_far = g.best_value;
+                    }
+                    history.push(HistoryRow {
+                        start: i,
+                        restart,
+                        generation: g.generation,
+                        evaluations,
+                        generation_best: g.best_value,
+                        best_so_far,
+                        sigma: g.sigma,
+                    });
+                    progress(Progress {
+                        evaluations,
+                        budget,
+                        best: best_so_far,
+                    })
+                },
+            )?;
+            let (termination, pool) = (run.termination, run.pool);
+            elites.extend(pool.into_iter().map(|(fitness, _, x)| Elite {
+                start: i,
+                chain: encoding.decode(&x),
+                fitness,
+            }));
+            let run_best = termination.overall_best.as_ref().ok_or_else(|| {
+                format!(
+                    "start {} restart {restart}: CMA-ES stopped with no candidate",
+                    start.label
+                )
+            })?;
+            let stopped = termination
+                .reasons
+                .iter()
+                .map(|r| format!("{r:?}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            restarts.push(RestartRow {
+                start: i,
+                restart,
+                population,
+                evaluations: used,
+                best_value: if run_best.value < crate::evaluate::INFEASIBLE_FITNESS {
+                    -run_best.value
+                } else {
+                    f64::NAN
+                },
+                stopped_because: stopped.clone(),
+            });
+            reasons.push(stopped);
+            if best.as_ref().is_none_or(|b| run_best.value < b.0) {
+                best = Some((run_best.value, run_best.point.as_slice().to_vec()));
+            }
+            left = left.saturating_sub(used);
+            let spent = termination
+                .reasons
+                .iter()
+                .any(|r| matches!(r, cmaes::TerminationReason::MaxFunctionEvals));
+            if spent || used == 0 {
+                break;
+            }
+            population = population.saturating_mul(2);
+        }
+        let (_, point) =
+            best.ok_or_else(|| format!("start {}: no CMA-ES run fitted its budget", start.label))?;
+        let chain = encoding.decode(&point);
         let evaluation = problem.evaluate(&chain);
         by_start.push(StartBest {
             start: start.clone(),
             chain,
             evaluation,
-            stopped_because: termination
-                .reasons
-                .iter()
-                .map(|r| format!("{r:?}"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            stopped_because: reasons.join("; then "),
         });
     }
     by_start.sort_by(|a, b| a.evaluation.fitness().total_cmp(&b.evaluation.fitness()));
@@ -240,6 +314,7 @@ pub fn search(
         by_start,
         elites,
         history,
+        restarts,
         evaluations,
         replayed,
         infeasible,
@@ -335,6 +410,11 @@ pub(crate) fn cma_run(
         .seed(spec.seed)
         .max_function_evals(spec.budget)
         .tol_fun(1e-12)
+        // Converged: the best fitness moved less than 0.1 um (heights are metres) over the
+        // last 10 + 30 n / lambda generations, or the steps shrank below 1e-7 of the unit
+        // coordinates. The start then restarts with a larger population (IPOP, `search`).
+        .tol_fun_hist(1e-7)
+        .tol_x(1e-7)
         .build(&objective)
         .map_err(|e| format!("cannot set up CMA-ES: {e:?}"))?;
     let mut pool: Vec<(f64, u64, Vec<f64>)> = Vec::new();

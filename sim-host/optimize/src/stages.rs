@@ -17,7 +17,9 @@ use crate::checkpoint::Checkpoint;
 use crate::error::OptimizeError;
 use crate::evaluate::Evaluation;
 use crate::family::{Encoding, MoveChain};
-use crate::outcome::{CandidateRow, KindBest, OptimizeOutcome, ResultStroke, chain_text};
+use crate::outcome::{
+    CandidateRow, KindBest, OptimizeOutcome, RestartAgreement, ResultStroke, chain_text,
+};
 use crate::paper_sweep::{PaperGrid, PaperStroke, PaperSweep, SweptPoint, sweep};
 use crate::refine::{RefineSettings, refine};
 use crate::request::{OptimizeRequest, Setup, checkpoint_path};
@@ -721,6 +723,8 @@ impl<'a> Context<'a> {
             search: s.settings.clone(),
             params: s.problem.params.clone(),
             paper_sweep: paper.sweep.points,
+            restart_agreement: RestartAgreement::of(&searched.outcome.restarts),
+            restarts: searched.outcome.restarts,
             history: searched.outcome.history,
             answer_series,
             paper_series,

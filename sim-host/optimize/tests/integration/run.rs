@@ -447,3 +447,60 @@ fn verifying_through_pil_or_the_f407_alone_ranks_and_refines_through_sil() {
         }
     }
 }
+
+/// IPOP: a start whose CMA-ES stops by its own criteria with budget left starts again with
+/// twice the population, until the start's budget is spent; every run is reported with its
+/// best, and the answer is the best of all runs. (Two moves, the fewest: a small space, where
+/// CMA-ES converges well within the budget.)
+#[test]
+fn a_start_that_converges_early_restarts_with_a_doubled_population() {
+    let dir = tempfile::tempdir().unwrap();
+    let request = OptimizeRequest {
+        evaluations: 9000,
+        population: 6,
+        random_starts: 0,
+        moves: 2,
+        ..tiny(&dir.path().join("ipop"))
+    };
+    let o = run(&request, &Silent).unwrap();
+    for r in &o.restarts {
+        eprintln!("{r:?}");
+    }
+    let starts = o.restarts.iter().map(|r| r.start).max().unwrap() + 1;
+    let per_start = request.evaluations / starts;
+    for s in 0..starts {
+        let runs: Vec<_> = o.restarts.iter().filter(|r| r.start == s).collect();
+        assert!(runs.iter().map(|r| r.evaluations).sum::<usize>() <= per_start);
+        for (k, r) in runs.iter().enumerate() {
+            assert_eq!((r.restart, r.population), (k, 6 << k), "{runs:?}");
+        }
+        // Every run but the last stopped by its own criteria, not the budget.
+        for r in &runs[..runs.len() - 1] {
+            assert!(!r.stopped_because.contains("MaxFunctionEvals"), "{runs:?}");
+        }
+    }
+    assert!(
+        o.restarts.len() > starts,
+        "no start restarted: {:?}",
+        o.restarts
+    );
+    let best_run = o
+        .restarts
+        .iter()
+        .map(|r| r.best_value)
+        .filter(|v| v.is_finite())
+        .fold(f64::NEG_INFINITY, f64::max);
+    let a = &o.restart_agreement;
+    assert!(a.within_1_percent >= 1 && a.within_1_percent <= a.feasible_runs);
+    assert!(a.spread >= 0.0);
+    // The kinematic model's best is the best of every run.
+    let kinematic_best = o
+        .candidates
+        .iter()
+        .map(|c| c.kinematic_value)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        kinematic_best >= best_run - 1e-12,
+        "{kinematic_best} {best_run}"
+    );
+}
