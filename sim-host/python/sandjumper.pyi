@@ -331,7 +331,8 @@ def optimize(
     OUT`` does: CMA-ES over the stroke family, beside the best of the paper's strokes, both
     re-run through the controller on ``verify``'s links. objective: ``"height"``,
     ``"final-height"``, ``"com-rise"``, ``"height-per-peak-power"`` or ``"height-per-energy"``. options: the
-    command's by name (``max_stroke=0.025`` (m), ``evaluations=192000``, ``moves=4``,
+    command's by name (``max_stroke=0.025`` (m), ``max_rise=1.0`` (m),
+    ``max_spring_compression=...`` (m), ``evaluations=192000``, ``moves=4``,
     ``verify="sil"`` or ``["sil", "pil"]`` or ``"none"``, ``threads=...``, ``seed=1``, ...).
     Ctrl-C stops the search after its current generation; the checkpoint beside ``out``
     resumes it. ``summary`` is ``optimize --json``'s; ``tables["stroke"]`` the stroke."""

@@ -23,6 +23,9 @@ pub struct JumpSummary {
     /// flight. Exact in flight (the ballistic apex from each lift-off); elsewhere the highest
     /// at any integration step's end.
     pub com_rise_m: f64,
+    /// Most the spring was compressed below its free length (`L0 - (x_r - x_f)`), m, at any
+    /// integration step's end or event.
+    pub max_spring_compression_m: f64,
     /// Time of the first lift-off after the push-off half began, s.
     pub final_liftoff_time_s: Option<f64>,
     /// Time at which `jump_height_m` is reached, s.

@@ -62,6 +62,8 @@ struct Metrics {
     com0_m: f64,
     /// Highest centre of mass above `com0_m` so far, m.
     com_rise_m: f64,
+    /// Most the spring was compressed below its free length so far, m.
+    max_spring_compression_m: f64,
     peak_added_mass_kg: f64,
     peak_motor_force_n: f64,
     peak_motor_power_w: f64,
@@ -404,6 +406,9 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
     fn observe(&mut self, t: f64, y: &SVector<f64, N>) {
         let com = self.centre_of_mass(t, y).0 - self.metrics.com0_m;
         self.metrics.com_rise_m = self.metrics.com_rise_m.max(com);
+        let compression = self.robot.spring_rest_length_m() - (y[0] - y[2]);
+        self.metrics.max_spring_compression_m =
+            self.metrics.max_spring_compression_m.max(compression);
         let f_s = self.spring_force(y);
         let m_a = self.contact.added_mass(&self.sand, y[2]);
         let f_m = self.actuation.motor_force(&self.robot, t, y, f_s);
@@ -483,6 +488,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             liftoff_time_s: copy.first_liftoff_s,
             final_liftoff_time_s: copy.final_liftoff_s,
             com_rise_m: copy.com_rise_m,
+            max_spring_compression_m: copy.max_spring_compression_m,
             apex_time_s: copy.best_time_s,
             final_apex_time_s: copy.final_time_s,
             peak_motor_force_n: copy.peak_motor_force_n,

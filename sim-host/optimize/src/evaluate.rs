@@ -68,6 +68,10 @@ pub struct SearchLimits {
     /// Least jump height for the ratio objectives, m (they also need the foot to leave the
     /// ground).
     pub min_height_m: f64,
+    /// Most the spring may be compressed below its free length, m.
+    pub max_spring_compression_m: f64,
+    /// Highest the rod may rise above its rest (the rig's frame), m.
+    pub max_rise_m: f64,
 }
 
 /// A search problem: robot, ground, limits and objective.
@@ -243,6 +247,24 @@ impl Problem {
                 s.peak_motor_force_n
             ));
             e.excess = s.peak_motor_force_n / peak - 1.0;
+            return e;
+        }
+        if s.max_spring_compression_m > l.max_spring_compression_m {
+            e.violation = Some(format!(
+                "compresses the spring {:.1} mm, beyond the {:.1} mm it allows",
+                1e3 * s.max_spring_compression_m,
+                1e3 * l.max_spring_compression_m
+            ));
+            e.excess = s.max_spring_compression_m / l.max_spring_compression_m - 1.0;
+            return e;
+        }
+        if s.jump_height_m > l.max_rise_m {
+            e.violation = Some(format!(
+                "raises the rod {:.1} mm, above the rig's {:.1} mm",
+                1e3 * s.jump_height_m,
+                1e3 * l.max_rise_m
+            ));
+            e.excess = s.jump_height_m / l.max_rise_m - 1.0;
             return e;
         }
         if self.objective.is_ratio() && s.liftoff_time_s.is_none() {

@@ -38,6 +38,13 @@ pub struct OptimizeRequest {
     pub table_rate_hz: u32,
     /// Least jump height of a stroke for the ratio objectives, m (0 < X <= 1).
     pub min_height_m: f64,
+    /// Most the spring may be compressed below its free length, m (`None`: the free length
+    /// itself, `robot.spring_rest_length_m`: a spring cannot be shorter than nothing; a
+    /// coil-bind length from the spring's data sheet is tighter).
+    pub max_spring_compression_m: Option<f64>,
+    /// Highest the rod may rise above its rest, m (0 < X <= 10): the rig's frame above the bed.
+    /// No document of the rig gives it; 1 m is a stated default, not a measurement.
+    pub max_rise_m: f64,
     /// Moves per stroke (2..=8; the paper's strokes have 2).
     pub moves: usize,
     /// Longest hold between moves, s (0 < X <= 5).
@@ -85,6 +92,8 @@ impl Default for OptimizeRequest {
             max_duration_s: 2.0,
             table_rate_hz: 1000,
             min_height_m: 0.02,
+            max_spring_compression_m: None,
+            max_rise_m: 1.0,
             moves: 4,
             max_hold_s: 0.5,
             evaluations: 192_000,
@@ -211,6 +220,16 @@ impl OptimizeRequest {
         within("--max-stroke", self.max_stroke_m, 0.0, 0.025, "m")?;
         within("--max-duration", self.max_duration_s, 0.0, 409.5, "s")?;
         within("--min-height", self.min_height_m, 0.0, 1.0, "m")?;
+        within("--max-rise", self.max_rise_m, 0.0, 10.0, "m")?;
+        if let Some(c) = self.max_spring_compression_m {
+            within(
+                "--max-spring-compression",
+                c,
+                0.0,
+                self.params.robot.spring_rest_length_m,
+                "m (at most the spring's free length)",
+            )?;
+        }
         within("--max-hold", self.max_hold_s, 0.0, 5.0, "s")?;
         within("--sweep-freq-step", self.sweep_freq_step_hz, 0.0, 5.0, "Hz")?;
         within("--sweep-tau-step", self.sweep_tau_step_s, 0.0, 1.0, "s")?;
@@ -267,6 +286,10 @@ impl OptimizeRequest {
             table_rate_hz: self.table_rate_hz,
             max_duration_s: self.max_duration_s,
             min_height_m: self.min_height_m,
+            max_spring_compression_m: self
+                .max_spring_compression_m
+                .unwrap_or(self.params.robot.spring_rest_length_m),
+            max_rise_m: self.max_rise_m,
         };
         Ok((limits, max_accel))
     }

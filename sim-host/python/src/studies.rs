@@ -186,7 +186,7 @@ const OBJECTIVES: [(&str, Objective); 5] = [
 ];
 
 /// `optimize`'s options by name (checked together by [`OptimizeRequest::validate`]).
-const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 19] = [
+const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 21] = [
     ("rtol", |r, v| {
         r.rtol = number("rtol", v, sandjumper_output::parse::parse_rtol)?;
         Ok(())
@@ -205,6 +205,14 @@ const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 19] = [
     }),
     ("min_height", |r, v| {
         r.min_height_m = number("min_height", v, parse_number)?;
+        Ok(())
+    }),
+    ("max_spring_compression", |r, v| {
+        r.max_spring_compression_m = Some(number("max_spring_compression", v, parse_number)?);
+        Ok(())
+    }),
+    ("max_rise", |r, v| {
+        r.max_rise_m = number("max_rise", v, parse_number)?;
         Ok(())
     }),
     ("moves", |r, v| {

@@ -86,6 +86,15 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "M", default_value = "0.02",
           value_parser = ranged("--min-height", 0.0, 1.0, "m"))]
     pub min_height: f64,
+    /// Most the spring may be compressed below its free length, m (default: the free length,
+    /// robot.spring_rest_length_m; a coil-bind length from the spring's data sheet is tighter).
+    #[arg(long, value_name = "M", value_parser = ranged("--max-spring-compression", 0.0, 1.0, "m"))]
+    pub max_spring_compression: Option<f64>,
+    /// Highest the rod may rise above its rest, m: the rig's frame above the bed (no document
+    /// of the rig gives it; 1 m is a stated default).
+    #[arg(long, value_name = "M", default_value = "1",
+          value_parser = ranged("--max-rise", 0.0, 10.0, "m"))]
+    pub max_rise: f64,
     /// Moves per stroke (the family: rest-to-rest cosine moves with holds; the paper's
     /// strokes have 2).
     #[arg(long, value_name = "N", default_value = "4",
@@ -168,6 +177,8 @@ fn request(a: &OptimizeArgs) -> Result<OptimizeRequest, CliError> {
         max_duration_s: a.max_duration,
         table_rate_hz: a.table_rate,
         min_height_m: a.min_height,
+        max_spring_compression_m: a.max_spring_compression,
+        max_rise_m: a.max_rise,
         moves: a.moves as usize,
         max_hold_s: a.max_hold,
         evaluations: a.evaluations as usize,

@@ -504,3 +504,72 @@ fn a_start_that_converges_early_restarts_with_a_doubled_population() {
         "{kinematic_best} {best_run}"
     );
 }
+
+/// The robot's physical limits are constraints: the rig's height caps the rod's rise (the
+/// answer and every feasible candidate stay under a 40 mm frame, which the unconstrained
+/// search's answer passes), and a spring allowed to compress less refuses the strokes that
+/// compress it more, naming the limit. A compression beyond the spring's free length is
+/// refused before anything runs.
+#[test]
+fn the_rigs_height_and_the_springs_free_length_are_constraints() {
+    let dir = tempfile::tempdir().unwrap();
+    let free = run(&tiny(&dir.path().join("free")), &Silent).unwrap();
+    assert!(
+        free.answer.kinematic.jump_height_m > 0.04,
+        "{:?}",
+        free.answer.kinematic
+    );
+    let low = run(
+        &OptimizeRequest {
+            max_rise_m: 0.04,
+            ..tiny(&dir.path().join("low"))
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(low.answer.kinematic.jump_height_m <= 0.04);
+    for c in low
+        .candidates
+        .iter()
+        .filter(|c| c.kinematic_value.is_finite())
+    {
+        assert!(c.kinematic_height_m <= 0.04, "{}", c.kinematic_height_m);
+    }
+    assert!(
+        low.paper_sweep
+            .iter()
+            .filter_map(|p| p.evaluation.violation.as_deref())
+            .any(|v| v.contains("above the rig's 40.0 mm")),
+        "no paper stroke met the frame"
+    );
+    let stiff = run(
+        &OptimizeRequest {
+            max_spring_compression_m: Some(0.005),
+            ..tiny(&dir.path().join("stiff"))
+        },
+        &Silent,
+    );
+    match stiff {
+        Ok(o) => assert!(
+            o.paper_sweep
+                .iter()
+                .filter_map(|p| p.evaluation.violation.as_deref())
+                .any(|v| v.contains("beyond the 5.0 mm it allows")),
+            "no stroke compressed the spring past 5 mm"
+        ),
+        Err(e) => assert!(
+            matches!(e, OptimizeError::NoFeasiblePaperStroke { .. }),
+            "{e:?}"
+        ),
+    }
+    let e = run(
+        &OptimizeRequest {
+            max_spring_compression_m: Some(0.5),
+            ..tiny(&dir.path().join("long"))
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input);
+    assert!(e.to_string().contains("--max-spring-compression"), "{e}");
+}
