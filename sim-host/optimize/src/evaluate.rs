@@ -249,23 +249,28 @@ impl Problem {
             e.excess = s.peak_motor_force_n / peak - 1.0;
             return e;
         }
-        if s.max_spring_compression_m > l.max_spring_compression_m {
-            e.violation = Some(format!(
-                "compresses the spring {:.1} mm, beyond the {:.1} mm it allows",
-                1e3 * s.max_spring_compression_m,
-                1e3 * l.max_spring_compression_m
-            ));
-            e.excess = s.max_spring_compression_m / l.max_spring_compression_m - 1.0;
-            return e;
-        }
-        if s.jump_height_m > l.max_rise_m {
-            e.violation = Some(format!(
-                "raises the rod {:.1} mm, above the rig's {:.1} mm",
-                1e3 * s.jump_height_m,
-                1e3 * l.max_rise_m
-            ));
-            e.excess = s.jump_height_m / l.max_rise_m - 1.0;
-            return e;
+        // The robot's physical limits, in millimetres in the words.
+        for (value, limit, words) in [
+            (
+                s.max_spring_compression_m,
+                l.max_spring_compression_m,
+                "compresses the spring {v} mm, beyond the {l} mm it allows",
+            ),
+            (
+                s.jump_height_m,
+                l.max_rise_m,
+                "raises the rod {v} mm, above the rig's {l} mm",
+            ),
+        ] {
+            if value > limit {
+                e.violation = Some(
+                    words
+                        .replace("{v}", &format!("{:.1}", 1e3 * value))
+                        .replace("{l}", &format!("{:.1}", 1e3 * limit)),
+                );
+                e.excess = value / limit - 1.0;
+                return e;
+            }
         }
         if self.objective.is_ratio() && s.liftoff_time_s.is_none() {
             // A rod raised by a retracting motor is not a jump.
