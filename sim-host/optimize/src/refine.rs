@@ -79,7 +79,7 @@ pub fn refine(
         ) {
             Ok(run) => match run.value(
                 problem.objective,
-                problem.limits.min_height_m,
+                &problem.limits,
                 problem.released_energy_j(&chain),
             ) {
                 Some(v) => -v,

@@ -740,7 +740,7 @@ impl Ranking {
         self.ranked[i].as_ref().and_then(|r| {
             r.value(
                 p.objective,
-                p.limits.min_height_m,
+                &p.limits,
                 p.released_energy_j(&self.pool[i].chain),
             )
         })

@@ -17,7 +17,7 @@ use sandjumper_rig::stroke_table::StrokeTable;
 use sandjumper_rig::tool::replay::{ReplayOutcome, ReplayRequest, run as replay_run};
 use sandjumper_rig::tool::target::Target;
 
-use crate::evaluate::Objective;
+use crate::evaluate::{Objective, SearchLimits};
 use crate::request::OptimizeRequest;
 
 /// One stroke run through one link.
@@ -34,6 +34,9 @@ pub struct LinkRun {
     /// Highest rise of the robot's centre of mass, m (None where the link does not report it:
     /// the F407 board's replay).
     pub com_rise_m: Option<f64>,
+    /// Most the spring was compressed below its free length, m (None where the link does not
+    /// report it).
+    pub max_spring_compression_m: Option<f64>,
     /// Faults the controller latched, by name.
     pub faults: Vec<String>,
     /// Largest |p_cmd - p| until the drive first saturated, m.
@@ -55,13 +58,26 @@ impl LinkRun {
     /// acceleration step) is reported in `saturated_periods`, not disqualified: the paper's
     /// own fast strokes do it and track within a millimetre. `released_j` is the potential
     /// energy the stroke releases by ending lower than it starts (charged to the energy
-    /// objective).
-    pub fn value(&self, objective: Objective, min_height_m: f64, released_j: f64) -> Option<f64> {
+    /// objective). A run past the robot's physical limits (`limits`: the rig's frame, the
+    /// spring's compression) is worth nothing, as its kinematic jump would be.
+    pub fn value(
+        &self,
+        objective: Objective,
+        limits: &SearchLimits,
+        released_j: f64,
+    ) -> Option<f64> {
         if self.skipped.is_some() || !self.faults.is_empty() {
             return None;
         }
         let h = self.jump_height_m?;
-        if objective.is_ratio() && (h < min_height_m || !self.lifted_off) {
+        if h > limits.max_rise_m
+            || self
+                .max_spring_compression_m
+                .is_some_and(|c| c > limits.max_spring_compression_m)
+        {
+            return None;
+        }
+        if objective.is_ratio() && (h < limits.min_height_m || !self.lifted_off) {
             return None;
         }
         let v = match objective {
@@ -82,6 +98,7 @@ impl LinkRun {
             jump_height_m: None,
             final_jump_height_m: None,
             com_rise_m: None,
+            max_spring_compression_m: None,
             faults: Vec::new(),
             tracking_error_max_m: None,
             saturated_periods: None,
@@ -125,6 +142,7 @@ pub fn run_through(
         jump_height_m: Some(o.summary.jump_height_m),
         final_jump_height_m: Some(o.summary.final_jump_height_m),
         com_rise_m: Some(o.summary.com_rise_m),
+        max_spring_compression_m: Some(o.summary.max_spring_compression_m),
         faults: o.faults.iter().map(|f| f.code.name().to_string()).collect(),
         tracking_error_max_m: Some(o.tracking_error_until_saturation().0),
         saturated_periods: Some(
@@ -186,6 +204,7 @@ fn board_run(o: &ReplayOutcome) -> LinkRun {
         jump_height_m: o.simulated_jump_height_m,
         final_jump_height_m: None,
         com_rise_m: None,
+        max_spring_compression_m: None,
         faults: o.fault_names().into_iter().map(str::to_string).collect(),
         tracking_error_max_m: Some(o.tracking_error_max_m),
         saturated_periods: None,
@@ -206,5 +225,39 @@ impl StrokeOnBoard for NoBoard {
             &LinkArg::F407,
             "no virtual board was given to this run (sandjumper_optimize::NoBoard)".into(),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sandjumper_model::Params;
+    use sandjumper_rig::stroke_table::RigLimits;
+
+    /// A run through the controller past the robot's physical limits is worth nothing, as its
+    /// kinematic jump would be: the rig's frame and the spring's compression.
+    #[test]
+    fn a_run_past_the_frame_or_the_springs_limit_is_worth_nothing() {
+        let limits = SearchLimits {
+            rig: RigLimits::of(&Params::default()),
+            table_rate_hz: 1000,
+            max_duration_s: 2.0,
+            min_height_m: 0.02,
+            max_spring_compression_m: 0.05,
+            max_rise_m: 0.3,
+        };
+        let run = |h: f64, c: f64| LinkRun {
+            jump_height_m: Some(h),
+            max_spring_compression_m: Some(c),
+            lifted_off: true,
+            skipped: None,
+            ..LinkRun::skipped(&LinkArg::Sil, String::new())
+        };
+        assert_eq!(
+            run(0.2, 0.04).value(Objective::Height, &limits, 0.0),
+            Some(0.2)
+        );
+        assert_eq!(run(0.31, 0.04).value(Objective::Height, &limits, 0.0), None);
+        assert_eq!(run(0.2, 0.06).value(Objective::Height, &limits, 0.0), None);
     }
 }

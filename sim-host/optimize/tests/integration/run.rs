@@ -542,6 +542,20 @@ fn the_rigs_height_and_the_springs_free_length_are_constraints() {
             .any(|v| v.contains("above the rig's 40.0 mm")),
         "no paper stroke met the frame"
     );
+    // Through the controller too: a run above the frame is worth nothing, so the answer
+    // ranked and refined through sil keeps under it.
+    let ranked = run(
+        &OptimizeRequest {
+            max_rise_m: 0.04,
+            verify: vec![LinkArg::Sil],
+            refine: 24,
+            ..tiny(&dir.path().join("low-sil"))
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(ranked.height_basis, "sil");
+    assert!(ranked.best_height_m <= 0.04, "{}", ranked.best_height_m);
     let stiff = run(
         &OptimizeRequest {
             max_spring_compression_m: Some(0.005),
