@@ -14,7 +14,7 @@ use std::path::Path;
 
 use sandjumper_core::command::replay_upload;
 use sandjumper_core::replay::REPLAY_CAPACITY;
-use sandjumper_core::{Command, Reply, SensorFrame};
+use sandjumper_core::{Command, Reply, SensorFrame, Status};
 use sandjumper_rig::hil::emulated_firmware;
 use sandjumper_rig::hil::link::RigLink;
 use sandjumper_rig::hil::pil::{self, PilConfig};
@@ -26,16 +26,42 @@ const F407_TICK_BUDGET_CYCLES: u32 = 13_440;
 /// flash with 5 wait states takes more than one cycle per instruction.
 const COMMAND_LIMIT_INSTRUCTIONS: u32 = F407_TICK_BUDGET_CYCLES / 2;
 
-#[test]
-fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
+/// The emulated firmware, built once (None, saying why, when the test cannot run here).
+fn emulated_elf() -> Option<&'static Path> {
     if emulated_firmware::test_prerequisites("the PIL command-cost test")
         .map_err(|skip| eprintln!("{skip}"))
         .is_err()
     {
-        return;
+        return None;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let elf = emulated_firmware::build_once(root).unwrap_or_else(|e| panic!("{e}"));
+    Some(emulated_firmware::build_once(root).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// `command` (`what` in messages), then sensor frame `frame`, which reports the command's tick
+/// to the core, then the core's status.
+fn status_after(link: &mut dyn RigLink, command: &Command, frame: u32, what: &str) -> Status {
+    link.command(command)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    link.exchange(&SensorFrame {
+        frame,
+        encoder_count: 0,
+        current_a: None,
+        overrun: false,
+        bed: None,
+    })
+    .expect("lockstep answer");
+    let Reply::Status(status) = link.command(&Command::StatusQuery).expect("status") else {
+        panic!("StatusQuery answered without a status");
+    };
+    status
+}
+
+#[test]
+fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
+    let Some(elf) = emulated_elf() else {
+        return;
+    };
     let mut link = pil::start(&PilConfig::new(elf)).expect("QEMU starts and answers");
     let samples: Vec<f32> = (0..REPLAY_CAPACITY)
         .map(|k| 0.01 * (k as f32 * 0.002).sin())
@@ -43,20 +69,7 @@ fn a_full_replay_upload_and_commit_fit_the_tick_budget() {
     let mut worst = (0u32, String::new());
     for (frame, command) in (1u32..).zip(replay_upload(&samples, 10)) {
         let what = format!("{:?}", command.kind());
-        link.command(&command)
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
-        // One sensor frame reports the command's tick to the core.
-        link.exchange(&SensorFrame {
-            frame,
-            encoder_count: 0,
-            current_a: None,
-            overrun: false,
-            bed: None,
-        })
-        .expect("lockstep answer");
-        let Reply::Status(status) = link.command(&Command::StatusQuery).expect("status") else {
-            panic!("StatusQuery answered without a status");
-        };
+        let status = status_after(&mut link, &command, frame, &what);
         assert_eq!(status.fault, None, "after {what}: {status:?}");
         if status.counters.max_tick_cycles > worst.0 {
             worst = (status.counters.max_tick_cycles, what);
@@ -89,14 +102,9 @@ fn every_trajectorys_configure_fits_the_tick_budget() {
     use sandjumper_core::controller::GainLowering;
     use sandjumper_core::trajectory::JumpKind;
     use sandjumper_core::{JumpConfig, TrajectorySpec};
-    if emulated_firmware::test_prerequisites("the PIL command-cost test")
-        .map_err(|skip| eprintln!("{skip}"))
-        .is_err()
-    {
+    let Some(elf) = emulated_elf() else {
         return;
-    }
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let elf = emulated_firmware::build_once(root).unwrap_or_else(|e| panic!("{e}"));
+    };
     let intrusion = sandjumper_rig::tool::intrude::IntrudeRequest::default();
     let mut jump = JumpConfig::new(TrajectorySpec::Sine {
         kind: JumpKind::DelayedStutter,
@@ -125,19 +133,7 @@ fn every_trajectorys_configure_fits_the_tick_budget() {
     ];
     for (what, config) in configs {
         let mut link = pil::start(&PilConfig::new(elf)).expect("QEMU starts and answers");
-        link.command(&Command::Configure(config))
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
-        link.exchange(&SensorFrame {
-            frame: 1,
-            encoder_count: 0,
-            current_a: None,
-            overrun: false,
-            bed: None,
-        })
-        .expect("lockstep answer");
-        let Reply::Status(status) = link.command(&Command::StatusQuery).expect("status") else {
-            panic!("StatusQuery answered without a status");
-        };
+        let status = status_after(&mut link, &Command::Configure(config), 1, what);
         let cost = status.counters.max_tick_cycles;
         eprintln!("Configure of {what}: {cost} instructions");
         assert_eq!(status.fault, None, "after configuring {what}: {status:?}");

@@ -29,6 +29,6 @@ pub mod verify;
 
 pub use error::OptimizeError;
 pub use outcome::OptimizeOutcome;
-pub use request::{OptimizeRequest, checkpoint_path, parse_verify, ranged};
+pub use request::{OptimizeRequest, checkpoint_lock_path, checkpoint_path, parse_verify, ranged};
 pub use stages::{run, run_with_board};
 pub use verify::{LinkRun, NoBoard, StrokeOnBoard, VirtualBoard};

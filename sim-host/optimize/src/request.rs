@@ -135,6 +135,14 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     out.with_file_name(name)
 }
 
+/// The lock of the checkpoint for `out` (`DIR.checkpoint.lock` beside it): held by the one
+/// search that writes the checkpoint.
+pub fn checkpoint_lock_path(out: &Path) -> PathBuf {
+    let mut path = checkpoint_path(out).into_os_string();
+    path.push(".lock");
+    PathBuf::from(path)
+}
+
 /// `v` within `lo < v <= hi` (in `unit`), or the command line's refusal of `flag`.
 fn within(flag: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), OptimizeError> {
     if v.is_finite() && v > lo && v <= hi {

@@ -22,7 +22,7 @@ use crate::outcome::{
 };
 use crate::paper_sweep::{PaperGrid, PaperStroke, PaperSweep, SweptPoint, sweep};
 use crate::refine::{RefineSettings, refine};
-use crate::request::{OptimizeRequest, Setup, checkpoint_path};
+use crate::request::{OptimizeRequest, Setup, checkpoint_lock_path, checkpoint_path};
 use crate::search::{SearchOutcome, SearchSettings, Start, search};
 use crate::verify::{LinkRun, StrokeOnBoard, VirtualBoard, run_through};
 
@@ -88,14 +88,13 @@ pub fn run_with_board(
 /// until the search ends and released by the OS however it ends. A second search on the same
 /// folder is refused, naming the process that holds it.
 fn lock_the_checkpoint(out: &Path) -> Result<WriterLock, OptimizeError> {
-    let mut path = checkpoint_path(out).into_os_string();
-    path.push(".lock");
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| {
             OptimizeError::Checkpoint(format!("cannot create {}: {e}", parent.display()))
         })?;
     }
-    WriterLock::take(Path::new(&path)).map_err(|e| OptimizeError::Checkpoint(e.to_string()))
+    WriterLock::take(&checkpoint_lock_path(out))
+        .map_err(|e| OptimizeError::Checkpoint(e.to_string()))
 }
 
 /// A resumed search's killed run left its half-written output folder (`.DIR.partial-*` beside

@@ -8,7 +8,9 @@ use std::path::{Path, PathBuf};
 
 use sandjumper_model::ModelName;
 use sandjumper_optimize::evaluate::Objective;
-use sandjumper_optimize::{OptimizeError, OptimizeOutcome, OptimizeRequest, checkpoint_path, run};
+use sandjumper_optimize::{
+    OptimizeError, OptimizeOutcome, OptimizeRequest, checkpoint_lock_path, checkpoint_path, run,
+};
 use sandjumper_output::{Blame, Blamed, Progress, Silent};
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::stroke_table::{RigLimits, StrokeTable};
@@ -305,9 +307,8 @@ fn other_objectives_and_hard_ground_run() {
 fn a_second_search_on_a_checkpoint_in_use_is_refused_naming_its_holder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("busy");
-    let mut lock_path = checkpoint_path(&out).into_os_string();
-    lock_path.push(".lock");
-    let held = sandjumper_output::WriterLock::take(Path::new(&lock_path)).unwrap();
+    let lock_path = checkpoint_lock_path(&out);
+    let held = sandjumper_output::WriterLock::take(&lock_path).unwrap();
     let e = run(&small(&out), &Silent).unwrap_err();
     assert!(matches!(e, OptimizeError::Checkpoint(_)), "{e:?}");
     assert_eq!(e.blame(), Blame::Input);
@@ -325,10 +326,7 @@ fn a_second_search_on_a_checkpoint_in_use_is_refused_naming_its_holder() {
     assert!(!out.exists(), "nothing written");
     drop(held);
     run(&small(&out), &Silent).unwrap();
-    assert!(
-        !Path::new(&lock_path).exists(),
-        "the lock goes with the checkpoint"
-    );
+    assert!(!lock_path.exists(), "the lock goes with the checkpoint");
 }
 
 /// The centre of mass's rise as the objective (`--objective com-rise`): the answer's value is
