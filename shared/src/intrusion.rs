@@ -113,16 +113,6 @@ impl SlowIntrusion {
     /// The seven segments: intrude, hold, withdraw, hold, re-intrude, hold, withdraw to start.
     pub fn segments(&self) -> [Segment; SEGMENTS] {
         let v = self.speed_m_s;
-        let depths = [
-            // (target depth below start, moving?)
-            (self.depth_m, true),
-            (self.depth_m, false),
-            (self.depth_m - self.withdraw_m, true),
-            (self.depth_m - self.withdraw_m, false),
-            (self.reintrusion_depth_m, true),
-            (self.reintrusion_depth_m, false),
-            (0.0, true),
-        ];
         let mut out = [Segment {
             t0_s: 0.0,
             p0_m: 0.0,
@@ -130,7 +120,7 @@ impl SlowIntrusion {
             duration_s: 0.0,
         }; SEGMENTS];
         let (mut t, mut d) = (0.0, 0.0);
-        for (seg, (target, moving)) in out.iter_mut().zip(depths) {
+        for (seg, (target, moving)) in out.iter_mut().zip(self.targets()) {
             let (velocity_m_s, duration_s) = if moving {
                 let travel: f64 = target - d;
                 (v * travel.signum(), travel.abs() / v)
@@ -149,6 +139,21 @@ impl SlowIntrusion {
         out
     }
 
+    /// Each segment's target depth below the start, m, and whether it moves there (a hold
+    /// does not): intrude, hold, withdraw, hold, re-intrude, hold, withdraw to start.
+    fn targets(&self) -> [(f64, bool); SEGMENTS] {
+        let withdrawn = self.depth_m - self.withdraw_m;
+        [
+            (self.depth_m, true),
+            (self.depth_m, false),
+            (withdrawn, true),
+            (withdrawn, false),
+            (self.reintrusion_depth_m, true),
+            (self.reintrusion_depth_m, false),
+            (0.0, true),
+        ]
+    }
+
     /// The segments as the control tick needs them at `ticks_per_s`: where each starts, in
     /// ticks, its start position, m (f32, as the tick evaluates it), and its direction (-1, 0,
     /// +1), with the end, in ticks.
@@ -158,35 +163,19 @@ impl SlowIntrusion {
     pub(crate) fn corners_in_ticks(&self, ticks_per_s: f64) -> ([(f64, f32, f64); SEGMENTS], f64) {
         let ticks_per_m = ticks_per_s / self.speed_m_s;
         let hold = self.hold_s * ticks_per_s;
-        let withdrawn = self.depth_m - self.withdraw_m;
-        // Each depth once in f32 too, for the positions.
-        let (depth, withdrawn_f, reintrusion) = (
-            self.depth_m as f32,
-            withdrawn as f32,
-            self.reintrusion_depth_m as f32,
-        );
-        let depths = [
-            ((self.depth_m, depth), true),
-            ((self.depth_m, depth), false),
-            ((withdrawn, withdrawn_f), true),
-            ((withdrawn, withdrawn_f), false),
-            ((self.reintrusion_depth_m, reintrusion), true),
-            ((self.reintrusion_depth_m, reintrusion), false),
-            ((0.0, 0.0), true),
-        ];
         let mut out = [(0.0, 0.0, 0.0); SEGMENTS];
         let start = self.start_m as f32;
-        let (mut at, mut d, mut d_f) = (0.0, 0.0, 0.0);
-        for (corner, ((target, target_f), moving)) in out.iter_mut().zip(depths) {
+        let (mut at, mut d) = (0.0, 0.0);
+        for (corner, (target, moving)) in out.iter_mut().zip(self.targets()) {
             let (direction, length) = if moving {
                 let travel: f64 = target - d;
                 (travel.signum(), travel.abs() * ticks_per_m)
             } else {
                 (0.0, hold)
             };
-            *corner = (at, start + d_f, direction);
+            *corner = (at, start + d as f32, direction);
             at += length;
-            (d, d_f) = (target, target_f);
+            d = target;
         }
         (out, at)
     }
