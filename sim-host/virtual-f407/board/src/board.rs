@@ -152,14 +152,15 @@ impl F407 {
             cir::CSSF.is_set(registers.get(RccRegister::Cir))
         });
         // No frequency from the pin from now on either: a PLL set up on it gets no clock.
+        // (The tick timer's clock, the core's rate and its NMI input follow at once:
+        // `core_clock::CoreClock::follow`, which the run calls right after.)
         self.part.rcc.attach_crystals(0, 0);
-        self.clock_the_tick_timer();
         noticed
     }
 
     /// TIM7's input clock from the clock tree as it is now (RM0090 6.2: APB1's timer clock):
-    /// before every access to the RCC or TIM7, and after every access that may change the
-    /// clock (`core_clock::CoreClock::follow`).
+    /// before every access to TIM7, and after every access that may change the clock and at
+    /// every stop (`core_clock::CoreClock::follow`).
     pub fn clock_the_tick_timer(&mut self) {
         let (rcc, regs) = self.part.clocks();
         self.tim7.clock_hz = rcc.timer_clock(regs, Apb::One);
@@ -222,11 +223,6 @@ impl Mcu for F407 {
             let (_, registers) = self.part.program();
             let sr = registers.get(FlashRegister::Sr);
             registers.set(FlashRegister::Sr, flash_sr::BSY.set(sr, 1));
-        }
-        if slot == s.rcc {
-            // The clock tree as the last access left it (the firmware reads RCC back after each
-            // change it makes): the tick's next period is counted on it.
-            self.clock_the_tick_timer();
         }
         let block = if slot == s.tim7 {
             self.clock_the_tick_timer();

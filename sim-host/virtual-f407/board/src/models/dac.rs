@@ -322,7 +322,11 @@ mod tests {
         write(mcu, 160_000, DHR12R1, 99);
         trgo(mcu, Some(170_000));
         write(mcu, 180_000, CR, cr(true, TSEL_TIM7));
-        assert_eq!(mcu.dac.code(0), 1234, "a TRGO before the selection is no trigger");
+        assert_eq!(
+            mcu.dac.code(0),
+            1234,
+            "a TRGO before the selection is no trigger"
+        );
         trgo(mcu, Some(200_000));
         assert_eq!(mcu.dac.code(0), 99);
     }
