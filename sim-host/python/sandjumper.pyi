@@ -325,6 +325,9 @@ def optimize(
     phi: float = 0.57,
     params: Optional[Params] = None,
     progress: Optional[Progress] = None,
+    phi_range: Optional[str] = None,
+    phi_points: int = 5,
+    start_from: Sequence[PathLike] = (),
     **options: Any,
 ) -> FolderResult:
     """Search for the best stroke within the rig's limits, as ``sandjumper optimize --out
@@ -335,7 +338,11 @@ def optimize(
     ``max_spring_compression=...`` (m), ``evaluations=192000``, ``moves=4``,
     ``verify="sil"`` or ``["sil", "pil"]`` or ``"none"``, ``threads=...``, ``seed=1``, ...).
     Ctrl-C stops the search after its current generation; the checkpoint beside ``out``
-    resumes it. ``summary`` is ``optimize --json``'s; ``tables["stroke"]`` the stroke."""
+    resumes it. phi_range: ``"0.57:0.62"`` (instead of ``phi``), a bed known to a range: the
+    worst case over ``phi_points`` beds is maximised (``tables["beds"]``, ``over_beds``).
+    start_from: earlier searches' folders whose answers this search also starts from (and
+    keeps as candidates). ``summary`` is ``optimize --json``'s (``validity``: where the
+    answer leaves the paper's measured regime); ``tables["stroke"]`` the stroke."""
 
 def campaign_run(
     file: PathLike,

@@ -26,6 +26,9 @@ pub struct JumpSummary {
     /// Most the spring was compressed below its free length (`L0 - (x_r - x_f)`), m, at any
     /// integration step's end or event.
     pub max_spring_compression_m: f64,
+    /// The foot's downward speed at each touchdown, in order, m/s (its velocity just before
+    /// the contact; one per `Touchdown` event).
+    pub touchdown_speeds_m_s: Vec<f64>,
     /// Time of the first lift-off after the push-off half began, s.
     pub final_liftoff_time_s: Option<f64>,
     /// Time at which `jump_height_m` is reached, s.

@@ -64,6 +64,8 @@ struct Metrics {
     com_rise_m: f64,
     /// Most the spring was compressed below its free length so far, m.
     max_spring_compression_m: f64,
+    /// The foot's downward speed at each touchdown so far, m/s.
+    touchdown_speeds_m_s: Vec<f64>,
     peak_added_mass_kg: f64,
     peak_motor_force_n: f64,
     peak_motor_power_w: f64,
@@ -303,6 +305,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             }
             let f_s = self.spring_force(&self.y);
             let mut v_f = self.y[3];
+            let landing_speed = -v_f;
             let event = self.contact.apply(
                 transition,
                 &self.robot,
@@ -314,7 +317,10 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             self.y[3] = v_f;
             if let Some(kind) = event {
                 self.record(kind);
-                touched |= kind == EventKind::Touchdown;
+                if kind == EventKind::Touchdown {
+                    self.metrics.touchdown_speeds_m_s.push(landing_speed);
+                    touched = true;
+                }
             }
             let f_s = self.spring_force(&self.y);
             let guards = self
@@ -489,6 +495,7 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             final_liftoff_time_s: copy.final_liftoff_s,
             com_rise_m: copy.com_rise_m,
             max_spring_compression_m: copy.max_spring_compression_m,
+            touchdown_speeds_m_s: copy.touchdown_speeds_m_s,
             apex_time_s: copy.best_time_s,
             final_apex_time_s: copy.final_time_s,
             peak_motor_force_n: copy.peak_motor_force_n,

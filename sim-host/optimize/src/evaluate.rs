@@ -77,8 +77,12 @@ pub struct SearchLimits {
 /// A search problem: robot, ground, limits and objective.
 #[derive(Clone, Debug)]
 pub struct Problem {
-    /// The robot and sand.
+    /// The robot and sand (with `beds`, the nominal bed: the figure's jump is on it).
     pub params: Params,
+    /// Other beds a stroke must jump on (a packing fraction known only to a range): with any,
+    /// a candidate is scored on `params` and on each of them, its value is the worst of those
+    /// and it is feasible only when it keeps every limit on each. Empty: `params` alone.
+    pub beds: Vec<Params>,
     /// Ground model.
     pub model: ModelName,
     /// Limits.
@@ -109,8 +113,15 @@ pub struct Evaluation {
     pub work_j: f64,
     /// Duration of the stroke, s.
     pub duration_s: f64,
-    /// The objective's value (NaN when infeasible).
+    /// The foot's fastest landing (downward speed at a touchdown) of the kinematic jump while
+    /// the stroke still runs, m/s (0 when the foot does not land again before it ends).
+    pub max_touchdown_speed_m_s: f64,
+    /// The objective's value (NaN when infeasible): with several beds, the worst of them.
     pub value: f64,
+    /// The mean of the objective's values over the beds (`value` with one bed).
+    pub mean_value: f64,
+    /// The packing fraction of the bed whose value is `value` (the worst bed).
+    pub worst_phi: f64,
     /// The limit the candidate breaks, in words (None: feasible).
     pub violation: Option<String>,
     /// How far past that limit, relative (0 when feasible).
@@ -148,7 +159,10 @@ impl Evaluation {
             peak_power_w: f64::NAN,
             work_j: f64::NAN,
             duration_s,
+            max_touchdown_speed_m_s: f64::NAN,
             value: f64::NAN,
+            mean_value: f64::NAN,
+            worst_phi: f64::NAN,
             violation: Some(why),
             excess: excess.max(0.0),
         }
@@ -174,8 +188,35 @@ impl Problem {
         }
     }
 
-    /// Evaluate `chain`: limits first (cheap), then the kinematic jump.
+    /// Every bed a candidate is scored on: `params`, then `beds`.
+    pub fn all_beds(&self) -> impl Iterator<Item = &Params> {
+        std::iter::once(&self.params).chain(&self.beds)
+    }
+
+    /// Evaluate `chain`: limits first (cheap), then the kinematic jump, on every bed; its
+    /// value is the worst bed's, and it is infeasible when it breaks a limit on any (the
+    /// first bed it breaks one on is reported).
     pub fn evaluate(&self, chain: &MoveChain) -> Evaluation {
+        let mut worst: Option<Evaluation> = None;
+        let (mut sum, mut n) = (0.0, 0usize);
+        for params in self.all_beds() {
+            let e = self.evaluate_on(params, chain);
+            if !e.feasible() {
+                return e;
+            }
+            sum += e.value;
+            n += 1;
+            if worst.as_ref().is_none_or(|w| e.value < w.value) {
+                worst = Some(e);
+            }
+        }
+        let mut e = worst.expect("a problem has at least its own bed");
+        e.mean_value = sum / n as f64;
+        e
+    }
+
+    /// Evaluate `chain` on the bed `params` alone.
+    pub fn evaluate_on(&self, params: &Params, chain: &MoveChain) -> Evaluation {
         let duration_s = chain.duration_s();
         let l = &self.limits;
         if duration_s > l.max_duration_s {
@@ -215,7 +256,7 @@ impl Problem {
             Ok(s) => s,
             Err(e) => return Evaluation::infeasible(duration_s, e, 1.0),
         };
-        let outcome = match simulate_stroke(&self.params, self.model, stroke, &self.opts) {
+        let outcome = match simulate_stroke(params, self.model, stroke, &self.opts) {
             Ok(o) => o,
             Err(e) => {
                 return Evaluation::infeasible(
@@ -226,7 +267,7 @@ impl Problem {
             }
         };
         let s = &outcome.summary;
-        let peak = self.params.drive.peak_force_n;
+        let peak = params.drive.peak_force_n;
         let mut e = Evaluation {
             jump_height_m: s.jump_height_m,
             final_jump_height_m: s.final_jump_height_m,
@@ -236,7 +277,13 @@ impl Problem {
             peak_power_w: s.peak_motor_power_w,
             work_j: s.motor_work_j,
             duration_s,
+            max_touchdown_speed_m_s: crate::validity::landings_before(s, duration_s)
+                .iter()
+                .map(|l| l.1)
+                .fold(0.0, f64::max),
             value: f64::NAN,
+            mean_value: f64::NAN,
+            worst_phi: params.sand.packing_fraction,
             violation: None,
             excess: 0.0,
         };

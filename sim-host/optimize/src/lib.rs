@@ -6,7 +6,8 @@
 //! delayed stutter at the same limits: the baseline), [`search`] (CMA-ES from several starts,
 //! in parallel) with its [`checkpoint`] (resumable after a crash), [`verify`] (the best
 //! strokes through the real controller), [`refine`] (the best refined through sil),
-//! [`figure`] (the stroke and the jump beside the paper's best).
+//! [`figure`] (the stroke and the jump beside the paper's best), [`validity`] (the answer
+//! against the paper's measured regime, re-scored under the model's alternative rules).
 //!
 //! The whole command is one call: an [`OptimizeRequest`] (its `Default` holds the command
 //! line's defaults), [`run`] (the F407 link on the virtual board; or [`run_with_board`],
@@ -25,10 +26,14 @@ pub mod refine;
 pub mod request;
 pub mod search;
 pub mod stages;
+pub mod validity;
 pub mod verify;
 
 pub use error::OptimizeError;
 pub use outcome::OptimizeOutcome;
-pub use request::{OptimizeRequest, checkpoint_lock_path, checkpoint_path, parse_verify, ranged};
+pub use request::{
+    OptimizeRequest, PhiRange, checkpoint_lock_path, checkpoint_path, parse_phi_range,
+    parse_verify, ranged,
+};
 pub use stages::{run, run_with_board};
 pub use verify::{LinkRun, NoBoard, StrokeOnBoard, VirtualBoard};

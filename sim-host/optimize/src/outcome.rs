@@ -19,6 +19,7 @@ use crate::family::{Encoding, MoveChain};
 use crate::figure::{Shown, search_figure};
 use crate::paper_sweep::SweptPoint;
 use crate::search::{HistoryRow, RestartRow, SearchSettings};
+use crate::validity::Validity;
 use crate::verify::LinkRun;
 
 /// A stroke of the result: its description, its kinematic evaluation and its runs through
@@ -27,7 +28,7 @@ use crate::verify::LinkRun;
 pub struct ResultStroke {
     /// In words.
     pub label: String,
-    /// The chain (start and moves), for the optimised strokes.
+    /// The chain (start and moves): what `--start-from` reads back.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chain: Option<MoveChain>,
     /// The objective's value through the ranking link (None: not run, or it faulted).
@@ -143,6 +144,9 @@ pub struct OptimizeOutcome {
     pub candidates_ranked: usize,
     /// Runs through sil of the refinement.
     pub refine_runs: usize,
+    /// Runs through sil refining the paper's best (the same budget, over the paper's
+    /// amplitude, frequency and delay), before the two are compared.
+    pub paper_refine_runs: usize,
     /// Points of the paper sweep.
     pub paper_sweep_points: usize,
     /// Feasible points of the sweep.
@@ -191,6 +195,15 @@ pub struct OptimizeOutcome {
     /// of the search's best, and the spread (best minus worst) of their best values, in the
     /// objective's unit. The search's uncertainty.
     pub restart_agreement: RestartAgreement,
+    /// The answer against the paper's measured regime: its landings, pushes and overshoots
+    /// beside the paper's best's, re-scored under the model's alternative rules
+    /// (validity.csv), and the rules its result relies on, in words.
+    pub validity: Validity,
+    /// The answer and the paper's best on each bed (beds.csv; one row, the nominal bed,
+    /// without `--phi-range`).
+    pub beds: Vec<BedRow>,
+    /// Their worst case and mean over the beds.
+    pub over_beds: OverBeds,
     /// The answer's kinematic jump, for the figure.
     #[serde(skip)]
     pub answer_series: Vec<SeriesRow>,
@@ -200,6 +213,70 @@ pub struct OptimizeOutcome {
     /// The folder the run wrote (empty until written).
     #[serde(skip)]
     pub dir: PathBuf,
+}
+
+/// The answer and the paper's best on one bed (beds.csv): the nominal bed alone, or each bed
+/// of `--phi-range`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BedRow {
+    /// The bed's packing fraction.
+    pub phi: f64,
+    /// The answer's objective value, kinematic model (NaN when it breaks a limit there).
+    pub answer_kinematic_value: f64,
+    /// The answer's value through sil (NaN: not run, faulted, or past a limit).
+    pub answer_sil_value: f64,
+    /// The paper's best's value, kinematic model.
+    pub paper_kinematic_value: f64,
+    /// The paper's best's value through sil.
+    pub paper_sil_value: f64,
+}
+
+/// The worst case and the mean over the beds of the answer and of the paper's best.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct OverBeds {
+    /// Beds.
+    pub beds: usize,
+    /// The answer's worst value on the basis (sil when it ran, else kinematic).
+    pub answer_worst: f64,
+    /// The answer's mean value on the basis.
+    pub answer_mean: f64,
+    /// The paper's best's worst value on the basis.
+    pub paper_worst: f64,
+    /// The paper's best's mean value on the basis.
+    pub paper_mean: f64,
+}
+
+impl OverBeds {
+    /// The worst and mean of `rows`, through sil when `sil` (else kinematic); NaN values
+    /// (a faulted run, a broken limit) make the worst case NaN.
+    pub fn of(rows: &[BedRow], sil: bool) -> Self {
+        let pick = |r: &BedRow, answer: bool| match (sil, answer) {
+            (true, true) => r.answer_sil_value,
+            (true, false) => r.paper_sil_value,
+            (false, true) => r.answer_kinematic_value,
+            (false, false) => r.paper_kinematic_value,
+        };
+        let worst = |answer: bool| {
+            rows.iter()
+                .map(|r| pick(r, answer))
+                .fold(f64::INFINITY, |w, v| {
+                    if v.is_nan() || w.is_nan() {
+                        f64::NAN
+                    } else {
+                        w.min(v)
+                    }
+                })
+        };
+        let mean =
+            |answer: bool| rows.iter().map(|r| pick(r, answer)).sum::<f64>() / rows.len() as f64;
+        Self {
+            beds: rows.len(),
+            answer_worst: worst(true),
+            answer_mean: mean(true),
+            paper_worst: worst(false),
+            paper_mean: mean(false),
+        }
+    }
 }
 
 /// How far a search's CMA-ES runs agree ([`OptimizeOutcome::restart_agreement`]).
@@ -235,8 +312,10 @@ impl RestartAgreement {
 }
 
 /// The files of an outcome's folder ([`OptimizeOutcome::write`]).
-pub const FILES: [&str; 9] = [
+pub const FILES: [&str; 11] = [
     "stroke.csv",
+    "beds.csv",
+    "validity.csv",
     "paper_stroke.csv",
     "candidates.csv",
     "paper_sweep.csv",
@@ -246,6 +325,42 @@ pub const FILES: [&str; 9] = [
     "optimize.png",
     "optimize.svg",
 ];
+
+/// The answer's chain of an earlier search's folder (`DIR/summary.json`, `answer.chain`): a
+/// stroke for [`OptimizeRequest::start_from`](crate::OptimizeRequest::start_from).
+pub fn answer_chain_in(dir: &Path) -> Result<MoveChain, OptimizeError> {
+    #[derive(serde::Deserialize)]
+    struct Summary {
+        answer: Answer,
+    }
+    #[derive(serde::Deserialize)]
+    struct Answer {
+        chain: Option<MoveChain>,
+    }
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        OptimizeError::Invalid(format!(
+            "--start-from {}: cannot read {}: {e} (allowed: a folder `optimize` wrote)",
+            dir.display(),
+            path.display()
+        ))
+    })?;
+    let summary: Summary = serde_json::from_str(&text).map_err(|e| {
+        OptimizeError::Invalid(format!(
+            "--start-from {}: {} is not an optimize summary: {e}",
+            dir.display(),
+            path.display()
+        ))
+    })?;
+    summary.answer.chain.ok_or_else(|| {
+        OptimizeError::Invalid(format!(
+            "--start-from {}: {} gives no answer.chain (written by an older version: run that \
+             search again)",
+            dir.display(),
+            path.display()
+        ))
+    })
+}
 
 /// `c` in words: its start, then each move's target and duration and the holds between.
 pub fn chain_text(c: &MoveChain) -> String {
@@ -326,6 +441,21 @@ impl OptimizeOutcome {
             ],
         )
         .map_err(OptimizeError::Internal)?;
+        write_csv(
+            &staged.file("validity.csv"),
+            &self.validity.rescored,
+            &[
+                "rule",
+                "alternative",
+                "answer_value",
+                "answer_value_alternative",
+                "paper_value",
+                "paper_value_alternative",
+                "violation",
+            ],
+        )
+        .map_err(OptimizeError::Internal)?;
+        write_csv(&staged.file("beds.csv"), &self.beds, &[]).map_err(OptimizeError::Internal)?;
         self.figure(staged)?;
         staged.write_text("summary.json", &format!("{}\n", self.json()?))?;
         Ok(())
@@ -342,7 +472,14 @@ impl OptimizeOutcome {
                 self.height_basis,
                 1e3 * self.best_height_m,
                 1e3 * self.best_paper_stroke_height_m
-            ),
+            ) + &if self.validity.relies_on.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " — relies on {} rule(s) outside the paper's measured regime (summary.json)",
+                    self.validity.relies_on.len()
+                )
+            },
             &[
                 Shown {
                     label: "answer".into(),
@@ -368,14 +505,22 @@ impl OptimizeOutcome {
     }
 
     /// One stroke of the human summary.
-    fn stroke_lines(s: &ResultStroke, head: &str) -> String {
+    fn stroke_lines(s: &ResultStroke, head: &str, beds: usize) -> String {
         let mm = |v: f64| format!("{:.2} mm", 1e3 * v);
         let mut t = format!("  {head}: {}\n", s.label);
         if let Some(c) = &s.chain {
             t += &format!("    stroke: {}\n", chain_text(c));
         }
+        let on = if beds > 1 {
+            format!(
+                " on its worst bed (phi {}; the table and the links on the nominal bed)",
+                s.kinematic.worst_phi
+            )
+        } else {
+            String::new()
+        };
         t += &format!(
-            "    kinematic {} (its table {}; centre of mass {}), peak force {:.0} N (table \
+            "    kinematic {}{on} (its table {}; centre of mass {}), peak force {:.0} N (table \
              estimate {:.0} N)\n",
             mm(s.kinematic.jump_height_m),
             mm(s.table_jump_height_m),
@@ -440,13 +585,43 @@ impl fmt::Display for OptimizeOutcome {
             a.feasible_runs,
             value(a.spread)
         )?;
+        let b = &self.over_beds;
+        if b.beds > 1 {
+            writeln!(
+                f,
+                "  over {} beds (phi {}..{}): worst {} (mean {}), the paper's best worst {} \
+                 (mean {}): worst-case ratio {:.3} (beds.csv)",
+                b.beds,
+                self.beds.first().map_or(f64::NAN, |r| r.phi),
+                self.beds.last().map_or(f64::NAN, |r| r.phi),
+                value(b.answer_worst),
+                value(b.answer_mean),
+                value(b.paper_worst),
+                value(b.paper_mean),
+                b.answer_worst / b.paper_worst
+            )?;
+        }
+        if self.validity.relies_on.is_empty() {
+            writeln!(
+                f,
+                "  validity: within the paper's measured regime on every check (validity.csv)"
+            )?;
+        } else {
+            writeln!(
+                f,
+                "  validity: the answer relies on rules outside the paper's measured regime:"
+            )?;
+            for r in &self.validity.relies_on {
+                writeln!(f, "    - {r}")?;
+            }
+        }
         let heads = ["answer", "the paper's best", "the kinematic model's best"];
         for (s, head) in [&self.answer, &self.paper_answer]
             .into_iter()
             .chain(self.kinematic_optimum.iter())
             .zip(heads)
         {
-            f.write_str(&Self::stroke_lines(s, head))?;
+            f.write_str(&Self::stroke_lines(s, head, self.over_beds.beds))?;
         }
         writeln!(
             f,

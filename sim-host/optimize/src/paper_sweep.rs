@@ -192,3 +192,108 @@ pub fn sweep(
         best_by_kind,
     })
 }
+
+/// The paper's strokes of one kind as coordinates for the refinement through the controller:
+/// amplitude, frequency and, for the delayed stutter, the delay, each linear over the sweep
+/// grid's range and reflected into it (so the refined stroke is still one of the paper's,
+/// within the sweep's bounds).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaperSpace {
+    /// `single`, `stutter` or `delayed`.
+    pub kind: &'static str,
+    /// Amplitudes from, to, m.
+    pub amplitude_m: (f64, f64),
+    /// Frequencies from, to, Hz.
+    pub freq_hz: (f64, f64),
+    /// Delays from, to, s.
+    pub tau_s: (f64, f64),
+}
+
+impl PaperSpace {
+    /// The space of `kind` over `grid`'s ranges.
+    pub fn of(kind: &'static str, grid: &PaperGrid) -> Self {
+        let range = |v: &[f64]| {
+            (
+                v.iter().copied().fold(f64::INFINITY, f64::min),
+                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        Self {
+            kind,
+            amplitude_m: range(&grid.amplitudes_m),
+            freq_hz: range(&grid.freqs_hz),
+            tau_s: range(&grid.taus_s),
+        }
+    }
+
+    /// `s`'s coordinates (`s` of this space's kind, within its ranges).
+    pub fn encode(&self, s: &PaperStroke) -> Vec<f64> {
+        let unit = |v: f64, (lo, hi): (f64, f64)| {
+            if hi > lo {
+                ((v - lo) / (hi - lo)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        };
+        let mut x = vec![
+            unit(s.amplitude_m, self.amplitude_m),
+            unit(s.freq_hz, self.freq_hz),
+        ];
+        if self.kind == "delayed" {
+            x.push(unit(s.tau_s, self.tau_s));
+        }
+        x
+    }
+
+    /// The stroke at `x` (any real coordinates, reflected into the ranges).
+    pub fn stroke(&self, x: &[f64]) -> PaperStroke {
+        let at = |u: f64, (lo, hi): (f64, f64)| lo + (hi - lo) * crate::family::reflect(u);
+        PaperStroke {
+            kind: self.kind,
+            amplitude_m: at(x[0], self.amplitude_m),
+            freq_hz: at(x[1], self.freq_hz),
+            tau_s: if self.kind == "delayed" {
+                at(x[2], self.tau_s)
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_paper_stroke_is_its_own_point_and_every_point_a_stroke_within_the_grid() {
+        let grid = PaperGrid::standard(0.025, 0.5, 0.5, 0.05);
+        let space = PaperSpace::of("delayed", &grid);
+        let s = PaperStroke {
+            kind: "delayed",
+            amplitude_m: 0.01875,
+            freq_hz: 9.5,
+            tau_s: 0.2,
+        };
+        let back = space.stroke(&space.encode(&s));
+        assert!((back.amplitude_m - s.amplitude_m).abs() < 1e-15);
+        assert!((back.freq_hz - s.freq_hz).abs() < 1e-12);
+        assert!((back.tau_s - s.tau_s).abs() < 1e-15);
+        let far = space.stroke(&[1.3, -0.2, 2.5]);
+        assert!((far.amplitude_m - (0.0125 + 0.7 * 0.0125)).abs() < 1e-12);
+        assert!((far.freq_hz - (1.0 + 0.2 * 24.0)).abs() < 1e-9);
+        assert!((far.tau_s - 0.25).abs() < 1e-12);
+        let single = PaperSpace::of("single", &grid);
+        assert_eq!(
+            single
+                .encode(&PaperStroke {
+                    kind: "single",
+                    tau_s: 0.0,
+                    ..s
+                })
+                .len(),
+            2
+        );
+        assert_eq!(single.stroke(&[0.5, 0.5]).tau_s, 0.0);
+    }
+}

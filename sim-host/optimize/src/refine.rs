@@ -15,13 +15,11 @@ use std::sync::Mutex;
 
 use serde::Serialize;
 
-use sandjumper_rig::hil::open::LinkArg;
-
 use crate::checkpoint::Checkpoint;
 use crate::evaluate::{INFEASIBLE_FITNESS, Problem};
 use crate::family::{Encoding, MoveChain};
 use crate::search::{CmaSpec, Generation, cma_run};
-use crate::verify::run_through;
+use crate::verify::through_sil_on_beds;
 
 /// Salt of the refinement's checkpoint keys.
 const REFINE_SALT: u64 = 0x5111_0000_5111_0000;
@@ -39,11 +37,38 @@ pub struct RefineSettings {
     pub seed: u64,
 }
 
+/// A map from a point of a space's coordinates to the chain it stands for.
+pub type Decoder<'a> = Box<dyn Fn(&[f64]) -> MoveChain + Sync + 'a>;
+
+/// What the refinement searches over: a point of its coordinates (reflected into range by
+/// `decode`) and the chain it stands for.
+pub struct RefineSpace<'a> {
+    /// The point the refinement starts from.
+    pub x0: Vec<f64>,
+    /// The chain at a point.
+    pub decode: Decoder<'a>,
+    /// Mixed into the checkpoint's keys, so two spaces never share a value.
+    pub salt: u64,
+}
+
+impl<'a> RefineSpace<'a> {
+    /// The family's space, from `from`.
+    pub fn family(encoding: &'a Encoding, from: &MoveChain) -> Self {
+        Self {
+            x0: encoding.encode(from),
+            decode: Box::new(|x| encoding.decode(x)),
+            salt: 0,
+        }
+    }
+}
+
 /// What the refinement found.
 #[derive(Clone, Debug)]
 pub struct Refined {
     /// The best stroke through the controller.
     pub chain: MoveChain,
+    /// Its point in the refinement's space.
+    pub point: Vec<f64>,
     /// Its value through the controller.
     pub value: f64,
     /// Runs made (or read back from the checkpoint).
@@ -54,38 +79,26 @@ pub struct Refined {
     pub infeasible: usize,
 }
 
-/// Refine `from` through sil. `firmware` is unused by sil (kept for the link's opening).
+/// Refine through sil over `space`, from its `x0`. `firmware` is unused by sil (kept for the
+/// link's opening).
 pub fn refine(
     problem: &Problem,
-    encoding: &Encoding,
-    from: &MoveChain,
+    space: &RefineSpace<'_>,
     settings: &RefineSettings,
     checkpoint: Option<&mut Checkpoint>,
     firmware: &Path,
     progress: &(dyn Fn(usize, usize, f64) -> bool + Sync),
 ) -> Result<Refined, String> {
     let fitness = |x: &[f64]| -> f64 {
-        let chain = encoding.decode(x);
+        let chain = (space.decode)(x);
         let kinematic = problem.evaluate(&chain);
         if !kinematic.feasible() {
             return kinematic.fitness();
         }
-        match run_through(
-            &LinkArg::Sil,
-            &problem.params,
-            problem.model,
-            &problem.table(&chain),
-            firmware,
-        ) {
-            Ok(run) => match run.value(
-                problem.objective,
-                &problem.limits,
-                problem.released_energy_j(&chain),
-            ) {
-                Some(v) => -v,
-                // Faulted (or below the least height): the safe state is worth nothing.
-                None => INFEASIBLE_FITNESS + 0.5,
-            },
+        match through_sil_on_beds(problem, &chain, firmware) {
+            Ok((_, Some(v))) => -v,
+            // Faulted (or below the least height) on a bed: the safe state is worth nothing.
+            Ok((_, None)) => INFEASIBLE_FITNESS + 0.5,
             Err(_) => INFEASIBLE_FITNESS + 1.0,
         }
     };
@@ -94,13 +107,15 @@ pub fn refine(
     let mut best = f64::NEG_INFINITY;
     let run = cma_run(
         &CmaSpec {
-            x0: &encoding.encode(from),
+            x0: &space.x0,
             sigma: settings.sigma,
             seed: settings.seed,
             population: settings.population,
             budget: settings.evaluations,
             elites: 1,
-            salt: REFINE_SALT,
+            salt: REFINE_SALT ^ space.salt,
+            // One run on a small budget: it refines, it does not restart.
+            stall_generations: None,
         },
         &fitness,
         &checkpoint,
@@ -123,7 +138,8 @@ pub fn refine(
         }
     };
     Ok(Refined {
-        chain: encoding.decode(&point),
+        chain: (space.decode)(&point),
+        point,
         value: -fitness,
         evaluations,
         replayed,

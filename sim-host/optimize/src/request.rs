@@ -4,8 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
 use sandjumper_model::SimOptions;
 use sandjumper_model::params::{ModelName, Params};
+use sandjumper_model::resolve::{ParamsFile, resolve_params};
 use sandjumper_output::parse::number_within;
 use sandjumper_rig::hil::open::LinkArg;
 use sandjumper_rig::hil::rig_model::RigModelConfig;
@@ -13,7 +16,7 @@ use sandjumper_rig::stroke_table::RigLimits;
 
 use crate::error::OptimizeError;
 use crate::evaluate::{Objective, Problem, SearchLimits};
-use crate::family::Encoding;
+use crate::family::{Encoding, MoveChain};
 use crate::search::SearchSettings;
 
 /// A stroke search: what to maximise, on which ground, within which limits, how hard to
@@ -24,8 +27,14 @@ pub struct OptimizeRequest {
     pub objective: Objective,
     /// Ground model.
     pub model: ModelName,
-    /// Robot, drive and sand (the `--phi` preset with any `--params` file applied).
+    /// Robot, drive and sand (the `--phi` preset with any `--params` file applied); with
+    /// `beds`, the nominal bed (the figure's jumps, the F407 and pil runs are on it).
     pub params: Params,
+    /// Other beds the stroke must jump on, for a packing fraction known only to a range
+    /// (`--phi-range`): with any, the search maximises the worst case over `params` and these,
+    /// through the kinematic model and through the controller, and reports the mean. The
+    /// beds differ from `params` in their sand only.
+    pub beds: Vec<Params>,
     /// Relative tolerance of the Dormand-Prince 5(4) integrator (1e-14 <= rtol < 1).
     pub rtol: f64,
     /// Largest |p| a stroke may reach, m (0 < X <= 0.025, the rig's stroke).
@@ -57,6 +66,11 @@ pub struct OptimizeRequest {
     pub random_starts: usize,
     /// Seed of the search (the same seed, the same answer).
     pub seed: u64,
+    /// Strokes the search also starts from, after the paper's best of each kind (e.g. a search's
+    /// answer under narrower limits, `--start-from DIR`). Each is also a candidate for the
+    /// answer when it keeps this search's limits, so wider limits never answer lower than the
+    /// narrower search that gave it. At most `moves` moves each.
+    pub start_from: Vec<MoveChain>,
     /// Step of the paper strokes' frequency sweep (1..25 Hz), Hz (0 < X <= 5).
     pub sweep_freq_step_hz: f64,
     /// Step of the delayed stutter's delay in the sweep, s (0 < X <= 1).
@@ -67,7 +81,8 @@ pub struct OptimizeRequest {
     pub verify: Vec<LinkArg>,
     /// Candidates of each start re-ranked through the controller (1..=1000).
     pub elites: usize,
-    /// Runs through sil refining the best re-ranked stroke (0..=100,000; 0: none).
+    /// Runs through sil refining the best re-ranked stroke, and as many refining the paper's
+    /// best over its own amplitude, frequency and delay (0..=100,000; 0: none).
     pub refine: usize,
     /// Paper strokes of each kind re-ranked through the controller (1..=1000).
     pub paper_candidates: usize,
@@ -87,6 +102,7 @@ impl Default for OptimizeRequest {
             objective: Objective::Height,
             model: ModelName::Eq4,
             params: Params::preset(0.57).expect("0.57 is a preset packing fraction"),
+            beds: Vec::new(),
             rtol: 1e-8,
             max_stroke_m: 0.025,
             max_duration_s: 2.0,
@@ -100,6 +116,7 @@ impl Default for OptimizeRequest {
             population: 24,
             random_starts: 9,
             seed: 1,
+            start_from: Vec::new(),
             sweep_freq_step_hz: 0.1,
             sweep_tau_step_s: 0.01,
             verify: vec![LinkArg::Sil, LinkArg::Pil, LinkArg::F407],
@@ -181,6 +198,83 @@ fn out_of_range(flag: &str, shown: impl std::fmt::Display, lo: f64, hi: f64, uni
     format!("{flag} `{shown}` out of range (allowed: {lo} < X <= {hi} {unit})")
 }
 
+/// A packing fraction known to a range: `--phi-range A:B` (A < B, both within the presets'
+/// 0.57..=0.62 unless a params file gives the sand), sampled at `points` evenly spaced
+/// packing fractions, ends included.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PhiRange {
+    /// Lowest packing fraction.
+    pub lo: f64,
+    /// Highest packing fraction.
+    pub hi: f64,
+    /// Beds sampled, ends included (2..=21).
+    pub points: usize,
+}
+
+impl PhiRange {
+    /// The packing fractions sampled, lowest first.
+    pub fn phis(&self) -> Vec<f64> {
+        let n = self.points.max(2);
+        (0..n)
+            .map(|i| self.lo + (self.hi - self.lo) * i as f64 / (n - 1) as f64)
+            .collect()
+    }
+
+    /// The nominal bed's packing fraction: the sample nearest the middle of the range.
+    pub fn nominal(&self) -> f64 {
+        let phis = self.phis();
+        phis[(phis.len() - 1) / 2]
+    }
+
+    /// The nominal bed and the other beds ([`OptimizeRequest::params`] and
+    /// [`OptimizeRequest::beds`]): each sample's preset with `file` applied.
+    pub fn beds(&self, file: Option<&ParamsFile>) -> Result<(Params, Vec<Params>), OptimizeError> {
+        let resolve = |phi: f64| {
+            resolve_params(phi, file)
+                .map_err(|e| OptimizeError::Invalid(format!("--phi-range, the bed at {phi}: {e}")))
+        };
+        let nominal = self.nominal();
+        let others = self
+            .phis()
+            .into_iter()
+            .filter(|&p| p != nominal)
+            .map(resolve)
+            .collect::<Result<_, _>>()?;
+        Ok((resolve(nominal)?, others))
+    }
+}
+
+/// `A:B` (two packing fractions, A < B) as the ends of a [`PhiRange`] of `points` beds. Not the
+/// sweep's `A:B:STEP` grammar: a range here is one uncertain bed, not a grid of runs.
+pub fn parse_phi_range(s: &str, points: usize) -> Result<PhiRange, String> {
+    let allowed = "allowed: A:B with 0 < A < B < 1, e.g. 0.57:0.62";
+    let mut parts = s.split(':');
+    let (Some(a), Some(b), None) = (parts.next(), parts.next(), parts.next()) else {
+        return Err(format!(
+            "--phi-range `{s}` is not two packing fractions A:B ({allowed})"
+        ));
+    };
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0 && *v < 1.0)
+    };
+    match (num(a), num(b)) {
+        (Some(lo), Some(hi)) if lo < hi => {
+            if !(2..=21).contains(&points) {
+                return Err(format!(
+                    "--phi-points {points} out of range (allowed: 2..=21)"
+                ));
+            }
+            Ok(PhiRange { lo, hi, points })
+        }
+        _ => Err(format!(
+            "--phi-range `{s}`: not two packing fractions with A < B ({allowed})"
+        )),
+    }
+}
+
 /// The refusal of a link `--verify` does not take.
 fn not_verifiable(link: impl std::fmt::Display) -> String {
     format!(
@@ -252,6 +346,27 @@ impl OptimizeRequest {
         if let Some(t) = self.threads {
             counted("--threads", t, 1, 1024)?;
         }
+        for (i, c) in self.start_from.iter().enumerate() {
+            let bad = c.moves.len() > self.moves
+                || !c.start_m.is_finite()
+                || c.moves.iter().any(|m| {
+                    !(m.to_m.is_finite()
+                        && m.duration_s.is_finite()
+                        && m.duration_s > 0.0
+                        && m.hold_s.is_finite()
+                        && m.hold_s >= 0.0)
+                });
+            if bad {
+                return Err(OptimizeError::Invalid(format!(
+                    "start stroke {} ({} moves): not a chain this search can start from \
+                     (allowed: at most --moves {} moves, finite positions, durations > 0, holds \
+                     >= 0)",
+                    i + 1,
+                    c.moves.len(),
+                    self.moves
+                )));
+            }
+        }
         if let Some(l) = self.verify.iter().find(|l| matches!(l, LinkArg::Serial(_))) {
             return Err(OptimizeError::Invalid(not_verifiable(l)));
         }
@@ -308,6 +423,24 @@ impl OptimizeRequest {
         self.params
             .validate()
             .map_err(|e| OptimizeError::Invalid(format!("parameters: {e}")))?;
+        for bed in &self.beds {
+            bed.validate().map_err(|e| {
+                OptimizeError::Invalid(format!(
+                    "parameters of the bed at phi {}: {e}",
+                    bed.sand.packing_fraction
+                ))
+            })?;
+            if bed.robot != self.params.robot
+                || bed.drive != self.params.drive
+                || bed.model != self.params.model
+            {
+                return Err(OptimizeError::Invalid(format!(
+                    "the bed at phi {} has another robot or drive than the nominal bed (allowed: \
+                     beds that differ in their sand only)",
+                    bed.sand.packing_fraction
+                )));
+            }
+        }
         let (limits, max_accel) = self.limits()?;
         let encoding = Encoding {
             moves: self.moves,
@@ -321,6 +454,7 @@ impl OptimizeRequest {
         };
         let problem = Problem {
             params: self.params.clone(),
+            beds: self.beds.clone(),
             model: self.model,
             limits,
             objective: self.objective,

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use crate::checkpoint::{Checkpoint, point_key};
 use crate::evaluate::{Evaluation, Problem};
-use crate::family::{Encoding, MoveChain, reflect};
+use crate::family::{MoveChain, reflect};
 
 /// How the search runs.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -90,6 +90,20 @@ pub struct RestartRow {
     pub best_value: f64,
     /// Why CMA-ES stopped.
     pub stopped_because: String,
+}
+
+/// A point uniform in the unit cube of `dim` coordinates, from `seed` alone (SplitMix64).
+pub fn uniform_point(seed: u64, dim: usize) -> Vec<f64> {
+    let mut state = seed ^ 0x5EED_5EED_5EED_5EED;
+    (0..dim)
+        .map(|_| {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        })
+        .collect()
 }
 
 /// Added to a start's seed for each restart, so no two runs share a sampler.
@@ -179,11 +193,13 @@ fn diverse_best(mut pool: Vec<(f64, u64, Vec<f64>)>, n: usize) -> Vec<(f64, u64,
 /// The start of the error of a search its caller stopped (Ctrl-C).
 pub const INTERRUPTED: &str = "interrupted";
 
-/// Run the search from `starts` (`progress` is told after each generation and returns false
-/// to stop the search).
+/// Run the search over the space `decode` maps to chains (the family's
+/// [`Encoding`](crate::family::Encoding), or a smaller one such as the paper's strokes), from
+/// `starts`
+/// (`progress` is told after each generation and returns false to stop the search).
 pub fn search(
     problem: &Problem,
-    encoding: &Encoding,
+    decode: &(dyn Fn(&[f64]) -> MoveChain + Sync),
     starts: &[Start],
     settings: &SearchSettings,
     checkpoint: Option<&mut Checkpoint>,
@@ -202,10 +218,12 @@ pub fn search(
     let mut elites = Vec::new();
     let mut restarts = Vec::new();
     for (i, start) in starts.iter().enumerate() {
-        let fitness = |x: &[f64]| problem.evaluate(&encoding.decode(x)).fitness();
-        // IPOP: once CMA-ES stops by its own criteria (converged or stalled) with budget left,
-        // it starts again from the same point with twice the population, until the start's
-        // budget is spent; a run that stops at the budget ends the start.
+        let fitness = |x: &[f64]| problem.evaluate(&decode(x)).fitness();
+        // IPOP (Auger & Hansen 2005): once CMA-ES stops by its own criteria (converged) or
+        // stalls (no gain over its window) with budget left, it starts again from a random
+        // point of the space with twice the population, until the start's budget is spent; a
+        // run that stops at the budget ends the start. The first run starts from the start's
+        // point.
         let (mut left, mut population) = (per_start, settings.population);
         let mut best: Option<(f64, Vec<f64>)> = None;
         let mut reasons = Vec::new();
@@ -214,19 +232,26 @@ pub fn search(
                 break;
             }
             let mut used = 0usize;
+            let seed = settings
+                .seed
+                .wrapping_add(i as u64)
+                .wrapping_add((restart as u64).wrapping_mul(RESTART_SEED_STEP));
+            let (x0, sigma) = if restart == 0 {
+                (start.x.clone(), start.sigma)
+            } else {
+                (uniform_point(seed, start.x.len()), settings.sigma_random)
+            };
             let run = cma_run(
                 &CmaSpec {
-                    x0: &start.x,
-                    sigma: start.sigma,
-                    seed: settings
-                        .seed
-                        .wrapping_add(i as u64)
-                        .wrapping_add((restart as u64).wrapping_mul(RESTART_SEED_STEP)),
+                    x0: &x0,
+                    sigma,
+                    seed,
                     population,
                     // Whole generations: CMA-ES ends on the generation that reaches its budget.
                     budget: left - left % population,
                     elites: settings.elites_per_start,
                     salt: 0,
+                    stall_generations: Some(stall_window(start.x.len(), population)),
                 },
                 &fitness,
                 &checkpoint,
@@ -254,53 +279,42 @@ pub fn search(
                     })
                 },
             )?;
-            let (termination, pool) = (run.termination, run.pool);
-            elites.extend(pool.into_iter().map(|(fitness, _, x)| Elite {
+            elites.extend(run.pool.into_iter().map(|(fitness, _, x)| Elite {
                 start: i,
-                chain: encoding.decode(&x),
+                chain: decode(&x),
                 fitness,
             }));
-            let run_best = termination.overall_best.as_ref().ok_or_else(|| {
+            let run_best = run.best.ok_or_else(|| {
                 format!(
                     "start {} restart {restart}: CMA-ES stopped with no candidate",
                     start.label
                 )
             })?;
-            let stopped = termination
-                .reasons
-                .iter()
-                .map(|r| format!("{r:?}"))
-                .collect::<Vec<_>>()
-                .join(", ");
             restarts.push(RestartRow {
                 start: i,
                 restart,
                 population,
                 evaluations: used,
-                best_value: if run_best.value < crate::evaluate::INFEASIBLE_FITNESS {
-                    -run_best.value
+                best_value: if run_best.0 < crate::evaluate::INFEASIBLE_FITNESS {
+                    -run_best.0
                 } else {
                     f64::NAN
                 },
-                stopped_because: stopped.clone(),
+                stopped_because: run.stopped_because.clone(),
             });
-            reasons.push(stopped);
-            if best.as_ref().is_none_or(|b| run_best.value < b.0) {
-                best = Some((run_best.value, run_best.point.as_slice().to_vec()));
+            reasons.push(run.stopped_because);
+            if best.as_ref().is_none_or(|b| run_best.0 < b.0) {
+                best = Some(run_best);
             }
             left = left.saturating_sub(used);
-            let spent = termination
-                .reasons
-                .iter()
-                .any(|r| matches!(r, cmaes::TerminationReason::MaxFunctionEvals));
-            if spent || used == 0 {
+            if run.spent || used == 0 {
                 break;
             }
             population = population.saturating_mul(2);
         }
         let (_, point) =
             best.ok_or_else(|| format!("start {}: no CMA-ES run fitted its budget", start.label))?;
-        let chain = encoding.decode(&point);
+        let chain = decode(&point);
         let evaluation = problem.evaluate(&chain);
         by_start.push(StartBest {
             start: start.clone(),
@@ -337,6 +351,22 @@ pub(crate) struct CmaSpec<'a> {
     pub elites: usize,
     /// Mixed into the checkpoint's keys, so runs of different objectives do not share values.
     pub salt: u64,
+    /// Stop once the run's best has not improved by more than [`STALL_TOLERANCE`] for this
+    /// many generations (None: CMA-ES's own criteria only).
+    pub stall_generations: Option<usize>,
+}
+
+/// A run stalls when its best improves by no more than this (relative to the best, and at
+/// least 1 um on heights in metres) over its stall window: on a rugged landscape (a foot that
+/// turns static or not, a hop that lands or not) CMA-ES's own history criterion never
+/// fires, since each generation's best keeps jumping, and a run would spend the whole budget
+/// in one basin.
+pub const STALL_TOLERANCE: f64 = 1e-3;
+
+/// The stall window of a run of `dim` coordinates and population `lambda`: Hansen's
+/// `10 + 30 n / lambda` generations (his TolHistFun window), at least 10.
+pub fn stall_window(dim: usize, lambda: usize) -> usize {
+    10 + (30 * dim).div_ceil(lambda.max(1))
 }
 
 /// What one generation did.
@@ -357,8 +387,12 @@ pub(crate) struct Generation {
 
 /// What one CMA-ES run found.
 pub(crate) struct CmaRun {
-    /// Why it stopped, and its best point.
-    pub termination: cmaes::TerminationData,
+    /// Its best (fitness, point), if it evaluated any candidate.
+    pub best: Option<(f64, Vec<f64>)>,
+    /// Why it stopped, in words (CMA-ES's reasons, or `Stagnated`).
+    pub stopped_because: String,
+    /// Whether it stopped at its evaluation budget.
+    pub spent: bool,
     /// Its best distinct feasible candidates (fitness, key, point), best first.
     pub pool: Vec<(f64, u64, Vec<f64>)>,
 }
@@ -419,7 +453,9 @@ pub(crate) fn cma_run(
         .map_err(|e| format!("cannot set up CMA-ES: {e:?}"))?;
     let mut pool: Vec<(f64, u64, Vec<f64>)> = Vec::new();
     let mut generation = 0;
-    let termination = loop {
+    // The run's best at each generation, for the stall check.
+    let mut bests: Vec<f64> = Vec::new();
+    let stopped_because = loop {
         let done = cmaes.next_parallel();
         generation += 1;
         let new: Vec<(u64, f64)> = fresh
@@ -464,8 +500,42 @@ pub(crate) fn cma_run(
             ));
         }
         if let Some(t) = done {
-            break t;
+            let spent = t
+                .reasons
+                .iter()
+                .any(|r| matches!(r, cmaes::TerminationReason::MaxFunctionEvals));
+            let reasons = t
+                .reasons
+                .iter()
+                .map(|r| format!("{r:?}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            break (reasons, spent);
+        }
+        bests.push(
+            cmaes
+                .overall_best_individual()
+                .map_or(f64::INFINITY, |b| b.value),
+        );
+        if let Some(window) = spec.stall_generations
+            && bests.len() > window
+        {
+            let (then, now) = (bests[bests.len() - 1 - window], bests[bests.len() - 1]);
+            // Fitness is minus the value: an improvement lowers it.
+            let tolerance = (STALL_TOLERANCE * now.abs()).max(1e-6);
+            if now < INFEASIBLE_FITNESS && then - now <= tolerance {
+                break ("Stagnated".to_string(), false);
+            }
         }
     };
-    Ok(CmaRun { termination, pool })
+    let (stopped_because, spent) = stopped_because;
+    let best = cmaes
+        .overall_best_individual()
+        .map(|b| (b.value, b.point.as_slice().to_vec()));
+    Ok(CmaRun {
+        best,
+        stopped_because,
+        spent,
+        pool,
+    })
 }

@@ -9,22 +9,25 @@ use std::time::Instant;
 
 use sandjumper_model::SimOptions;
 use sandjumper_model::jump::simulate_stroke;
-use sandjumper_model::record::SeriesRow;
+use sandjumper_model::params::Params;
+use sandjumper_model::record::{JumpSummary, SeriesRow};
 use sandjumper_output::{Progress, StagedDir, WriterLock, unfinished_beside};
 use sandjumper_rig::hil::open::LinkArg;
 
 use crate::checkpoint::Checkpoint;
 use crate::error::OptimizeError;
-use crate::evaluate::Evaluation;
+use crate::evaluate::{Evaluation, Problem};
 use crate::family::{Encoding, MoveChain};
 use crate::outcome::{
-    CandidateRow, KindBest, OptimizeOutcome, RestartAgreement, ResultStroke, chain_text,
+    BedRow, CandidateRow, KindBest, OptimizeOutcome, OverBeds, RestartAgreement, ResultStroke,
+    chain_text,
 };
-use crate::paper_sweep::{PaperGrid, PaperStroke, PaperSweep, SweptPoint, sweep};
-use crate::refine::{RefineSettings, refine};
+use crate::paper_sweep::{PaperGrid, PaperSpace, PaperStroke, PaperSweep, SweptPoint, sweep};
+use crate::refine::{RefineSettings, RefineSpace, Refined, refine};
 use crate::request::{OptimizeRequest, Setup, checkpoint_lock_path, checkpoint_path};
-use crate::search::{SearchOutcome, SearchSettings, Start, search};
-use crate::verify::{LinkRun, StrokeOnBoard, VirtualBoard, run_through};
+use crate::search::{SearchOutcome, SearchSettings, Start, search, uniform_point};
+use crate::validity::Validity;
+use crate::verify::{LinkRun, StrokeOnBoard, VirtualBoard, run_through, through_sil_on_beds};
 
 /// Run the search `request` asks for, reporting to `progress`, and write its folder
 /// (`request.out`). The F407 link, if asked, runs on the virtual F407 board
@@ -60,6 +63,7 @@ pub fn run_with_board(
     let paper = cx.paper_sweep()?;
     let starts = starts(
         &paper.sweep.best_by_kind,
+        &request.start_from,
         &cx.setup.encoding,
         &cx.setup.settings,
     );
@@ -67,7 +71,7 @@ pub fn run_with_board(
     let mut checkpoint = cx.open_checkpoint(&ckpt_path, &starts)?;
     let searched = cx.search(&starts, &mut checkpoint)?;
     let mut ranking = cx.rank(cx.candidates(&paper, &searched));
-    ranking.ranked = cx.runs_through(&ranking)?;
+    (ranking.ranked, ranking.values) = cx.runs_through(&ranking)?;
     cx.go_on("after the runs through the controller")?;
     cx.refine(&mut ranking, &mut checkpoint)?;
     cx.go_on("after the refinement")?;
@@ -116,8 +120,13 @@ fn prepare_output(out: &Path, cx: &Context<'_>) -> Result<StagedDir, OptimizeErr
     Ok(StagedDir::create(out)?)
 }
 
-/// The starts: the paper's best of each kind, then seeded random points.
-fn starts(sweep_best: &[SweptPoint], encoding: &Encoding, s: &SearchSettings) -> Vec<Start> {
+/// The starts: the paper's best of each kind, the given strokes, then seeded random points.
+fn starts(
+    sweep_best: &[SweptPoint],
+    given: &[MoveChain],
+    encoding: &Encoding,
+    s: &SearchSettings,
+) -> Vec<Start> {
     let mut v: Vec<Start> = sweep_best
         .iter()
         .map(|p| Start {
@@ -126,19 +135,18 @@ fn starts(sweep_best: &[SweptPoint], encoding: &Encoding, s: &SearchSettings) ->
             sigma: s.sigma_paper,
         })
         .collect();
-    // SplitMix64 from the seed: random starts depend on the seed alone.
-    let mut state = s.seed ^ 0x5EED_5EED_5EED_5EED;
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    for i in 0..s.random_starts {
+    v.extend(given.iter().enumerate().map(|(i, c)| Start {
+        label: format!("from given stroke {}", i + 1),
+        x: encoding.encode(c),
+        sigma: s.sigma_paper,
+    }));
+    // Random starts depend on the seed alone (one SplitMix64 stream, a start at a time).
+    let dim = encoding.dim();
+    let stream = uniform_point(s.seed, dim * s.random_starts);
+    for (i, x) in stream.chunks(dim.max(1)).enumerate() {
         v.push(Start {
             label: format!("random start {}", i + 1),
-            x: (0..encoding.dim()).map(|_| next()).collect(),
+            x: x.to_vec(),
             sigma: s.sigma_random,
         });
     }
@@ -221,12 +229,17 @@ impl Candidate {
 /// The candidates and their runs through the ranking link.
 struct Ranking {
     pool: Vec<Candidate>,
-    /// One run per candidate (None: no link).
+    /// One run per candidate (None: no link), on the nominal bed.
     ranked: Vec<Option<LinkRun>>,
+    /// Each candidate's objective value through the ranking link: the worst over the beds
+    /// (None: not run, or it faulted or broke a limit on a bed).
+    values: Vec<Option<f64>>,
     /// The link they are ranked through: sil if asked, else the first link asked.
     link: Option<LinkArg>,
-    /// Runs through sil of the refinement.
+    /// Runs through sil of the answer's refinement.
     refine_runs: usize,
+    /// Runs through sil of the paper's best's refinement.
+    paper_refine_runs: usize,
 }
 
 /// The answer and the paper's best, through every link.
@@ -288,15 +301,21 @@ impl<'a> Context<'a> {
         Ok(())
     }
 
-    /// Stage 1: the paper's strokes swept on the kinematic model.
-    fn paper_sweep(&self) -> Result<PaperStage, OptimizeError> {
+    /// The paper sweep's grid.
+    fn grid(&self) -> PaperGrid {
         let r = self.request;
-        let grid = PaperGrid::standard(
+        PaperGrid::standard(
             r.max_stroke_m,
             r.sweep_freq_step_hz,
             r.max_hold_s,
             r.sweep_tau_step_s,
-        );
+        )
+    }
+
+    /// Stage 1: the paper's strokes swept on the kinematic model.
+    fn paper_sweep(&self) -> Result<PaperStage, OptimizeError> {
+        let r = self.request;
+        let grid = self.grid();
         let started = Instant::now();
         let sweep = {
             let at = Position::start(self.progress, "paper strokes", grid.len());
@@ -372,7 +391,7 @@ impl<'a> Context<'a> {
                 .install(|| {
                     search(
                         &s.problem,
-                        &s.encoding,
+                        &|x| s.encoding.decode(x),
                         starts,
                         &s.settings,
                         Some(checkpoint),
@@ -412,6 +431,33 @@ impl<'a> Context<'a> {
             _ => Candidate::paper(&paper.best, moves),
         };
         let mut pool = vec![optimum];
+        // The given strokes, as they are: when one keeps these limits, the answer is at least
+        // as good (a wider search never answers below the narrower one that gave it).
+        for (i, c) in self.request.start_from.iter().enumerate() {
+            let chain = padded(c, moves);
+            let kinematic = problem.evaluate(&chain);
+            if !kinematic.feasible() {
+                continue;
+            }
+            if kinematic.value > pool[0].kinematic.value {
+                pool.insert(
+                    0,
+                    Candidate {
+                        label: format!("given stroke {}", i + 1),
+                        chain,
+                        kinematic,
+                        paper: None,
+                    },
+                );
+            } else {
+                pool.push(Candidate {
+                    label: format!("given stroke {}", i + 1),
+                    chain,
+                    kinematic,
+                    paper: None,
+                });
+            }
+        }
         for e in &searched.outcome.elites {
             let kinematic = problem.evaluate(&e.chain);
             if kinematic.feasible() {
@@ -451,49 +497,59 @@ impl<'a> Context<'a> {
         let link = (!self.request.verify.is_empty()).then_some(LinkArg::Sil);
         Ranking {
             ranked: vec![None; pool.len()],
+            values: vec![None; pool.len()],
             pool,
             link,
             refine_runs: 0,
+            paper_refine_runs: 0,
         }
     }
 
-    /// Stage 4: every candidate through the ranking link (a stroke the controller cannot
-    /// follow is worth nothing).
-    fn runs_through(&self, ranking: &Ranking) -> Result<Vec<Option<LinkRun>>, OptimizeError> {
+    /// Stage 4: every candidate through the ranking link, on every bed (a stroke the
+    /// controller cannot follow is worth nothing): the nominal bed's runs and the worst values.
+    #[allow(clippy::type_complexity)]
+    fn runs_through(
+        &self,
+        ranking: &Ranking,
+    ) -> Result<(Vec<Option<LinkRun>>, Vec<Option<f64>>), OptimizeError> {
         let (pool, problem) = (&ranking.pool, &self.setup.problem);
         let Some(link) = &ranking.link else {
-            return Ok(vec![None; pool.len()]);
+            return Ok((vec![None; pool.len()], vec![None; pool.len()]));
         };
         self.say(format!(
-            "  re-ranking {} candidates (the search's best, the paper's best) through {link}",
-            pool.len()
+            "  re-ranking {} candidates (the search's best, the paper's best) through {link}{}",
+            pool.len(),
+            if problem.beds.is_empty() {
+                String::new()
+            } else {
+                format!(" on {} beds", 1 + problem.beds.len())
+            }
         ));
         let at = Position::start(self.progress, "runs through the controller", pool.len());
         let done = AtomicU64::new(0);
-        self.pool
+        let runs = self
+            .pool
             .install(|| {
                 use rayon::prelude::*;
                 pool.par_iter()
                     .map(|c| {
                         if self.progress.cancelled() {
-                            return Ok(None);
+                            return Ok((None, None));
                         }
-                        let r = run_through(
-                            link,
-                            &problem.params,
-                            problem.model,
-                            &problem.table(&c.chain),
-                            &self.request.firmware,
-                        );
+                        let r = through_sil_on_beds(problem, &c.chain, &self.request.firmware);
                         at.at(done.fetch_add(1, Ordering::Relaxed) as usize + 1);
-                        r.map(Some)
+                        r.map(|(run, value)| (Some(run), value))
                     })
                     .collect::<Result<Vec<_>, _>>()
             })
-            .map_err(OptimizeError::Internal)
+            .map_err(OptimizeError::Internal)?;
+        Ok(runs.into_iter().unzip())
     }
 
-    /// Stage 5: the best stroke through the controller refined there (sil only).
+    /// Stage 5: the best stroke through the controller refined there (sil only), and the
+    /// paper's best through the controller refined there with the same budget, over the
+    /// paper's own parameters (amplitude, frequency, delay): the two are compared on equal
+    /// terms.
     fn refine(
         &self,
         ranking: &mut Ranking,
@@ -503,8 +559,56 @@ impl<'a> Context<'a> {
         if ranking.link != Some(LinkArg::Sil) || r.refine == 0 {
             return Ok(());
         }
-        let from = ranking.best(false, s);
+        let from = ranking.best(false);
         let label = ranking.pool[from].label.clone();
+        let space = RefineSpace::family(&s.encoding, &ranking.pool[from].chain);
+        let (refined, run, value) = self.refine_in(&space, &label, checkpoint)?;
+        ranking.refine_runs = refined.evaluations;
+        ranking.pool.push(Candidate {
+            label: format!("refined through sil from {label}"),
+            kinematic: s.problem.evaluate(&refined.chain),
+            chain: refined.chain,
+            paper: None,
+        });
+        ranking.ranked.push(Some(run));
+        ranking.values.push(value);
+        self.go_on("in the refinement")?;
+        let from = ranking.best(true);
+        let Some(stroke) = ranking.pool[from].paper else {
+            return Ok(());
+        };
+        let label = ranking.pool[from].label.clone();
+        let paper = PaperSpace::of(stroke.kind, &self.grid());
+        let moves = s.encoding.moves;
+        let space = RefineSpace {
+            x0: paper.encode(&stroke),
+            decode: Box::new(|x| paper.stroke(x).chain(moves)),
+            salt: PAPER_REFINE_SALT,
+        };
+        let (refined, run, value) =
+            self.refine_in(&space, &format!("the paper's {label}"), checkpoint)?;
+        ranking.paper_refine_runs = refined.evaluations;
+        let stroke = paper.stroke(&refined.point);
+        ranking.pool.push(Candidate {
+            label: stroke.describe(),
+            kinematic: s.problem.evaluate(&refined.chain),
+            chain: refined.chain,
+            paper: Some(stroke),
+        });
+        ranking.ranked.push(Some(run));
+        ranking.values.push(value);
+        Ok(())
+    }
+
+    /// One refinement through sil over `space` (`r.refine` runs), its best's run on the
+    /// nominal bed and its worst value over the beds.
+    fn refine_in(
+        &self,
+        space: &RefineSpace<'_>,
+        label: &str,
+        checkpoint: &mut Checkpoint,
+    ) -> Result<(Refined, LinkRun, Option<f64>), OptimizeError> {
+        let (r, s) = (self.request, &self.setup);
         self.say(format!(
             "  refining {label} through sil ({} runs)",
             r.refine
@@ -515,8 +619,7 @@ impl<'a> Context<'a> {
                 .install(|| {
                     refine(
                         &s.problem,
-                        &s.encoding,
-                        &ranking.pool[from].chain,
+                        space,
                         &RefineSettings {
                             evaluations: r.refine,
                             population: 12,
@@ -530,23 +633,9 @@ impl<'a> Context<'a> {
                 })
                 .map_err(OptimizeError::Internal)?
         };
-        let run = run_through(
-            &LinkArg::Sil,
-            &s.problem.params,
-            s.problem.model,
-            &s.problem.table(&refined.chain),
-            &r.firmware,
-        )
-        .map_err(OptimizeError::Internal)?;
-        ranking.refine_runs = refined.evaluations;
-        ranking.pool.push(Candidate {
-            label: format!("refined through sil from {label}"),
-            kinematic: s.problem.evaluate(&refined.chain),
-            chain: refined.chain,
-            paper: None,
-        });
-        ranking.ranked.push(Some(run));
-        Ok(())
+        let (run, value) = through_sil_on_beds(&s.problem, &refined.chain, &r.firmware)
+            .map_err(OptimizeError::Internal)?;
+        Ok((refined, run, value))
     }
 
     /// Stage 6: the answer and the paper's best (and the kinematic model's best, when the
@@ -556,10 +645,7 @@ impl<'a> Context<'a> {
         ranking: &Ranking,
         board: &dyn StrokeOnBoard,
     ) -> Result<Verified, OptimizeError> {
-        let (answer_i, paper_i) = (
-            ranking.best(false, &self.setup),
-            ranking.best(true, &self.setup),
-        );
+        let (answer_i, paper_i) = (ranking.best(false), ranking.best(true));
         let result = |i: usize| {
             self.go_on("in the verification")?;
             self.result(ranking, i, board)
@@ -572,7 +658,7 @@ impl<'a> Context<'a> {
         } else {
             Some(result(0)?)
         };
-        let basis = ranking.basis(&self.setup);
+        let basis = ranking.basis();
         if let Some(link) = ranking.link.as_ref().filter(|_| basis == "kinematic") {
             self.say(format!(
                 "warning: no candidate kept its limits through {link} (every run faulted or \
@@ -614,11 +700,7 @@ impl<'a> Context<'a> {
         let (problem, r) = (&self.setup.problem, self.request);
         let c = &ranking.pool[i];
         let table = problem.table(&c.chain);
-        let table_stroke = table.kinematic_stroke().map_err(OptimizeError::Internal)?;
-        let table_jump =
-            simulate_stroke(&problem.params, problem.model, table_stroke, &problem.opts).map_err(
-                |e| OptimizeError::Internal(format!("the stroke table's jump failed: {e}")),
-            )?;
+        let table_jump = table_jump(problem, &c.chain).map_err(OptimizeError::Internal)?;
         let mut links: Vec<LinkRun> = ranking.ranked[i].iter().cloned().collect();
         for link in r
             .verify
@@ -634,10 +716,10 @@ impl<'a> Context<'a> {
         }
         Ok(ResultStroke {
             label: c.label.clone(),
-            chain: c.paper.is_none().then(|| c.chain.clone()),
-            controller_value: ranking.controller_value(i, &self.setup),
+            chain: Some(c.chain.clone()),
+            controller_value: ranking.controller_value(i),
             kinematic: c.kinematic.clone(),
-            table_jump_height_m: table_jump.summary.jump_height_m,
+            table_jump_height_m: table_jump.jump_height_m,
             links,
         })
     }
@@ -652,6 +734,70 @@ impl<'a> Context<'a> {
         simulate_stroke(&problem.params, problem.model, chain.stroke(), &opts)
             .map(|o| o.series)
             .map_err(|e| OptimizeError::Internal(format!("cannot record the jump: {e}")))
+    }
+
+    /// The answer against the paper's measured regime and the model's alternative rules,
+    /// the paper's regime being its swept strokes' at the robot's own amplitude (the
+    /// paper's 18.75 mm; the grid's nearest amplitude): their fastest landing.
+    fn validity(
+        &self,
+        paper: &PaperStage,
+        answer: &MoveChain,
+        paper_chain: &MoveChain,
+    ) -> Result<Validity, OptimizeError> {
+        let robot_a = self.setup.problem.params.robot.stroke_amplitude_m;
+        let points = &paper.sweep.points;
+        let nearest = points
+            .iter()
+            .map(|p| p.stroke.amplitude_m)
+            .min_by(|a, b| (a - robot_a).abs().total_cmp(&(b - robot_a).abs()))
+            .unwrap_or(robot_a);
+        let fastest = points
+            .iter()
+            .filter(|p| p.evaluation.feasible() && p.stroke.amplitude_m == nearest)
+            .map(|p| p.evaluation.max_touchdown_speed_m_s)
+            .fold(0.0, f64::max);
+        Validity::assess(
+            &self.setup.problem,
+            answer,
+            paper_chain,
+            fastest,
+            &table_jump,
+        )
+        .map_err(OptimizeError::Internal)
+    }
+
+    /// The answer and the paper's best on every bed, kinematic and (`sil`) through sil, the
+    /// beds in order of their packing fraction.
+    fn beds(
+        &self,
+        answer: &MoveChain,
+        paper: &MoveChain,
+        sil: bool,
+    ) -> Result<Vec<BedRow>, OptimizeError> {
+        let (p, firmware) = (&self.setup.problem, &self.request.firmware);
+        let through = |params: &Params, chain: &MoveChain| -> Result<f64, OptimizeError> {
+            if !sil {
+                return Ok(f64::NAN);
+            }
+            let run = run_through(&LinkArg::Sil, params, p.model, &p.table(chain), firmware)
+                .map_err(OptimizeError::Internal)?;
+            Ok(run
+                .value(p.objective, &p.limits, p.released_energy_j(chain))
+                .unwrap_or(f64::NAN))
+        };
+        let mut rows = Vec::new();
+        for params in p.all_beds() {
+            rows.push(BedRow {
+                phi: params.sand.packing_fraction,
+                answer_kinematic_value: p.evaluate_on(params, answer).value,
+                answer_sil_value: through(params, answer)?,
+                paper_kinematic_value: p.evaluate_on(params, paper).value,
+                paper_sil_value: through(params, paper)?,
+            });
+        }
+        rows.sort_by(|a, b| a.phi.total_cmp(&b.phi));
+        Ok(rows)
     }
 
     /// Stage 7: the outcome: the candidates in their order through the controller, the
@@ -669,6 +815,9 @@ impl<'a> Context<'a> {
         let paper_chain = &ranking.pool[verified.paper_i].chain;
         let answer_series = self.series(answer_chain)?;
         let paper_series = self.series(paper_chain)?;
+        let validity = self.validity(&paper, answer_chain, paper_chain)?;
+        let beds = self.beds(answer_chain, paper_chain, ranking.link.is_some())?;
+        let over_beds = OverBeds::of(&beds, verified.basis != "kinematic");
         let search = &searched.outcome;
         let fresh = paper.sweep.points.len() + search.evaluations - search.replayed;
         let (h, hp) = (
@@ -693,7 +842,7 @@ impl<'a> Context<'a> {
             phi: s.problem.params.sand.packing_fraction,
             stroke: s.problem.table(answer_chain),
             paper_stroke: s.problem.table(paper_chain),
-            candidates: ranking.rows(s),
+            candidates: ranking.rows(),
             answer: verified.answer,
             paper_answer: verified.paper_answer,
             kinematic_optimum: verified.kinematic_optimum,
@@ -709,6 +858,7 @@ impl<'a> Context<'a> {
                 .collect(),
             candidates_ranked: ranking.pool.len(),
             refine_runs: ranking.refine_runs,
+            paper_refine_runs: ranking.paper_refine_runs,
             paper_sweep_points: paper.sweep.points.len(),
             paper_sweep_feasible: paper.feasible,
             evaluations: search.evaluations,
@@ -723,6 +873,9 @@ impl<'a> Context<'a> {
             params: s.problem.params.clone(),
             paper_sweep: paper.sweep.points,
             restart_agreement: RestartAgreement::of(&searched.outcome.restarts),
+            validity,
+            beds,
+            over_beds,
             restarts: searched.outcome.restarts,
             history: searched.outcome.history,
             answer_series,
@@ -733,26 +886,20 @@ impl<'a> Context<'a> {
 }
 
 impl Ranking {
-    /// Candidate `i`'s objective value through the ranking link (None: not run, faulted).
-    fn controller_value(&self, i: usize, s: &Setup) -> Option<f64> {
-        let p = &s.problem;
-        self.ranked[i].as_ref().and_then(|r| {
-            r.value(
-                p.objective,
-                &p.limits,
-                p.released_energy_j(&self.pool[i].chain),
-            )
-        })
+    /// Candidate `i`'s objective value through the ranking link, the worst over the beds
+    /// (None: not run, faulted).
+    fn controller_value(&self, i: usize) -> Option<f64> {
+        self.values[i]
     }
 
     /// The best candidate by its value through the controller, among the paper's strokes
     /// only with `paper_only`; by the kinematic value when no run gave one (no link, or
     /// every run faulted).
-    fn best(&self, paper_only: bool, s: &Setup) -> usize {
+    fn best(&self, paper_only: bool) -> usize {
         let eligible = |i: &usize| !paper_only || self.pool[*i].paper.is_some();
         let by_controller = (0..self.pool.len())
             .filter(eligible)
-            .filter_map(|i| self.controller_value(i, s).map(|v| (i, v)))
+            .filter_map(|i| self.controller_value(i).map(|v| (i, v)))
             .fold(None::<(usize, f64)>, |best, (i, v)| match best {
                 Some((_, bv)) if bv >= v => best,
                 _ => Some((i, v)),
@@ -773,9 +920,9 @@ impl Ranking {
 
     /// What the heights and values are measured on: the ranking link when any run through
     /// it gave a value, else `kinematic`.
-    fn basis(&self, s: &Setup) -> String {
+    fn basis(&self) -> String {
         match &self.link {
-            Some(l) if (0..self.pool.len()).any(|i| self.controller_value(i, s).is_some()) => {
+            Some(l) if (0..self.pool.len()).any(|i| self.controller_value(i).is_some()) => {
                 l.to_string()
             }
             _ => "kinematic".to_string(),
@@ -783,9 +930,9 @@ impl Ranking {
     }
 
     /// candidates.csv: best through the controller first, then by the kinematic value.
-    fn rows(&self, s: &Setup) -> Vec<CandidateRow> {
+    fn rows(&self) -> Vec<CandidateRow> {
         let mut order: Vec<usize> = (0..self.pool.len()).collect();
-        let key = |i: usize| self.controller_value(i, s).unwrap_or(f64::NEG_INFINITY);
+        let key = |i: usize| self.controller_value(i).unwrap_or(f64::NEG_INFINITY);
         order.sort_by(|&x, &y| {
             key(y).total_cmp(&key(x)).then(
                 self.pool[y]
@@ -802,7 +949,7 @@ impl Ranking {
                 CandidateRow {
                     rank: rank + 1,
                     label: c.label.clone(),
-                    controller_value: self.controller_value(i, s).unwrap_or(f64::NAN),
+                    controller_value: self.controller_value(i).unwrap_or(f64::NAN),
                     controller_height_m: run.and_then(|r| r.jump_height_m).unwrap_or(f64::NAN),
                     controller_faults: run.map(|r| r.faults.join(" ")).unwrap_or_default(),
                     kinematic_value: c.kinematic.value,
@@ -842,6 +989,31 @@ impl Verified {
             r.controller_value.unwrap_or(f64::NAN)
         }
     }
+}
+
+/// `c` with null moves (staying put) appended up to `moves`.
+fn padded(c: &MoveChain, moves: usize) -> MoveChain {
+    let mut c = c.clone();
+    let at = c.moves.last().map_or(c.start_m, |m| m.to_m);
+    while c.moves.len() < moves {
+        c.moves.push(crate::family::Move {
+            to_m: at,
+            duration_s: crate::family::NULL_MOVE_S,
+            hold_s: 0.0,
+        });
+    }
+    c
+}
+
+/// Salt of the paper's best's refinement (its coordinates are not the family's).
+const PAPER_REFINE_SALT: u64 = 0x9A9E_0000_9A9E_0000;
+
+/// The kinematic jump of `chain`'s stroke table on `problem` (what `jump --stroke` runs).
+fn table_jump(problem: &Problem, chain: &MoveChain) -> Result<JumpSummary, String> {
+    let stroke = problem.table(chain).kinematic_stroke()?;
+    simulate_stroke(&problem.params, problem.model, stroke, &problem.opts)
+        .map(|o| o.summary)
+        .map_err(|e| format!("the stroke table's jump failed: {e}"))
 }
 
 /// The settings a checkpoint must agree on, as JSON.

@@ -17,7 +17,8 @@ use sandjumper_rig::stroke_table::StrokeTable;
 use sandjumper_rig::tool::replay::{ReplayOutcome, ReplayRequest, run as replay_run};
 use sandjumper_rig::tool::target::Target;
 
-use crate::evaluate::{Objective, SearchLimits};
+use crate::evaluate::{Objective, Problem, SearchLimits};
+use crate::family::MoveChain;
 use crate::request::OptimizeRequest;
 
 /// One stroke run through one link.
@@ -107,6 +108,37 @@ impl LinkRun {
             work_j: None,
         }
     }
+}
+
+/// `chain` through sil on every bed of `problem`: the nominal bed's run and the objective's
+/// worst value over the beds (None when the run on any bed faulted or broke a limit).
+pub fn through_sil_on_beds(
+    problem: &Problem,
+    chain: &MoveChain,
+    firmware: &Path,
+) -> Result<(LinkRun, Option<f64>), String> {
+    let table = problem.table(chain);
+    let released = problem.released_energy_j(chain);
+    let value = |r: &LinkRun| r.value(problem.objective, &problem.limits, released);
+    let nominal = run_through(
+        &LinkArg::Sil,
+        &problem.params,
+        problem.model,
+        &table,
+        firmware,
+    )?;
+    let mut worst = value(&nominal);
+    for bed in &problem.beds {
+        if worst.is_none() {
+            break;
+        }
+        let run = run_through(&LinkArg::Sil, bed, problem.model, &table, firmware)?;
+        worst = match (worst, value(&run)) {
+            (Some(w), Some(v)) => Some(w.min(v)),
+            _ => None,
+        };
+    }
+    Ok((nominal, worst))
 }
 
 /// Run `table` through `link` on `model` with `params` (the rig's gains, as `hil` runs).

@@ -284,10 +284,13 @@ const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 21] = [
 /// replay`); a search stopped by Ctrl-C leaves its checkpoint beside it and the same call
 /// resumes it. `objective`: `"height"`, `"final-height"`, `"com-rise"`, `"height-per-peak-power"` or
 /// `"height-per-energy"`; options: the command's by name (`max_stroke=0.025`,
-/// `evaluations=…`, `moves=4`, `verify="sil"`, `threads=…`, `seed=…`, …). Returns
-/// `summary` (as `optimize --json`) and the folder's tables (`stroke`, …).
+/// `evaluations=…`, `moves=4`, `verify="sil"`, `threads=…`, `seed=…`, …). `phi_range`
+/// (`"0.57:0.62"`, instead of `phi`): a bed known to a range, the worst case over
+/// `phi_points` beds maximised. `start_from`: earlier searches' folders whose answers the
+/// search also starts from. Returns `summary` (as `optimize --json`) and the folder's
+/// tables (`stroke`, …).
 #[pyfunction]
-#[pyo3(signature = (out, objective = "height".to_string(), model = "eq4".to_string(), phi = 0.57, params = None, progress = None, **options))]
+#[pyo3(signature = (out, objective = "height".to_string(), model = "eq4".to_string(), phi = 0.57, params = None, progress = None, phi_range = None, phi_points = 5, start_from = Vec::new(), **options))]
 #[allow(clippy::too_many_arguments)]
 pub fn optimize(
     py: Python<'_>,
@@ -297,15 +300,34 @@ pub fn optimize(
     #[pyo3(from_py_with = typed::phi)] phi: f64,
     params: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    phi_range: Option<String>,
+    phi_points: usize,
+    start_from: Vec<std::path::PathBuf>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<FolderResult> {
     let phi = checked_number("phi", phi, check_phi)?;
     let file = params_source("params", params)?;
+    let (params, beds) = match phi_range {
+        None => (
+            resolve_params(phi, file.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?,
+            Vec::new(),
+        ),
+        Some(range) => sandjumper_optimize::parse_phi_range(&range, phi_points)
+            .map_err(|e| PyValueError::new_err(e.replace("--phi-range", "phi_range")))?
+            .beds(file.as_ref())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?,
+    };
+    let start_from = start_from
+        .iter()
+        .map(|d| sandjumper_optimize::outcome::answer_chain_in(d))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| PyValueError::new_err(e.to_string().replace("--start-from", "start_from")))?;
     let mut request = OptimizeRequest {
         objective: choice("objective", &objective, &OBJECTIVES)?,
         model: choice("model", &model, &models())?,
-        params: resolve_params(phi, file.as_ref())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?,
+        params,
+        beds,
+        start_from,
         out: path_arg("out", out)?,
         ..OptimizeRequest::default()
     };

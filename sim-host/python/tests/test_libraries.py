@@ -168,6 +168,28 @@ def test_optimize_equals_the_cli(tmp_path):
     assert str(raised.value).startswith("max_stroke `0.05` out of range")
 
 
+def test_optimize_over_an_uncertain_bed_from_a_given_stroke_equals_the_cli(tmp_path):
+    args = dict(evaluations=100, population=4, random_starts=0, refine=0, verify="none",
+                sweep_freq_step=2.0, sweep_tau_step=0.2, threads=1)
+    first = tmp_path / "first"
+    cli("optimize", *sum([["--" + k.replace("_", "-"), v] for k, v in args.items()], []),
+        "--out", first)
+    r = sandjumper.optimize(tmp_path / "py", phi_range="0.57:0.62", phi_points=3,
+                            start_from=[first], **args)
+    flags = sum([["--" + k.replace("_", "-"), v] for k, v in args.items()], [])
+    cli("optimize", *flags, "--phi-range", "0.57:0.62", "--phi-points", 3,
+        "--start-from", first, "--out", tmp_path / "cli")
+    expected = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    for key in ["best_value", "over_beds", "answer", "paper_answer", "validity"]:
+        assert r.summary[key] == expected[key], key
+    assert r.summary["over_beds"]["beds"] == 3
+    assert [round(b, 3) for b in r.tables["beds"]["phi"]] == [0.57, 0.595, 0.62]
+    with pytest.raises(ValueError, match="phi_range `0.62:0.57`"):
+        sandjumper.optimize(tmp_path / "bad", phi_range="0.62:0.57")
+    with pytest.raises(ValueError, match="start_from"):
+        sandjumper.optimize(tmp_path / "bad", start_from=[tmp_path / "nowhere"])
+
+
 def test_a_campaign_runs_resumes_and_reports_its_status(tmp_path):
     plan = REPO / "examples" / "campaign-small.toml"
     out = tmp_path / "c"

@@ -14,7 +14,8 @@ use crate::command::args::{ModelArg, ParamSource, parse_phi};
 use crate::command::progress::Bars;
 use crate::command::resolve::{ParamsFile, resolve_params};
 use sandjumper_optimize::evaluate::Objective;
-use sandjumper_optimize::{OptimizeRequest, parse_verify, ranged};
+use sandjumper_optimize::outcome::answer_chain_in;
+use sandjumper_optimize::{OptimizeRequest, parse_phi_range, parse_verify, ranged};
 use sandjumper_rig::hil::open::LinkArg;
 
 /// The objective on the command line.
@@ -64,6 +65,16 @@ pub struct OptimizeArgs {
     /// Packing fraction phi of the sand (presets 0.57..=0.62).
     #[arg(long, value_name = "PHI", default_value = "0.57", value_parser = parse_phi)]
     pub phi: f64,
+    /// A bed known only to a range of packing fractions, A:B (e.g. 0.57:0.62): the search
+    /// maximises the worst case over --phi-points beds across it (ends included), through the
+    /// kinematic model and the controller, and reports the mean; the nominal bed (the
+    /// figure's, pil's and the F407's) is the one nearest the middle. Not with --phi.
+    #[arg(long, value_name = "A:B", conflicts_with = "phi")]
+    pub phi_range: Option<String>,
+    /// Beds sampled across --phi-range, ends included.
+    #[arg(long, value_name = "N", default_value = "5", requires = "phi_range",
+          value_parser = clap::value_parser!(u32).range(2..=21))]
+    pub phi_points: u32,
     /// Parameters and integration.
     #[command(flatten)]
     pub source: ParamSource,
@@ -119,6 +130,11 @@ pub struct OptimizeArgs {
     /// Seed of the search (the same seed, the same answer).
     #[arg(long, value_name = "N", default_value = "1")]
     pub seed: u64,
+    /// Also start from the answer of an earlier search (its folder; repeatable), e.g. one
+    /// under narrower limits: it is a candidate too, so the answer here is at least as good
+    /// when it keeps these limits.
+    #[arg(long, value_name = "DIR")]
+    pub start_from: Vec<PathBuf>,
     /// Step of the paper strokes' frequency sweep, Hz (1..25 Hz).
     #[arg(long, value_name = "HZ", default_value = "0.1",
           value_parser = ranged("--sweep-freq-step", 0.0, 5.0, "Hz"))]
@@ -139,7 +155,8 @@ pub struct OptimizeArgs {
           value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub elites: u32,
     /// Runs through sil refining the best re-ranked stroke (CMA-ES on the controller's
-    /// value; 0: none).
+    /// value), and as many refining the paper's best over its amplitude, frequency and delay,
+    /// before the two are compared (0: none).
     #[arg(long, value_name = "N", default_value = "600",
           value_parser = clap::value_parser!(u32).range(0..=100_000))]
     pub refine: u32,
@@ -154,7 +171,9 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
     /// Output directory: stroke.csv, paper_stroke.csv, candidates.csv, paper_sweep.csv,
-    /// history.csv, summary.json, params.toml, optimize.png and optimize.svg. The search's
+    /// history.csv, validity.csv (the answer under the model's alternative rules), beds.csv
+    /// (the answer and the paper's best on each bed), summary.json, params.toml, optimize.png
+    /// and optimize.svg. The search's
     /// checkpoint lives beside it (DIR.checkpoint) until it finishes: run the same command
     /// again to resume.
     #[arg(long, value_name = "DIR")]
@@ -168,10 +187,17 @@ pub struct OptimizeArgs {
 /// The request `a` asks for (its parameters resolved from `--phi` and `--params`).
 fn request(a: &OptimizeArgs) -> Result<OptimizeRequest, CliError> {
     let file = ParamsFile::read_opt(a.source.params.as_deref())?;
+    let (params, beds) = match &a.phi_range {
+        None => (resolve_params(a.phi, file.as_ref())?, Vec::new()),
+        Some(range) => parse_phi_range(range, a.phi_points as usize)
+            .map_err(CliError::input)?
+            .beds(file.as_ref().map(ParamsFile::to_library).as_ref())?,
+    };
     Ok(OptimizeRequest {
         objective: a.objective.into(),
         model: a.model.into(),
-        params: resolve_params(a.phi, file.as_ref())?,
+        params,
+        beds,
         rtol: a.source.rtol,
         max_stroke_m: a.max_stroke,
         max_duration_s: a.max_duration,
@@ -185,6 +211,11 @@ fn request(a: &OptimizeArgs) -> Result<OptimizeRequest, CliError> {
         population: a.population as usize,
         random_starts: a.random_starts as usize,
         seed: a.seed,
+        start_from: a
+            .start_from
+            .iter()
+            .map(|d| answer_chain_in(d))
+            .collect::<Result<_, _>>()?,
         sweep_freq_step_hz: a.sweep_freq_step,
         sweep_tau_step_s: a.sweep_tau_step,
         verify: a.verify.0.clone(),

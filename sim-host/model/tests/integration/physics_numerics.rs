@@ -429,3 +429,47 @@ fn the_centre_of_mass_rise_matches_the_time_series() {
         assert!(s.com_rise_m > 0.005, "{model:?} {kind:?}: {}", s.com_rise_m);
     }
 }
+
+/// Each touchdown's landing speed is the foot's downward speed just before the contact, as a
+/// dense time series of the same run shows it (on hard ground too, where the impact then sets
+/// the foot's velocity to zero), one per `Touchdown` event.
+#[test]
+fn the_landing_speeds_match_the_time_series() {
+    let p = Params::preset(0.57).unwrap();
+    let opts = SimOptions {
+        record_series: true,
+        series_interval_s: 1e-5,
+        ..SimOptions::default()
+    };
+    for (model, kind, f, tau) in [
+        (ModelName::Eq4, JumpKind::Stutter, 12.0, 0.0),
+        (ModelName::Eq4, JumpKind::DelayedStutter, 8.5, 0.19),
+        (ModelName::Hard, JumpKind::Stutter, 12.0, 0.0),
+    ] {
+        let spec = JumpSpec {
+            kind,
+            freq_hz: f,
+            tau_s: tau,
+            model,
+        };
+        let o = simulate_jump(&p, &spec, &opts).unwrap();
+        let s = &o.summary;
+        let touchdowns: Vec<f64> = s
+            .events
+            .iter()
+            .filter(|e| e.kind == EventKind::Touchdown)
+            .map(|e| e.t_s)
+            .collect();
+        assert!(!touchdowns.is_empty(), "{model:?} {kind:?}: no landing");
+        assert_eq!(touchdowns.len(), s.touchdown_speeds_m_s.len());
+        for (t, speed) in touchdowns.iter().zip(&s.touchdown_speeds_m_s) {
+            let before: Vec<&SeriesRow> = o.series.iter().filter(|r| r.t_s < *t).collect();
+            let (a, b) = (before[before.len() - 2], before[before.len() - 1]);
+            let seen = -(b.x_f - a.x_f) / (b.t_s - a.t_s);
+            assert!(
+                *speed > 0.05 && (speed - seen).abs() < 0.03 * seen + 1e-3,
+                "{model:?} {kind:?} at {t} s: {speed} m/s against the series' {seen} m/s"
+            );
+        }
+    }
+}

@@ -4,3 +4,4 @@
 
 mod answer;
 mod run;
+mod trust;

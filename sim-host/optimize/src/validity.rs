@@ -1,0 +1,383 @@
+//! Where an answer stands against what the paper measured: its landings, its pushes while the
+//! grains still move, the re-intrusion overshoot it re-arms ([`Regime`]), and the height it
+//! keeps when the model's rule for each is swapped for the model's alternative
+//! ([`Rescore`]). The paper measured single jumps, stutters and delayed stutters; a stroke
+//! that lands faster than those do, or pushes into grains still moving from a landing, is
+//! scored by rules (the overshoot after a landing, the drag law, the overshoot re-armed at
+//! every restart of a static foot) fitted elsewhere. [`Validity::relies_on`] names, in
+//! words, each rule the answer's advantage rests on.
+
+use serde::Serialize;
+
+use sandjumper_model::events::EventKind;
+use sandjumper_model::ground::{DragLaw, GroundLaw};
+use sandjumper_model::params::{DragChoice, ReintrusionAnchor, ReintrusionChoice};
+use sandjumper_model::record::JumpSummary;
+
+use crate::evaluate::Problem;
+use crate::family::MoveChain;
+
+/// The landings of `jump` (time, s; downward speed, m/s) before `until_s`: the ones a stroke
+/// lasting `until_s` still acts on (the landing after its last hop ends the run and is not).
+pub fn landings_before(jump: &JumpSummary, until_s: f64) -> Vec<(f64, f64)> {
+    jump.events
+        .iter()
+        .filter(|e| e.kind == EventKind::Touchdown)
+        .zip(&jump.touchdown_speeds_m_s)
+        .filter(|(e, _)| e.t_s < until_s)
+        .map(|(e, v)| (e.t_s, *v))
+        .collect()
+}
+
+/// What a stroke's kinematic jump does outside the paper's measured regime.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Regime {
+    /// Landings (touchdowns after a hop) while the stroke still runs (the landing that ends
+    /// the run is not one).
+    pub touchdowns: usize,
+    /// The foot's fastest of those landings, m/s (0 without one).
+    pub max_landing_speed_m_s: f64,
+    /// Pushes (moves that raise `p`, driving the foot down through the spring) that begin
+    /// after a touchdown while the foot still intrudes (the grains under it still move: it has
+    /// neither come to rest nor left again).
+    pub pushes_during_grain_motion: usize,
+    /// The earliest such push after its touchdown, s.
+    pub earliest_push_after_touchdown_s: Option<f64>,
+    /// Intrusion episodes that carry the re-intrusion overshoot (0 when the ground law has
+    /// none): each touchdown, and, with the overshoot re-anchored at every episode, each
+    /// restart of a static foot after the first flight.
+    pub reintrusion_episodes: usize,
+}
+
+impl Regime {
+    /// The regime of `chain`'s kinematic jump `jump` on ground `law`.
+    pub fn of(jump: &JumpSummary, chain: &MoveChain, law: &GroundLaw) -> Self {
+        let events = &jump.events;
+        // Intervals [touchdown, rest or lift-off) in which the grains under the foot move.
+        let mut moving: Vec<(f64, f64)> = Vec::new();
+        for (i, e) in events.iter().enumerate() {
+            if e.kind == EventKind::Touchdown {
+                let end = events[i + 1..]
+                    .iter()
+                    .find(|n| matches!(n.kind, EventKind::Static | EventKind::LiftOff))
+                    .map_or(jump.end_time_s, |n| n.t_s);
+                moving.push((e.t_s, end));
+            }
+        }
+        let (mut pushes, mut earliest) = (0, None::<f64>);
+        let (mut t, mut p) = (0.0, chain.start_m);
+        for m in &chain.moves {
+            if m.to_m > p
+                && let Some(&(td, _)) = moving.iter().find(|&&(a, b)| t > a && t < b)
+            {
+                pushes += 1;
+                earliest = Some(earliest.map_or(t - td, |e: f64| e.min(t - td)));
+            }
+            if m.to_m != p {
+                t += m.duration_s;
+            }
+            t += m.hold_s;
+            p = m.to_m;
+        }
+        let first_flight = events.iter().position(|e| e.kind == EventKind::LiftOff);
+        let reintrusion_episodes = if !law.reintrusion {
+            0
+        } else {
+            events
+                .iter()
+                .enumerate()
+                .filter(|&(i, e)| match e.kind {
+                    EventKind::Touchdown => true,
+                    EventKind::Intrusion => {
+                        law.anchor == ReintrusionAnchor::Episode
+                            && first_flight.is_some_and(|f| i > f)
+                    }
+                    _ => false,
+                })
+                .count()
+        };
+        let landings = landings_before(jump, chain.duration_s());
+        Self {
+            touchdowns: landings.len(),
+            max_landing_speed_m_s: landings.iter().map(|l| l.1).fold(0.0, f64::max),
+            pushes_during_grain_motion: pushes,
+            earliest_push_after_touchdown_s: earliest,
+            reintrusion_episodes,
+        }
+    }
+}
+
+/// One of the model's rules swapped for its alternative, and what the answer and the paper's
+/// best keep under it (kinematic model, the stroke tables the rig replays).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Rescore {
+    /// The rule, in words.
+    pub rule: String,
+    /// Its alternative, in words.
+    pub alternative: String,
+    /// The answer's objective value under the model's rule (the search's).
+    pub answer_value: f64,
+    /// The answer's value under the alternative (NaN when it breaks a limit there).
+    pub answer_value_alternative: f64,
+    /// The paper's best's value under the model's rule.
+    pub paper_value: f64,
+    /// The paper's best's value under the alternative (NaN when it breaks a limit there).
+    pub paper_value_alternative: f64,
+    /// The limit a stroke breaks under the alternative, in words (empty: none).
+    pub violation: String,
+}
+
+impl Rescore {
+    /// The fraction of its value the answer keeps under the alternative.
+    pub fn answer_kept(&self) -> f64 {
+        self.answer_value_alternative / self.answer_value
+    }
+
+    /// Whether the answer's result rests on the rule: it keeps less than
+    /// [`RELIANCE_KEPT`] of its value under the alternative, or no longer beats the paper's
+    /// best there.
+    pub fn relied_on(&self) -> bool {
+        let keeps = self.answer_kept() >= RELIANCE_KEPT;
+        let leads = self.answer_value_alternative > self.paper_value_alternative;
+        !keeps || !leads
+    }
+}
+
+/// A stroke relies on a rule when it keeps less than this fraction of its value without it.
+pub const RELIANCE_KEPT: f64 = 0.9;
+
+/// The answer against the paper's measured regime and the model's alternatives.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Validity {
+    /// The answer's regime.
+    pub answer: Regime,
+    /// The paper's best's regime.
+    pub paper: Regime,
+    /// The fastest landing while the stroke still runs among the paper's strokes this run
+    /// swept at the robot's amplitude (feasible ones, the same ground and limits; a
+    /// stutter's preliminary hop), m/s: the paper's regime as this model renders it.
+    pub paper_sweep_max_landing_speed_m_s: f64,
+    /// The answer under each alternative rule (none on hard ground).
+    pub rescored: Vec<Rescore>,
+    /// Each rule outside the paper's measured regime the answer relies on, in words (empty:
+    /// none found).
+    pub relies_on: Vec<String>,
+}
+
+impl Validity {
+    /// The validity of `answer` against `paper` on `problem`; `paper_sweep_max_landing` is
+    /// the fastest landing of the paper's swept strokes, m/s. `jump` gives a chain's kinematic
+    /// jump on the problem's ground (its table's, as the search evaluates it).
+    pub fn assess(
+        problem: &Problem,
+        answer: &MoveChain,
+        paper: &MoveChain,
+        paper_sweep_max_landing: f64,
+        jump: &dyn Fn(&Problem, &MoveChain) -> Result<JumpSummary, String>,
+    ) -> Result<Self, String> {
+        let law = GroundLaw::resolve(problem.model, &problem.params.model);
+        let answer_regime = Regime::of(&jump(problem, answer)?, answer, &law);
+        let paper_regime = Regime::of(&jump(problem, paper)?, paper, &law);
+        let (a, p) = (problem.evaluate(answer), problem.evaluate(paper));
+        let rescored: Vec<Rescore> = alternatives(&law)
+            .into_iter()
+            .map(|alt| {
+                let mut swapped = problem.clone();
+                (alt.apply)(&mut swapped.params.model);
+                for bed in &mut swapped.beds {
+                    (alt.apply)(&mut bed.model);
+                }
+                let (ea, ep) = (swapped.evaluate(answer), swapped.evaluate(paper));
+                Rescore {
+                    rule: alt.rule.into(),
+                    alternative: alt.alternative.into(),
+                    answer_value: a.value,
+                    answer_value_alternative: ea.value,
+                    paper_value: p.value,
+                    paper_value_alternative: ep.value,
+                    violation: [
+                        ea.violation.map(|v| format!("answer: {v}")),
+                        ep.violation.map(|v| format!("paper: {v}")),
+                    ]
+                    .into_iter()
+                    .flatten()
+                    .collect::<Vec<_>>()
+                    .join("; "),
+                }
+            })
+            .collect();
+        let mut relies_on = Vec::new();
+        if answer_regime.max_landing_speed_m_s > paper_sweep_max_landing {
+            relies_on.push(format!(
+                "lands at {:.2} m/s, faster than any of the paper's strokes at the robot's \
+                 amplitude ({:.2} m/s)",
+                answer_regime.max_landing_speed_m_s, paper_sweep_max_landing
+            ));
+        }
+        if let Some(dt) = answer_regime.earliest_push_after_touchdown_s {
+            relies_on.push(format!(
+                "pushes {:.1} ms after a touchdown, while the grains under the foot still move \
+                 ({} push(es))",
+                1e3 * dt,
+                answer_regime.pushes_during_grain_motion
+            ));
+        }
+        for r in rescored.iter().filter(|r| r.relied_on()) {
+            relies_on.push(format!(
+                "{}: keeps {:.0} % of its value with {} ({} the paper's best there)",
+                r.rule,
+                100.0 * r.answer_kept(),
+                r.alternative,
+                if r.answer_value_alternative > r.paper_value_alternative {
+                    "still above"
+                } else {
+                    "no longer above"
+                }
+            ));
+        }
+        Ok(Self {
+            answer: answer_regime,
+            paper: paper_regime,
+            paper_sweep_max_landing_speed_m_s: paper_sweep_max_landing,
+            rescored,
+            relies_on,
+        })
+    }
+}
+
+/// A rule of the ground model and its alternative.
+struct Alternative {
+    rule: &'static str,
+    alternative: &'static str,
+    apply: fn(&mut sandjumper_model::params::ModelOverrides),
+}
+
+/// The alternatives that apply to `law` (none on the rigid floor).
+fn alternatives(law: &GroundLaw) -> Vec<Alternative> {
+    let mut v = Vec::new();
+    if law.is_rigid() {
+        return v;
+    }
+    if law.reintrusion {
+        v.push(Alternative {
+            rule: "re-intrusion overshoot after a landing",
+            alternative: "no overshoot",
+            apply: |o| o.reintrusion = ReintrusionChoice::Off,
+        });
+        if law.anchor == ReintrusionAnchor::Episode {
+            v.push(Alternative {
+                rule: "overshoot re-armed at every restart of a static foot",
+                alternative: "the overshoot anchored at touchdowns only",
+                apply: |o| o.reintrusion_anchor = ReintrusionAnchor::Touchdown,
+            });
+        }
+    }
+    v.push(match law.drag {
+        DragLaw::AddedMass => Alternative {
+            rule: "added-mass drag (eq. 4) at these speeds",
+            alternative: "constant-alpha drag (eq. 1)",
+            apply: |o| o.drag = DragChoice::ConstantAlpha,
+        },
+        DragLaw::ConstantAlpha => Alternative {
+            rule: "constant-alpha drag (eq. 1) at these speeds",
+            alternative: "added-mass drag (eq. 4)",
+            apply: |o| o.drag = DragChoice::AddedMass,
+        },
+    });
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::family::Move;
+    use sandjumper_model::events::Event;
+    use sandjumper_model::params::{ModelName, ModelOverrides};
+
+    /// A hop landing at 0.2 s at 1.2 m/s, intruding until it rests at 0.25 s, a restart of
+    /// the static foot at 0.3 s, a lift-off at 0.35 s and the landing that ends the run, at
+    /// 2.5 m/s after the stroke (not one the stroke acts on).
+    fn jump() -> JumpSummary {
+        let ev = |t_s, kind| Event { t_s, kind };
+        JumpSummary {
+            events: vec![
+                ev(0.05, EventKind::LiftOff),
+                ev(0.1, EventKind::Apex),
+                ev(0.2, EventKind::Touchdown),
+                ev(0.25, EventKind::Static),
+                ev(0.3, EventKind::Intrusion),
+                ev(0.35, EventKind::LiftOff),
+                ev(0.6, EventKind::Touchdown),
+            ],
+            touchdown_speeds_m_s: vec![1.2, 2.5],
+            end_time_s: 0.6,
+            ..JumpSummary::default()
+        }
+    }
+
+    /// From 10 mm: down to -10 mm by 0.1 s, held to 0.21 s; a push to 10 mm (0.21-0.23 s,
+    /// 10 ms after the landing, grains moving); down again by 0.24 s; a push from 0.26 s
+    /// (the foot at rest).
+    fn chain() -> MoveChain {
+        let mv = |to_m, duration_s, hold_s| Move {
+            to_m,
+            duration_s,
+            hold_s,
+        };
+        MoveChain {
+            start_m: 0.01,
+            moves: vec![
+                mv(-0.01, 0.1, 0.11),
+                mv(0.01, 0.02, 0.0),
+                mv(-0.01, 0.01, 0.02),
+                mv(0.01, 0.02, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_push_into_moving_grains_and_each_overshoot_episode_are_counted() {
+        let eq4 = GroundLaw::resolve(ModelName::Eq4, &ModelOverrides::default());
+        let r = Regime::of(&jump(), &chain(), &eq4);
+        assert_eq!(r.touchdowns, 1);
+        assert_eq!(r.max_landing_speed_m_s, 1.2);
+        assert_eq!(r.pushes_during_grain_motion, 1);
+        let dt = r.earliest_push_after_touchdown_s.unwrap();
+        assert!((dt - 0.01).abs() < 1e-12, "{dt}");
+        // The touchdowns' episodes and the static foot's restart.
+        assert_eq!(r.reintrusion_episodes, 3);
+        let touchdown_anchor = GroundLaw::resolve(
+            ModelName::Eq4,
+            &ModelOverrides {
+                reintrusion_anchor: ReintrusionAnchor::Touchdown,
+                ..ModelOverrides::default()
+            },
+        );
+        assert_eq!(
+            Regime::of(&jump(), &chain(), &touchdown_anchor).reintrusion_episodes,
+            2
+        );
+        let none = GroundLaw::resolve(ModelName::Eq1Linear, &ModelOverrides::default());
+        assert_eq!(Regime::of(&jump(), &chain(), &none).reintrusion_episodes, 0);
+    }
+
+    #[test]
+    fn a_stroke_that_keeps_its_lead_under_an_alternative_does_not_rely_on_it() {
+        let row = |answer_alt: f64, paper_alt: f64| Rescore {
+            rule: "r".into(),
+            alternative: "a".into(),
+            answer_value: 0.4,
+            answer_value_alternative: answer_alt,
+            paper_value: 0.2,
+            paper_value_alternative: paper_alt,
+            violation: String::new(),
+        };
+        assert!(!row(0.38, 0.2).relied_on());
+        // Loses more than a tenth.
+        assert!(row(0.35, 0.2).relied_on());
+        // Keeps its height but the paper's best overtakes it.
+        assert!(row(0.39, 0.395).relied_on());
+        // Breaks a limit under the alternative.
+        assert!(row(f64::NAN, 0.2).relied_on());
+    }
+}
