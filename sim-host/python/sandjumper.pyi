@@ -322,11 +322,11 @@ def optimize(
     out: PathLike,
     objective: str = "height",
     model: str = "eq4",
-    phi: float = 0.57,
+    phi: Optional[float] = None,
     params: Optional[Params] = None,
     progress: Optional[Progress] = None,
     phi_range: Optional[str] = None,
-    phi_points: int = 5,
+    phi_points: Optional[int] = None,
     start_from: Sequence[PathLike] = (),
     **options: Any,
 ) -> FolderResult:
@@ -338,8 +338,9 @@ def optimize(
     ``max_spring_compression=...`` (m), ``evaluations=192000``, ``moves=4``,
     ``verify="sil"`` or ``["sil", "pil"]`` or ``"none"``, ``threads=...``, ``seed=1``, ...).
     Ctrl-C stops the search after its current generation; the checkpoint beside ``out``
-    resumes it. phi_range: ``"0.57:0.62"`` (instead of ``phi``), a bed known to a range: the
-    worst case over ``phi_points`` beds is maximised (``tables["beds"]``, ``over_beds``).
+    resumes it. phi: the packing fraction (0.57 when neither it nor ``phi_range`` is given).
+    phi_range: ``"0.57:0.62"`` (instead of ``phi``), a bed known to a range: the worst case
+    over ``phi_points`` (5) beds is maximised (``tables["beds"]``, ``over_beds``).
     start_from: earlier searches' folders whose answers this search also starts from (and
     keeps as candidates). ``summary`` is ``optimize --json``'s (``validity``: where the
     answer leaves the paper's measured regime); ``tables["stroke"]`` the stroke."""

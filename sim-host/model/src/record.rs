@@ -26,8 +26,9 @@ pub struct JumpSummary {
     /// Most the spring was compressed below its free length (`L0 - (x_r - x_f)`), m, at any
     /// integration step's end or event.
     pub max_spring_compression_m: f64,
-    /// The foot's downward speed at each touchdown, in order, m/s (its velocity just before
-    /// the contact; one per `Touchdown` event).
+    /// The robot's landing speed at each touchdown, in order, m/s: its centre of mass's
+    /// downward speed just before the contact (the foot alone rings on the spring in flight,
+    /// so its own speed says little about the landing); one per `Touchdown` event.
     pub touchdown_speeds_m_s: Vec<f64>,
     /// Time of the first lift-off after the push-off half began, s.
     pub final_liftoff_time_s: Option<f64>,

@@ -64,7 +64,7 @@ struct Metrics {
     com_rise_m: f64,
     /// Most the spring was compressed below its free length so far, m.
     max_spring_compression_m: f64,
-    /// The foot's downward speed at each touchdown so far, m/s.
+    /// The centre of mass's downward speed at each touchdown so far, m/s.
     touchdown_speeds_m_s: Vec<f64>,
     peak_added_mass_kg: f64,
     peak_motor_force_n: f64,
@@ -305,7 +305,9 @@ impl<A: Actuation<N>, const N: usize> Simulation<A, N> {
             }
             let f_s = self.spring_force(&self.y);
             let mut v_f = self.y[3];
-            let landing_speed = -v_f;
+            // The robot's descent as the foot lands (its centre of mass: the foot alone
+            // rings on the spring in flight).
+            let landing_speed = -self.centre_of_mass(self.t, &self.y).1;
             let event = self.contact.apply(
                 transition,
                 &self.robot,

@@ -113,8 +113,9 @@ pub struct Evaluation {
     pub work_j: f64,
     /// Duration of the stroke, s.
     pub duration_s: f64,
-    /// The foot's fastest landing (downward speed at a touchdown) of the kinematic jump while
-    /// the stroke still runs, m/s (0 when the foot does not land again before it ends).
+    /// The fastest landing (the centre of mass's downward speed at a touchdown) of the
+    /// kinematic jump while the stroke still runs, m/s (0 when the foot does not land again
+    /// before it ends); with several beds, on the nominal one.
     pub max_touchdown_speed_m_s: f64,
     /// The objective's value (NaN when infeasible): with several beds, the worst of them.
     pub value: f64,
@@ -199,10 +200,14 @@ impl Problem {
     pub fn evaluate(&self, chain: &MoveChain) -> Evaluation {
         let mut worst: Option<Evaluation> = None;
         let (mut sum, mut n) = (0.0, 0usize);
+        let mut nominal_landing = f64::NAN;
         for params in self.all_beds() {
             let e = self.evaluate_on(params, chain);
             if !e.feasible() {
                 return e;
+            }
+            if n == 0 {
+                nominal_landing = e.max_touchdown_speed_m_s;
             }
             sum += e.value;
             n += 1;
@@ -212,6 +217,7 @@ impl Problem {
         }
         let mut e = worst.expect("a problem has at least its own bed");
         e.mean_value = sum / n as f64;
+        e.max_touchdown_speed_m_s = nominal_landing;
         e
     }
 

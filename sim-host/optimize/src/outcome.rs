@@ -451,6 +451,8 @@ impl OptimizeOutcome {
                 "answer_value_alternative",
                 "paper_value",
                 "paper_value_alternative",
+                "answer_height_alternative_m",
+                "paper_height_alternative_m",
                 "violation",
             ],
         )

@@ -210,20 +210,27 @@ pub struct PaperSpace {
 }
 
 impl PaperSpace {
-    /// The space of `kind` over `grid`'s ranges.
-    pub fn of(kind: &'static str, grid: &PaperGrid) -> Self {
+    /// The space of `kind` (`single`, `stutter` or `delayed`) over `grid`'s ranges; None for
+    /// another kind or a grid with no amplitude, frequency or (for `delayed`) delay.
+    pub fn of(kind: &'static str, grid: &PaperGrid) -> Option<Self> {
         let range = |v: &[f64]| {
-            (
-                v.iter().copied().fold(f64::INFINITY, f64::min),
-                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            )
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
         };
-        Self {
-            kind,
-            amplitude_m: range(&grid.amplitudes_m),
-            freq_hz: range(&grid.freqs_hz),
-            tau_s: range(&grid.taus_s),
+        if !["single", "stutter", "delayed"].contains(&kind) {
+            return None;
         }
+        Some(Self {
+            kind,
+            amplitude_m: range(&grid.amplitudes_m)?,
+            freq_hz: range(&grid.freqs_hz)?,
+            tau_s: if kind == "delayed" {
+                range(&grid.taus_s)?
+            } else {
+                (0.0, 0.0)
+            },
+        })
     }
 
     /// `s`'s coordinates (`s` of this space's kind, within its ranges).
@@ -245,15 +252,18 @@ impl PaperSpace {
         x
     }
 
-    /// The stroke at `x` (any real coordinates, reflected into the ranges).
+    /// The stroke at `x` (any real coordinates, reflected into the ranges; a coordinate
+    /// missing is 0, the range's low end).
     pub fn stroke(&self, x: &[f64]) -> PaperStroke {
-        let at = |u: f64, (lo, hi): (f64, f64)| lo + (hi - lo) * crate::family::reflect(u);
+        let at = |i: usize, (lo, hi): (f64, f64)| {
+            lo + (hi - lo) * crate::family::reflect(x.get(i).copied().unwrap_or(0.0))
+        };
         PaperStroke {
             kind: self.kind,
-            amplitude_m: at(x[0], self.amplitude_m),
-            freq_hz: at(x[1], self.freq_hz),
+            amplitude_m: at(0, self.amplitude_m),
+            freq_hz: at(1, self.freq_hz),
             tau_s: if self.kind == "delayed" {
-                at(x[2], self.tau_s)
+                at(2, self.tau_s)
             } else {
                 0.0
             },
@@ -268,7 +278,7 @@ mod tests {
     #[test]
     fn a_paper_stroke_is_its_own_point_and_every_point_a_stroke_within_the_grid() {
         let grid = PaperGrid::standard(0.025, 0.5, 0.5, 0.05);
-        let space = PaperSpace::of("delayed", &grid);
+        let space = PaperSpace::of("delayed", &grid).unwrap();
         let s = PaperStroke {
             kind: "delayed",
             amplitude_m: 0.01875,
@@ -283,7 +293,15 @@ mod tests {
         assert!((far.amplitude_m - (0.0125 + 0.7 * 0.0125)).abs() < 1e-12);
         assert!((far.freq_hz - (1.0 + 0.2 * 24.0)).abs() < 1e-9);
         assert!((far.tau_s - 0.25).abs() < 1e-12);
-        let single = PaperSpace::of("single", &grid);
+        let single = PaperSpace::of("single", &grid).unwrap();
+        assert_eq!(single.stroke(&[]).freq_hz, 1.0);
+        assert!(PaperSpace::of("Delayed", &grid).is_none());
+        let no_taus = PaperGrid {
+            taus_s: Vec::new(),
+            ..grid.clone()
+        };
+        assert!(PaperSpace::of("delayed", &no_taus).is_none());
+        assert!(PaperSpace::of("single", &no_taus).is_some());
         assert_eq!(
             single
                 .encode(&PaperStroke {

@@ -62,7 +62,7 @@ pub fn run_with_board(
     ));
     let paper = cx.paper_sweep()?;
     let starts = starts(
-        &paper.sweep.best_by_kind,
+        &paper.seeds(request.params.robot.stroke_amplitude_m),
         &request.start_from,
         &cx.setup.encoding,
         &cx.setup.settings,
@@ -120,7 +120,8 @@ fn prepare_output(out: &Path, cx: &Context<'_>) -> Result<StagedDir, OptimizeErr
     Ok(StagedDir::create(out)?)
 }
 
-/// The starts: the paper's best of each kind, the given strokes, then seeded random points.
+/// The starts: the paper's best strokes ([`PaperStage::seeds`]), the given strokes, then
+/// seeded random points.
 fn starts(
     sweep_best: &[SweptPoint],
     given: &[MoveChain],
@@ -195,6 +196,45 @@ struct PaperStage {
     feasible: usize,
     /// Seconds it took.
     seconds: f64,
+}
+
+impl PaperStage {
+    /// The paper strokes the search starts from: the best of each kind, then, when the stroke
+    /// limit is wider than the robot's own amplitude `a` (the paper's), the best of each kind
+    /// at that amplitude (the grid's nearest) where it is another stroke: what the narrower
+    /// limits give.
+    fn seeds(&self, a: f64) -> Vec<SweptPoint> {
+        let mut v = self.sweep.best_by_kind.clone();
+        let points = &self.sweep.points;
+        let nearest = self.nearest_amplitude(a);
+        for best in &self.sweep.best_by_kind {
+            let at_a = points
+                .iter()
+                .filter(|p| {
+                    p.stroke.amplitude_m == nearest
+                        && p.stroke.kind == best.stroke.kind
+                        && p.evaluation.feasible()
+                })
+                .fold(None::<&SweptPoint>, |b, p| match b {
+                    Some(b) if b.evaluation.value >= p.evaluation.value => Some(b),
+                    _ => Some(p),
+                });
+            if let Some(p) = at_a.filter(|p| p.stroke != best.stroke) {
+                v.push(p.clone());
+            }
+        }
+        v
+    }
+
+    /// The sweep's amplitude nearest `a`, m (`a` itself when the sweep is empty).
+    fn nearest_amplitude(&self, a: f64) -> f64 {
+        self.sweep
+            .points
+            .iter()
+            .map(|p| p.stroke.amplitude_m)
+            .min_by(|x, y| (x - a).abs().total_cmp(&(y - a).abs()))
+            .unwrap_or(a)
+    }
 }
 
 /// The search's result.
@@ -436,7 +476,12 @@ impl<'a> Context<'a> {
         for (i, c) in self.request.start_from.iter().enumerate() {
             let chain = padded(c, moves);
             let kinematic = problem.evaluate(&chain);
-            if !kinematic.feasible() {
+            if let Some(why) = &kinematic.violation {
+                self.say(format!(
+                    "  given stroke {} starts the search but is not a candidate: it breaks this \
+                     search's limits ({why})",
+                    i + 1
+                ));
                 continue;
             }
             if kinematic.value > pool[0].kinematic.value {
@@ -578,7 +623,9 @@ impl<'a> Context<'a> {
             return Ok(());
         };
         let label = ranking.pool[from].label.clone();
-        let paper = PaperSpace::of(stroke.kind, &self.grid());
+        let Some(paper) = PaperSpace::of(stroke.kind, &self.grid()) else {
+            return Ok(());
+        };
         let moves = s.encoding.moves;
         let space = RefineSpace {
             x0: paper.encode(&stroke),
@@ -586,11 +633,21 @@ impl<'a> Context<'a> {
             salt: PAPER_REFINE_SALT,
         };
         let (refined, run, value) =
-            self.refine_in(&space, &format!("the paper's {label}"), checkpoint)?;
+            match self.refine_in(&space, &format!("the paper's {label}"), checkpoint) {
+                Ok(r) => r,
+                Err(OptimizeError::Internal(e)) if !e.starts_with(crate::search::INTERRUPTED) => {
+                    self.say(format!(
+                        "warning: the paper's best was not refined through sil ({e}): it is \
+                         compared as the sweep found it"
+                    ));
+                    return Ok(());
+                }
+                Err(e) => return Err(e),
+            };
         ranking.paper_refine_runs = refined.evaluations;
         let stroke = paper.stroke(&refined.point);
         ranking.pool.push(Candidate {
-            label: stroke.describe(),
+            label: format!("{}, refined through sil", stroke.describe()),
             kinematic: s.problem.evaluate(&refined.chain),
             chain: refined.chain,
             paper: Some(stroke),
@@ -746,13 +803,10 @@ impl<'a> Context<'a> {
         paper_chain: &MoveChain,
     ) -> Result<Validity, OptimizeError> {
         let robot_a = self.setup.problem.params.robot.stroke_amplitude_m;
-        let points = &paper.sweep.points;
-        let nearest = points
-            .iter()
-            .map(|p| p.stroke.amplitude_m)
-            .min_by(|a, b| (a - robot_a).abs().total_cmp(&(b - robot_a).abs()))
-            .unwrap_or(robot_a);
-        let fastest = points
+        let nearest = paper.nearest_amplitude(robot_a);
+        let fastest = paper
+            .sweep
+            .points
             .iter()
             .filter(|p| p.evaluation.feasible() && p.stroke.amplitude_m == nearest)
             .map(|p| p.evaluation.max_touchdown_speed_m_s)
@@ -1031,6 +1085,7 @@ fn checkpoint_settings(s: &Setup, starts: &[Start]) -> Result<String, OptimizeEr
         "objective": p.objective.name(),
         "model": p.model.as_str(),
         "params": p.params.to_toml(),
+        "beds": p.beds.iter().map(|b| b.to_toml()).collect::<Vec<_>>(),
         "rtol": p.opts.rtol,
         "limits": p.limits,
         "encoding": s.encoding,

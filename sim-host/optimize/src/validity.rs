@@ -123,6 +123,11 @@ pub struct Rescore {
     pub paper_value: f64,
     /// The paper's best's value under the alternative (NaN when it breaks a limit there).
     pub paper_value_alternative: f64,
+    /// The answer's rod apex under the alternative, m (the height it keeps, whatever the
+    /// objective; NaN when it breaks a limit there).
+    pub answer_height_alternative_m: f64,
+    /// The paper's best's rod apex under the alternative, m.
+    pub paper_height_alternative_m: f64,
     /// The limit a stroke breaks under the alternative, in words (empty: none).
     pub violation: String,
 }
@@ -133,17 +138,32 @@ impl Rescore {
         self.answer_value_alternative / self.answer_value
     }
 
-    /// Whether the answer's result rests on the rule: it keeps less than
-    /// [`RELIANCE_KEPT`] of its value under the alternative, or no longer beats the paper's
-    /// best there.
+    /// The answer's value over the paper's best's under the model's rule.
+    pub fn lead(&self) -> f64 {
+        self.answer_value / self.paper_value
+    }
+
+    /// The answer's value over the paper's best's under the alternative.
+    pub fn lead_alternative(&self) -> f64 {
+        self.answer_value_alternative / self.paper_value_alternative
+    }
+
+    /// Whether the answer's advantage over the paper's best rests on the rule: under the
+    /// alternative its lead shrinks to less than [`RELIANCE_KEPT`] of what it was, or a lead
+    /// it had is gone (or it breaks a limit there). The paper's strokes lean on the model's
+    /// rules too (their heights were fitted with them); what is asked here is whether the
+    /// answer's gain over them does.
     pub fn relied_on(&self) -> bool {
-        let keeps = self.answer_kept() >= RELIANCE_KEPT;
-        let leads = self.answer_value_alternative > self.paper_value_alternative;
-        !keeps || !leads
+        let (lead, alt) = (self.lead(), self.lead_alternative());
+        // NaN (a limit broken under the alternative) neither keeps nor leads.
+        let kept = alt >= RELIANCE_KEPT * lead;
+        let leads = alt > 1.0;
+        !kept || (lead > 1.0 && !leads)
     }
 }
 
-/// A stroke relies on a rule when it keeps less than this fraction of its value without it.
+/// An answer relies on a rule when its lead over the paper's best keeps less than this fraction
+/// of itself without the rule.
 pub const RELIANCE_KEPT: f64 = 0.9;
 
 /// The answer against the paper's measured regime and the model's alternatives.
@@ -195,6 +215,8 @@ impl Validity {
                     answer_value_alternative: ea.value,
                     paper_value: p.value,
                     paper_value_alternative: ep.value,
+                    answer_height_alternative_m: ea.jump_height_m,
+                    paper_height_alternative_m: ep.jump_height_m,
                     violation: [
                         ea.violation.map(|v| format!("answer: {v}")),
                         ep.violation.map(|v| format!("paper: {v}")),
@@ -224,15 +246,13 @@ impl Validity {
         }
         for r in rescored.iter().filter(|r| r.relied_on()) {
             relies_on.push(format!(
-                "{}: keeps {:.0} % of its value with {} ({} the paper's best there)",
+                "{}: with {} the answer keeps {:.0} % of its value and {:.2} times the paper's \
+                 best (against {:.2} times with the rule)",
                 r.rule,
-                100.0 * r.answer_kept(),
                 r.alternative,
-                if r.answer_value_alternative > r.paper_value_alternative {
-                    "still above"
-                } else {
-                    "no longer above"
-                }
+                100.0 * r.answer_kept(),
+                r.lead_alternative(),
+                r.lead()
             ));
         }
         Ok(Self {
@@ -370,14 +390,25 @@ mod tests {
             answer_value_alternative: answer_alt,
             paper_value: 0.2,
             paper_value_alternative: paper_alt,
+            answer_height_alternative_m: answer_alt,
+            paper_height_alternative_m: paper_alt,
             violation: String::new(),
         };
-        assert!(!row(0.38, 0.2).relied_on());
-        // Loses more than a tenth.
-        assert!(row(0.35, 0.2).relied_on());
-        // Keeps its height but the paper's best overtakes it.
-        assert!(row(0.39, 0.395).relied_on());
-        // Breaks a limit under the alternative.
+        // Both lose a quarter: the lead (2x) is the same.
+        assert!(!row(0.3, 0.15).relied_on());
+        // The answer loses more than the paper's best: its lead shrinks to 1.5x.
+        assert!(row(0.3, 0.2).relied_on());
+        // Its lead is gone.
+        assert!(row(0.19, 0.2).relied_on());
+        // It breaks a limit under the alternative.
         assert!(row(f64::NAN, 0.2).relied_on());
+        // The answer is the paper's best: no lead to lose.
+        let same = Rescore {
+            answer_value: 0.2,
+            answer_value_alternative: 0.07,
+            paper_value_alternative: 0.07,
+            ..row(0.0, 0.0)
+        };
+        assert!(!same.relied_on());
     }
 }

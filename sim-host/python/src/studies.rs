@@ -290,32 +290,52 @@ const OPTIMIZE_OPTIONS: [(&str, Setter<OptimizeRequest>); 21] = [
 /// search also starts from. Returns `summary` (as `optimize --json`) and the folder's
 /// tables (`stroke`, …).
 #[pyfunction]
-#[pyo3(signature = (out, objective = "height".to_string(), model = "eq4".to_string(), phi = 0.57, params = None, progress = None, phi_range = None, phi_points = 5, start_from = Vec::new(), **options))]
+#[pyo3(signature = (out, objective = "height".to_string(), model = "eq4".to_string(), phi = None, params = None, progress = None, phi_range = None, phi_points = None, start_from = Vec::new(), **options))]
 #[allow(clippy::too_many_arguments)]
 pub fn optimize(
     py: Python<'_>,
     out: &Bound<'_, PyAny>,
     objective: String,
     #[pyo3(from_py_with = typed::model)] model: String,
-    #[pyo3(from_py_with = typed::phi)] phi: f64,
+    #[pyo3(from_py_with = typed::phi_opt)] phi: Option<f64>,
     params: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
     phi_range: Option<String>,
-    phi_points: usize,
+    phi_points: Option<usize>,
     start_from: Vec<std::path::PathBuf>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<FolderResult> {
-    let phi = checked_number("phi", phi, check_phi)?;
     let file = params_source("params", params)?;
-    let (params, beds) = match phi_range {
-        None => (
-            resolve_params(phi, file.as_ref()).map_err(|e| PyValueError::new_err(e.to_string()))?,
-            Vec::new(),
-        ),
-        Some(range) => sandjumper_optimize::parse_phi_range(&range, phi_points)
-            .map_err(|e| PyValueError::new_err(e.replace("--phi-range", "phi_range")))?
-            .beds(file.as_ref())
-            .map_err(|e| PyValueError::new_err(e.to_string()))?,
+    let (params, beds) = match (phi_range, phi) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "phi and phi_range given together (allowed: one of them)",
+            ));
+        }
+        (None, phi) => {
+            if phi_points.is_some() {
+                return Err(PyValueError::new_err(
+                    "phi_points given without phi_range (allowed: with phi_range only)",
+                ));
+            }
+            let phi = checked_number("phi", phi.unwrap_or(0.57), check_phi)?;
+            (
+                resolve_params(phi, file.as_ref())
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?,
+                Vec::new(),
+            )
+        }
+        (Some(range), None) => {
+            sandjumper_optimize::parse_phi_range(&range, phi_points.unwrap_or(5))
+                .map_err(|e| {
+                    PyValueError::new_err(
+                        e.replace("--phi-range", "phi_range")
+                            .replace("--phi-points", "phi_points"),
+                    )
+                })?
+                .beds(file.as_ref())
+                .map_err(|e| PyValueError::new_err(e.to_string()))?
+        }
     };
     let start_from = start_from
         .iter()

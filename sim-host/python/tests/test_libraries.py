@@ -186,6 +186,12 @@ def test_optimize_over_an_uncertain_bed_from_a_given_stroke_equals_the_cli(tmp_p
     assert [round(b, 3) for b in r.tables["beds"]["phi"]] == [0.57, 0.595, 0.62]
     with pytest.raises(ValueError, match="phi_range `0.62:0.57`"):
         sandjumper.optimize(tmp_path / "bad", phi_range="0.62:0.57")
+    with pytest.raises(ValueError, match="phi and phi_range"):
+        sandjumper.optimize(tmp_path / "bad", phi=0.6, phi_range="0.57:0.62")
+    with pytest.raises(ValueError, match="phi_points given without phi_range"):
+        sandjumper.optimize(tmp_path / "bad", phi_points=3)
+    with pytest.raises(ValueError, match="phi_points 1 out of range"):
+        sandjumper.optimize(tmp_path / "bad", phi_range="0.57:0.62", phi_points=1)
     with pytest.raises(ValueError, match="start_from"):
         sandjumper.optimize(tmp_path / "bad", start_from=[tmp_path / "nowhere"])
 

@@ -142,6 +142,39 @@ fn bad_limits_and_bad_stroke_files_are_refused() {
         &["serial", "allowed"],
     );
     refused(&["optimize", "--out", o, "--moves", "1"], &["--moves"]);
+    refused(
+        &["optimize", "--out", o, "--phi-range", "0.62:0.57"],
+        &["--phi-range", "0.62:0.57", "A < B"],
+    );
+    refused(
+        &["optimize", "--out", o, "--phi-range", "0.57:0.60:0.01"],
+        &["--phi-range", "A:B"],
+    );
+    refused(
+        &["optimize", "--out", o, "--phi-range", "0.5:0.6"],
+        &["--phi-range", "0.5", "phi"],
+    );
+    refused(
+        &["optimize", "--out", o, "--phi-points", "3"],
+        &["--phi-points", "--phi-range"],
+    );
+    refused(
+        &[
+            "optimize",
+            "--out",
+            o,
+            "--phi",
+            "0.6",
+            "--phi-range",
+            "0.57:0.62",
+        ],
+        &["--phi", "--phi-range"],
+    );
+    let nowhere = dir.path().join("nowhere");
+    refused(
+        &["optimize", "--out", o, "--start-from", s(&nowhere)],
+        &["--start-from", "nowhere", "summary.json"],
+    );
     assert!(!out.exists(), "nothing written on refusal");
 
     let missing = dir.path().join("missing.csv");
