@@ -117,6 +117,9 @@ pub struct Evaluation {
     /// kinematic jump while the stroke still runs, m/s (0 when the foot does not land again
     /// before it ends); with several beds, on the nominal one.
     pub max_touchdown_speed_m_s: f64,
+    /// The shortest delay from a landing to the next push of the kinematic jump, s (None: no
+    /// push follows a landing); with several beds, on the nominal one.
+    pub earliest_push_after_landing_s: Option<f64>,
     /// The objective's value (NaN when infeasible): with several beds, the worst of them.
     pub value: f64,
     /// The mean of the objective's values over the beds (`value` with one bed).
@@ -161,6 +164,7 @@ impl Evaluation {
             work_j: f64::NAN,
             duration_s,
             max_touchdown_speed_m_s: f64::NAN,
+            earliest_push_after_landing_s: None,
             value: f64::NAN,
             mean_value: f64::NAN,
             worst_phi: f64::NAN,
@@ -200,7 +204,7 @@ impl Problem {
     pub fn evaluate(&self, chain: &MoveChain) -> Evaluation {
         let mut worst: Option<Evaluation> = None;
         let (mut sum, mut n) = (0.0, 0usize);
-        let mut nominal_landing = f64::NAN;
+        let (mut nominal_landing, mut nominal_push) = (f64::NAN, None);
         for params in self.all_beds() {
             let e = self.evaluate_on(params, chain);
             if !e.feasible() {
@@ -208,6 +212,7 @@ impl Problem {
             }
             if n == 0 {
                 nominal_landing = e.max_touchdown_speed_m_s;
+                nominal_push = e.earliest_push_after_landing_s;
             }
             sum += e.value;
             n += 1;
@@ -218,6 +223,7 @@ impl Problem {
         let mut e = worst.expect("a problem has at least its own bed");
         e.mean_value = sum / n as f64;
         e.max_touchdown_speed_m_s = nominal_landing;
+        e.earliest_push_after_landing_s = nominal_push;
         e
     }
 
@@ -287,6 +293,7 @@ impl Problem {
                 .iter()
                 .map(|l| l.1)
                 .fold(0.0, f64::max),
+            earliest_push_after_landing_s: crate::validity::pushes_after_landings(s, chain).0,
             value: f64::NAN,
             mean_value: f64::NAN,
             worst_phi: params.sand.packing_fraction,

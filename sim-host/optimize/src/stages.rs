@@ -804,18 +804,27 @@ impl<'a> Context<'a> {
     ) -> Result<Validity, OptimizeError> {
         let robot_a = self.setup.problem.params.robot.stroke_amplitude_m;
         let nearest = paper.nearest_amplitude(robot_a);
-        let fastest = paper
+        let regime: Vec<&Evaluation> = paper
             .sweep
             .points
             .iter()
             .filter(|p| p.evaluation.feasible() && p.stroke.amplitude_m == nearest)
-            .map(|p| p.evaluation.max_touchdown_speed_m_s)
+            .map(|p| &p.evaluation)
+            .collect();
+        let fastest = regime
+            .iter()
+            .map(|e| e.max_touchdown_speed_m_s)
             .fold(0.0, f64::max);
+        let soonest = regime
+            .iter()
+            .filter_map(|e| e.earliest_push_after_landing_s)
+            .min_by(f64::total_cmp);
         Validity::assess(
             &self.setup.problem,
             answer,
             paper_chain,
             fastest,
+            soonest,
             &table_jump,
         )
         .map_err(OptimizeError::Internal)

@@ -35,13 +35,15 @@ pub struct Regime {
     /// Landings (touchdowns after a hop) while the stroke still runs (the landing that ends
     /// the run is not one).
     pub touchdowns: usize,
-    /// The foot's fastest of those landings, m/s (0 without one).
+    /// The fastest of those landings (the centre of mass's downward speed), m/s (0 without
+    /// one).
     pub max_landing_speed_m_s: f64,
     /// Pushes (moves that raise `p`, driving the foot down through the spring) that begin
     /// after a touchdown while the foot still intrudes (the grains under it still move: it has
     /// neither come to rest nor left again).
     pub pushes_during_grain_motion: usize,
-    /// The earliest such push after its touchdown, s.
+    /// The shortest delay from a touchdown to the next push, s (None: no push follows a
+    /// landing).
     pub earliest_push_after_touchdown_s: Option<f64>,
     /// Intrusion episodes that carry the re-intrusion overshoot (0 when the ground law has
     /// none): each touchdown, and, with the overshoot re-anchored at every episode, each
@@ -49,36 +51,48 @@ pub struct Regime {
     pub reintrusion_episodes: usize,
 }
 
+/// The pushes of `chain` after a landing in its kinematic jump `jump`: the earliest delay from
+/// a touchdown to the start of the next push (a move that raises `p`, driving the foot down
+/// through the spring), s, and how many pushes begin while the foot still intrudes after a
+/// touchdown (it has neither come to rest nor left again: the grains under it still move).
+pub fn pushes_after_landings(jump: &JumpSummary, chain: &MoveChain) -> (Option<f64>, usize) {
+    let events = &jump.events;
+    // Each touchdown and the end of its grains' motion (rest, lift-off or the run's end).
+    let landings: Vec<(f64, f64)> = events
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.kind == EventKind::Touchdown)
+        .map(|(i, e)| {
+            let end = events[i + 1..]
+                .iter()
+                .find(|n| matches!(n.kind, EventKind::Static | EventKind::LiftOff))
+                .map_or(jump.end_time_s, |n| n.t_s);
+            (e.t_s, end)
+        })
+        .collect();
+    let (mut earliest, mut during) = (None::<f64>, 0);
+    let (mut t, mut p) = (0.0, chain.start_m);
+    for m in &chain.moves {
+        if m.to_m > p
+            && let Some(&(td, still)) = landings.iter().rev().find(|&&(a, _)| a < t)
+        {
+            earliest = Some(earliest.map_or(t - td, |e: f64| e.min(t - td)));
+            during += usize::from(t < still);
+        }
+        if m.to_m != p {
+            t += m.duration_s;
+        }
+        t += m.hold_s;
+        p = m.to_m;
+    }
+    (earliest, during)
+}
+
 impl Regime {
     /// The regime of `chain`'s kinematic jump `jump` on ground `law`.
     pub fn of(jump: &JumpSummary, chain: &MoveChain, law: &GroundLaw) -> Self {
         let events = &jump.events;
-        // Intervals [touchdown, rest or lift-off) in which the grains under the foot move.
-        let mut moving: Vec<(f64, f64)> = Vec::new();
-        for (i, e) in events.iter().enumerate() {
-            if e.kind == EventKind::Touchdown {
-                let end = events[i + 1..]
-                    .iter()
-                    .find(|n| matches!(n.kind, EventKind::Static | EventKind::LiftOff))
-                    .map_or(jump.end_time_s, |n| n.t_s);
-                moving.push((e.t_s, end));
-            }
-        }
-        let (mut pushes, mut earliest) = (0, None::<f64>);
-        let (mut t, mut p) = (0.0, chain.start_m);
-        for m in &chain.moves {
-            if m.to_m > p
-                && let Some(&(td, _)) = moving.iter().find(|&&(a, b)| t > a && t < b)
-            {
-                pushes += 1;
-                earliest = Some(earliest.map_or(t - td, |e: f64| e.min(t - td)));
-            }
-            if m.to_m != p {
-                t += m.duration_s;
-            }
-            t += m.hold_s;
-            p = m.to_m;
-        }
+        let (earliest, pushes) = pushes_after_landings(jump, chain);
         let first_flight = events.iter().position(|e| e.kind == EventKind::LiftOff);
         let reintrusion_episodes = if !law.reintrusion {
             0
@@ -177,6 +191,9 @@ pub struct Validity {
     /// swept at the robot's amplitude (feasible ones, the same ground and limits; a
     /// stutter's preliminary hop), m/s: the paper's regime as this model renders it.
     pub paper_sweep_max_landing_speed_m_s: f64,
+    /// The shortest delay from a landing to the next push among the same paper strokes, s
+    /// (None: none of them pushes after a landing).
+    pub paper_sweep_earliest_push_after_landing_s: Option<f64>,
     /// The answer under each alternative rule (none on hard ground).
     pub rescored: Vec<Rescore>,
     /// Each rule outside the paper's measured regime the answer relies on, in words (empty:
@@ -186,13 +203,15 @@ pub struct Validity {
 
 impl Validity {
     /// The validity of `answer` against `paper` on `problem`; `paper_sweep_max_landing` is
-    /// the fastest landing of the paper's swept strokes, m/s. `jump` gives a chain's kinematic
+    /// the fastest landing of the paper's swept strokes, m/s, and `paper_sweep_earliest_push`
+    /// their shortest delay from a landing to a push, s. `jump` gives a chain's kinematic
     /// jump on the problem's ground (its table's, as the search evaluates it).
     pub fn assess(
         problem: &Problem,
         answer: &MoveChain,
         paper: &MoveChain,
         paper_sweep_max_landing: f64,
+        paper_sweep_earliest_push: Option<f64>,
         jump: &dyn Fn(&Problem, &MoveChain) -> Result<JumpSummary, String>,
     ) -> Result<Self, String> {
         let law = GroundLaw::resolve(problem.model, &problem.params.model);
@@ -236,12 +255,23 @@ impl Validity {
                 answer_regime.max_landing_speed_m_s, paper_sweep_max_landing
             ));
         }
-        if let Some(dt) = answer_regime.earliest_push_after_touchdown_s {
+        if let Some(dt) = answer_regime.earliest_push_after_touchdown_s
+            && paper_sweep_earliest_push.is_none_or(|p| dt < p)
+        {
             relies_on.push(format!(
-                "pushes {:.1} ms after a touchdown, while the grains under the foot still move \
-                 ({} push(es))",
+                "pushes {:.1} ms after a landing, sooner than any of the paper's strokes at the \
+                 robot's amplitude ({})",
                 1e3 * dt,
-                answer_regime.pushes_during_grain_motion
+                paper_sweep_earliest_push.map_or("none pushes after a landing".into(), |p| {
+                    format!("{:.1} ms", 1e3 * p)
+                })
+            ));
+        }
+        if answer_regime.pushes_during_grain_motion > paper_regime.pushes_during_grain_motion {
+            relies_on.push(format!(
+                "{} push(es) while the foot still intrudes after a landing (the grains under it \
+                 still moving; the paper's best: {})",
+                answer_regime.pushes_during_grain_motion, paper_regime.pushes_during_grain_motion
             ));
         }
         for r in rescored.iter().filter(|r| r.relied_on()) {
@@ -259,6 +289,7 @@ impl Validity {
             answer: answer_regime,
             paper: paper_regime,
             paper_sweep_max_landing_speed_m_s: paper_sweep_max_landing,
+            paper_sweep_earliest_push_after_landing_s: paper_sweep_earliest_push,
             rescored,
             relies_on,
         })

@@ -587,3 +587,32 @@ fn the_rigs_height_and_the_springs_free_length_are_constraints() {
     assert_eq!(e.blame(), Blame::Input);
     assert!(e.to_string().contains("--max-spring-compression"), "{e}");
 }
+
+/// A search over several beds stopped mid-way resumes to the answer of an unbroken one, and
+/// its checkpoint is refused by a search over other beds (its values are worst cases over
+/// its own beds).
+#[test]
+fn a_search_over_beds_resumes_and_its_checkpoint_knows_its_beds() {
+    use sandjumper_model::params::Params;
+    let dir = tempfile::tempdir().unwrap();
+    let over = |out: &Path, beds: &[f64]| OptimizeRequest {
+        params: Params::preset(0.595).unwrap(),
+        beds: beds.iter().map(|&p| Params::preset(p).unwrap()).collect(),
+        ..tiny(out)
+    };
+    let out = dir.path().join("beds");
+    let e = run(
+        &over(&out, &[0.57, 0.62]),
+        &StopAfter::new("evaluations", 40),
+    )
+    .unwrap_err();
+    assert!(e.to_string().starts_with("interrupted"), "{e}");
+    let refused = run(&over(&out, &[0.57, 0.6, 0.62]), &Silent).unwrap_err();
+    assert!(refused.to_string().contains("beds"), "{refused}");
+    let resumed = run(&over(&out, &[0.57, 0.62]), &Silent).unwrap();
+    let whole = run(&over(&dir.path().join("whole"), &[0.57, 0.62]), &Silent).unwrap();
+    assert!(resumed.evaluations_resumed > 0);
+    assert_eq!(resumed.stroke, whole.stroke);
+    assert_eq!(resumed.best_value, whole.best_value);
+    assert_eq!(format!("{:?}", resumed.beds), format!("{:?}", whole.beds));
+}
