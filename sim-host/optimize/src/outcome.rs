@@ -445,6 +445,7 @@ impl OptimizeOutcome {
             &staged.file("validity.csv"),
             &self.validity.rescored,
             &[
+                "tag",
                 "rule",
                 "alternative",
                 "answer_value",
@@ -478,8 +479,8 @@ impl OptimizeOutcome {
                 String::new()
             } else {
                 format!(
-                    " — relies on {} rule(s) outside the paper's measured regime (summary.json)",
-                    self.validity.relies_on.len()
+                    " — relies on rules outside the paper's measured regime: {}",
+                    self.validity.relies_on_tags.join(", ")
                 )
             },
             &[

@@ -125,6 +125,8 @@ impl Regime {
 /// best keep under it (kinematic model, the stroke tables the rig replays).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Rescore {
+    /// The rule, in a word or two (`overshoot`, `re-armed overshoot`, `drag law`).
+    pub tag: String,
     /// The rule, in words.
     pub rule: String,
     /// Its alternative, in words.
@@ -199,6 +201,8 @@ pub struct Validity {
     /// Each rule outside the paper's measured regime the answer relies on, in words (empty:
     /// none found).
     pub relies_on: Vec<String>,
+    /// The same, in a word or two each (the figure's title names them).
+    pub relies_on_tags: Vec<String>,
 }
 
 impl Validity {
@@ -228,6 +232,7 @@ impl Validity {
                 }
                 let (ea, ep) = (swapped.evaluate(answer), swapped.evaluate(paper));
                 Rescore {
+                    tag: alt.tag.into(),
                     rule: alt.rule.into(),
                     alternative: alt.alternative.into(),
                     answer_value: a.value,
@@ -247,13 +252,14 @@ impl Validity {
                 }
             })
             .collect();
-        let mut relies_on = Vec::new();
+        let (mut relies_on, mut relies_on_tags) = (Vec::new(), Vec::<String>::new());
         if answer_regime.max_landing_speed_m_s > paper_sweep_max_landing {
             relies_on.push(format!(
                 "lands at {:.2} m/s, faster than any of the paper's strokes at the robot's \
                  amplitude ({:.2} m/s)",
                 answer_regime.max_landing_speed_m_s, paper_sweep_max_landing
             ));
+            relies_on_tags.push("landing speed".into());
         }
         if let Some(dt) = answer_regime.earliest_push_after_touchdown_s
             && paper_sweep_earliest_push.is_none_or(|p| dt < p)
@@ -266,6 +272,7 @@ impl Validity {
                     format!("{:.1} ms", 1e3 * p)
                 })
             ));
+            relies_on_tags.push("push timing".into());
         }
         if answer_regime.pushes_during_grain_motion > paper_regime.pushes_during_grain_motion {
             relies_on.push(format!(
@@ -273,6 +280,7 @@ impl Validity {
                  still moving; the paper's best: {})",
                 answer_regime.pushes_during_grain_motion, paper_regime.pushes_during_grain_motion
             ));
+            relies_on_tags.push("push into moving grains".into());
         }
         for r in rescored.iter().filter(|r| r.relied_on()) {
             relies_on.push(format!(
@@ -284,6 +292,7 @@ impl Validity {
                 r.lead_alternative(),
                 r.lead()
             ));
+            relies_on_tags.push(r.tag.clone());
         }
         Ok(Self {
             answer: answer_regime,
@@ -292,12 +301,14 @@ impl Validity {
             paper_sweep_earliest_push_after_landing_s: paper_sweep_earliest_push,
             rescored,
             relies_on,
+            relies_on_tags,
         })
     }
 }
 
 /// A rule of the ground model and its alternative.
 struct Alternative {
+    tag: &'static str,
     rule: &'static str,
     alternative: &'static str,
     apply: fn(&mut sandjumper_model::params::ModelOverrides),
@@ -311,12 +322,14 @@ fn alternatives(law: &GroundLaw) -> Vec<Alternative> {
     }
     if law.reintrusion {
         v.push(Alternative {
+            tag: "overshoot",
             rule: "re-intrusion overshoot after a landing",
             alternative: "no overshoot",
             apply: |o| o.reintrusion = ReintrusionChoice::Off,
         });
         if law.anchor == ReintrusionAnchor::Episode {
             v.push(Alternative {
+                tag: "re-armed overshoot",
                 rule: "overshoot re-armed at every restart of a static foot",
                 alternative: "the overshoot anchored at touchdowns only",
                 apply: |o| o.reintrusion_anchor = ReintrusionAnchor::Touchdown,
@@ -325,11 +338,13 @@ fn alternatives(law: &GroundLaw) -> Vec<Alternative> {
     }
     v.push(match law.drag {
         DragLaw::AddedMass => Alternative {
+            tag: "drag law",
             rule: "added-mass drag (eq. 4) at these speeds",
             alternative: "constant-alpha drag (eq. 1)",
             apply: |o| o.drag = DragChoice::ConstantAlpha,
         },
         DragLaw::ConstantAlpha => Alternative {
+            tag: "drag law",
             rule: "constant-alpha drag (eq. 1) at these speeds",
             alternative: "added-mass drag (eq. 4)",
             apply: |o| o.drag = DragChoice::AddedMass,
@@ -415,6 +430,7 @@ mod tests {
     #[test]
     fn a_stroke_that_keeps_its_lead_under_an_alternative_does_not_rely_on_it() {
         let row = |answer_alt: f64, paper_alt: f64| Rescore {
+            tag: "t".into(),
             rule: "r".into(),
             alternative: "a".into(),
             answer_value: 0.4,

@@ -241,6 +241,7 @@ fn the_answer_is_rescored_under_the_models_alternatives() {
         usize::from(v.answer.max_landing_speed_m_s > v.paper_sweep_max_landing_speed_m_s)
             + usize::from(v.answer.pushes_during_grain_motion > 0);
     assert_eq!(v.relies_on.len(), relied + landings, "{:?}", v.relies_on);
+    assert_eq!(v.relies_on_tags.len(), v.relies_on.len());
     for r in v.rescored.iter().filter(|r| r.relied_on()) {
         assert!(
             v.relies_on.iter().any(|w| w.starts_with(&r.rule)),
