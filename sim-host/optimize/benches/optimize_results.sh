@@ -11,15 +11,19 @@
 # measured regime (the rules it relies on; its height without the re-intrusion overshoot).
 # About 25 minutes on 2 cores. Folders go to DIR (default: a temporary folder, removed).
 #
-# Usage: sim-host/optimize/benches/optimize_results.sh [DIR]
+# Usage: sim-host/optimize/benches/optimize_results.sh [DIR [GROUND ...]]
+#   GROUND: "eq4 0.57", "eq4 0.62", "hard 0.57" or "range" (the phi range; default: all four).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../../.." && pwd)"
 cd "$root"
 cargo build -q --profile fast -p sandjumper-cli
 bin="$root/target/fast/sandjumper"
+grounds=("eq4 0.57" "eq4 0.62" "hard 0.57" range)
 if [ $# -ge 1 ]; then
   out=$1
   mkdir -p "$out"
+  shift
+  [ $# -ge 1 ] && grounds=("$@")
 else
   out=$(mktemp -d)
   trap 'rm -rf "$out"' EXIT
@@ -51,7 +55,12 @@ PY
 }
 echo "| search | answer (sil) | the paper's best, refined (sil) | ratio | runs within 1 % | rules relied on | kept without the overshoot | time |"
 echo "|---|---|---|---|---|---|---|---|"
-for ground in "eq4 0.57" "eq4 0.62" "hard 0.57"; do
+for ground in "${grounds[@]}"; do
+  if [ "$ground" = range ]; then
+    row "range-0.57-0.62" --phi-range 0.57:0.62 |
+      sed "s/| range-0.57-0.62 |/| eq4 phi 0.57:0.62 (5 beds), 25 mm, 4 moves: worst case |/"
+    continue
+  fi
   set -- $ground
   model=$1 phi=$2
   tag="$model phi $phi"
@@ -65,5 +74,3 @@ for ground in "eq4 0.57" "eq4 0.62" "hard 0.57"; do
   row "$model-$phi-25-seeded" --model "$model" --phi "$phi" --start-from "$out/$model-$phi-18.75" |
     sed "s/| $model-$phi-25-seeded |/| $tag, 25 mm, 4 moves, from the 18.75 mm answer |/"
 done
-row "range-0.57-0.62" --phi-range 0.57:0.62 |
-  sed "s/| range-0.57-0.62 |/| eq4 phi 0.57:0.62 (5 beds), 25 mm, 4 moves: worst case |/"

@@ -93,6 +93,8 @@ impl Regime {
     pub fn of(jump: &JumpSummary, chain: &MoveChain, law: &GroundLaw) -> Self {
         let events = &jump.events;
         let (earliest, pushes) = pushes_after_landings(jump, chain);
+        // A rigid floor has no grains to move (its foot stays in contact at rest).
+        let pushes = if law.is_rigid() { 0 } else { pushes };
         let first_flight = events.iter().position(|e| e.kind == EventKind::LiftOff);
         let reintrusion_episodes = if !law.reintrusion {
             0
@@ -425,6 +427,18 @@ mod tests {
         );
         let none = GroundLaw::resolve(ModelName::Eq1Linear, &ModelOverrides::default());
         assert_eq!(Regime::of(&jump(), &chain(), &none).reintrusion_episodes, 0);
+        let hard = Regime::of(
+            &jump(),
+            &chain(),
+            &GroundLaw::resolve(ModelName::Hard, &ModelOverrides::default()),
+        );
+        assert_eq!(
+            (
+                hard.pushes_during_grain_motion,
+                hard.earliest_push_after_touchdown_s
+            ),
+            (0, r.earliest_push_after_touchdown_s)
+        );
     }
 
     #[test]

@@ -265,6 +265,7 @@ fn the_answer_is_rescored_under_the_models_alternatives() {
     )
     .unwrap();
     assert!(hard.validity.rescored.is_empty());
+    assert_eq!(hard.validity.answer.pushes_during_grain_motion, 0);
     assert_eq!(hard.validity.answer.reintrusion_episodes, 0);
 }
 
