@@ -468,13 +468,13 @@ impl OptimizeOutcome {
     fn figure(&self, staged: &StagedDir) -> Result<(), OptimizeError> {
         let fig = search_figure(
             format!(
-                "best {} on {}, φ = {} ({}): {:.2} mm vs the paper's {:.2} mm",
+                "best {} on {}, {} ({}): {} vs the paper's {}",
                 self.objective,
                 self.model,
-                self.params.sand.packing_fraction,
+                self.where_(),
                 self.height_basis,
-                1e3 * self.best_height_m,
-                1e3 * self.best_paper_stroke_height_m
+                self.shown(self.best_value),
+                self.shown(self.best_paper_value)
             ) + &if self.validity.relies_on.is_empty() {
                 String::new()
             } else {
@@ -505,6 +505,32 @@ impl OptimizeOutcome {
             Some(&staged.file("optimize.svg")),
         )?;
         Ok(())
+    }
+
+    /// Where the values hold: `phi 0.57` (`hard ground`), or the worst case over the beds.
+    fn where_(&self) -> String {
+        let b = &self.over_beds;
+        if self.model == "hard" {
+            "hard ground".into()
+        } else if b.beds > 1 {
+            format!(
+                "the worst of {} beds, phi {}..{}",
+                b.beds,
+                self.beds.first().map_or(f64::NAN, |r| r.phi),
+                self.beds.last().map_or(f64::NAN, |r| r.phi)
+            )
+        } else {
+            format!("phi {}", self.phi)
+        }
+    }
+
+    /// An objective value in its unit (heights in mm).
+    fn shown(&self, v: f64) -> String {
+        if self.objective_unit == "m" {
+            format!("{:.2} mm", 1e3 * v)
+        } else {
+            format!("{v:.4e} {}", self.objective_unit)
+        }
     }
 
     /// One stroke of the human summary.
@@ -560,19 +586,13 @@ impl OptimizeOutcome {
 /// The human summary `optimize` prints without `--json`.
 impl fmt::Display for OptimizeOutcome {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let value = |v: f64| {
-            if self.objective_unit == "m" {
-                format!("{:.2} mm", 1e3 * v)
-            } else {
-                format!("{v:.4e} {}", self.objective_unit)
-            }
-        };
+        let value = |v: f64| self.shown(v);
         writeln!(
             f,
-            "best {} on {} at phi {} ({}): {}, the paper's best {}: ratio {:.3}",
+            "best {} on {}, {} ({}): {}, the paper's best {}: ratio {:.3}",
             self.objective,
             self.model,
-            self.phi,
+            self.where_(),
             self.height_basis,
             value(self.best_value),
             value(self.best_paper_value),

@@ -71,7 +71,7 @@ fn a_tiny_search_is_at_least_the_paper_sweeps_best_and_writes_its_folder() {
     assert!(!checkpoint_path(&out).exists());
     let human = o.to_string();
     assert!(
-        human.starts_with("best height on eq4 at phi 0.57 (kinematic): "),
+        human.starts_with("best height on eq4, phi 0.57 (kinematic): "),
         "{human}"
     );
     assert!(
