@@ -43,8 +43,12 @@ pub struct Manifest {
     pub geometry: Geometry,
     /// The settled bed.
     pub settled: Settled,
-    /// Whether the settle ended on its rms speed (false: on its longest time).
+    /// Whether the settle ended on its rms speed (false: on its longest time, or no settle:
+    /// the bed was given).
     pub settled_by_speed: bool,
+    /// The settled bed this run reused (`--bed`), if it did not pour its own.
+    #[serde(default)]
+    pub bed_from: Option<String>,
     /// Grains removed because the foot's start overlapped them.
     pub grains_removed_under_foot: u64,
     /// The foot's spheres.
@@ -131,6 +135,8 @@ pub struct Summary {
     pub settled_packing_fraction: f64,
     /// Whether the settle ended on its rms speed.
     pub settled_by_speed: bool,
+    /// The settled bed the run reused (`--bed`), if it did not pour its own.
+    pub bed_from: Option<String>,
     /// Time step, s.
     #[serde(deserialize_with = "number_or_nan")]
     pub time_step_s: f64,
@@ -243,33 +249,25 @@ pub fn check_inputs(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<(), La
         .map_err(LammpsError::input)
 }
 
-/// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
-/// then [`analyse`] it with the speed rule `min_speed_ratio`.
-pub fn run(
+/// Pour the loose grains and settle them (`in.settle`, LAMMPS on `ranks` ranks in `dir`),
+/// which writes `settled.data` there.
+#[allow(clippy::too_many_arguments)]
+fn pour_and_settle(
     spec: &LammpsSpec,
-    trajectory: &Trajectory,
     lammps: &Lammps,
     ranks: u32,
-    min_speed_ratio: f64,
-    out: &Path,
+    run_id: &str,
+    bed_box: &bed::BedBox,
+    loose: &[Atom],
+    dir: &Path,
     progress: &dyn Progress,
-) -> Result<Summary, LammpsError> {
-    check_inputs(spec, trajectory)?;
-    let pieces = script::pieces(spec, trajectory);
-    let spec_text = toml::to_string(spec).map_err(io)?;
-    let run_id = fnv(&format!("{spec_text}{pieces:?}"));
-    let dir = out.join("lammps");
-    std::fs::create_dir_all(dir.join("dumps")).map_err(io)?;
-    let g = spec.gravity_m_s2;
-
-    // 1. Pour and settle.
-    let (bed_box, loose) = bed::loose_start(spec);
+) -> Result<crate::lammps::RunReport, LammpsError> {
     std::fs::write(
         dir.join("pour.data"),
-        bed::data_file(&format!("sandjumper pour (run {run_id})"), &bed_box, &loose),
+        bed::data_file(&format!("sandjumper pour (run {run_id})"), bed_box, loose),
     )
     .map_err(io)?;
-    let fall_s = (2.0 * bed_box.top_m / g).sqrt();
+    let fall_s = (2.0 * bed_box.top_m / spec.gravity_m_s2).sqrt();
     if fall_s >= spec.max_settle_s {
         return Err(LammpsError::input(format!(
             "the grains take {fall_s:.2} s to fall from the loose start; the longest settle is \
@@ -279,21 +277,105 @@ pub fn run(
     }
     std::fs::write(
         dir.join("in.settle"),
-        script::settle_script(spec, &run_id, fall_s).map_err(LammpsError::input)?,
+        script::settle_script(spec, run_id, fall_s).map_err(LammpsError::input)?,
     )
     .map_err(io)?;
-    let dt = spec.time_step_s();
-    let settle_max = (spec.max_settle_s / dt).ceil() as u64;
+    let settle_max = (spec.max_settle_s / spec.time_step_s()).ceil() as u64;
     stage(progress, "settle", settle_max);
-    let settle = lammps
+    lammps
         .run(
-            &dir,
+            dir,
             "in.settle",
             "log.settle",
             ranks,
             &mut stepper(progress),
         )
-        .map_err(LammpsError::internal)?;
+        .map_err(LammpsError::internal)
+}
+
+/// The settled bed `given` (a `settled.data`, or a run folder holding `lammps/settled.data`)
+/// copied to `to`, once checked against this run's spec: the same box width as this spec's
+/// pour (`bed_box`) and every grain's diameter within the spec's size range.
+pub fn reuse_bed(
+    spec: &LammpsSpec,
+    bed_box: &bed::BedBox,
+    given: &Path,
+    to: &Path,
+) -> Result<(), LammpsError> {
+    let file = if given.is_dir() {
+        given.join("lammps").join("settled.data")
+    } else {
+        given.to_path_buf()
+    };
+    let (box_given, grains) = bed::read_data(&file).map_err(|e| {
+        LammpsError::input(format!(
+            "--bed {}: cannot read a settled bed: {e} (allowed: an earlier run's \
+             lammps/settled.data, or its folder)",
+            given.display()
+        ))
+    })?;
+    let mismatch = |what: String| {
+        LammpsError::input(format!(
+            "--bed {}: {what} (allowed: a bed settled with the same preset and options)",
+            file.display()
+        ))
+    };
+    if (box_given.width_m - bed_box.width_m).abs() > 1e-9 * bed_box.width_m {
+        return Err(mismatch(format!(
+            "its box is {} m wide, this run's bed {} m",
+            box_given.width_m, bed_box.width_m
+        )));
+    }
+    let (lo, hi) = (spec.min_grain_diameter_m(), spec.max_grain_diameter_m());
+    if let Some(a) = grains
+        .iter()
+        .filter(|a| a.kind == bed::GRAIN)
+        .find(|a| a.diameter_m < lo * (1.0 - 1e-9) || a.diameter_m > hi * (1.0 + 1e-9))
+    {
+        return Err(mismatch(format!(
+            "grain {} is {} m across, outside this run's {lo}..{hi} m",
+            a.id, a.diameter_m
+        )));
+    }
+    if grains.iter().all(|a| a.kind != bed::GRAIN) {
+        return Err(mismatch("it holds no grains".into()));
+    }
+    std::fs::copy(&file, to).map_err(io)?;
+    Ok(())
+}
+
+/// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
+/// then [`analyse`] it with the speed rule `min_speed_ratio`. With `bed` (a settled bed of
+/// the same spec, [`reuse_bed`]) the pour and settle are skipped.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    spec: &LammpsSpec,
+    trajectory: &Trajectory,
+    lammps: &Lammps,
+    ranks: u32,
+    min_speed_ratio: f64,
+    bed: Option<&Path>,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<Summary, LammpsError> {
+    check_inputs(spec, trajectory)?;
+    let pieces = script::pieces(spec, trajectory);
+    let spec_text = toml::to_string(spec).map_err(io)?;
+    let run_id = fnv(&format!("{spec_text}{pieces:?}"));
+    let dir = out.join("lammps");
+    std::fs::create_dir_all(dir.join("dumps")).map_err(io)?;
+
+    // 1. Pour and settle, or the settled bed given.
+    let (bed_box, loose) = bed::loose_start(spec);
+    let settle = match bed {
+        Some(given) => {
+            reuse_bed(spec, &bed_box, given, &dir.join("settled.data"))?;
+            None
+        }
+        None => Some(pour_and_settle(
+            spec, lammps, ranks, &run_id, &bed_box, &loose, &dir, progress,
+        )?),
+    };
     let (_, mut grains) =
         bed::read_data(&dir.join("settled.data")).map_err(LammpsError::internal)?;
     let settled = bed::settled(spec, &bed_box, &grains).map_err(LammpsError::internal)?;
@@ -365,15 +447,16 @@ pub fn run(
             surface_m: settled.surface_m,
             grain_density_kg_m3: spec.grain_density_kg_m3,
             grain_diameter_m: spec.grain_diameter_m,
-            time_step_s: dt,
+            time_step_s: spec.time_step_s(),
         },
         settled,
-        settled_by_speed: settle.halted,
+        settled_by_speed: settle.as_ref().is_some_and(|s| s.halted),
+        bed_from: bed.map(|b| b.display().to_string()),
         grains_removed_under_foot: removed,
         foot_spheres,
-        settle_steps: settle.last_step,
+        settle_steps: settle.as_ref().map_or(0, |s| s.last_step),
         intrusion_steps,
-        settle_wall_s: settle.wall_s,
+        settle_wall_s: settle.as_ref().map_or(0.0, |s| s.wall_s),
         intrusion_wall_s: 0.0,
         pieces,
         spec: spec.clone(),
@@ -590,6 +673,7 @@ fn summarise(
         target_packing_fraction: s.packing_fraction,
         settled_packing_fraction: m.settled.packing_fraction,
         settled_by_speed: m.settled_by_speed,
+        bed_from: m.bed_from.clone(),
         time_step_s: m.geometry.time_step_s,
         frames: rows.len() as u64,
         fps: s.actual_fps(),
@@ -707,6 +791,7 @@ mod summary_tests {
             target_packing_fraction: 0.6,
             settled_packing_fraction: 0.59,
             settled_by_speed: true,
+            bed_from: None,
             time_step_s: 1e-6,
             frames: 0,
             fps: 2000.0,

@@ -381,13 +381,14 @@ pub fn dem_intrude(
 }
 
 /// `dem lammps`'s flags whose names differ from the Python arguments'.
-const LAMMPS_NAMES: [(&str, &str); 11] = [
+const LAMMPS_NAMES: [(&str, &str); 12] = [
     ("--speed", "speed"),
     ("--depth", "depth"),
     ("--trajectory", "trajectory"),
     ("--episode", "episode"),
     ("--lmp", "lmp"),
     ("--mpiexec", "mpiexec"),
+    ("--bed", "bed"),
     ("--ranks", "ranks"),
     ("--out", "out"),
     ("--min-speed-ratio", "min_speed_ratio"),
@@ -396,7 +397,7 @@ const LAMMPS_NAMES: [(&str, &str); 11] = [
 ];
 
 /// `lammps`'s options by name.
-const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 19] = [
+const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 20] = [
     ("preset", |r, v| {
         r.preset = choice("preset", v)?;
         Ok(())
@@ -482,6 +483,10 @@ const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 19] = [
         r.mpiexec = Some(path("mpiexec", v)?);
         Ok(())
     }),
+    ("bed", |r, v| {
+        r.bed = Some(path("bed", v)?);
+        Ok(())
+    }),
 ];
 
 /// The 3-D intrusion through LAMMPS, as `sandjumper dem lammps --out OUT` does (LAMMPS and,
@@ -489,7 +494,8 @@ const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 19] = [
 /// a poured and settled bed, the disc foot on its trajectory, dumps at the camera's rate read
 /// back into the column's momentum, the added mass against eq. 6, the force against F_p(z).
 /// `options`: the command's options by name (`preset="small"`, `speed=…` or
-/// `trajectory=…`, `depth=…`, `bed_width=…`, `ranks=2`, …); `progress`:
+/// `trajectory=…`, `depth=…`, `bed_width=…`, `ranks=2`, `bed=` an earlier run's folder or
+/// its `lammps/settled.data` to reuse its settled bed, …); `progress`:
 /// `progress(stage, done, total)`; Ctrl-C stops LAMMPS. Returns the folder loaded:
 /// `summary` (`summary.json`), `tables` (`flow`, `force_depth`, `cone`).
 #[pyfunction]

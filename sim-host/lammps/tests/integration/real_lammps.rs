@@ -40,6 +40,21 @@ fn lammps_here() -> bool {
     }
 }
 
+/// The scaled-down run into `out`: the small preset in a 40 x 40 x 35 mm bed, at 0.1 m/s to
+/// [`DEPTH`] on 2 ranks.
+fn scaled_down(out: &Path) -> LammpsRequest {
+    LammpsRequest {
+        preset: Preset::Small,
+        bed_width_m: Some(0.04),
+        bed_depth_m: Some(0.035),
+        speed_m_s: Some(0.1),
+        depth_m: DEPTH,
+        ranks: 2,
+        out: out.to_path_buf(),
+        ..LammpsRequest::default()
+    }
+}
+
 /// The text of the file at `p`; panics naming the file when it cannot be read.
 fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
@@ -136,20 +151,7 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
     let out = work.path().join("run");
     // `dem lammps --preset small --bed-width 0.04 --bed-depth 0.035 --speed 0.1 --depth 0.01
     // --ranks 2`.
-    let outcome = run::run(
-        &LammpsRequest {
-            preset: Preset::Small,
-            bed_width_m: Some(0.04),
-            bed_depth_m: Some(0.035),
-            speed_m_s: Some(0.1),
-            depth_m: DEPTH,
-            ranks: 2,
-            out: out.clone(),
-            ..LammpsRequest::default()
-        },
-        &Silent,
-    )
-    .unwrap();
+    let outcome = run::run(&scaled_down(&out), &Silent).unwrap();
     assert_eq!(outcome.out, out);
     let s = &outcome.summary;
     for f in [
@@ -291,6 +293,49 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
     assert!(out.join("lammps/run.toml").is_file());
 
     refusals(&out.join("lammps"), work.path());
+
+    // The settled bed reused (`--bed`): no pour, no settle, and the same intrusion on the
+    // same ranks gives the same force and flow, LAMMPS being deterministic for a fixed
+    // decomposition.
+    let reused = work.path().join("reused");
+    let again = run::run(
+        &LammpsRequest {
+            bed: Some(out.clone()),
+            ..scaled_down(&reused)
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(!reused.join("lammps/in.settle").exists());
+    assert!(!reused.join("lammps/log.settle").exists());
+    assert_eq!(
+        again.summary.bed_from.as_deref(),
+        Some(out.to_str().unwrap())
+    );
+    assert_eq!(
+        read(&reused.join("lammps/settled.data")),
+        read(&out.join("lammps/settled.data"))
+    );
+    assert_eq!(
+        read(&reused.join("force_depth.csv")),
+        read(&out.join("force_depth.csv"))
+    );
+    assert_eq!(read(&reused.join("flow.csv")), read(&out.join("flow.csv")));
+    // A bed of another width is refused before LAMMPS runs.
+    let e = run::run(
+        &LammpsRequest {
+            bed_width_m: Some(0.05),
+            bed: Some(out.join("lammps/settled.data")),
+            ..scaled_down(&work.path().join("wider"))
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert!(
+        e.to_string().contains("--bed") && e.to_string().contains("wide"),
+        "{e}"
+    );
 }
 
 /// A copy of the run folder `run` (its `lammps/` files, the dumps linked by copy).
