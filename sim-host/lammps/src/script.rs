@@ -73,7 +73,11 @@ fn contact(spec: &LammpsSpec, mu: f64) -> String {
     )
 }
 
-/// The lines every stage starts with.
+/// The lines every stage starts with. The ranks split the bed in x and y only
+/// (`processors * * 1`): a bed settling from its loose start to a third of its height would
+/// leave the upper ranks of a split in z empty. Atoms are found by a hash (`map hash`): an
+/// array indexed by atom id costs every rank memory for every atom (about 61 MB a rank at 15
+/// million atoms).
 fn header(spec: &LammpsSpec, what: &str, run_id: &str, data: &str, mu: f64) -> String {
     let skin = 0.2 * spec.grain_diameter_m;
     let c = contact(spec, mu);
@@ -81,7 +85,8 @@ fn header(spec: &LammpsSpec, what: &str, run_id: &str, data: &str, mu: f64) -> S
         "# sandjumper dem lammps: {what} (run {run_id})\n\
          units si\n\
          atom_style sphere\n\
-         atom_modify map array\n\
+         atom_modify map hash\n\
+         processors * * 1\n\
          boundary p p fm\n\
          newton off\n\
          comm_modify vel yes\n\
