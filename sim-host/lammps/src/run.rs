@@ -17,6 +17,53 @@ use crate::lammps::Lammps;
 use crate::outputs::{self, Summary};
 use crate::spec::{LammpsSpec, Preset};
 
+/// Grain-steps per core-second of the settle (pour and settle), measured on the small preset on
+/// 2 ranks split in x and y: 20,400 grains, 23,000 steps in 49.3-50.3 s (2026-11-29).
+pub const SETTLE_GRAIN_STEPS_PER_CORE_S: f64 = 4.7e6;
+
+/// Grain-steps per core-second of the intrusion (the foot moved, force and dumps written),
+/// measured in the same runs: 20,000 steps in 68.2-69.2 s.
+pub const INTRUSION_GRAIN_STEPS_PER_CORE_S: f64 = 3.0e6;
+
+/// What a run costs at most, before it starts: each stage's grain-steps at its measured rate
+/// ([`SETTLE_GRAIN_STEPS_PER_CORE_S`], [`INTRUSION_GRAIN_STEPS_PER_CORE_S`]); the settle at
+/// its longest (`max_settle_s`; none with `--bed`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Cost {
+    /// Grains.
+    pub grains: f64,
+    /// Steps of the settle, at most.
+    pub settle_steps: f64,
+    /// Steps of the intrusion.
+    pub intrusion_steps: f64,
+    /// Core-hours of the settle, at most.
+    pub settle_core_hours: f64,
+    /// Core-hours of the intrusion.
+    pub intrusion_core_hours: f64,
+    /// MPI ranks.
+    pub ranks: u32,
+}
+
+impl fmt::Display for Cost {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let total = self.settle_core_hours + self.intrusion_core_hours;
+        write!(
+            f,
+            "dem lammps: {:.0} grains; the settle up to {:.0} steps (~{:.1} core-hours at most), \
+             the intrusion {:.0} steps (~{:.1} core-hours): up to ~{:.1} core-hours (~{:.1} h on \
+             {} rank(s)), at the rates measured on the small preset",
+            self.grains,
+            self.settle_steps,
+            self.settle_core_hours,
+            self.intrusion_steps,
+            self.intrusion_core_hours,
+            total,
+            total / f64::from(self.ranks),
+            self.ranks
+        )
+    }
+}
+
 /// Most MPI ranks a run takes ([`LammpsRequest::ranks`]).
 pub const MAX_RANKS: u32 = 100_000;
 
@@ -341,6 +388,30 @@ impl LammpsRequest {
         Ok((spec, trajectory))
     }
 
+    /// What the run of `spec` along `traj` costs at most ([`Cost`]).
+    pub fn cost(&self, spec: &LammpsSpec, traj: &Trajectory) -> Cost {
+        let grains = spec.grain_count() as f64;
+        let settle_steps = if self.bed.is_some() {
+            0.0
+        } else {
+            (spec.max_settle_s / spec.time_step_s()).ceil()
+        };
+        let intrusion_steps = crate::script::pieces(spec, traj)
+            .iter()
+            .map(|p| p.steps as f64)
+            .sum::<f64>();
+        Cost {
+            grains,
+            settle_steps,
+            intrusion_steps,
+            settle_core_hours: grains * settle_steps / SETTLE_GRAIN_STEPS_PER_CORE_S / 3600.0,
+            intrusion_core_hours: grains * intrusion_steps
+                / INTRUSION_GRAIN_STEPS_PER_CORE_S
+                / 3600.0,
+            ranks: self.ranks,
+        }
+    }
+
     /// The LAMMPS (and MPI launcher) this request names or finds.
     pub fn lammps(&self) -> Result<Lammps, LammpsError> {
         crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref())
@@ -410,29 +481,8 @@ pub fn submit(
 pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
     let (spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
-    // What this run will cost, before it starts (the paper preset is a cluster's job): the
-    // settle at most its longest, at the small preset's measured 4 million grain-steps per
-    // core-second.
-    let grains = spec.grain_count() as f64;
-    let settle_steps = if request.bed.is_some() {
-        0.0
-    } else {
-        spec.max_settle_s / spec.time_step_s()
-    };
-    let steps = settle_steps
-        + crate::script::pieces(&spec, &traj)
-            .iter()
-            .map(|p| p.steps as f64)
-            .sum::<f64>();
-    progress.note(&format!(
-        "dem lammps: {:.0} grains, up to {:.0} steps: up to ~{:.1} core-hours (~{:.1} h on {} \
-         rank(s))",
-        grains,
-        steps,
-        grains * steps / 4e6 / 3600.0,
-        grains * steps / 4e6 / 3600.0 / f64::from(request.ranks),
-        request.ranks
-    ));
+    // What this run will cost, before it starts (the paper preset is a cluster's job).
+    progress.note(&request.cost(&spec, &traj).to_string());
     let staged = StagedDir::create(&request.out)?;
     let result = outputs::run(
         &spec,

@@ -136,3 +136,46 @@ fn a_slurm_submission_refuses_what_a_run_refuses_before_it_looks_for_slurm() {
         assert!(!out.exists() && !work.path().join("run.slurm").exists());
     }
 }
+
+/// The cost printed before a run: each stage at its measured rate, the settle at its longest,
+/// none with a bed given; the paper preset's push-off a cluster's job.
+#[test]
+fn the_cost_counts_each_stage_at_its_rate_and_a_given_bed_saves_the_settle() {
+    let work = tempfile::tempdir().unwrap();
+    let request = small(&work.path().join("run"));
+    let (spec, traj) = (request.spec(), request.trajectory().unwrap());
+    let poured = request.cost(&spec, &traj);
+    let reused = LammpsRequest {
+        bed: Some(work.path().join("bed")),
+        ..request.clone()
+    }
+    .cost(&spec, &traj);
+    assert!(poured.settle_steps > 0.0 && poured.settle_core_hours > 0.0);
+    assert_eq!((reused.settle_steps, reused.settle_core_hours), (0.0, 0.0));
+    assert_eq!(reused.intrusion_core_hours, poured.intrusion_core_hours);
+    let grain_steps = poured.grains * poured.intrusion_steps;
+    assert!(
+        (poured.intrusion_core_hours * 3600.0 * run::INTRUSION_GRAIN_STEPS_PER_CORE_S
+            - grain_steps)
+            .abs()
+            < 1e-6 * grain_steps
+    );
+    let text = poured.to_string();
+    assert!(
+        text.contains("settle") && text.contains("intrusion"),
+        "{text}"
+    );
+    let paper = LammpsRequest {
+        speed_m_s: Some(0.5),
+        depth_m: 0.03,
+        ranks: 256,
+        out: work.path().join("paper"),
+        ..LammpsRequest::default()
+    };
+    let cost = paper.cost(&paper.spec(), &paper.trajectory().unwrap());
+    eprintln!("{cost}");
+    assert!(
+        cost.settle_core_hours > 10.0 * cost.intrusion_core_hours,
+        "{cost}"
+    );
+}
