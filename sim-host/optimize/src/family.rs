@@ -71,26 +71,31 @@ impl MoveChain {
 
     /// `start` then `moves` `(to, duration, hold)`, then null moves (staying put) up to `n`.
     fn padded(start: f64, moves: &[(f64, f64, f64)], n: usize) -> Self {
-        let mut v: Vec<Move> = moves
-            .iter()
-            .map(|&(to_m, duration_s, hold_s)| Move {
-                to_m,
-                duration_s,
-                hold_s,
-            })
-            .collect();
-        let last = v.last().map_or(start, |m| m.to_m);
-        while v.len() < n {
-            v.push(Move {
+        Self {
+            start_m: start,
+            moves: moves
+                .iter()
+                .map(|&(to_m, duration_s, hold_s)| Move {
+                    to_m,
+                    duration_s,
+                    hold_s,
+                })
+                .collect(),
+        }
+        .padded_to(n)
+    }
+
+    /// This chain with null moves (staying put) appended up to `n` moves.
+    pub fn padded_to(mut self, n: usize) -> Self {
+        let last = self.moves.last().map_or(self.start_m, |m| m.to_m);
+        while self.moves.len() < n {
+            self.moves.push(Move {
                 to_m: last,
                 duration_s: NULL_MOVE_S,
                 hold_s: 0.0,
             });
         }
-        Self {
-            start_m: start,
-            moves: v,
-        }
+        self
     }
 
     /// Time from the start to the end of the last move, s (the final hold excluded).

@@ -176,20 +176,26 @@ pub fn sweep(
     let best_by_kind = ["single", "stutter", "delayed"]
         .iter()
         .filter_map(|k| {
-            points
-                .iter()
-                .filter(|p| p.stroke.kind == *k && p.evaluation.feasible())
-                // First best in grid order on ties: deterministic.
-                .fold(None::<&SweptPoint>, |best, p| match best {
-                    Some(b) if b.evaluation.value >= p.evaluation.value => Some(b),
-                    _ => Some(p),
-                })
-                .cloned()
+            first_best(
+                points
+                    .iter()
+                    .filter(|p| p.stroke.kind == *k && p.evaluation.feasible()),
+            )
+            .cloned()
         })
         .collect();
     Some(PaperSweep {
         points,
         best_by_kind,
+    })
+}
+
+/// The point of `points` with the highest value, the first in their order on ties (so a
+/// sweep's best does not depend on the threads).
+pub fn first_best<'a>(points: impl Iterator<Item = &'a SweptPoint>) -> Option<&'a SweptPoint> {
+    points.fold(None, |best, p| match best {
+        Some(b) if b.evaluation.value >= p.evaluation.value => Some(b),
+        _ => Some(p),
     })
 }
 

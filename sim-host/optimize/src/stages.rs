@@ -22,7 +22,9 @@ use crate::outcome::{
     BedRow, CandidateRow, KindBest, OptimizeOutcome, OverBeds, RestartAgreement, ResultStroke,
     chain_text,
 };
-use crate::paper_sweep::{PaperGrid, PaperSpace, PaperStroke, PaperSweep, SweptPoint, sweep};
+use crate::paper_sweep::{
+    PaperGrid, PaperSpace, PaperStroke, PaperSweep, SweptPoint, first_best, sweep,
+};
 use crate::refine::{RefineSettings, RefineSpace, Refined, refine};
 use crate::request::{OptimizeRequest, Setup, checkpoint_lock_path, checkpoint_path};
 use crate::search::{SearchOutcome, SearchSettings, Start, search, uniform_point};
@@ -205,20 +207,11 @@ impl PaperStage {
     /// limits give.
     fn seeds(&self, a: f64) -> Vec<SweptPoint> {
         let mut v = self.sweep.best_by_kind.clone();
-        let points = &self.sweep.points;
-        let nearest = self.nearest_amplitude(a);
         for best in &self.sweep.best_by_kind {
-            let at_a = points
-                .iter()
-                .filter(|p| {
-                    p.stroke.amplitude_m == nearest
-                        && p.stroke.kind == best.stroke.kind
-                        && p.evaluation.feasible()
-                })
-                .fold(None::<&SweptPoint>, |b, p| match b {
-                    Some(b) if b.evaluation.value >= p.evaluation.value => Some(b),
-                    _ => Some(p),
-                });
+            let at_a = first_best(
+                self.at_amplitude(a)
+                    .filter(|p| p.stroke.kind == best.stroke.kind),
+            );
             if let Some(p) = at_a.filter(|p| p.stroke != best.stroke) {
                 v.push(p.clone());
             }
@@ -226,14 +219,17 @@ impl PaperStage {
         v
     }
 
-    /// The sweep's amplitude nearest `a`, m (`a` itself when the sweep is empty).
-    fn nearest_amplitude(&self, a: f64) -> f64 {
-        self.sweep
-            .points
+    /// The feasible points of the sweep at its amplitude nearest `a` (m), in grid order.
+    fn at_amplitude(&self, a: f64) -> impl Iterator<Item = &SweptPoint> {
+        let points = &self.sweep.points;
+        let nearest = points
             .iter()
             .map(|p| p.stroke.amplitude_m)
             .min_by(|x, y| (x - a).abs().total_cmp(&(y - a).abs()))
-            .unwrap_or(a)
+            .unwrap_or(a);
+        points
+            .iter()
+            .filter(move |p| p.evaluation.feasible() && p.stroke.amplitude_m == nearest)
     }
 }
 
@@ -474,7 +470,7 @@ impl<'a> Context<'a> {
         // The given strokes, as they are: when one keeps these limits, the answer is at least
         // as good (a wider search never answers below the narrower one that gave it).
         for (i, c) in self.request.start_from.iter().enumerate() {
-            let chain = padded(c, moves);
+            let chain = c.clone().padded_to(moves);
             let kinematic = problem.evaluate(&chain);
             if let Some(why) = &kinematic.violation {
                 self.say(format!(
@@ -803,14 +799,7 @@ impl<'a> Context<'a> {
         paper_chain: &MoveChain,
     ) -> Result<Validity, OptimizeError> {
         let robot_a = self.setup.problem.params.robot.stroke_amplitude_m;
-        let nearest = paper.nearest_amplitude(robot_a);
-        let regime: Vec<&Evaluation> = paper
-            .sweep
-            .points
-            .iter()
-            .filter(|p| p.evaluation.feasible() && p.stroke.amplitude_m == nearest)
-            .map(|p| &p.evaluation)
-            .collect();
+        let regime: Vec<&Evaluation> = paper.at_amplitude(robot_a).map(|p| &p.evaluation).collect();
         let fastest = regime
             .iter()
             .map(|e| e.max_touchdown_speed_m_s)
@@ -1052,20 +1041,6 @@ impl Verified {
             r.controller_value.unwrap_or(f64::NAN)
         }
     }
-}
-
-/// `c` with null moves (staying put) appended up to `moves`.
-fn padded(c: &MoveChain, moves: usize) -> MoveChain {
-    let mut c = c.clone();
-    let at = c.moves.last().map_or(c.start_m, |m| m.to_m);
-    while c.moves.len() < moves {
-        c.moves.push(crate::family::Move {
-            to_m: at,
-            duration_s: crate::family::NULL_MOVE_S,
-            hold_s: 0.0,
-        });
-    }
-    c
 }
 
 /// Salt of the paper's best's refinement (its coordinates are not the family's).

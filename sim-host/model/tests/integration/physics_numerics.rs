@@ -378,6 +378,13 @@ fn intrusion_at_low_phi_rings_near_5_hz() {
     assert!((f - series).abs() < 0.1 * series);
 }
 
+/// The robot's centre of mass (motor, rod and foot) at a series row, m, for `p`'s masses.
+fn centre_of_mass(p: &Params) -> impl Fn(&SeriesRow) -> f64 {
+    let r = &p.robot;
+    let (m_m, m_r, m_f) = (r.motor_mass_kg, r.rod_mass_kg, r.foot_mass_kg);
+    move |s: &SeriesRow| (m_m * (s.x_r + s.p) + m_r * s.x_r + m_f * s.x_f) / (m_m + m_r + m_f)
+}
+
 /// The centre of mass's rise (motor, rod and foot) matches the one worked out from a dense time
 /// series of the same run, for a single jump and a delayed stutter on sand and on hard ground;
 /// it is below the rod's apex when the motor is lowered in flight, and zero for a stroke that
@@ -385,11 +392,7 @@ fn intrusion_at_low_phi_rings_near_5_hz() {
 #[test]
 fn the_centre_of_mass_rise_matches_the_time_series() {
     let p = Params::preset(0.57).unwrap();
-    let (m_m, m_r, m_f) = (
-        p.robot.motor_mass_kg,
-        p.robot.rod_mass_kg,
-        p.robot.foot_mass_kg,
-    );
+    let com = centre_of_mass(&p);
     let opts = SimOptions {
         record_series: true,
         series_interval_s: 2e-5,
@@ -413,8 +416,6 @@ fn the_centre_of_mass_rise_matches_the_time_series() {
         .unwrap();
         let series = &o.series;
         assert!(series.len() > 100);
-        let com =
-            |r: &SeriesRow| (m_m * (r.x_r + r.p) + m_r * r.x_r + m_f * r.x_f) / (m_m + m_r + m_f);
         let com0 = com(&series[0]);
         let rise = series
             .iter()
@@ -436,12 +437,7 @@ fn the_centre_of_mass_rise_matches_the_time_series() {
 #[test]
 fn the_landing_speeds_match_the_time_series() {
     let p = Params::preset(0.57).unwrap();
-    let (m_m, m_r, m_f) = (
-        p.robot.motor_mass_kg,
-        p.robot.rod_mass_kg,
-        p.robot.foot_mass_kg,
-    );
-    let com = |r: &SeriesRow| (m_m * (r.x_r + r.p) + m_r * r.x_r + m_f * r.x_f) / (m_m + m_r + m_f);
+    let com = centre_of_mass(&p);
     let opts = SimOptions {
         record_series: true,
         series_interval_s: 1e-5,
