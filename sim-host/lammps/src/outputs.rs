@@ -20,7 +20,8 @@ use crate::dump::{self, RunCheck};
 use crate::error::LammpsError;
 use crate::foot::foot_atoms;
 use crate::lammps::Lammps;
-use crate::script::{self, Piece};
+use crate::restart::{self, Stage, StageRun};
+use crate::script::{self, Piece, Resume};
 use crate::spec::LammpsSpec;
 
 /// What a run's `run.toml` records: everything the read-back checks against.
@@ -32,6 +33,9 @@ pub struct Manifest {
     pub lammps_version: String,
     /// MPI ranks.
     pub ranks: u32,
+    /// How they started (`srun`, `mpiexec`, or `lmp` alone).
+    #[serde(default)]
+    pub launcher: String,
     /// Where the trajectory came from.
     pub trajectory: String,
     /// The model's packing fraction for eq. 6 and F_p: the settled bed's, within the
@@ -57,10 +61,17 @@ pub struct Manifest {
     pub settle_steps: u64,
     /// Steps of the intrusion.
     pub intrusion_steps: u64,
-    /// Wall time of the settle and of the intrusion, s.
+    /// Wall time of the settle's last attempt, s (a resumed settle's attempts before it
+    /// were killed and not timed).
     pub settle_wall_s: f64,
-    /// Wall time of the intrusion, s.
+    /// Wall time of the intrusion's last attempt, s.
     pub intrusion_wall_s: f64,
+    /// The step the settle's last attempt resumed from (none: its start).
+    #[serde(default)]
+    pub settle_resumed_from: Option<u64>,
+    /// The step the intrusion's last attempt resumed from (none: its start).
+    #[serde(default)]
+    pub intrusion_resumed_from: Option<u64>,
     /// The foot's path.
     pub pieces: Vec<Piece>,
     /// The run.
@@ -250,7 +261,8 @@ pub fn check_inputs(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<(), La
 }
 
 /// Pour the loose grains and settle them (`in.settle`, LAMMPS on `ranks` ranks in `dir`),
-/// which writes `settled.data` there.
+/// which writes `settled.data` there; from the settle's newest restart file when an earlier
+/// attempt left one.
 #[allow(clippy::too_many_arguments)]
 fn pour_and_settle(
     spec: &LammpsSpec,
@@ -259,9 +271,10 @@ fn pour_and_settle(
     run_id: &str,
     bed_box: &bed::BedBox,
     loose: &[Atom],
+    restart_every: u64,
     dir: &Path,
     progress: &dyn Progress,
-) -> Result<crate::lammps::RunReport, LammpsError> {
+) -> Result<StageRun, LammpsError> {
     std::fs::write(
         dir.join("pour.data"),
         bed::data_file(&format!("sandjumper pour (run {run_id})"), bed_box, loose),
@@ -275,22 +288,42 @@ fn pour_and_settle(
             spec.max_settle_s
         )));
     }
-    std::fs::write(
-        dir.join("in.settle"),
-        script::settle_script(spec, run_id, fall_s).map_err(LammpsError::input)?,
-    )
-    .map_err(io)?;
+    // The script's own errors (a spec it cannot pour) are the user's: checked first.
+    script::settle_script(spec, run_id, fall_s, restart_every, None).map_err(LammpsError::input)?;
     let settle_max = (spec.max_settle_s / spec.time_step_s()).ceil() as u64;
     stage(progress, "settle", settle_max);
-    lammps
-        .run(
-            dir,
-            "in.settle",
-            "log.settle",
-            ranks,
-            &mut stepper(progress),
-        )
-        .map_err(LammpsError::internal)
+    let script =
+        |resume: Option<Resume>| script::settle_script(spec, run_id, fall_s, restart_every, resume);
+    restart::run_stage(
+        lammps,
+        dir,
+        ranks,
+        &Stage {
+            name: "settle",
+            input: "in.settle",
+            script: &script,
+            prepare: &|_| Ok(()),
+        },
+        progress,
+        &mut stepper(progress),
+    )
+    .map_err(LammpsError::internal)
+}
+
+/// How a finished settle went, kept in `settle.toml` beside `settled.data` (a resumed run
+/// does not settle again).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct SettleRecord {
+    /// Its last step.
+    steps: u64,
+    /// Wall time of its last attempt, s.
+    wall_s: f64,
+    /// Whether it ended on its rms speed.
+    halted: bool,
+    /// The step its last attempt resumed from.
+    resumed_from: Option<u64>,
+    /// The bed given instead (`--bed`), if any.
+    bed_from: Option<String>,
 }
 
 /// The settled bed `given` (a `settled.data`, or a run folder holding `lammps/settled.data`)
@@ -344,37 +377,91 @@ pub fn reuse_bed(
     Ok(())
 }
 
-/// Run `spec` on `trajectory` with `lammps` on `ranks` ranks into `out` (a staging folder);
-/// then [`analyse`] it with the speed rule `min_speed_ratio`. With `bed` (a settled bed of
-/// the same spec, [`reuse_bed`]) the pour and settle are skipped.
+/// How often each stage writes a restart file, steps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RestartEvery {
+    /// Steps between the settle's restart files.
+    pub settle: u64,
+    /// Steps between the intrusion's (a multiple of the force window and the dump interval,
+    /// so a resumed stage's windows and frames fall where the unbroken run's do).
+    pub intrusion: u64,
+}
+
+/// Run `spec` on `trajectory` with `lammps` on `ranks` ranks in `dir` (the run's LAMMPS
+/// folder): pour and settle (or take the settled bed `bed`, [`reuse_bed`]), place the foot,
+/// intrude, and write `run.toml`. Resumes what an earlier attempt in `dir` left: a finished
+/// settle (`settle.toml`) is not run again, a stage with restart files goes on from the
+/// newest, a finished intrusion (`run.toml`) is not run again.
 #[allow(clippy::too_many_arguments)]
-pub fn run(
+pub fn simulate(
     spec: &LammpsSpec,
     trajectory: &Trajectory,
     lammps: &Lammps,
     ranks: u32,
-    min_speed_ratio: f64,
     bed: Option<&Path>,
-    out: &Path,
+    restart_every: RestartEvery,
+    dir: &Path,
     progress: &dyn Progress,
-) -> Result<Summary, LammpsError> {
+) -> Result<(), LammpsError> {
     check_inputs(spec, trajectory)?;
     let pieces = script::pieces(spec, trajectory);
-    let spec_text = toml::to_string(spec).map_err(io)?;
-    let run_id = fnv(&format!("{spec_text}{pieces:?}"));
-    let dir = out.join("lammps");
+    let run_id = run_id(spec, trajectory)?;
+    if dir.join("run.toml").is_file() {
+        progress.note("dem lammps: the intrusion had finished; its files are read back");
+        return Ok(());
+    }
     std::fs::create_dir_all(dir.join("dumps")).map_err(io)?;
 
     // 1. Pour and settle, or the settled bed given.
     let (bed_box, loose) = bed::loose_start(spec);
-    let settle = match bed {
-        Some(given) => {
-            reuse_bed(spec, &bed_box, given, &dir.join("settled.data"))?;
-            None
+    let record_path = dir.join("settle.toml");
+    let record = match std::fs::read_to_string(&record_path)
+        .ok()
+        .and_then(|t| toml::from_str::<SettleRecord>(&t).ok())
+        .filter(|r| dir.join("settled.data").is_file() && r.bed_from == bed.map(display))
+    {
+        Some(r) => {
+            progress.note("dem lammps: the bed had settled; it is not settled again");
+            r
         }
-        None => Some(pour_and_settle(
-            spec, lammps, ranks, &run_id, &bed_box, &loose, &dir, progress,
-        )?),
+        None => {
+            let r = match bed {
+                Some(given) => {
+                    reuse_bed(spec, &bed_box, given, &dir.join("settled.data"))?;
+                    SettleRecord {
+                        steps: 0,
+                        wall_s: 0.0,
+                        halted: false,
+                        resumed_from: None,
+                        bed_from: Some(display(given)),
+                    }
+                }
+                None => {
+                    let s = pour_and_settle(
+                        spec,
+                        lammps,
+                        ranks,
+                        &run_id,
+                        &bed_box,
+                        &loose,
+                        restart_every.settle,
+                        dir,
+                        progress,
+                    )?;
+                    SettleRecord {
+                        steps: s.report.last_step,
+                        wall_s: s.report.wall_s,
+                        halted: s.report.halted,
+                        resumed_from: s.resumed_from,
+                        bed_from: None,
+                    }
+                }
+            };
+            std::fs::write(&record_path, toml::to_string(&r).map_err(io)?).map_err(io)?;
+            // Each restart file holds the whole bed: the settled one is all that is needed now.
+            restart::remove_all(dir, "settle");
+            r
+        }
     };
     let (_, mut grains) =
         bed::read_data(&dir.join("settled.data")).map_err(LammpsError::internal)?;
@@ -418,16 +505,12 @@ pub fn run(
         ),
     )
     .map_err(io)?;
-    std::fs::write(
-        dir.join("in.intrude"),
-        script::intrude_script(spec, &run_id, &pieces, axis, sphere),
-    )
-    .map_err(io)?;
     let intrusion_steps: u64 = pieces.iter().map(|p| p.steps).sum();
     let mut manifest = Manifest {
-        run_id,
+        run_id: run_id.clone(),
         lammps_version: lammps.version.clone(),
         ranks,
+        launcher: lammps.launcher_for(ranks).into(),
         trajectory: match trajectory {
             Trajectory::Constant {
                 speed_m_s,
@@ -450,36 +533,67 @@ pub fn run(
             time_step_s: spec.time_step_s(),
         },
         settled,
-        settled_by_speed: settle.as_ref().is_some_and(|s| s.halted),
-        bed_from: bed.map(|b| b.display().to_string()),
+        settled_by_speed: record.halted,
+        bed_from: record.bed_from.clone(),
         grains_removed_under_foot: removed,
         foot_spheres,
-        settle_steps: settle.as_ref().map_or(0, |s| s.last_step),
+        settle_steps: record.steps,
         intrusion_steps,
-        settle_wall_s: settle.as_ref().map_or(0.0, |s| s.wall_s),
+        settle_wall_s: record.wall_s,
         intrusion_wall_s: 0.0,
-        pieces,
+        settle_resumed_from: record.resumed_from,
+        intrusion_resumed_from: None,
+        pieces: pieces.clone(),
         spec: spec.clone(),
     };
 
-    // 3. The intrusion.
+    // 3. The intrusion, from its newest restart file when there is one.
     stage(progress, "intrusion", intrusion_steps);
-    let intrusion = lammps
-        .run(
-            &dir,
-            "in.intrude",
-            "log.intrude",
-            ranks,
-            &mut stepper(progress),
-        )
-        .map_err(LammpsError::internal)?;
-    manifest.intrusion_wall_s = intrusion.wall_s;
+    let every = restart_every.intrusion;
+    let script = |resume: Option<Resume>| {
+        Ok(script::intrude_script(
+            spec, &run_id, &pieces, axis, sphere, every, resume,
+        ))
+    };
+    let prepare = |from: Option<u64>| match from {
+        Some(step) => restart::cut_force_file(dir, step),
+        None => Ok(()),
+    };
+    let intrusion = restart::run_stage(
+        lammps,
+        dir,
+        ranks,
+        &Stage {
+            name: "intrude",
+            input: "in.intrude",
+            script: &script,
+            prepare: &prepare,
+        },
+        progress,
+        &mut stepper(progress),
+    )
+    .map_err(LammpsError::internal)?;
+    manifest.intrusion_wall_s = intrusion.report.wall_s;
+    manifest.intrusion_resumed_from = intrusion.resumed_from;
+    // The restart files are not needed once the stage is done (each holds the whole bed).
+    let _ = std::fs::remove_dir_all(dir.join("restart"));
     std::fs::write(
         dir.join("run.toml"),
         toml::to_string(&manifest).map_err(io)?,
     )
-    .map_err(io)?;
-    analyse(&dir, out, min_speed_ratio, progress)
+    .map_err(io)
+}
+
+/// A path as the manifest records it.
+fn display(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// The run's id: a hash of its spec and the foot's path, in its inputs' first lines.
+pub fn run_id(spec: &LammpsSpec, trajectory: &Trajectory) -> Result<String, LammpsError> {
+    let pieces = script::pieces(spec, trajectory);
+    let spec_text = toml::to_string(spec).map_err(io)?;
+    Ok(fnv(&format!("{spec_text}{pieces:?}")))
 }
 
 /// The deepest the trajectory goes, m (its table's deepest sample, or its end).
@@ -664,7 +778,9 @@ fn summarise(
     let per_contact = peak * d * d / (core::f64::consts::PI * s.foot_radius_m().powi(2));
     let overlap = (per_contact / (4.0 / 3.0 * e_star * (0.25 * d).sqrt())).powf(2.0 / 3.0);
     let core_seconds = (m.settle_wall_s + m.intrusion_wall_s) * f64::from(m.ranks);
-    let grain_steps = m.settled.grains as f64 * m.intrusion_steps as f64;
+    // The rate of the intrusion's last attempt: the steps it ran over its wall time.
+    let grain_steps = m.settled.grains as f64
+        * (m.intrusion_steps - m.intrusion_resumed_from.unwrap_or(0).min(m.intrusion_steps)) as f64;
     Summary {
         lammps_version: m.lammps_version.clone(),
         grains: m.settled.grains - m.grains_removed_under_foot,

@@ -13,8 +13,8 @@ use sandjumper_output::{Progress, StagedDir};
 use sandjumper_slurm::{CommandJobOutcome, QueueOptions};
 
 use crate::error::LammpsError;
-use crate::lammps::Lammps;
-use crate::outputs::{self, Summary};
+use crate::lammps::{Lammps, Launcher};
+use crate::outputs::{self, RestartEvery, Summary};
 use crate::spec::{LammpsSpec, Preset};
 
 /// Grain-steps per core-second of the settle (pour and settle), measured on the small preset on
@@ -135,6 +135,12 @@ pub struct LammpsRequest {
     /// fastest speed.
     #[cfg_attr(feature = "clap", arg(long, value_name = "F", default_value = "0.3", value_parser = sandjumper_dem::intrude_run::parse_share))]
     pub min_speed_ratio: f64,
+    /// Wall minutes between restart files (each stage writes one about this often, at the
+    /// rates measured on the small preset; only the newest two are kept). A run killed (a
+    /// time limit, a lost node) resumes from the newest when the same command is given the
+    /// same output again.
+    #[cfg_attr(feature = "clap", arg(long = "restart-every", value_name = "MINUTES", default_value = "15", value_parser = sandjumper_output::parse::parse_positive))]
+    pub restart_every_min: f64,
     /// MPI ranks (`mpiexec -n N lmp`).
     #[cfg_attr(feature = "clap", arg(long, value_name = "N", default_value = "2", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RANKS))))]
     pub ranks: u32,
@@ -144,6 +150,9 @@ pub struct LammpsRequest {
     /// The MPI launcher (default: the mpiexec beside lmp, else on PATH).
     #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub mpiexec: Option<PathBuf>,
+    /// How the ranks start: `srun` inside a Slurm job, else `mpiexec` (auto), or one of them.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "auto"))]
+    pub launcher: Launcher,
     /// Output directory.
     #[cfg_attr(feature = "clap", arg(skip))]
     pub out: PathBuf,
@@ -169,9 +178,11 @@ impl Default for LammpsRequest {
             fps: None,
             seed: None,
             min_speed_ratio: 0.3,
+            restart_every_min: 15.0,
             ranks: 2,
             lmp: None,
             mpiexec: None,
+            launcher: Launcher::Auto,
             out: PathBuf::new(),
         }
     }
@@ -302,9 +313,11 @@ impl LammpsRequest {
             fps,
             seed,
             min_speed_ratio,
+            restart_every_min,
             ranks: _,
             lmp,
             mpiexec,
+            launcher,
             out: _,
         } = self;
         let mut args: Vec<String> = vec!["dem".into(), "lammps".into()];
@@ -341,6 +354,7 @@ impl LammpsRequest {
             ("--restitution", *restitution),
             ("--fps", *fps),
             ("--min-speed-ratio", Some(*min_speed_ratio)),
+            ("--restart-every", Some(*restart_every_min)),
         ];
         // `{}` writes the shortest text that reads back as the same f64.
         args.extend(
@@ -353,6 +367,7 @@ impl LammpsRequest {
         }
         path("--lmp", lmp, &mut args)?;
         path("--mpiexec", mpiexec, &mut args)?;
+        args.push(format!("--launcher={}", launcher.name()));
         Ok(args)
     }
 
@@ -375,6 +390,12 @@ impl LammpsRequest {
             return Err(LammpsError::input(format!(
                 "--min-speed-ratio {} not allowed (allowed: 0 to 1)",
                 self.min_speed_ratio
+            )));
+        }
+        if !(self.restart_every_min.is_finite() && self.restart_every_min > 0.0) {
+            return Err(LammpsError::input(format!(
+                "--restart-every {} not allowed (allowed: minutes above 0)",
+                self.restart_every_min
             )));
         }
         if !(1..=MAX_RANKS).contains(&self.ranks) {
@@ -412,11 +433,36 @@ impl LammpsRequest {
         }
     }
 
+    /// How often each stage of the run of `spec` writes a restart file: about every
+    /// [`LammpsRequest::restart_every_min`] wall minutes at the measured rates on
+    /// [`LammpsRequest::ranks`] ranks; the intrusion's on the grid of its force windows and
+    /// dumps, the settle's on its speed checks.
+    pub fn restart_every(&self, spec: &LammpsSpec) -> RestartEvery {
+        let grains = spec.grain_count().max(1) as f64;
+        let core_s = 60.0 * self.restart_every_min * f64::from(self.ranks);
+        let on_grid = |rate: f64, grid: u64| {
+            let steps = (core_s * rate / grains / grid as f64).floor() as u64;
+            steps.max(1) * grid
+        };
+        let dt = spec.time_step_s();
+        let check = ((0.005 / dt).round() as u64).max(1);
+        let (fe, de) = (spec.force_every(), spec.dump_every());
+        let lcm = fe / gcd(fe, de) * de;
+        RestartEvery {
+            settle: on_grid(SETTLE_GRAIN_STEPS_PER_CORE_S, check),
+            intrusion: on_grid(INTRUSION_GRAIN_STEPS_PER_CORE_S, lcm),
+        }
+    }
+
     /// The LAMMPS (and MPI launcher) this request names or finds.
     pub fn lammps(&self) -> Result<Lammps, LammpsError> {
-        crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref())
+        crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref(), self.launcher)
             .map_err(LammpsError::Input)
     }
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a.max(1) } else { gcd(b, a % b) }
 }
 
 /// What a run submitted to Slurm ([`submit`]) came to.
@@ -448,7 +494,13 @@ pub fn submit(
 ) -> Result<Submitted, LammpsError> {
     request.validate()?;
     request.lammps()?;
-    let args = request.job_arguments()?;
+    // A restart file at least four times within the job's time limit: a job killed at its
+    // limit and submitted again loses at most a quarter of it.
+    let mut in_job = request.clone();
+    if let Some(limit) = queue.time_limit_min() {
+        in_job.restart_every_min = in_job.restart_every_min.min(limit / 4.0);
+    }
+    let args = in_job.job_arguments()?;
     let job = sandjumper_slurm::CommandJob {
         name: "dem-lammps",
         program,
@@ -458,7 +510,9 @@ pub fn submit(
         expect: &["summary.json"],
         queue: queue.clone(),
     };
-    match sandjumper_slurm::submit_command(&job, progress)? {
+    let outcome = sandjumper_slurm::submit_command(&job, progress)
+        .map_err(|e| kept(&unfinished_dir(&request.out), e.into()))?;
+    match outcome {
         CommandJobOutcome::Queued { id } => Ok(Submitted::Queued { id }),
         CommandJobOutcome::Done { .. } => {
             let p = request.out.join("summary.json");
@@ -476,62 +530,125 @@ pub fn submit(
     }
 }
 
-/// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write
-/// its folder (a failed run keeps its LAMMPS files in `OUT.failed/`).
-pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
-    let (spec, traj) = request.checked()?;
-    let lammps = request.lammps()?;
-    // What this run will cost, before it starts (the paper preset is a cluster's job).
-    progress.note(&request.cost(&spec, &traj).to_string());
-    let staged = StagedDir::create(&request.out)?;
-    let result = outputs::run(
-        &spec,
-        &traj,
-        &lammps,
-        request.ranks,
-        request.min_speed_ratio,
-        request.bed.as_deref(),
-        staged.path(),
-        progress,
-    );
-    progress.finish();
-    let summary = match result {
-        Ok(s) => s,
-        Err(e) => return Err(keep_failed_run(staged.path(), &request.out, e)),
-    };
-    let out = staged.commit()?;
-    Ok(LammpsOutcome { summary, out })
-}
-
-/// A run that failed keeps its LAMMPS files (inputs, logs, dumps: hours of a cluster) in
-/// `OUT.failed/`, beside where its output would have been, and the error says so; the
-/// output folder itself is not written.
-fn keep_failed_run(staged: &Path, out: &Path, e: LammpsError) -> LammpsError {
-    let files = staged.join("lammps");
-    if !files.join("in.settle").is_file() {
-        return e;
-    }
+/// The folder a run into `out` works in until it is done: `OUT.unfinished/`, beside it. It
+/// holds the LAMMPS files (`lammps/`) and, while a run works in it, its writer's lock
+/// (`.lock`); a run killed leaves it, and the same command resumes from it.
+pub fn unfinished_dir(out: &Path) -> PathBuf {
     let mut name = out
         .file_name()
         .map(|n| n.to_os_string())
         .unwrap_or_default();
-    name.push(".failed");
-    let kept = out.with_file_name(name);
-    // Only an earlier failed run of ours is replaced.
-    if kept.join("in.settle").is_file() {
-        let _ = std::fs::remove_dir_all(&kept);
+    name.push(".unfinished");
+    out.with_file_name(name)
+}
+
+/// What an unfinished folder was started for: a run resumes only the same run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Unfinished {
+    /// The run's id ([`outputs::run_id`]).
+    run_id: String,
+    /// The settled bed it reuses, if any.
+    bed_from: Option<String>,
+}
+
+/// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write its
+/// folder. LAMMPS works in [`unfinished_dir`] (locked: one run at a time), writing restart
+/// files as it goes: a run that fails or is killed keeps it, and the same command resumes it
+/// from its newest restart file; a finished run moves its LAMMPS files into the output and
+/// removes it.
+pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
+    let (spec, traj) = request.checked()?;
+    let lammps = request.lammps()?;
+    // The output can be written (checked now, not after hours of LAMMPS).
+    drop(StagedDir::create(&request.out)?);
+    // What this run will cost, before it starts (the paper preset is a cluster's job).
+    progress.note(&request.cost(&spec, &traj).to_string());
+    let work = unfinished_dir(&request.out);
+    std::fs::create_dir_all(&work)
+        .map_err(|e| LammpsError::input(format!("cannot create {}: {e}", work.display())))?;
+    let _lock = sandjumper_output::lock::WriterLock::take(&work.join(".lock"))
+        .map_err(|e| LammpsError::input(e.to_string()))?;
+    let this = Unfinished {
+        run_id: outputs::run_id(&spec, &traj)?,
+        bed_from: request.bed.as_ref().map(|b| b.display().to_string()),
+    };
+    let record = work.join("run.toml");
+    match std::fs::read_to_string(&record)
+        .ok()
+        .and_then(|t| toml::from_str::<Unfinished>(&t).ok())
+    {
+        Some(earlier) if earlier == this => progress.note(&format!(
+            "dem lammps: resuming the unfinished run in {}",
+            work.display()
+        )),
+        Some(earlier) => {
+            return Err(LammpsError::input(format!(
+                "{} holds an unfinished run of other inputs (run {}{}; this one is run {}{}):                  resume it with its own command, or remove the folder (allowed: one run per                  output)",
+                work.display(),
+                earlier.run_id,
+                earlier
+                    .bed_from
+                    .map_or(String::new(), |b| format!(" on the bed {b}")),
+                this.run_id,
+                this.bed_from
+                    .as_ref()
+                    .map_or(String::new(), |b| format!(" on the bed {b}"))
+            )));
+        }
+        None => {
+            std::fs::write(&record, toml::to_string(&this).map_err(internal)?).map_err(internal)?
+        }
     }
-    if !kept.exists() && std::fs::rename(&files, &kept).is_ok() {
-        return e.map_message(|mut message| {
-            message += &format!(
-                "\nthe run's LAMMPS files (inputs, logs, data, dumps) are kept in {}",
-                kept.display()
-            );
-            // The log the message names moved with them.
-            message.replace(&files.display().to_string(), &kept.display().to_string())
-        });
+    let lammps_dir = work.join("lammps");
+    let result = outputs::simulate(
+        &spec,
+        &traj,
+        &lammps,
+        request.ranks,
+        request.bed.as_deref(),
+        request.restart_every(&spec),
+        &lammps_dir,
+        progress,
+    )
+    .and_then(|()| {
+        let staged = StagedDir::create(&request.out)?;
+        let summary = outputs::analyse(
+            &lammps_dir,
+            staged.path(),
+            request.min_speed_ratio,
+            progress,
+        )?;
+        Ok((staged, summary))
+    });
+    progress.finish();
+    let (staged, summary) = match result {
+        Ok(r) => r,
+        Err(e) => return Err(kept(&work, e)),
+    };
+    std::fs::rename(&lammps_dir, staged.path().join("lammps")).map_err(internal)?;
+    let out = staged.commit()?;
+    let _ = std::fs::remove_dir_all(&work);
+    Ok(LammpsOutcome { summary, out })
+}
+
+fn internal(e: impl fmt::Display) -> LammpsError {
+    LammpsError::internal(e.to_string())
+}
+
+/// The error of a run that failed, saying where its files are and that the same command
+/// resumes it.
+fn kept(work: &Path, e: LammpsError) -> LammpsError {
+    if !work.join("lammps").is_dir() {
+        return e;
     }
-    e
+    e.map_message(|mut message| {
+        message += &format!(
+            "\nthe run's LAMMPS files (inputs, logs, data, dumps, restart files) are kept in {}: \
+             the same command resumes it from its newest restart file",
+            work.display()
+        );
+        message
+    })
 }
 
 /// A finished `dem lammps` run to read back again (another speed rule, or a run made

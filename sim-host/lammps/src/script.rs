@@ -73,24 +73,64 @@ fn contact(spec: &LammpsSpec, mu: f64) -> String {
     )
 }
 
+/// Where a stage's atoms come from: a data file (its start) or a restart file LAMMPS wrote
+/// while an earlier attempt ran ([`Resume`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Start<'a> {
+    /// `read_data FILE`: the stage from its start.
+    Data(&'a str),
+    /// `read_restart`: the stage from a restart file.
+    Restart(Resume<'a>),
+}
+
+/// A restart file a stage resumes from: LAMMPS's `restart` command wrote it at `step`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resume<'a> {
+    /// The file, relative to the run's folder.
+    pub file: &'a str,
+    /// The step it holds.
+    pub step: u64,
+}
+
 /// The lines every stage starts with. The ranks split the bed in x and y only
 /// (`processors * * 1`): a bed settling from its loose start to a third of its height would
 /// leave the upper ranks of a split in z empty. Atoms are found by a hash (`map hash`): an
 /// array indexed by atom id costs every rank memory for every atom (about 61 MB a rank at 15
 /// million atoms).
-fn header(spec: &LammpsSpec, what: &str, run_id: &str, data: &str, mu: f64) -> String {
+///
+/// From a restart file, LAMMPS keeps the atoms, the groups, the contacts' history (the pair's
+/// and the floor's, given back to a fix of the same ID) and the moving foot's origin; the pair
+/// style is given again (LAMMPS 22 Jul 2025 restores it with no cut-off and newton on) and the
+/// clock is set again (it restarts the time at the restart's step).
+fn header(spec: &LammpsSpec, what: &str, run_id: &str, start: Start, mu: f64) -> String {
     let skin = 0.2 * spec.grain_diameter_m;
     let c = contact(spec, mu);
+    let read = match start {
+        Start::Data(data) => format!(
+            "units si\n\
+             atom_style sphere\n\
+             atom_modify map hash\n\
+             processors * * 1\n\
+             boundary p p fm\n\
+             newton off\n\
+             read_data {data}\n"
+        ),
+        Start::Restart(r) => format!(
+            "# resumed from step {step}\n\
+             atom_modify map hash\n\
+             processors * * 1\n\
+             newton off\n\
+             read_restart {file}\n\
+             reset_timestep {step} time {time:e}\n",
+            step = r.step,
+            file = r.file,
+            time = r.step as f64 * spec.time_step_s()
+        ),
+    };
     format!(
         "# sandjumper dem lammps: {what} (run {run_id})\n\
-         units si\n\
-         atom_style sphere\n\
-         atom_modify map hash\n\
-         processors * * 1\n\
-         boundary p p fm\n\
-         newton off\n\
+         {read}\
          comm_modify vel yes\n\
-         read_data {data}\n\
          group grains type 1\n\
          pair_style granular\n\
          pair_coeff * * {c}\n\
@@ -101,19 +141,34 @@ fn header(spec: &LammpsSpec, what: &str, run_id: &str, data: &str, mu: f64) -> S
     )
 }
 
-/// `in.settle`: pour and settle.
-pub fn settle_script(spec: &LammpsSpec, run_id: &str, fall_s: f64) -> Result<String, String> {
+/// Restart files of a stage (`settle` or `intrude`): `restart/STAGE.STEP`, every `every`
+/// steps.
+pub fn restart_line(stage: &str, every: u64) -> String {
+    format!("restart {every} restart/{stage}.*\n")
+}
+
+/// `in.settle`: pour and settle, writing a restart file every `restart_every` steps; from
+/// `resume` on, when given.
+pub fn settle_script(
+    spec: &LammpsSpec,
+    run_id: &str,
+    fall_s: f64,
+    restart_every: u64,
+    resume: Option<Resume>,
+) -> Result<String, String> {
+    let start = resume.map_or(Start::Data("pour.data"), Start::Restart);
     let mut s = header(
         spec,
         "pour and settle",
         run_id,
-        "pour.data",
+        start,
         spec.pour_friction()?,
     );
     let dt = spec.time_step_s();
     let fall = (fall_s / dt).ceil() as u64;
     let rest = ((spec.max_settle_s - fall_s).max(0.0) / dt).ceil() as u64;
     let check = ((0.005 / dt).round() as u64).max(1);
+    let at = resume.map_or(0, |r| r.step);
     let _ = write!(
         s,
         "neigh_modify delay 0 every 1 check yes\n\
@@ -123,27 +178,48 @@ pub fn settle_script(spec: &LammpsSpec, run_id: &str, fall_s: f64) -> Result<Str
          thermo_style custom step time atoms ke v_rms_speed\n\
          thermo {check}\n\
          thermo_modify lost error norm no\n\
-         # the fall: no grain can be at rest before the highest has reached the bed\n\
-         run {fall}\n\
-         fix halt grains halt {check} v_rms_speed < {:e} error continue\n\
-         run {rest}\n\
+         {}",
+        spec.gravity_m_s2,
+        restart_line("settle", restart_every)
+    );
+    if at < fall {
+        let _ = writeln!(
+            s,
+            "# the fall: no grain can be at rest before the highest has reached the bed\n\
+             run {fall} upto"
+        );
+    }
+    let _ = write!(
+        s,
+        "fix halt grains halt {check} v_rms_speed < {:e} error continue\n\
+         run {} upto\n\
          unfix halt\n\
          write_data settled.data\n",
-        spec.gravity_m_s2, spec.settled_rms_speed_m_s
+        spec.settled_rms_speed_m_s,
+        fall + rest
     );
     Ok(s)
 }
 
-/// `in.intrude`: the foot on its `pieces`, the force and the dumps. The foot's axis is at
-/// (`cx`, `cy`); `foot_sphere_m` is its spheres' diameter.
+/// `in.intrude`: the foot on its `pieces`, the force and the dumps, a restart file every
+/// `restart_every` steps of the intrusion; from `resume` on, when given (the bed's relaxation
+/// against the still foot is then behind it). The foot's axis is at (`cx`, `cy`);
+/// `foot_sphere_m` is its spheres' diameter.
+///
+/// Each piece's `fix move` has its own ID (`move_K`): a restart within piece K gives that
+/// fix its origin back, so the foot goes on from where it was; a piece that starts at the
+/// restart's step starts anew from there.
 pub fn intrude_script(
     spec: &LammpsSpec,
     run_id: &str,
     pieces: &[Piece],
     centre: (f64, f64),
     foot_sphere_m: f64,
+    restart_every: u64,
+    resume: Option<Resume>,
 ) -> String {
-    let mut s = header(spec, "intrusion", run_id, "intrude.data", spec.friction);
+    let start = resume.map_or(Start::Data("intrude.data"), Start::Restart);
+    let mut s = header(spec, "intrusion", run_id, start, spec.friction);
     let fe = spec.force_every();
     let de = spec.dump_every();
     let total: u64 = pieces.iter().map(|p| p.steps).sum();
@@ -154,17 +230,32 @@ pub fn intrude_script(
         "group foot type 2\n\
          neigh_modify delay 0 every 1 check yes exclude type 2 2\n\
          fix gravity grains gravity {g} vector 0 0 -1\n\
-         fix integrate grains nve/sphere\n\
-         # the bed relaxes against the foot, held still (the contacts' history starts anew)\n\
-         fix move foot move linear 0 0 0\n\
-         thermo {relax}\n\
-         run {relax}\n\
-         unfix move\n\
-         reset_timestep 0 time 0\n\
+         fix integrate grains nve/sphere\n",
+        g = spec.gravity_m_s2,
+    );
+    // force.txt from the start, or appended to (the caller cut it at the restart's step).
+    let force_file = match resume {
+        None => {
+            let _ = write!(
+                s,
+                "# the bed relaxes against the foot, held still (the contacts' history starts anew)\n\
+                 fix hold foot move linear 0 0 0\n\
+                 thermo {relax}\n\
+                 run {relax}\n\
+                 unfix hold\n\
+                 reset_timestep 0 time 0\n"
+            );
+            "file force.txt"
+        }
+        Some(_) => "append force.txt",
+    };
+    let _ = write!(
+        s,
+        "{restart}\
          compute foot_fz foot reduce sum fz\n\
          compute foot_zmin foot reduce min z\n\
          variable t equal time\n\
-         fix force all ave/time 1 {fe} {fe} v_t c_foot_fz c_foot_zmin file force.txt format \" %.9g\"\n\
+         fix force all ave/time 1 {fe} {fe} v_t c_foot_fz c_foot_zmin {force_file} format \" %.9g\"\n\
          region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
          dump frames all custom {de} dumps/frame.*.txt id type x y z vx vy vz radius\n\
          dump_modify frames region near sort id format float %.9g\n\
@@ -172,17 +263,23 @@ pub fn intrude_script(
          thermo {de}\n\
          thermo_modify lost error norm no\n\
          # the foot: {n} piece(s), {total} steps; its spheres are {fd:e} m across\n",
-        g = spec.gravity_m_s2,
+        restart = restart_line("intrude", restart_every),
         cx = centre.0,
         cy = centre.1,
         n = pieces.len(),
         fd = foot_sphere_m,
     );
-    for p in pieces {
+    let from = resume.map_or(0, |r| r.step);
+    let mut end = 0;
+    for (k, p) in pieces.iter().enumerate() {
+        end += p.steps;
+        if end <= from {
+            continue;
+        }
         let _ = write!(
             s,
-            "fix move foot move linear 0 0 {:e}\nrun {}\nunfix move\n",
-            p.vz_m_s, p.steps
+            "fix move_{k} foot move linear 0 0 {:e}\nrun {end} upto\nunfix move_{k}\n",
+            p.vz_m_s
         );
     }
     s
@@ -229,7 +326,7 @@ mod tests {
     #[test]
     fn the_scripts_name_the_contacts_the_rates_and_the_run() {
         let spec = LammpsSpec::preset(Preset::Small);
-        let s = settle_script(&spec, "abc", 0.1).unwrap();
+        let s = settle_script(&spec, "abc", 0.1, 1000, None).unwrap();
         assert!(s.contains("(run abc)"));
         // The pour's friction sets the packing; the intrusion has the grains'.
         let pour = spec.pour_friction().unwrap();
@@ -241,10 +338,11 @@ mod tests {
             steps: spec.force_every() * 3,
             vz_m_s: -0.1,
         }];
-        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018);
+        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018, 100, None);
         assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
         assert!(i.contains("exclude type 2 2"));
         assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));
-        assert!(i.contains("fix move foot move linear 0 0 -1e-1\nrun"));
+        assert!(i.contains("fix move_0 foot move linear 0 0 -1e-1\nrun 150 upto\n"));
+        assert!(i.contains("restart 100 restart/intrude.*") && i.contains("file force.txt"));
     }
 }

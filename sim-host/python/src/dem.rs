@@ -381,7 +381,9 @@ pub fn dem_intrude(
 }
 
 /// `dem lammps`'s flags whose names differ from the Python arguments'.
-const LAMMPS_NAMES: [(&str, &str); 12] = [
+const LAMMPS_NAMES: [(&str, &str); 14] = [
+    ("--restart-every", "restart_every"),
+    ("--launcher", "launcher"),
     ("--speed", "speed"),
     ("--depth", "depth"),
     ("--trajectory", "trajectory"),
@@ -397,7 +399,15 @@ const LAMMPS_NAMES: [(&str, &str); 12] = [
 ];
 
 /// `lammps`'s options by name.
-const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 20] = [
+const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 22] = [
+    ("restart_every", |r, v| {
+        r.restart_every_min = number("restart_every", v, parse_positive)?;
+        Ok(())
+    }),
+    ("launcher", |r, v| {
+        r.launcher = choice("launcher", v)?;
+        Ok(())
+    }),
     ("preset", |r, v| {
         r.preset = choice("preset", v)?;
         Ok(())
@@ -495,7 +505,9 @@ const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 20] = [
 /// back into the column's momentum, the added mass against eq. 6, the force against F_p(z).
 /// `options`: the command's options by name (`preset="small"`, `speed=…` or
 /// `trajectory=…`, `depth=…`, `bed_width=…`, `ranks=2`, `bed=` an earlier run's folder or
-/// its `lammps/settled.data` to reuse its settled bed, …); `progress`:
+/// its `lammps/settled.data` to reuse its settled bed, `restart_every=` wall minutes between
+/// restart files, `launcher="srun"`, …; a run killed resumes from its newest restart file
+/// when called again with the same options); `progress`:
 /// `progress(stage, done, total)`; Ctrl-C stops LAMMPS. Returns the folder loaded:
 /// `summary` (`summary.json`), `tables` (`flow`, `force_depth`, `cone`).
 #[pyfunction]

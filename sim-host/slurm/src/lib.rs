@@ -54,6 +54,29 @@ impl Default for QueueOptions {
     }
 }
 
+impl QueueOptions {
+    /// The time limit in minutes, from Slurm's forms: `M`, `M:S`, `H:M:S`, `D-H`, `D-H:M`,
+    /// `D-H:M:S`. `None` for a form it does not take (or `UNLIMITED`).
+    pub fn time_limit_min(&self) -> Option<f64> {
+        let t = self.time.trim();
+        let (days, rest) = match t.split_once('-') {
+            Some((d, r)) => (d.parse::<f64>().ok()?, Some(r)),
+            None => (0.0, None),
+        };
+        let num = |w: &str| w.parse::<f64>().ok().filter(|v| *v >= 0.0);
+        let parts: Vec<&str> = rest.unwrap_or(t).split(':').collect();
+        let minutes = match (rest.is_some(), parts.as_slice()) {
+            (false, [m]) => num(m)?,
+            (false, [m, s]) => num(m)? + num(s)? / 60.0,
+            (_, [h, m, s]) => 60.0 * num(h)? + num(m)? + num(s)? / 60.0,
+            (true, [h]) => 60.0 * num(h)?,
+            (true, [h, m]) => 60.0 * num(h)? + num(m)?,
+            _ => return None,
+        };
+        Some(24.0 * 60.0 * days + minutes)
+    }
+}
+
 /// A job script: `#!/bin/bash`, the `#SBATCH` lines, `set -euo pipefail`, one command.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobScript {
@@ -589,6 +612,25 @@ pub fn submit_sharded(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn time_limits_read_in_every_form_slurm_takes() {
+        let limit = |t: &str| {
+            QueueOptions {
+                time: t.into(),
+                ..QueueOptions::default()
+            }
+            .time_limit_min()
+        };
+        assert_eq!(limit("30"), Some(30.0));
+        assert_eq!(limit("1:30"), Some(1.5));
+        assert_eq!(limit("2:00:00"), Some(120.0));
+        assert_eq!(limit("1-2"), Some(1560.0));
+        assert_eq!(limit("1-0:30"), Some(1470.0));
+        assert_eq!(limit("1-0:0:30"), Some(1440.5));
+        assert_eq!(limit("UNLIMITED"), None);
+        assert_eq!(limit("1:2:3:4"), None);
+    }
 
     fn words(w: &[&str]) -> Vec<String> {
         w.iter().map(|s| s.to_string()).collect()

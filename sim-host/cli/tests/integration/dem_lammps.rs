@@ -66,7 +66,8 @@ fn without_lammps_or_with_bad_values_dem_lammps_refuses_before_anything_runs() {
         assert!(e.contains(why), "{extra:?}: {e}");
         assert!(!out.exists());
     }
-    // A LAMMPS that fails: the run's files are kept beside the output, the log named.
+    // A LAMMPS that fails: the run's files are kept beside the output, the log named, and the
+    // same command said to resume it.
     let fake = work.path().join("lmp");
     std::fs::write(
         &fake,
@@ -94,8 +95,9 @@ fn without_lammps_or_with_bad_values_dem_lammps_refuses_before_anything_runs() {
     ]);
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    let kept = work.path().join("run.failed");
+    let kept = work.path().join("run.unfinished/lammps");
     assert!(e.contains("this LAMMPS fails every run"), "{e}");
+    assert!(e.contains("the same command resumes it"), "{e}");
     assert!(
         e.contains(&kept.join("log.settle").display().to_string()),
         "{e}"

@@ -363,30 +363,22 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The small preset in a 40 x 40 x 30 mm bed on 2 ranks through Slurm into `out`.
+    let small_dem = |out: &Path| {
+        let mut c = cluster.command(exe);
+        c.args(["dem", "lammps", "--preset", "small", "--bed-width", "0.04"])
+            .args(["--bed-depth", "0.03", "--ranks", "2", "--slurm", "--lmp"])
+            .arg(&lmp)
+            .arg("--out")
+            .arg(out);
+        c
+    };
     let dem = work.path().join("dem");
-    let out = cluster
-        .command(exe)
-        .args([
-            "dem",
-            "lammps",
-            "--preset",
-            "small",
-            "--bed-width",
-            "0.04",
-            "--bed-depth",
-            "0.03",
-            "--episode",
-            "push-off",
-            "--ranks",
-            "2",
-            "--lmp",
-        ])
-        .arg(&lmp)
+    let out = small_dem(&dem)
+        .args(["--episode", "push-off"])
         .arg("--trajectory")
         .arg(jump.join("trajectory.csv"))
-        .arg("--out")
-        .arg(&dem)
-        .args(["--slurm", "--json"])
+        .arg("--json")
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -421,6 +413,41 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
         "{depth} m, the table {deepest} m"
     );
     assert!(read(&dem.join("lammps/log.intrude")).contains("on 2 procs"));
+    // Its ranks started through srun (Slurm's PMI-2) as one MPI world of two.
+    let manifest = read(&dem.join("lammps/run.toml"));
+    assert!(manifest.contains("launcher = \"srun\""), "{manifest}");
+    assert!(read(&dem.join("lammps/log.intrude")).contains("1 by 2 by 1 MPI processor grid"));
+
+    // A run longer than its job's time limit (1 minute): killed by Slurm, it keeps its
+    // unfinished folder; the same command submitted again resumes it from its newest restart
+    // file (one every quarter of the limit) and finishes.
+    let long = work.path().join("long");
+    let submit_long = |time: &str| {
+        small_dem(&long)
+            .args(["--speed", "0.01", "--depth", "0.008", "--slurm-time", time])
+            .output()
+            .unwrap()
+    };
+    let out = submit_long("1");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("TIMEOUT"), "{stderr}");
+    assert!(
+        stderr.contains("long.unfinished") && stderr.contains("the same command resumes it"),
+        "{stderr}"
+    );
+    assert!(!long.exists());
+    let out = submit_long("10");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let log = read_or_empty(&work.path().join("long.slurm/logs/job.out"));
+    assert!(out.status.success(), "{stderr}\n{log}");
+    assert!(log.contains("resuming the unfinished run"), "{log}");
+    assert!(
+        log.contains("resumed from its restart file of step"),
+        "{log}"
+    );
+    assert!(long.join("summary.json").is_file());
+    assert!(!work.path().join("long.unfinished").exists());
 }
 
 fn read_or_empty(p: &Path) -> String {

@@ -29,7 +29,7 @@ const DEPTH: f64 = 0.010;
 /// Whether there is a LAMMPS to run (`$SANDJUMPER_LMP`, else `lmp` on PATH, found as a run
 /// finds it); `false` with a message when there is none (under CI it must be there).
 fn lammps_here() -> bool {
-    match sandjumper_lammps::lammps::find(None, None) {
+    match sandjumper_lammps::lammps::find(None, None, Default::default()) {
         Ok(_) => true,
         Err(e) => {
             let msg = format!("skipped: {e}");

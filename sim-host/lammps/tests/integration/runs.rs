@@ -60,7 +60,7 @@ fn bad_values_and_a_missing_lammps_are_refused_before_anything_runs() {
 }
 
 #[test]
-fn a_failed_lammps_keeps_its_files_beside_the_output() {
+fn a_failed_lammps_keeps_its_files_beside_the_output_for_the_same_command_to_resume() {
     let work = tempfile::tempdir().unwrap();
     let fake = work.path().join("lmp");
     std::fs::write(
@@ -84,9 +84,35 @@ fn a_failed_lammps_keeps_its_files_beside_the_output() {
     )
     .unwrap_err();
     assert_eq!(e.blame(), Blame::Internal, "{e}");
-    assert!(e.to_string().contains("run.failed"), "{e}");
-    assert!(work.path().join("run.failed/in.settle").is_file());
+    assert!(e.to_string().contains("run.unfinished"), "{e}");
+    assert!(e.to_string().contains("the same command resumes it"), "{e}");
+    assert!(
+        work.path()
+            .join("run.unfinished/lammps/in.settle")
+            .is_file()
+    );
     assert!(!out.exists());
+    // The lock is the process's: it ended with the call.
+    assert!(!sandjumper_output::WriterLock::is_held(
+        &work.path().join("run.unfinished/.lock")
+    ));
+    // Another run into the same output, of other inputs, is refused (exit 2).
+    let e = run::run(
+        &LammpsRequest {
+            ranks: 1,
+            seed: Some(7),
+            lmp: Some(work.path().join("lmp")),
+            ..small(&out)
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert!(
+        e.to_string()
+            .contains("holds an unfinished run of other inputs"),
+        "{e}"
+    );
 }
 
 #[test]
