@@ -56,6 +56,9 @@ pub struct FlowRow {
     /// Momentum of the grains in the ring `R < r <= 2R` below the foot (down positive),
     /// kg m/s.
     pub momentum_ring_kg_m_s: f64,
+    /// The column's momentum as LAMMPS measured it at this step (`column.txt`: regions that
+    /// move with the foot, `compute reduce/region`; NaN for a run without it), kg m/s.
+    pub momentum_under_foot_lammps_kg_m_s: f64,
     /// The paper's added mass `P / v_foot` (NaN while the foot is slower than the rule
     /// allows), kg.
     pub added_mass_kg: f64,
@@ -119,6 +122,7 @@ pub fn frame_row(frame: &Frame, g: &Geometry) -> Result<FlowRow, String> {
         momentum_under_foot_kg_m_s: p,
         grains_under_foot: n,
         momentum_ring_kg_m_s: ring,
+        momentum_under_foot_lammps_kg_m_s: f64::NAN,
         added_mass_kg: f64::NAN,
         eq6_added_mass_kg: f64::NAN,
     })
@@ -190,6 +194,53 @@ pub fn read_force(
             depth_m: depth,
             force_n: f[2],
             model_penetration_force_n: fp(depth)?,
+        });
+    }
+    Ok(rows)
+}
+
+/// One row of `column.txt`: the column under the foot as LAMMPS measured it at a dump step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColumnRow {
+    /// The step.
+    pub step: u64,
+    /// Down momentum of the grains under the foot, kg m/s.
+    pub momentum_kg_m_s: f64,
+    /// How many grains.
+    pub grains: u64,
+    /// Down momentum of the grains in the ring `R < r <= 2R` below the foot, kg m/s.
+    pub ring_kg_m_s: f64,
+}
+
+/// Read `column.txt` (`fix ave/time`: step, momentum, grains, ring). Errors name the file and
+/// line.
+pub fn read_column(path: &std::path::Path) -> Result<Vec<ColumnRow>, String> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
+    let mut rows = Vec::new();
+    for (no, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let f: Vec<f64> = l
+            .split_whitespace()
+            .map(|w| w.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("{name}:{}: `{l}` is not four numbers", no + 1))?;
+        let whole = |v: f64| v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53);
+        if f.len() != 4 || !whole(f[0]) || !whole(f[2]) {
+            return Err(format!(
+                "{name}:{}: `{l}` (allowed: step, momentum, grains, ring momentum; the file is \
+                 cut short or not of this run)",
+                no + 1
+            ));
+        }
+        rows.push(ColumnRow {
+            step: f[0] as u64,
+            momentum_kg_m_s: f[1],
+            grains: f[2] as u64,
+            ring_kg_m_s: f[3],
         });
     }
     Ok(rows)
@@ -359,6 +410,7 @@ mod tests {
                 momentum_under_foot_kg_m_s: 0.003,
                 grains_under_foot: 1,
                 momentum_ring_kg_m_s: 0.0,
+                momentum_under_foot_lammps_kg_m_s: f64::NAN,
                 added_mass_kg: f64::NAN,
                 eq6_added_mass_kg: f64::NAN,
             })

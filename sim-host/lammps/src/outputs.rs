@@ -166,6 +166,11 @@ pub struct Summary {
     /// The column's peak momentum, kg m/s.
     #[serde(deserialize_with = "number_or_nan")]
     pub grain_momentum_under_foot_kg_m_s: f64,
+    /// The largest difference between LAMMPS's own measure of the column's momentum
+    /// (`column.txt`) and the dumps' at the same frames, over the peak: the two measures of
+    /// one run agree to the dumps' printed digits (NaN: a run without `column.txt`), 1.
+    #[serde(default = "nan", deserialize_with = "number_or_nan")]
+    pub column_lammps_vs_dumps_max_diff: f64,
     /// The paper's added mass at the deepest frame that has one, kg.
     #[serde(deserialize_with = "number_or_nan")]
     pub final_added_mass_kg: f64,
@@ -209,6 +214,10 @@ pub struct Summary {
 /// A number of `summary.json` read back: serde_json writes a NaN or an infinity (a run with no
 /// sample past the speed cut, no cone measured) as `null`, read back here as NaN, which writes
 /// as `null` again.
+fn nan() -> f64 {
+    f64::NAN
+}
+
 fn number_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
@@ -552,11 +561,12 @@ pub fn simulate(
     let every = restart_every.intrusion;
     let script = |resume: Option<Resume>| {
         Ok(script::intrude_script(
-            spec, &run_id, &pieces, axis, sphere, every, resume,
+            spec, &run_id, &pieces, axis, sphere, bottom, every, resume,
         ))
     };
     let prepare = |from: Option<u64>| match from {
-        Some(step) => restart::cut_force_file(dir, step),
+        Some(step) => restart::cut_time_series(dir, "force.txt", step)
+            .and_then(|()| restart::cut_time_series(dir, "column.txt", step)),
         None => Ok(()),
     };
     let intrusion = restart::run_stage(
@@ -699,6 +709,29 @@ pub fn analyse(
         rows.push(row);
         progress.advance(1);
     }
+    // LAMMPS's own measure of the column at the same steps, where the run has it.
+    let column_path = dir.join("column.txt");
+    if column_path.is_file() {
+        let column = analysis::read_column(&column_path).map_err(LammpsError::input)?;
+        let by_step: std::collections::HashMap<u64, analysis::ColumnRow> =
+            column.iter().map(|c| (c.step, *c)).collect();
+        if by_step.len() != column.len() || column.len() != steps.len() {
+            return Err(LammpsError::input(format!(
+                "{}: {} rows ({} steps) where the run has {} frames (the file is cut short, holds \
+                 a step twice, or is not of this run)",
+                column_path.display(),
+                column.len(),
+                by_step.len(),
+                steps.len()
+            )));
+        }
+        for (row, s) in rows.iter_mut().zip(&steps) {
+            let c = by_step.get(s).ok_or_else(|| {
+                LammpsError::input(format!("{}: no row of step {s}", column_path.display()))
+            })?;
+            row.momentum_under_foot_lammps_kg_m_s = c.momentum_kg_m_s;
+        }
+    }
     analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(LammpsError::internal)?;
     // The cone over the frames with the paper's added mass (read again: one frame in
     // memory at a time, whatever the bed's size).
@@ -778,6 +811,21 @@ fn summarise(
     let per_contact = peak * d * d / (core::f64::consts::PI * s.foot_radius_m().powi(2));
     let overlap = (per_contact / (4.0 / 3.0 * e_star * (0.25 * d).sqrt())).powf(2.0 / 3.0);
     let core_seconds = (m.settle_wall_s + m.intrusion_wall_s) * f64::from(m.ranks);
+    let peak_p = rows
+        .iter()
+        .map(|r| r.momentum_under_foot_kg_m_s.abs())
+        .fold(0.0, f64::max);
+    let column_diff = rows
+        .iter()
+        .map(|r| (r.momentum_under_foot_lammps_kg_m_s - r.momentum_under_foot_kg_m_s).abs())
+        .fold(0.0, |a: f64, d| {
+            if d.is_nan() || a.is_nan() {
+                f64::NAN
+            } else {
+                a.max(d)
+            }
+        })
+        / peak_p;
     // The rate of the intrusion's last attempt: the steps it ran over its wall time.
     let grain_steps = m.settled.grains as f64
         * (m.intrusion_steps - m.intrusion_resumed_from.unwrap_or(0).min(m.intrusion_steps)) as f64;
@@ -808,6 +856,7 @@ fn summarise(
             .iter()
             .map(|r| r.momentum_under_foot_kg_m_s)
             .fold(f64::NEG_INFINITY, f64::max),
+        column_lammps_vs_dumps_max_diff: column_diff,
         final_added_mass_kg: with_mass
             .iter()
             .max_by(|a, b| a.depth_m.total_cmp(&b.depth_m))
@@ -914,6 +963,7 @@ mod summary_tests {
             max_depth_m: f64::NEG_INFINITY,
             added_mass_vs_eq6_median: f64::NAN,
             grain_momentum_under_foot_kg_m_s: f64::NEG_INFINITY,
+            column_lammps_vs_dumps_max_diff: f64::NAN,
             final_added_mass_kg: f64::NAN,
             force_vs_penetration_force_median: f64::NAN,
             peak_force_n: 0.0,

@@ -55,10 +55,11 @@ pub fn prune(dir: &Path, stage: &str) {
     }
 }
 
-/// Cut `force.txt` in `dir` to its header and the windows that end at or before `step` (the
-/// resumed stage appends the windows after it).
-pub fn cut_force_file(dir: &Path, step: u64) -> Result<(), String> {
-    let path = dir.join("force.txt");
+/// Cut the time series `name` (`force.txt`, `column.txt`: LAMMPS's `fix ave/time`) in `dir`
+/// to its header and the rows of steps at or before `step` (the resumed stage appends the
+/// rows after it).
+pub fn cut_time_series(dir: &Path, name: &str, step: u64) -> Result<(), String> {
+    let path = dir.join(name);
     let text = std::fs::read_to_string(&path).unwrap_or_default();
     let kept: String = text
         .lines()
@@ -221,7 +222,7 @@ mod tests {
             "# Time-averaged data\n# TimeStep v_t\n50 0.1 1\n100 0.2 2\n150 0.3 3\n",
         )
         .unwrap();
-        cut_force_file(dir.path(), 100).unwrap();
+        cut_time_series(dir.path(), "force.txt", 100).unwrap();
         assert_eq!(
             std::fs::read_to_string(dir.path().join("force.txt")).unwrap(),
             "# Time-averaged data\n# TimeStep v_t\n50 0.1 1\n100 0.2 2\n"

@@ -225,9 +225,10 @@ impl fmt::Display for LammpsOutcome {
         )?;
         write!(
             f,
-            "  added mass / eq. 6 (median)  {:.2}\n  column momentum (peak)       {:.3} g m/s\n  force / F_p(z) (median)      {:.2}\n  peak force                   {:.2} N (overlap ~{:.2} % of a grain)\n  jammed cone                  {}\n  cost                         {:.0} core-s ({:.2e} grain-steps per core-s)",
+            "  added mass / eq. 6 (median)  {:.2}\n  column momentum (peak)       {:.3} g m/s (LAMMPS's own measure within {:.1e} of the dumps')\n  force / F_p(z) (median)      {:.2}\n  peak force                   {:.2} N (overlap ~{:.2} % of a grain)\n  jammed cone                  {}\n  cost                         {:.0} core-s ({:.2e} grain-steps per core-s)",
             s.added_mass_vs_eq6_median,
             1e3 * s.grain_momentum_under_foot_kg_m_s,
+            s.column_lammps_vs_dumps_max_diff,
             s.force_vs_penetration_force_median,
             s.peak_force_n,
             100.0 * s.peak_overlap_ratio,

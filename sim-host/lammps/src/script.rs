@@ -209,12 +209,14 @@ pub fn settle_script(
 /// Each piece's `fix move` has its own ID (`move_K`): a restart within piece K gives that
 /// fix its origin back, so the foot goes on from where it was; a piece that starts at the
 /// restart's step starts anew from there.
+#[allow(clippy::too_many_arguments)]
 pub fn intrude_script(
     spec: &LammpsSpec,
     run_id: &str,
     pieces: &[Piece],
     centre: (f64, f64),
     foot_sphere_m: f64,
+    bottom_m: f64,
     restart_every: u64,
     resume: Option<Resume>,
 ) -> String {
@@ -233,7 +235,8 @@ pub fn intrude_script(
          fix integrate grains nve/sphere\n",
         g = spec.gravity_m_s2,
     );
-    // force.txt from the start, or appended to (the caller cut it at the restart's step).
+    // force.txt and column.txt from the start, or appended to (the caller cut them at the
+    // restart's step).
     let force_file = match resume {
         None => {
             let _ = write!(
@@ -249,6 +252,8 @@ pub fn intrude_script(
         }
         Some(_) => "append force.txt",
     };
+    let column_file = force_file.replace("force.txt", "column.txt");
+    let r = spec.foot_radius_m();
     let _ = write!(
         s,
         "{restart}\
@@ -256,6 +261,20 @@ pub fn intrude_script(
          compute foot_zmin foot reduce min z\n\
          variable t equal time\n\
          fix force all ave/time 1 {fe} {fe} v_t c_foot_fz c_foot_zmin {force_file} format \" %.9g\"\n\
+         # the column under the foot, measured in LAMMPS: the grains whose centres lie within\n\
+         # the foot's radius of its axis and below its bottom (regions that move with it), and\n\
+         # the ring R..2R below it; each grain's down momentum summed\n\
+         variable foot_dz equal 0\n\
+         region under cylinder z {cx:e} {cy:e} {r:e} INF {bottom_m:e} side in move NULL NULL v_foot_dz\n\
+         region wide cylinder z {cx:e} {cy:e} {r2:e} INF {bottom_m:e} side in move NULL NULL v_foot_dz\n\
+         region beyond cylinder z {cx:e} {cy:e} {r:e} INF INF side out\n\
+         region ring intersect 2 wide beyond\n\
+         variable down_p atom -mass*vz\n\
+         variable one atom 1\n\
+         compute under_p grains reduce/region under sum v_down_p\n\
+         compute under_n grains reduce/region under sum v_one\n\
+         compute ring_p grains reduce/region ring sum v_down_p\n\
+         fix column all ave/time {de} 1 {de} c_under_p c_under_n c_ring_p {column_file} format \" %.12g\"\n\
          region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
          dump frames all custom {de} dumps/frame.*.txt id type x y z vx vy vz radius\n\
          dump_modify frames region near sort id format float %.9g\n\
@@ -264,23 +283,29 @@ pub fn intrude_script(
          thermo_modify lost error norm no\n\
          # the foot: {n} piece(s), {total} steps; its spheres are {fd:e} m across\n",
         restart = restart_line("intrude", restart_every),
+        r2 = 2.0 * r,
         cx = centre.0,
         cy = centre.1,
         n = pieces.len(),
         fd = foot_sphere_m,
     );
     let from = resume.map_or(0, |r| r.step);
-    let mut end = 0;
+    let (mut end, mut dz) = (0, 0.0);
+    let dt = spec.time_step_s();
     for (k, p) in pieces.iter().enumerate() {
+        let start = end;
         end += p.steps;
-        if end <= from {
-            continue;
+        if end > from {
+            // The regions follow the foot: its displacement along this piece, exact at every
+            // step (the path is the pieces').
+            let _ = write!(
+                s,
+                "variable foot_dz equal {dz:e}+({:e})*(step-{start})*{dt:e}\n\
+                 fix move_{k} foot move linear 0 0 {:e}\nrun {end} upto\nunfix move_{k}\n",
+                p.vz_m_s, p.vz_m_s
+            );
         }
-        let _ = write!(
-            s,
-            "fix move_{k} foot move linear 0 0 {:e}\nrun {end} upto\nunfix move_{k}\n",
-            p.vz_m_s
-        );
+        dz += p.vz_m_s * p.steps as f64 * dt;
     }
     s
 }
@@ -338,7 +363,7 @@ mod tests {
             steps: spec.force_every() * 3,
             vz_m_s: -0.1,
         }];
-        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018, 100, None);
+        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018, 0.03, 100, None);
         assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
         assert!(i.contains("exclude type 2 2"));
         assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));

@@ -431,7 +431,12 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     let out = submit_long("1");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("TIMEOUT"), "{stderr}");
+    // Slurm stops the LAMMPS step and then the job: the job ends TIMEOUT, or FAILED when
+    // sandjumper saw its LAMMPS stopped and exited first.
+    assert!(
+        stderr.contains("TIMEOUT") || stderr.contains("Force Terminated"),
+        "{stderr}"
+    );
     assert!(
         stderr.contains("long.unfinished") && stderr.contains("the same command resumes it"),
         "{stderr}"

@@ -243,6 +243,25 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         .filter(|r| r["momentum_under_foot_kg_m_s"] > 0.0)
         .count();
     assert_eq!(positive, inside.len());
+    // LAMMPS's own measure of the column (regions moving with the foot, `compute
+    // reduce/region`, column.txt) is the dumps' at every frame, to the dumps' 9 printed
+    // digits.
+    for r in &flow {
+        let (dumps, lammps) = (
+            r["momentum_under_foot_kg_m_s"],
+            r["momentum_under_foot_lammps_kg_m_s"],
+        );
+        assert!(
+            (dumps - lammps).abs() <= 1e-7 * s.grain_momentum_under_foot_kg_m_s,
+            "{dumps} from the dumps, {lammps} from LAMMPS at {} s",
+            r["t_s"]
+        );
+    }
+    assert!(
+        s.column_lammps_vs_dumps_max_diff < 1e-7,
+        "{}",
+        s.column_lammps_vs_dumps_max_diff
+    );
     let added = |lo: f64, hi: f64| {
         median(
             flow.iter()
