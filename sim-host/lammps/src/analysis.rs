@@ -167,6 +167,23 @@ pub fn read_force(
     g: &Geometry,
     fp: &dyn Fn(f64) -> Result<f64, String>,
 ) -> Result<Vec<ForceRow>, String> {
+    let rows = read_series(path, "step, time, force, lowest foot centre")?;
+    rows.iter()
+        .map(|f| {
+            let depth = g.surface_m - (f[3] - g.foot_sphere_radius_m);
+            Ok(ForceRow {
+                t_s: f[1],
+                depth_m: depth,
+                force_n: f[2],
+                model_penetration_force_n: fp(depth)?,
+            })
+        })
+        .collect()
+}
+
+/// The rows of a `fix ave/time` file of four columns (`what` names them for errors), its
+/// `#` lines skipped. Errors name the file and line.
+fn read_series(path: &std::path::Path, what: &str) -> Result<Vec<[f64; 4]>, String> {
     let name = path.display();
     let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
     let mut rows = Vec::new();
@@ -180,21 +197,14 @@ pub fn read_force(
             .map(|w| w.parse::<f64>())
             .collect::<Result<_, _>>()
             .map_err(|_| format!("{name}:{}: `{l}` is not four numbers", no + 1))?;
-        if f.len() != 4 {
-            return Err(format!(
-                "{name}:{}: {} values (allowed: step, time, force, lowest foot centre; the \
-                 file is cut short or not of this run)",
-                no + 1,
-                f.len()
-            ));
-        }
-        let depth = g.surface_m - (f[3] - g.foot_sphere_radius_m);
-        rows.push(ForceRow {
-            t_s: f[1],
-            depth_m: depth,
-            force_n: f[2],
-            model_penetration_force_n: fp(depth)?,
-        });
+        let whole = f.first().is_some_and(|s| *s >= 0.0 && s.fract() == 0.0);
+        let row: [f64; 4] = f.try_into().ok().filter(|_| whole).ok_or_else(|| {
+            format!(
+                "{name}:{}: `{l}` (allowed: {what}; the file is cut short or not of this run)",
+                no + 1
+            )
+        })?;
+        rows.push(row);
     }
     Ok(rows)
 }
@@ -215,35 +225,25 @@ pub struct ColumnRow {
 /// Read `column.txt` (`fix ave/time`: step, momentum, grains, ring). Errors name the file and
 /// line.
 pub fn read_column(path: &std::path::Path) -> Result<Vec<ColumnRow>, String> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
-    let mut rows = Vec::new();
-    for (no, line) in text.lines().enumerate() {
-        let l = line.trim();
-        if l.is_empty() || l.starts_with('#') {
-            continue;
-        }
-        let f: Vec<f64> = l
-            .split_whitespace()
-            .map(|w| w.parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| format!("{name}:{}: `{l}` is not four numbers", no + 1))?;
-        let whole = |v: f64| v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53);
-        if f.len() != 4 || !whole(f[0]) || !whole(f[2]) {
-            return Err(format!(
-                "{name}:{}: `{l}` (allowed: step, momentum, grains, ring momentum; the file is \
-                 cut short or not of this run)",
-                no + 1
-            ));
-        }
-        rows.push(ColumnRow {
-            step: f[0] as u64,
-            momentum_kg_m_s: f[1],
-            grains: f[2] as u64,
-            ring_kg_m_s: f[3],
-        });
-    }
-    Ok(rows)
+    let rows = read_series(path, "step, momentum, grains, ring momentum")?;
+    rows.iter()
+        .map(|f| {
+            if !(f[2] >= 0.0 && f[2].fract() == 0.0) {
+                return Err(format!(
+                    "{}: {} grains at step {} (allowed: a count)",
+                    path.display(),
+                    f[2],
+                    f[0]
+                ));
+            }
+            Ok(ColumnRow {
+                step: f[0] as u64,
+                momentum_kg_m_s: f[1],
+                grains: f[2] as u64,
+                ring_kg_m_s: f[3],
+            })
+        })
+        .collect()
 }
 
 /// The jammed cone: [`sandjumper_flow::cone::comoving_cone`], the same measure as the 2-D
