@@ -23,6 +23,9 @@ pub struct QueueArgs {
         requires = "slurm"
     )]
     pub slurm_time: String,
+    /// Nodes to spread the job's tasks over (default: as Slurm places them).
+    #[arg(long, value_name = "N", requires = "slurm", value_parser = clap::value_parser!(u32).range(1..))]
+    pub slurm_nodes: Option<u32>,
     /// Submit and return the job id without waiting.
     #[arg(long, requires = "slurm")]
     pub slurm_no_wait: bool,
@@ -34,6 +37,7 @@ impl QueueArgs {
         QueueOptions {
             partition: self.slurm_partition.clone(),
             time: self.slurm_time.clone(),
+            nodes: self.slurm_nodes,
             no_wait: self.slurm_no_wait,
         }
     }

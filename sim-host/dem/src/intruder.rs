@@ -34,6 +34,34 @@ pub enum Trajectory {
 }
 
 impl Trajectory {
+    /// The same motion for a foot `length_factor` times the size, at the same Froude number
+    /// `v^2 / (g L)`: depths times `length_factor`, times times its square root (speeds too).
+    /// A jump's push-off with the robot's 38 mm foot, scaled to a smaller foot, keeps the
+    /// paper's depth over radius and its Froude number.
+    pub fn froude_scaled(&self, length_factor: f64) -> Self {
+        let (k, time) = (length_factor, length_factor.sqrt());
+        match self {
+            Self::Constant {
+                speed_m_s,
+                start_depth_m,
+                end_depth_m,
+            } => Self::Constant {
+                speed_m_s: speed_m_s * time,
+                start_depth_m: start_depth_m * k,
+                end_depth_m: end_depth_m * k,
+            },
+            Self::Table {
+                t_s,
+                depth_m,
+                source,
+            } => Self::Table {
+                t_s: t_s.iter().map(|t| t * time).collect(),
+                depth_m: depth_m.iter().map(|d| d * k).collect(),
+                source: format!("{source}, Froude-scaled by {k} in length"),
+            },
+        }
+    }
+
     /// Duration, s.
     pub fn duration_s(&self) -> f64 {
         match self {
@@ -422,5 +450,37 @@ mod tests {
             end_depth_m: 0.01,
         };
         assert!(constant.check_starts_at_surface().is_ok());
+    }
+
+    #[test]
+    fn a_froude_scaled_motion_keeps_depth_over_size_and_the_froude_number() {
+        let t = Trajectory::Table {
+            t_s: vec![0.0, 0.01, 0.03],
+            depth_m: vec![0.0, 0.004, 0.012],
+            source: "jump".into(),
+        };
+        let k = 0.25;
+        let s = t.froude_scaled(k);
+        // Depth over size kept at every scaled time.
+        for (time, depth) in [(0.0, 0.0), (0.01, 0.004), (0.02, 0.008), (0.03, 0.012)] {
+            assert!((s.depth(time * k.sqrt()) - k * depth).abs() < 1e-15);
+        }
+        // v^2 / (g L): the speed scales with the square root of the size.
+        let (v0, v1) = (t.speed(0.005), s.speed(0.005 * k.sqrt()));
+        assert!((v1 * v1 / k - v0 * v0).abs() < 1e-12 * v0 * v0, "{v0} {v1}");
+        let c = Trajectory::Constant {
+            speed_m_s: 0.4,
+            start_depth_m: 0.0,
+            end_depth_m: 0.02,
+        }
+        .froude_scaled(k);
+        assert_eq!(
+            c,
+            Trajectory::Constant {
+                speed_m_s: 0.2,
+                start_depth_m: 0.0,
+                end_depth_m: 0.005
+            }
+        );
     }
 }

@@ -44,14 +44,32 @@ pub fn grain_intensity(id: u32, seed: u64) -> f64 {
     90.0 + 140.0 * (h >> 11) as f64 / (1u64 << 53) as f64
 }
 
-/// Paint disks: `paint(px_index, coverage, grain)` for every pixel a disk covers, with
-/// anti-aliased coverage of its edge.
-fn for_each_disk_pixel(w: &World, cam: &SideCamera, mut paint: impl FnMut(usize, f64, usize, f64)) {
-    let g = &w.g;
+/// A disc to draw in the camera's plane: a grain, or a piece of the intruder.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disc {
+    /// Its centre's horizontal position, m.
+    pub x_m: f64,
+    /// Its centre's height, m.
+    pub h_m: f64,
+    /// Its radius, m.
+    pub radius_m: f64,
+    /// The grain's identity (its grey level, [`grain_intensity`]).
+    pub id: u32,
+    /// Drawn black: the intruder.
+    pub intruder: bool,
+}
+
+/// Paint disks: `paint(px_index, coverage, disc, distance_over_radius)` for every pixel a
+/// disk covers, with anti-aliased coverage of its edge, in the order given (later on top).
+fn for_each_disk_pixel(
+    discs: impl Iterator<Item = Disc>,
+    cam: &SideCamera,
+    mut paint: impl FnMut(usize, f64, (usize, &Disc), f64),
+) {
     let (wpx, hpx) = (cam.width_px as i64, cam.height_px as i64);
-    for i in 0..g.len() {
-        let (cx, cy) = cam.to_px(g.x[i], g.y[i]);
-        let r = g.radius[i] / cam.m_per_px;
+    for (i, disc) in discs.enumerate() {
+        let (cx, cy) = cam.to_px(disc.x_m, disc.h_m);
+        let r = disc.radius_m / cam.m_per_px;
         let (x0, x1) = ((cx - r - 1.0).floor() as i64, (cx + r + 1.0).ceil() as i64);
         let (y0, y1) = ((cy - r - 1.0).floor() as i64, (cy + r + 1.0).ceil() as i64);
         if x1 < 0 || y1 < 0 || x0 >= wpx || y0 >= hpx {
@@ -64,23 +82,50 @@ fn for_each_disk_pixel(w: &World, cam: &SideCamera, mut paint: impl FnMut(usize,
                 let d = (dx * dx + dy * dy).sqrt();
                 let cover = (r - d + 0.5).clamp(0.0, 1.0);
                 if cover > 0.0 {
-                    paint((py * wpx + px) as usize, cover, i, (d / r).min(1.0));
+                    paint(
+                        (py * wpx + px) as usize,
+                        cover,
+                        (i, &disc),
+                        (d / r).min(1.0),
+                    );
                 }
             }
         }
     }
 }
 
+/// The world's grains as discs, in their order.
+fn discs(w: &World) -> impl Iterator<Item = Disc> + '_ {
+    let g = &w.g;
+    (0..g.len()).map(|i| Disc {
+        x_m: g.x[i],
+        h_m: g.y[i],
+        radius_m: g.radius[i],
+        id: g.id[i],
+        intruder: g.kind[i] != FREE,
+    })
+}
+
 /// A side-wall frame: dark background, each free grain a disk of its own grey level shaded
 /// toward its edge, the intruder black. 8-bit grey.
 pub fn side_wall_frame(w: &World, cam: &SideCamera, seed: u64) -> image::GrayImage {
+    disc_frame(discs(w), cam, seed)
+}
+
+/// [`side_wall_frame`] of any discs (a 3-D bed's grains seen through its wall, say), drawn in
+/// the order given, later ones on top.
+pub fn disc_frame(
+    discs: impl Iterator<Item = Disc>,
+    cam: &SideCamera,
+    seed: u64,
+) -> image::GrayImage {
     let n = (cam.width_px * cam.height_px) as usize;
     let mut buf = vec![25.0f64; n];
-    for_each_disk_pixel(w, cam, |k, cover, i, rr| {
-        let level = if w.g.kind[i] == FREE {
-            grain_intensity(w.g.id[i], seed) * (1.0 - 0.45 * rr * rr)
-        } else {
+    for_each_disk_pixel(discs, cam, |k, cover, (_, disc), rr| {
+        let level = if disc.intruder {
             5.0
+        } else {
+            grain_intensity(disc.id, seed) * (1.0 - 0.45 * rr * rr)
         };
         buf[k] = buf[k] * (1.0 - cover) + level * cover;
     });
@@ -95,7 +140,7 @@ pub fn side_wall_frame(w: &World, cam: &SideCamera, seed: u64) -> image::GrayIma
 pub fn speed_snapshot(w: &World, cam: &SideCamera, v_max_m_s: f64) -> image::RgbaImage {
     let n = (cam.width_px * cam.height_px) as usize;
     let mut buf = vec![[250.0f64, 250.0, 250.0]; n];
-    for_each_disk_pixel(w, cam, |k, cover, i, _| {
+    for_each_disk_pixel(discs(w), cam, |k, cover, (i, _), _| {
         let c = if w.g.kind[i] == FREE {
             let s = w.u.x[i].hypot(w.u.y[i]) / v_max_m_s.max(1e-12);
             let c = sandjumper_flow::figure::colour(s);

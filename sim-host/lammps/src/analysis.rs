@@ -38,6 +38,14 @@ pub struct Geometry {
     pub grain_diameter_m: f64,
     /// The time step, s.
     pub time_step_s: f64,
+    /// What the measured half foot's momentum and force are multiplied by to be the full
+    /// foot's: 2 against a sidewall, else 1.
+    #[serde(default = "one")]
+    pub symmetry_factor: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// One row of `flow.csv`: one frame.
@@ -115,6 +123,7 @@ pub fn frame_row(frame: &Frame, g: &Geometry) -> Result<FlowRow, String> {
             ring += m * -a.v[2];
         }
     }
+    let (p, ring) = (g.symmetry_factor * p, g.symmetry_factor * ring);
     Ok(FlowRow {
         t_s: frame.step as f64 * g.time_step_s,
         depth_m: g.surface_m - bottom,
@@ -174,7 +183,7 @@ pub fn read_force(
             Ok(ForceRow {
                 t_s: f[1],
                 depth_m: depth,
-                force_n: f[2],
+                force_n: g.symmetry_factor * f[2],
                 model_penetration_force_n: fp(depth)?,
             })
         })
@@ -330,6 +339,7 @@ mod tests {
     fn geometry() -> Geometry {
         Geometry {
             axis_m: (0.03, 0.03),
+            symmetry_factor: 1.0,
             foot_radius_m: 0.01,
             foot_sphere_radius_m: 0.0009,
             surface_m: 0.04,

@@ -227,23 +227,25 @@ pub struct Settled {
     /// highest grain top, within the foot's radius of the axis), m.
     pub surface_m: f64,
     /// Packing fraction of the bulk (grain volume of the centres between 3 mean diameters
-    /// above the floor and 3 below the surface, over that slab's volume), 1.
+    /// above the floor and 3 below the surface, and 3 from a sidewall, over that slab's
+    /// volume), 1.
     pub packing_fraction: f64,
     /// Grains in the bed.
     pub grains: u64,
 }
 
-/// Measure the settled bed of `atoms` in `bed`, the foot's axis at the box's centre.
+/// Measure the settled bed of `atoms` in `bed`, the foot's axis where the spec puts it
+/// ([`LammpsSpec::axis_m`]).
 pub fn settled(spec: &LammpsSpec, bed: &BedBox, atoms: &[Atom]) -> Result<Settled, String> {
     let d = spec.grain_diameter_m;
-    let c = 0.5 * bed.width_m;
+    let c = spec.axis_m(bed.width_m);
     let r = spec.foot_radius_m();
     let cells = ((2.0 * r) / d).ceil() as usize;
     let mut top = vec![f64::NEG_INFINITY; cells * cells];
     let mut n = 0u64;
     for a in atoms.iter().filter(|a| a.kind == GRAIN) {
         n += 1;
-        let (dx, dy) = (a.x[0] - c, a.x[1] - c);
+        let (dx, dy) = (a.x[0] - c.0, a.x[1] - c.1);
         if dx * dx + dy * dy > r * r {
             continue;
         }
@@ -266,14 +268,27 @@ pub fn settled(spec: &LammpsSpec, bed: &BedBox, atoms: &[Atom]) -> Result<Settle
             1e3 * surface
         ));
     }
+    // Against sidewalls, the bulk is also 3 mean diameters away from each wall (a wall
+    // loosens the grains beside it).
+    let (y_lo, y_hi) = if spec.sidewall {
+        (3.0 * d, bed.width_m - 3.0 * d)
+    } else {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    };
     let volume: f64 = atoms
         .iter()
         .filter(|a| a.kind == GRAIN && a.x[2] >= lo && a.x[2] < hi)
+        .filter(|a| a.x[1] >= y_lo && a.x[1] < y_hi)
         .map(|a| core::f64::consts::PI / 6.0 * a.diameter_m.powi(3))
         .sum();
+    let depth_y = if spec.sidewall {
+        y_hi - y_lo
+    } else {
+        bed.width_m
+    };
     Ok(Settled {
         surface_m: surface,
-        packing_fraction: volume / (bed.width_m * bed.width_m * (hi - lo)),
+        packing_fraction: volume / (bed.width_m * depth_y * (hi - lo)),
         grains: n,
     })
 }

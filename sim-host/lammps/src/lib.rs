@@ -15,6 +15,7 @@
 //!   `F_p(z)` and the jammed cone;
 //! - [`figure`] and [`outputs`]: the run's folder;
 //! - [`restart`]: restart files, and a stage resumed from the newest;
+//! - [`sidewall`]: the paper's sidewall PIV of a run against a wall, beside its exact column;
 //! - [`run`]: `dem lammps` and `dem lammps-read` as calls (typed requests, the outcome,
 //!   [`LammpsError`]).
 pub mod analysis;
@@ -28,6 +29,7 @@ pub mod outputs;
 pub mod restart;
 pub mod run;
 pub mod script;
+pub mod sidewall;
 pub mod spec;
 
 pub use error::LammpsError;

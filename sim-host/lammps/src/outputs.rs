@@ -22,6 +22,7 @@ use crate::foot::foot_atoms;
 use crate::lammps::Lammps;
 use crate::restart::{self, Stage, StageRun};
 use crate::script::{self, Piece, Resume};
+use crate::sidewall;
 use crate::spec::LammpsSpec;
 
 /// What a run's `run.toml` records: everything the read-back checks against.
@@ -89,7 +90,8 @@ impl Manifest {
             && same(g.foot_radius_m, s.foot_radius_m())
             && same(g.foot_sphere_radius_m, 0.5 * s.min_grain_diameter_m())
             && same(g.time_step_s, s.time_step_s())
-            && same(g.grain_density_kg_m3, s.grain_density_kg_m3);
+            && same(g.grain_density_kg_m3, s.grain_density_kg_m3)
+            && same(g.symmetry_factor, s.symmetry_factor());
         if !agrees {
             return Err(
                 "its geometry (grain, foot, time step) is not its spec's: not a run \
@@ -171,6 +173,13 @@ pub struct Summary {
     /// one run agree to the dumps' printed digits (NaN: a run without `column.txt`), 1.
     #[serde(default = "nan", deserialize_with = "number_or_nan")]
     pub column_lammps_vs_dumps_max_diff: f64,
+    /// Against a sidewall: the sidewall PIV's added mass over the exact column's, the median
+    /// over the pairs both have (`sidewall.csv`; NaN: no sidewall), 1.
+    #[serde(default = "nan", deserialize_with = "number_or_nan")]
+    pub sidewall_piv_vs_exact_median: f64,
+    /// PIV pairs of the sidewall measure (0: no sidewall).
+    #[serde(default)]
+    pub sidewall_pairs: u64,
     /// The paper's added mass at the deepest frame that has one, kg.
     #[serde(deserialize_with = "number_or_nan")]
     pub final_added_mass_kg: f64,
@@ -298,11 +307,13 @@ fn pour_and_settle(
         )));
     }
     // The script's own errors (a spec it cannot pour) are the user's: checked first.
-    script::settle_script(spec, run_id, fall_s, restart_every, None).map_err(LammpsError::input)?;
+    script::settle_script(spec, run_id, bed_box.width_m, fall_s, restart_every, None)
+        .map_err(LammpsError::input)?;
     let settle_max = (spec.max_settle_s / spec.time_step_s()).ceil() as u64;
     stage(progress, "settle", settle_max);
-    let script =
-        |resume: Option<Resume>| script::settle_script(spec, run_id, fall_s, restart_every, resume);
+    let script = |resume: Option<Resume>| {
+        script::settle_script(spec, run_id, bed_box.width_m, fall_s, restart_every, resume)
+    };
     restart::run_stage(
         lammps,
         dir,
@@ -477,7 +488,7 @@ pub fn simulate(
     let settled = bed::settled(spec, &bed_box, &grains).map_err(LammpsError::internal)?;
 
     // 2. The foot at the trajectory's start; grains it overlaps removed.
-    let axis = (0.5 * bed_box.width_m, 0.5 * bed_box.width_m);
+    let axis = spec.axis_m(bed_box.width_m);
     let sphere = spec.min_grain_diameter_m();
     let bottom = settled.surface_m - trajectory.depth(0.0);
     let first_id = grains.iter().map(|a| a.id).max().unwrap_or(0) + 1;
@@ -491,6 +502,9 @@ pub fn simulate(
         1e3 * spec.grain_density_kg_m3,
         first_id,
     );
+    // Against a sidewall, the half of the disc in the bed (centres on or inside the wall's
+    // plane).
+    let foot: Vec<Atom> = foot.into_iter().filter(|a| a.x[1] >= axis.1).collect();
     let before = grains.len();
     grains.retain(|a| !overlaps_foot(a, &foot));
     let removed = (before - grains.len()) as u64;
@@ -540,6 +554,7 @@ pub fn simulate(
             grain_density_kg_m3: spec.grain_density_kg_m3,
             grain_diameter_m: spec.grain_diameter_m,
             time_step_s: spec.time_step_s(),
+            symmetry_factor: spec.symmetry_factor(),
         },
         settled,
         settled_by_speed: record.halted,
@@ -561,12 +576,22 @@ pub fn simulate(
     let every = restart_every.intrusion;
     let script = |resume: Option<Resume>| {
         Ok(script::intrude_script(
-            spec, &run_id, &pieces, axis, sphere, bottom, every, resume,
+            spec,
+            &run_id,
+            bed_box.width_m,
+            &pieces,
+            axis,
+            sphere,
+            bottom,
+            every,
+            resume,
         ))
     };
     let prepare = |from: Option<u64>| match from {
+        // The force windows end after the restart's step; the column is sampled at the
+        // restart's step itself again (a `fix ave/time` of one sample writes at its setup).
         Some(step) => restart::cut_time_series(dir, "force.txt", step)
-            .and_then(|()| restart::cut_time_series(dir, "column.txt", step)),
+            .and_then(|()| restart::cut_time_series(dir, "column.txt", step.saturating_sub(1))),
         None => Ok(()),
     };
     let intrusion = restart::run_stage(
@@ -729,7 +754,7 @@ pub fn analyse(
             let c = by_step.get(s).ok_or_else(|| {
                 LammpsError::input(format!("{}: no row of step {s}", column_path.display()))
             })?;
-            row.momentum_under_foot_lammps_kg_m_s = c.momentum_kg_m_s;
+            row.momentum_under_foot_lammps_kg_m_s = g.symmetry_factor * c.momentum_kg_m_s;
         }
     }
     analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(LammpsError::internal)?;
@@ -774,7 +799,27 @@ pub fn analyse(
             )));
         }
     }
-    let summary = summarise(&m, &rows, &force, &cone, min_speed_ratio);
+    // The paper's sidewall PIV of the same frames, beside the exact column.
+    let sidewall_rows = if m.spec.sidewall {
+        stage(
+            progress,
+            "sidewall PIV",
+            steps.len().saturating_sub(1) as u64,
+        );
+        let mut read = |s: u64| dump::read_frame(&dumps, s, &check);
+        let rho_phi = m.spec.grain_density_kg_m3 * m.settled.packing_fraction;
+        let r = sidewall::measure(&steps, &mut read, &rows, &g, rho_phi, min_speed_ratio)
+            .map_err(LammpsError::input)?;
+        write_csv(&out.join("sidewall.csv"), &r, &[]).map_err(LammpsError::internal)?;
+        Some(r)
+    } else {
+        None
+    };
+    let mut summary = summarise(&m, &rows, &force, &cone, min_speed_ratio);
+    if let Some(r) = &sidewall_rows {
+        summary.sidewall_piv_vs_exact_median = sidewall::piv_over_exact_median(r);
+        summary.sidewall_pairs = r.len() as u64;
+    }
     write_outputs(out, &m, &rows, &force, &cone, &summary)?;
     Ok(summary)
 }
@@ -857,6 +902,8 @@ fn summarise(
             .map(|r| r.momentum_under_foot_kg_m_s)
             .fold(f64::NEG_INFINITY, f64::max),
         column_lammps_vs_dumps_max_diff: column_diff,
+        sidewall_piv_vs_exact_median: f64::NAN,
+        sidewall_pairs: 0,
         final_added_mass_kg: with_mass
             .iter()
             .max_by(|a, b| a.depth_m.total_cmp(&b.depth_m))
@@ -964,6 +1011,8 @@ mod summary_tests {
             added_mass_vs_eq6_median: f64::NAN,
             grain_momentum_under_foot_kg_m_s: f64::NEG_INFINITY,
             column_lammps_vs_dumps_max_diff: f64::NAN,
+            sidewall_piv_vs_exact_median: f64::NAN,
+            sidewall_pairs: 0,
             final_added_mass_kg: f64::NAN,
             force_vs_penetration_force_median: f64::NAN,
             peak_force_n: 0.0,

@@ -82,6 +82,11 @@ pub struct LammpsRequest {
         arg(long, value_name = "CSV", conflicts_with = "speed_m_s")
     )]
     pub trajectory: Option<PathBuf>,
+    /// The foot diameter the trajectory was for (the robot's: 0.076), m: the motion is scaled
+    /// to this run's foot at the same Froude number (depths by the diameters' ratio, times by
+    /// its square root), so a reduced-scale run keeps the paper's depth over radius and speeds.
+    #[cfg_attr(feature = "clap", arg(long = "scale-from-foot", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
+    pub scale_from_foot_m: Option<f64>,
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
     /// `push-off`, the foot's last intrusion before the jump's flight.
     #[cfg_attr(
@@ -107,8 +112,9 @@ pub struct LammpsRequest {
     /// Bed depth, m.
     #[cfg_attr(feature = "clap", arg(long = "bed-depth", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub bed_depth_m: Option<f64>,
-    /// Target packing fraction of the poured bed (0.583 to 0.625, what pouring frictional
-    /// spheres gives); also the model's phi (within the presets' 0.57 to 0.62).
+    /// Target packing fraction of the poured bed (0.557 to 0.625: pouring frictional spheres
+    /// gives 0.583 and up, rolling friction below); also the model's phi (within the
+    /// presets' 0.57 to 0.62).
     #[cfg_attr(feature = "clap", arg(long, value_name = "PHI", value_parser = sandjumper_output::parse::parse_positive))]
     pub phi: Option<f64>,
     /// Young's modulus of the (softened) grains, Pa.
@@ -120,6 +126,11 @@ pub struct LammpsRequest {
     /// Normal restitution coefficient.
     #[cfg_attr(feature = "clap", arg(long, value_name = "E"))]
     pub restitution: Option<f64>,
+    /// The paper's PIV geometry: a frictional sidewall with a half foot against it; the run
+    /// also renders the wall's grains as the camera sees them and measures the column by
+    /// PIV beside the exact 3-D column (`sidewall.csv`).
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub sidewall: bool,
     /// A settled bed to reuse instead of pouring one (about 90 % of a run's cost): an
     /// earlier run's `lammps/settled.data`, or that run's folder. It must have been settled
     /// with the same preset and options (its box and grain sizes are checked).
@@ -150,7 +161,8 @@ pub struct LammpsRequest {
     /// The MPI launcher (default: the mpiexec beside lmp, else on PATH).
     #[cfg_attr(feature = "clap", arg(long, value_name = "PATH"))]
     pub mpiexec: Option<PathBuf>,
-    /// How the ranks start: `srun` inside a Slurm job, else `mpiexec` (auto), or one of them.
+    /// How the ranks start: `mpiexec` (auto: inside a Slurm job MPICH's Hydra starts its
+    /// proxies through `srun`), or `srun --mpi=pmi2` itself for an MPI built for it.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "auto"))]
     pub launcher: Launcher,
     /// Output directory.
@@ -163,6 +175,7 @@ impl Default for LammpsRequest {
         Self {
             preset: Preset::Paper,
             trajectory: None,
+            scale_from_foot_m: None,
             episode: None,
             speed_m_s: None,
             depth_m: 0.02,
@@ -174,6 +187,7 @@ impl Default for LammpsRequest {
             youngs_modulus_pa: None,
             friction: None,
             restitution: None,
+            sidewall: false,
             bed: None,
             fps: None,
             seed: None,
@@ -263,6 +277,7 @@ impl LammpsRequest {
         if let Some(seed) = self.seed {
             s.seed = seed;
         }
+        s.sidewall = self.sidewall;
         s
     }
 
@@ -285,6 +300,10 @@ impl LammpsRequest {
                 ));
             }
         };
+        let t = match self.scale_from_foot_m {
+            Some(d0) => t.froude_scaled(self.spec().foot_diameter_m / d0),
+            None => t,
+        };
         t.check_starts_at_surface().map_err(LammpsError::Input)?;
         Ok(t)
     }
@@ -299,6 +318,7 @@ impl LammpsRequest {
         let Self {
             preset,
             trajectory,
+            scale_from_foot_m,
             episode,
             speed_m_s,
             depth_m,
@@ -310,6 +330,7 @@ impl LammpsRequest {
             youngs_modulus_pa,
             friction,
             restitution,
+            sidewall,
             bed,
             fps,
             seed,
@@ -344,6 +365,7 @@ impl LammpsRequest {
         };
         let values = [
             ("--speed", speed),
+            ("--scale-from-foot", *scale_from_foot_m),
             ("--depth", Some(*depth_m)),
             ("--foot-diameter", *foot_diameter_m),
             ("--grain-diameter", *grain_diameter_m),
@@ -365,6 +387,9 @@ impl LammpsRequest {
         );
         if let Some(seed) = seed {
             args.push(format!("--seed={seed}"));
+        }
+        if *sidewall {
+            args.push("--sidewall".into());
         }
         path("--lmp", lmp, &mut args)?;
         path("--mpiexec", mpiexec, &mut args)?;

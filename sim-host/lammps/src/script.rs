@@ -65,10 +65,14 @@ pub fn bottom_at(pieces: &[Piece], dt: f64, start_m: f64, steps: u64) -> f64 {
     z
 }
 
-/// The contact model's coefficients with friction `mu` (pair and wall alike).
-fn contact(spec: &LammpsSpec, mu: f64) -> String {
+/// The contact model's coefficients with friction `mu` (pair and wall alike), and rolling
+/// friction `rolling` (LAMMPS's `rolling sds`, no rolling damping) when given.
+fn contact(spec: &LammpsSpec, mu: f64, rolling: Option<f64>) -> String {
+    let roll = rolling.map_or(String::new(), |mu_r| {
+        format!(" rolling sds {:e} 0.0 {mu_r}", spec.rolling_stiffness_n_m())
+    });
     format!(
-        "hertz/material {:e} {} {} tangential mindlin NULL 1.0 {} damping coeff_restitution",
+        "hertz/material {:e} {} {} tangential mindlin NULL 1.0 {} damping coeff_restitution{roll}",
         spec.youngs_modulus_pa, spec.restitution, spec.poisson_ratio, mu
     )
 }
@@ -102,16 +106,32 @@ pub struct Resume<'a> {
 /// and the floor's, given back to a fix of the same ID) and the moving foot's origin; the pair
 /// style is given again (LAMMPS 22 Jul 2025 restores it with no cut-off and newton on) and the
 /// clock is set again (it restarts the time at the restart's step).
-fn header(spec: &LammpsSpec, what: &str, run_id: &str, start: Start, mu: f64) -> String {
+fn header(
+    spec: &LammpsSpec,
+    what: &str,
+    run_id: &str,
+    (start, box_width_m): (Start, f64),
+    mu: f64,
+    rolling: Option<f64>,
+) -> String {
     let skin = 0.2 * spec.grain_diameter_m;
-    let c = contact(spec, mu);
+    let c = contact(spec, mu, rolling);
+    // With a sidewall the bed is walled in y (fixed boundaries, a frictional wall each side).
+    let (boundary, walls) = if spec.sidewall {
+        (
+            "p f fm",
+            format!("fix sides grains wall/gran granular {c} yplane 0.0 {box_width_m:e}\n"),
+        )
+    } else {
+        ("p p fm", String::new())
+    };
     let read = match start {
         Start::Data(data) => format!(
             "units si\n\
              atom_style sphere\n\
              atom_modify map hash\n\
              processors * * 1\n\
-             boundary p p fm\n\
+             boundary {boundary}\n\
              newton off\n\
              read_data {data}\n"
         ),
@@ -135,6 +155,7 @@ fn header(spec: &LammpsSpec, what: &str, run_id: &str, start: Start, mu: f64) ->
          pair_style granular\n\
          pair_coeff * * {c}\n\
          fix floor grains wall/gran granular {c} zplane 0.0 NULL\n\
+         {walls}\
          neighbor {skin:e} bin\n\
          timestep {:e}\n",
         spec.time_step_s()
@@ -152,6 +173,7 @@ pub fn restart_line(stage: &str, every: u64) -> String {
 pub fn settle_script(
     spec: &LammpsSpec,
     run_id: &str,
+    box_width_m: f64,
     fall_s: f64,
     restart_every: u64,
     resume: Option<Resume>,
@@ -161,8 +183,9 @@ pub fn settle_script(
         spec,
         "pour and settle",
         run_id,
-        start,
+        (start, box_width_m),
         spec.pour_friction()?,
+        spec.pour_rolling_friction(),
     );
     let dt = spec.time_step_s();
     let fall = (fall_s / dt).ceil() as u64;
@@ -182,11 +205,13 @@ pub fn settle_script(
         spec.gravity_m_s2,
         restart_line("settle", restart_every)
     );
+    let cap = |step: u64| spec.smoke_steps.map_or(step, |n| step.min(n));
     if at < fall {
         let _ = writeln!(
             s,
             "# the fall: no grain can be at rest before the highest has reached the bed\n\
-             run {fall} upto"
+             run {} upto",
+            cap(fall)
         );
     }
     let _ = write!(
@@ -196,7 +221,7 @@ pub fn settle_script(
          unfix halt\n\
          write_data settled.data\n",
         spec.settled_rms_speed_m_s,
-        fall + rest
+        cap(fall + rest)
     );
     Ok(s)
 }
@@ -213,6 +238,7 @@ pub fn settle_script(
 pub fn intrude_script(
     spec: &LammpsSpec,
     run_id: &str,
+    box_width_m: f64,
     pieces: &[Piece],
     centre: (f64, f64),
     foot_sphere_m: f64,
@@ -221,12 +247,21 @@ pub fn intrude_script(
     resume: Option<Resume>,
 ) -> String {
     let start = resume.map_or(Start::Data("intrude.data"), Start::Restart);
-    let mut s = header(spec, "intrusion", run_id, start, spec.friction);
+    let mut s = header(
+        spec,
+        "intrusion",
+        run_id,
+        (start, box_width_m),
+        spec.friction,
+        None,
+    );
     let fe = spec.force_every();
     let de = spec.dump_every();
     let total: u64 = pieces.iter().map(|p| p.steps).sum();
     let reach = spec.dump_radius_factor * spec.foot_radius_m();
     let relax = ((spec.relax_s / spec.time_step_s()).round() as u64).max(1);
+    let cap = |step: u64| spec.smoke_steps.map_or(step, |n| step.min(n));
+    let relax = cap(relax);
     let _ = write!(
         s,
         "group foot type 2\n\
@@ -295,14 +330,16 @@ pub fn intrude_script(
     for (k, p) in pieces.iter().enumerate() {
         let start = end;
         end += p.steps;
-        if end > from {
+        if end > from && start < cap(end) {
             // The regions follow the foot: its displacement along this piece, exact at every
             // step (the path is the pieces').
             let _ = write!(
                 s,
                 "variable foot_dz equal {dz:e}+({:e})*(step-{start})*{dt:e}\n\
-                 fix move_{k} foot move linear 0 0 {:e}\nrun {end} upto\nunfix move_{k}\n",
-                p.vz_m_s, p.vz_m_s
+                 fix move_{k} foot move linear 0 0 {:e}\nrun {} upto\nunfix move_{k}\n",
+                p.vz_m_s,
+                p.vz_m_s,
+                cap(end)
             );
         }
         dz += p.vz_m_s * p.steps as f64 * dt;
@@ -351,7 +388,7 @@ mod tests {
     #[test]
     fn the_scripts_name_the_contacts_the_rates_and_the_run() {
         let spec = LammpsSpec::preset(Preset::Small);
-        let s = settle_script(&spec, "abc", 0.1, 1000, None).unwrap();
+        let s = settle_script(&spec, "abc", 0.06, 0.1, 1000, None).unwrap();
         assert!(s.contains("(run abc)"));
         // The pour's friction sets the packing; the intrusion has the grains'.
         let pour = spec.pour_friction().unwrap();
@@ -363,7 +400,17 @@ mod tests {
             steps: spec.force_every() * 3,
             vz_m_s: -0.1,
         }];
-        let i = intrude_script(&spec, "abc", &p, (0.03, 0.03), 0.0018, 0.03, 100, None);
+        let i = intrude_script(
+            &spec,
+            "abc",
+            0.06,
+            &p,
+            (0.03, 0.03),
+            0.0018,
+            0.03,
+            100,
+            None,
+        );
         assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
         assert!(i.contains("exclude type 2 2"));
         assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));

@@ -20,6 +20,11 @@ pub enum Preset {
     /// A 20 mm foot in ~2 mm grains, a 60 mm x 40 mm bed (~20,000 grains, 5 MPa): minutes on
     /// two cores.
     Small,
+    /// The paper's regime at reduced scale: the small preset's 20 mm foot in 1.5 mm grains
+    /// (6.7 per foot radius), a 50 mm x 35 mm bed poured to phi 0.57 (rolling friction),
+    /// ~28,000 grains. With a jump's push-off scaled to this foot at the paper's Froude number
+    /// (`--scale-from-foot 0.076`), the paper's depth over radius and speeds.
+    Regime,
 }
 
 impl Preset {
@@ -28,6 +33,7 @@ impl Preset {
         match self {
             Self::Paper => "paper",
             Self::Small => "small",
+            Self::Regime => "regime",
         }
     }
 }
@@ -79,6 +85,17 @@ pub struct LammpsSpec {
     pub relax_s: f64,
     /// Seed of the grains' sizes and start positions.
     pub seed: u64,
+    /// The paper's PIV geometry: a flat frictional sidewall at `y = 0` (the bed periodic in x
+    /// only, a second wall at `y = width`) and a half-disc foot against it, its axis on the
+    /// wall; the camera looks through the wall. The column's momentum and the foot's force
+    /// are the half foot's, doubled (the full foot's by the wall's symmetry).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub sidewall: bool,
+    /// A deck check, not a run: every `run` of each stage stops after this many steps (the
+    /// settle, the relaxation, the intrusion), so that a large preset's inputs can be run
+    /// through LAMMPS in a cut-down box in seconds. None for a run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smoke_steps: Option<u64>,
 }
 
 impl LammpsSpec {
@@ -106,6 +123,8 @@ impl LammpsSpec {
             max_settle_s: 1.0,
             relax_s: 0.01,
             seed: 1,
+            sidewall: false,
+            smoke_steps: None,
         };
         match p {
             Preset::Paper => common,
@@ -117,7 +136,32 @@ impl LammpsSpec {
                 youngs_modulus_pa: 5e6,
                 ..common
             },
+            Preset::Regime => Self {
+                foot_diameter_m: 0.020,
+                grain_diameter_m: 0.0015,
+                bed_width_m: 0.050,
+                bed_depth_m: 0.035,
+                packing_fraction: 0.57,
+                youngs_modulus_pa: 5e6,
+                ..common
+            },
         }
+    }
+
+    /// The foot's axis in a bed `width_m` wide: the box's centre, or with a sidewall, the
+    /// middle of the wall at `y = 0`, m.
+    pub fn axis_m(&self, width_m: f64) -> (f64, f64) {
+        if self.sidewall {
+            (0.5 * width_m, 0.0)
+        } else {
+            (0.5 * width_m, 0.5 * width_m)
+        }
+    }
+
+    /// What the half foot's measures are multiplied by to be the full foot's: 2 with a
+    /// sidewall, else 1.
+    pub fn symmetry_factor(&self) -> f64 {
+        if self.sidewall { 2.0 } else { 1.0 }
     }
 
     /// Foot radius, m.
@@ -188,6 +232,20 @@ impl LammpsSpec {
     /// lattice, restitution 0.5, spread 0.1; `docs/dem.md`); errors outside it.
     pub fn pour_friction(&self) -> Result<f64, String> {
         pour_friction_for(self.packing_fraction)
+    }
+
+    /// The rolling friction the grains pour with, below what sliding friction alone reaches
+    /// (0.583): resisting their rolling as well packs them looser, down to the paper's 0.57
+    /// ([`POUR_ROLLING_TABLE`]). None above.
+    pub fn pour_rolling_friction(&self) -> Option<f64> {
+        pour_rolling_for(self.packing_fraction)
+    }
+
+    /// The rolling stiffness of [`Self::pour_rolling_friction`]'s contacts (LAMMPS's `rolling
+    /// sds`): `E d / 4`, which keeps `k dt^2 / m` the same (~0.06) at every grain size and
+    /// stiffness, N/m.
+    pub fn rolling_stiffness_n_m(&self) -> f64 {
+        0.25 * self.youngs_modulus_pa * self.grain_diameter_m
     }
 
     /// Check every value: what is wrong, and what is allowed.
@@ -315,22 +373,44 @@ pub const MAX_GRAINS: u64 = 50_000_000;
 /// this way (friction 2 gains 0.004 over friction 1).
 pub const POUR_TABLE: [(f64, f64); 4] = [(0.625, 0.1), (0.594, 0.5), (0.587, 1.0), (0.583, 2.0)];
 
-/// The pouring friction for a target packing fraction (see [`POUR_TABLE`]).
+/// Settled packing fraction against rolling friction when pouring with sliding friction 2
+/// (the loosest of [`POUR_TABLE`]; LAMMPS's `rolling sds`, stiffness
+/// [`LammpsSpec::rolling_stiffness_n_m`], no rolling damping): (phi, rolling friction), phi
+/// decreasing from where sliding friction alone stops. Measured with the small preset's
+/// grains in a 40 x 40 x 30 mm bed, seed 1, 1 rank (2026-11-29): rolling friction 0.02 settles
+/// 0.573, 0.05 0.569, 0.1 0.557 (0.3 0.531, 0.6 0.515).
+pub const POUR_ROLLING_TABLE: [(f64, f64); 4] =
+    [(0.583, 0.0), (0.573, 0.02), (0.569, 0.05), (0.557, 0.1)];
+
+/// The rolling friction to pour with for a target packing fraction below
+/// [`POUR_TABLE`]'s loosest (None above it, or below the rolling table's loosest).
+pub fn pour_rolling_for(phi: f64) -> Option<f64> {
+    interpolate(&POUR_ROLLING_TABLE, phi).filter(|mu| *mu > 0.0)
+}
+
+/// `table`'s second column at `phi` (first column decreasing), linearly; None outside it.
+fn interpolate(table: &[(f64, f64)], phi: f64) -> Option<f64> {
+    table.windows(2).find_map(|w| {
+        let ((p0, m0), (p1, m1)) = (w[0], w[1]);
+        (phi <= p0 && phi >= p1).then(|| m0 + (phi - p0) / (p1 - p0) * (m1 - m0))
+    })
+}
+
+/// The pouring friction for a target packing fraction (see [`POUR_TABLE`]; below its
+/// loosest, its loosest friction with rolling friction, [`POUR_ROLLING_TABLE`]).
 pub fn pour_friction_for(phi: f64) -> Result<f64, String> {
-    let (hi, lo) = (POUR_TABLE[0].0, POUR_TABLE[POUR_TABLE.len() - 1].0);
+    let rolling_lo = POUR_ROLLING_TABLE[POUR_ROLLING_TABLE.len() - 1].0;
+    if pour_rolling_for(phi).is_some() || (phi >= rolling_lo && phi < POUR_TABLE[3].0) {
+        return Ok(POUR_TABLE[POUR_TABLE.len() - 1].1);
+    }
+    let (hi, lo) = (POUR_TABLE[0].0, rolling_lo);
     if !(lo..=hi).contains(&phi) {
         return Err(format!(
             "the target packing fraction is {phi} (allowed: {lo} to {hi}, what pouring \
-             frictional spheres gives)"
+             frictional spheres gives, with rolling friction below 0.583)"
         ));
     }
-    for w in POUR_TABLE.windows(2) {
-        let ((p0, m0), (p1, m1)) = (w[0], w[1]);
-        if phi <= p0 && phi >= p1 {
-            return Ok(m0 + (phi - p0) / (p1 - p0) * (m1 - m0));
-        }
-    }
-    Ok(POUR_TABLE[POUR_TABLE.len() - 1].1)
+    Ok(interpolate(&POUR_TABLE, phi).unwrap_or(POUR_TABLE[POUR_TABLE.len() - 1].1))
 }
 
 #[cfg(test)]
@@ -409,6 +489,13 @@ mod tests {
         assert!((pour_friction_for(0.594).unwrap() - 0.5).abs() < 1e-12);
         assert!((pour_friction_for(0.590).unwrap() - (0.5 + 4.0 / 7.0 * 0.5)).abs() < 1e-12);
         assert!(pour_friction_for(0.63).is_err());
-        assert!(pour_friction_for(0.58).is_err());
+        // Below sliding friction's loosest: its friction, with rolling friction.
+        let loosest = POUR_TABLE[POUR_TABLE.len() - 1];
+        assert_eq!(pour_friction_for(0.58).unwrap(), loosest.1);
+        let (p0, p1) = (POUR_ROLLING_TABLE[1], POUR_ROLLING_TABLE[2]);
+        let mid = pour_rolling_for(0.5 * (p0.0 + p1.0)).unwrap();
+        assert!((mid - 0.5 * (p0.1 + p1.1)).abs() < 1e-12, "{mid}");
+        assert_eq!(pour_rolling_for(0.60), None);
+        assert!(pour_friction_for(0.5).is_err());
     }
 }

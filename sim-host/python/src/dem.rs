@@ -381,7 +381,9 @@ pub fn dem_intrude(
 }
 
 /// `dem lammps`'s flags whose names differ from the Python arguments'.
-const LAMMPS_NAMES: [(&str, &str); 14] = [
+const LAMMPS_NAMES: [(&str, &str); 16] = [
+    ("--scale-from-foot", "scale_from_foot"),
+    ("--sidewall", "sidewall"),
     ("--restart-every", "restart_every"),
     ("--launcher", "launcher"),
     ("--speed", "speed"),
@@ -399,7 +401,15 @@ const LAMMPS_NAMES: [(&str, &str); 14] = [
 ];
 
 /// `lammps`'s options by name.
-const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 22] = [
+const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 24] = [
+    ("scale_from_foot", |r, v| {
+        r.scale_from_foot_m = Some(number("scale_from_foot", v, parse_positive)?);
+        Ok(())
+    }),
+    ("sidewall", |r, v| {
+        r.sidewall = flag("sidewall", v)?;
+        Ok(())
+    }),
     ("restart_every", |r, v| {
         r.restart_every_min = number("restart_every", v, parse_positive)?;
         Ok(())

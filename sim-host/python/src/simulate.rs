@@ -631,6 +631,7 @@ pub fn sweep_slurm(
         queue: sandjumper_slurm::QueueOptions {
             partition,
             time,
+            nodes: None,
             no_wait: !wait,
         },
         program,

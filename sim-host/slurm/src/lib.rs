@@ -40,6 +40,8 @@ pub struct QueueOptions {
     pub partition: Option<String>,
     /// Time limit of the job (of each array task) in Slurm's format, e.g. 30, 1:00:00.
     pub time: String,
+    /// Nodes to spread the job's tasks over (None: as Slurm places them).
+    pub nodes: Option<u32>,
     /// Submit and return without waiting.
     pub no_wait: bool,
 }
@@ -49,6 +51,7 @@ impl Default for QueueOptions {
         Self {
             partition: None,
             time: "1:00:00".into(),
+            nodes: None,
             no_wait: false,
         }
     }
@@ -102,6 +105,9 @@ impl JobScript {
             script += &format!("#SBATCH {l}\n");
         }
         script += &format!("#SBATCH --time={}\n", self.queue.time);
+        if let Some(n) = self.queue.nodes {
+            script += &format!("#SBATCH --nodes={n}\n");
+        }
         // Quoted (Slurm reads quotes in directives); a `%` of the path itself doubled (Slurm
         // expands `%a`, `%j`... in --output), the file name's own patterns kept.
         let dir = self.log.parent().map_or(String::new(), |d| {
@@ -724,6 +730,19 @@ mod tests {
             "#!/bin/bash\n#SBATCH --job-name=sandjumper-sweep\n#SBATCH --array=1-3\n\
              #SBATCH --time=1:00:00\n#SBATCH --output=\"/j/100%%.slurm/logs/task-%a.out\"\n\
              #SBATCH --chdir=\"/w\"\n#SBATCH --partition=debug\nset -euo pipefail\nexec true\n"
+        );
+        // Nodes asked for, after the time limit.
+        let spread = JobScript {
+            queue: QueueOptions {
+                nodes: Some(4),
+                ..s.queue.clone()
+            },
+            ..s
+        };
+        assert!(
+            spread
+                .text()
+                .contains("#SBATCH --time=1:00:00\n#SBATCH --nodes=4\n")
         );
     }
 }

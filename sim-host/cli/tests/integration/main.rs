@@ -12,6 +12,7 @@ mod cli_runs;
 mod common;
 mod dem;
 mod dem_lammps;
+mod dem_lammps_regime;
 mod dem_lammps_resume;
 mod figures;
 mod fit_cli;

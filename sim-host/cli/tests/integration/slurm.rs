@@ -385,7 +385,8 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
     let log = read_or_empty(&work.path().join("dem.slurm/logs/job.out"));
     assert!(out.status.success(), "{stderr}\n{log}\n{}", cluster.logs());
     assert!(stderr.contains("submitted Slurm job"), "{stderr}");
-    assert!(read(&work.path().join("dem.slurm/job.sbatch")).contains("#SBATCH --ntasks=2"));
+    let sbatch = read(&work.path().join("dem.slurm/job.sbatch"));
+    assert!(sbatch.contains("#SBATCH --ntasks=2"));
     // --json prints the job's summary once it is done.
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
@@ -413,23 +414,67 @@ fn a_sweep_through_a_slurm_job_array_equals_the_local_sweep_and_a_failed_task_is
         "{depth} m, the table {deepest} m"
     );
     assert!(read(&dem.join("lammps/log.intrude")).contains("on 2 procs"));
-    // Its ranks started through srun (Slurm's PMI-2) as one MPI world of two.
+    // Its ranks started by MPICH's mpiexec, whose Hydra found the allocation and launched its
+    // proxies as Slurm job steps through srun, as one MPI world of two.
     let manifest = read(&dem.join("lammps/run.toml"));
-    assert!(manifest.contains("launcher = \"srun\""), "{manifest}");
+    assert!(manifest.contains("launcher = \"mpiexec\""), "{manifest}");
     assert!(read(&dem.join("lammps/log.intrude")).contains("1 by 2 by 1 MPI processor grid"));
+    let job: String = stderr
+        .split("submitted Slurm job ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap()
+        .into();
+    assert!(
+        cluster
+            .logs()
+            .contains(&format!("launch task StepId={job}.0 request")),
+        "no job step through srun in job {job}: {}",
+        cluster.logs()
+    );
 
     // A run longer than its job's time limit (1 minute): killed by Slurm, it keeps its
     // unfinished folder; the same command submitted again resumes it from its newest restart
-    // file (one every quarter of the limit) and finishes.
+    // file and finishes. On the first run's bed (no settle: the minute goes to the
+    // intrusion), restart files every 3 s of wall time (a quarter of the limit would be 15 s).
     let long = work.path().join("long");
     let submit_long = |time: &str| {
         small_dem(&long)
-            .args(["--speed", "0.01", "--depth", "0.008", "--slurm-time", time])
+            .args([
+                "--speed",
+                "0.01",
+                "--depth",
+                "0.008",
+                "--restart-every",
+                "0.05",
+            ])
+            .arg("--bed")
+            .arg(&dem)
+            .args(["--slurm-time", time])
             .output()
             .unwrap()
     };
+    let started = Instant::now();
     let out = submit_long("1");
+    let took = started.elapsed();
     let stderr = String::from_utf8_lossy(&out.stderr);
+    let intrude_log = read_or_empty(&work.path().join("long.unfinished/lammps/log.intrude"));
+    let intrude_tail: Vec<&str> = intrude_log.lines().rev().take(5).collect();
+    let first_log = read_or_empty(&work.path().join("long.slurm/logs/job.out"));
+    let first_restarts: Vec<String> =
+        std::fs::read_dir(work.path().join("long.unfinished/lammps/restart"))
+            .map(|d| {
+                d.filter_map(Result::ok)
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default();
+    assert!(
+        first_restarts.iter().any(|f| f.starts_with("intrude.")),
+        "no restart file of the intrusion within the limit ({took:?}): {first_restarts:?}\n\
+         {first_log}\n{intrude_tail:?}\n{}",
+        cluster.logs()
+    );
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     // Slurm stops the LAMMPS step and then the job: the job ends TIMEOUT, or FAILED when
     // sandjumper saw its LAMMPS stopped and exited first.

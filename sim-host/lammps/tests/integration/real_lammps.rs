@@ -437,3 +437,86 @@ fn refusals(run: &Path, work: &Path) {
         assert!(!out.exists(), "nothing written");
     }
 }
+
+/// The paper preset's deck (its 1 mm grains at 100 MPa, its time step, its 76 mm foot of
+/// spheres, its contacts, the x-y decomposition, the column's regions) run through LAMMPS on
+/// 2 ranks in a box cut to 100 x 100 x 12 mm (about 136,000 grains; the dumps to 1.3 R of the
+/// axis instead of 2 R, which would not fit) for 300 steps of each stage: the inputs the cluster will run are accepted and run (the full preset's 15 million
+/// grains are a cluster's job). A deck check, not a result: nothing is read back.
+#[test]
+fn the_paper_presets_deck_runs_in_a_cut_box() {
+    use sandjumper_dem::intruder::Trajectory;
+    use sandjumper_lammps::outputs::{self, RestartEvery};
+    use sandjumper_lammps::spec::LammpsSpec;
+    if !lammps_here() {
+        return;
+    }
+    let mut spec = LammpsSpec::preset(Preset::Paper);
+    spec.bed_width_m = 0.1;
+    spec.bed_depth_m = 0.012;
+    spec.smoke_steps = Some(300);
+    // Dumped to 1.3 R of the axis, not 2 R: the cut box is 2.6 R wide.
+    spec.dump_radius_factor = 1.3;
+    // The paper's push-off speed (about 0.5 m/s), to 4 mm.
+    let trajectory = Trajectory::Constant {
+        speed_m_s: 0.5,
+        start_depth_m: 0.0,
+        end_depth_m: 0.004,
+    };
+    let lammps = sandjumper_lammps::lammps::find(None, None, Default::default()).unwrap();
+    let work = tempfile::tempdir().unwrap();
+    let dir = work.path().join("lammps");
+    outputs::simulate(
+        &spec,
+        &trajectory,
+        &lammps,
+        2,
+        None,
+        RestartEvery {
+            settle: 100,
+            intrusion: 100,
+        },
+        &dir,
+        &Silent,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    // Both stages ran to their 300th step with the paper's time step, one world of 2 ranks.
+    let dt = format!("{:e}", spec.time_step_s());
+    for (input, log) in [("in.settle", "log.settle"), ("in.intrude", "log.intrude")] {
+        let deck = read(&dir.join(input));
+        assert!(deck.contains(&format!("timestep {dt}")), "{input}");
+        assert!(deck.contains("processors * * 1"), "{input}");
+        let log = read(&dir.join(log));
+        let grid: Vec<u64> = log
+            .lines()
+            .find(|l| l.contains("MPI processor grid"))
+            .unwrap_or("")
+            .split_whitespace()
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        assert_eq!(grid.iter().product::<u64>(), 2, "{input}: {grid:?}");
+        assert_eq!(grid.get(2), Some(&1), "{input}: not split in z");
+        // The thermo lines: the step, then at least three numbers.
+        let last = log
+            .lines()
+            .filter(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                w.len() >= 4 && w.iter().all(|x| x.parse::<f64>().is_ok())
+            })
+            .filter_map(|l| l.split_whitespace().next()?.parse::<u64>().ok())
+            .max()
+            .unwrap_or(0);
+        assert_eq!(last, 300, "{input} ran to its cap");
+    }
+    let settle = read(&dir.join("log.settle"));
+    let grains: u64 = settle
+        .lines()
+        .find_map(|l| l.trim().strip_suffix(" atoms")?.trim().parse().ok())
+        .unwrap();
+    assert!((100_000..140_000).contains(&grains), "{grains} grains");
+    // The foot: a 76 mm disc of 0.9 mm spheres.
+    let manifest = read(&dir.join("run.toml"));
+    assert!(manifest.contains("preset = \"paper\""), "{manifest}");
+    assert!(manifest.contains("smoke_steps = 300"), "{manifest}");
+    assert!(read(&dir.join("column.txt")).lines().count() >= 2);
+}

