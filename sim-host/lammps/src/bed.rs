@@ -83,15 +83,19 @@ pub fn loose_start(spec: &LammpsSpec) -> (BedBox, Vec<Atom>) {
             v,
         });
     }
-    let layers = n.div_ceil(per_row * per_row);
-    let top = (layers as f64 + 1.0) * spacing;
-    (
-        BedBox {
-            width_m: width,
-            top_m: top,
-        },
-        atoms,
-    )
+    debug_assert_eq!(loose_box(spec).width_m, width);
+    (loose_box(spec), atoms)
+}
+
+/// The box of [`loose_start`] (without its grains: a paper-sized bed's are ~1 GB).
+pub fn loose_box(spec: &LammpsSpec) -> BedBox {
+    let spacing = 1.2 * spec.max_grain_diameter_m();
+    let per_row = (spec.bed_width_m / spacing).ceil().max(1.0) as u64;
+    let layers = spec.grain_count().div_ceil(per_row * per_row);
+    BedBox {
+        width_m: per_row as f64 * spacing,
+        top_m: (layers as f64 + 1.0) * spacing,
+    }
 }
 
 /// The text of a LAMMPS data file (`atom_style sphere`, with velocities).

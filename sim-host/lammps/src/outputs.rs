@@ -210,10 +210,11 @@ pub struct Summary {
     /// The speed rule: frames with the foot at least this share of its fastest, 1.
     #[serde(deserialize_with = "number_or_nan")]
     pub min_speed_ratio: f64,
-    /// Core-seconds the two stages took (wall time x ranks), s.
+    /// Core-seconds the two stages' last attempts took (wall time x ranks; a resumed stage's
+    /// killed attempts were not timed), s.
     #[serde(deserialize_with = "number_or_nan")]
     pub core_seconds: f64,
-    /// Grain-steps per core-second of the intrusion (the cost to scale by).
+    /// Grain-steps per core-second of the intrusion's last attempt (the cost to scale by).
     #[serde(deserialize_with = "number_or_nan")]
     pub grain_steps_per_core_second: f64,
     /// The run's id.
@@ -355,6 +356,19 @@ pub fn reuse_bed(
     given: &Path,
     to: &Path,
 ) -> Result<(), LammpsError> {
+    let file = check_bed(spec, bed_box, given)?;
+    std::fs::copy(&file, to).map_err(io)?;
+    Ok(())
+}
+
+/// Check the settled bed `given` (a `settled.data`, or a run folder holding
+/// `lammps/settled.data`) against this run's spec ([`reuse_bed`]), before anything runs; the
+/// file it names.
+pub fn check_bed(
+    spec: &LammpsSpec,
+    bed_box: &bed::BedBox,
+    given: &Path,
+) -> Result<std::path::PathBuf, LammpsError> {
     let file = if given.is_dir() {
         given.join("lammps").join("settled.data")
     } else {
@@ -393,8 +407,25 @@ pub fn reuse_bed(
     if grains.iter().all(|a| a.kind != bed::GRAIN) {
         return Err(mismatch("it holds no grains".into()));
     }
-    std::fs::copy(&file, to).map_err(io)?;
-    Ok(())
+    // Walled in y or periodic: a bed settled against sidewalls has no grain across the planes
+    // y = 0 and y = width; a periodic one of any size has some.
+    let across = grains.iter().any(|a| {
+        a.kind == bed::GRAIN
+            && (a.x[1] < 0.5 * a.diameter_m || a.x[1] > box_given.width_m - 0.5 * a.diameter_m)
+    });
+    if spec.sidewall && across {
+        return Err(mismatch(
+            "it was settled without sidewalls (grains lie across the walls' planes); this run \
+             has --sidewall"
+                .into(),
+        ));
+    }
+    if !spec.sidewall && !across {
+        return Err(mismatch(
+            "it was settled against sidewalls (no grain across y = 0); this run has none".into(),
+        ));
+    }
+    Ok(file)
 }
 
 /// How often each stage writes a restart file, steps.
@@ -504,7 +535,10 @@ pub fn simulate(
     );
     // Against a sidewall, the half of the disc in the bed (centres on or inside the wall's
     // plane).
-    let foot: Vec<Atom> = foot.into_iter().filter(|a| a.x[1] >= axis.1).collect();
+    let foot: Vec<Atom> = foot
+        .into_iter()
+        .filter(|a| !spec.sidewall || a.x[1] >= axis.1)
+        .collect();
     let before = grains.len();
     grains.retain(|a| !overlaps_foot(a, &foot));
     let removed = (before - grains.len()) as u64;

@@ -64,15 +64,26 @@ pub fn cut_time_series(dir: &Path, name: &str, step: u64) -> Result<(), String> 
     let kept: String = text
         .lines()
         .filter(|l| {
+            // A header, or a whole row (four numbers: a row the kill cut short is dropped) of a
+            // step up to `step`.
+            let words: Vec<&str> = l.split_whitespace().collect();
             l.starts_with('#')
-                || l.split_whitespace()
-                    .next()
-                    .and_then(|w| w.parse::<u64>().ok())
-                    .is_some_and(|s| s <= step)
+                || (words.len() == 4
+                    && words.iter().all(|w| w.parse::<f64>().is_ok())
+                    && words[0].parse::<u64>().is_ok_and(|s| s <= step))
         })
         .map(|l| format!("{l}\n"))
         .collect();
     std::fs::write(&path, kept).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Whether the LAMMPS log `log` shows a run that stopped inside `read_restart`: the command
+/// echoed, its closing timing line (`read_restart CPU = ...`) never printed.
+pub fn failed_reading(log: &Path) -> bool {
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    text.lines()
+        .any(|l| l.trim_start().starts_with("read_restart "))
+        && !text.contains("read_restart CPU")
 }
 
 /// One stage to run: its name for restart files and logs, its input's name, and how to
@@ -155,9 +166,10 @@ pub fn run_stage(
                     resumed_from: resume.map(|r| r.step),
                 });
             }
-            // LAMMPS stopped before its first step: the restart file is unreadable (cut
-            // short while it was written). Set aside; the next older one is tried.
-            Err(e) if !seen.get() && !progress.cancelled() => {
+            // LAMMPS failed while it read the restart file (cut short while it was written):
+            // set aside; the next older one is tried. Any other failure (a launcher that did not
+            // start, a processor grid that is not one world) keeps every restart file.
+            Err(e) if !seen.get() && !progress.cancelled() && failed_reading(&dir.join(&log)) => {
                 let Some((_, path)) = candidate else {
                     return Err(e);
                 };
@@ -219,13 +231,29 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(
             dir.path().join("force.txt"),
-            "# Time-averaged data\n# TimeStep v_t\n50 0.1 1\n100 0.2 2\n150 0.3 3\n",
+            "# Time-averaged data\n# TimeStep v_t\n50 0.1 1 2\n100 0.2 2 2\n150 0.3 3 2\n200 0.",
         )
         .unwrap();
         cut_time_series(dir.path(), "force.txt", 100).unwrap();
+        // A log that stopped inside read_restart, and one that read it.
+        let log = dir.path().join("log");
+        std::fs::write(
+            &log,
+            "LAMMPS\nread_restart restart/intrude.600\nERROR: Unexpected end\n",
+        )
+        .unwrap();
+        assert!(failed_reading(&log));
+        std::fs::write(
+            &log,
+            "read_restart restart/intrude.600\n  read_restart CPU = 0.1\nERROR: x\n",
+        )
+        .unwrap();
+        assert!(!failed_reading(&log));
+        std::fs::write(&log, "srun: error\n").unwrap();
+        assert!(!failed_reading(&log));
         assert_eq!(
             std::fs::read_to_string(dir.path().join("force.txt")).unwrap(),
-            "# Time-averaged data\n# TimeStep v_t\n50 0.1 1\n100 0.2 2\n"
+            "# Time-averaged data\n# TimeStep v_t\n50 0.1 1 2\n100 0.2 2 2\n"
         );
     }
 }

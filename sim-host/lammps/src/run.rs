@@ -84,7 +84,8 @@ pub struct LammpsRequest {
     pub trajectory: Option<PathBuf>,
     /// The foot diameter the trajectory was for (the robot's: 0.076), m: the motion is scaled
     /// to this run's foot at the same Froude number (depths by the diameters' ratio, times by
-    /// its square root), so a reduced-scale run keeps the paper's depth over radius and speeds.
+    /// its square root), so a reduced-scale run keeps the paper's depth over radius and Froude
+    /// number `v^2 / (g R)` (its speeds are the square root of the size ratio times the paper's).
     #[cfg_attr(feature = "clap", arg(long = "scale-from-foot", value_name = "M", value_parser = sandjumper_output::parse::parse_positive))]
     pub scale_from_foot_m: Option<f64>,
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
@@ -585,8 +586,12 @@ struct Unfinished {
 pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
     let (spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
-    // The output can be written (checked now, not after hours of LAMMPS).
+    // The output can be written, and a bed given fits (checked now, not after hours of
+    // LAMMPS, and before an unfinished folder is made).
     drop(StagedDir::create(&request.out)?);
+    if let Some(bed) = &request.bed {
+        outputs::check_bed(&spec, &crate::bed::loose_box(&spec), bed)?;
+    }
     // What this run will cost, before it starts (the paper preset is a cluster's job).
     progress.note(&request.cost(&spec, &traj).to_string());
     let work = unfinished_dir(&request.out);
@@ -598,18 +603,29 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
         run_id: outputs::run_id(&spec, &traj)?,
         bed_from: request.bed.as_ref().map(|b| b.display().to_string()),
     };
-    let record = work.join("run.toml");
-    match std::fs::read_to_string(&record)
-        .ok()
-        .and_then(|t| toml::from_str::<Unfinished>(&t).ok())
-    {
+    let record = work.join("unfinished.toml");
+    let earlier = std::fs::read_to_string(&record).ok();
+    let parsed = earlier
+        .as_deref()
+        .and_then(|t| toml::from_str::<Unfinished>(t).ok());
+    if parsed.is_none() && work.join("lammps").is_dir() {
+        return Err(LammpsError::input(format!(
+            "{} holds LAMMPS files whose run cannot be told ({} is missing or not a record \
+             this tool wrote): look inside, and remove the folder to start again",
+            work.display(),
+            record.display()
+        )));
+    }
+    match parsed {
         Some(earlier) if earlier == this => progress.note(&format!(
             "dem lammps: resuming the unfinished run in {}",
             work.display()
         )),
         Some(earlier) => {
             return Err(LammpsError::input(format!(
-                "{} holds an unfinished run of other inputs (run {}{}; this one is run {}{}):                  resume it with its own command, or remove the folder (allowed: one run per                  output)",
+                "{} holds an unfinished run of other inputs (run {}{}; this one is run {}{}): \
+                 resume it with its own command, or remove the folder (allowed: one run per \
+                 output)",
                 work.display(),
                 earlier.run_id,
                 earlier
@@ -622,7 +638,11 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
             )));
         }
         None => {
-            std::fs::write(&record, toml::to_string(&this).map_err(internal)?).map_err(internal)?
+            // Written whole or not at all (a kill while it is written leaves no half record).
+            let partial = work.join(".unfinished.toml.partial");
+            std::fs::write(&partial, toml::to_string(&this).map_err(internal)?)
+                .map_err(internal)?;
+            std::fs::rename(&partial, &record).map_err(internal)?;
         }
     }
     let lammps_dir = work.join("lammps");
@@ -651,9 +671,25 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
         Ok(r) => r,
         Err(e) => return Err(kept(&work, e)),
     };
-    std::fs::rename(&lammps_dir, staged.path().join("lammps")).map_err(internal)?;
-    let out = staged.commit()?;
-    let _ = std::fs::remove_dir_all(&work);
+    // The read-back first, then the LAMMPS files moved beside it: a commit that fails (the
+    // output filled by something else meanwhile) leaves them where they are.
+    let out = staged.commit().map_err(|e| kept(&work, e.into()))?;
+    std::fs::rename(&lammps_dir, out.join("lammps")).map_err(|e| {
+        kept(
+            &work,
+            LammpsError::internal(format!(
+                "cannot move the LAMMPS files into {}: {e}",
+                out.display()
+            )),
+        )
+    })?;
+    // Renamed before it is removed: its lock file goes with it, and a run started meanwhile
+    // makes a folder of its own.
+    let mut done = work.clone().into_os_string();
+    done.push(format!(".done-{}", std::process::id()));
+    if std::fs::rename(&work, &done).is_ok() {
+        let _ = std::fs::remove_dir_all(&done);
+    }
     Ok(LammpsOutcome { summary, out })
 }
 

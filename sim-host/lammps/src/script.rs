@@ -162,6 +162,14 @@ fn header(
     )
 }
 
+/// The ranks' sub-domains moved (in x and y, by the grains' count) every 5 ms of simulated
+/// time when a rank holds 10 % more than the mean: a slab stays even while it settles, and
+/// the denser column under the foot does not load its ranks more than the rest.
+fn balance_line(spec: &LammpsSpec) -> String {
+    let every = ((0.005 / spec.time_step_s()).round() as u64).max(1);
+    format!("fix balance all balance {every} 1.1 shift xy 10 1.1\n")
+}
+
 /// Restart files of a stage (`settle` or `intrude`): `restart/STAGE.STEP`, every `every`
 /// steps.
 pub fn restart_line(stage: &str, every: u64) -> String {
@@ -197,13 +205,15 @@ pub fn settle_script(
         "neigh_modify delay 0 every 1 check yes\n\
          fix gravity grains gravity {} vector 0 0 -1\n\
          fix integrate grains nve/sphere\n\
+         {balance}\
          variable rms_speed equal sqrt(2*ke/mass(grains))\n\
          thermo_style custom step time atoms ke v_rms_speed\n\
          thermo {check}\n\
          thermo_modify lost error norm no\n\
          {}",
         spec.gravity_m_s2,
-        restart_line("settle", restart_every)
+        restart_line("settle", restart_every),
+        balance = balance_line(spec),
     );
     let cap = |step: u64| spec.smoke_steps.map_or(step, |n| step.min(n));
     if at < fall {
@@ -253,7 +263,8 @@ pub fn intrude_script(
         run_id,
         (start, box_width_m),
         spec.friction,
-        None,
+        // The grains that poured with rolling friction keep it (it stands for their shape).
+        spec.pour_rolling_friction(),
     );
     let fe = spec.force_every();
     let de = spec.dump_every();
@@ -267,8 +278,10 @@ pub fn intrude_script(
         "group foot type 2\n\
          neigh_modify delay 0 every 1 check yes exclude type 2 2\n\
          fix gravity grains gravity {g} vector 0 0 -1\n\
-         fix integrate grains nve/sphere\n",
+         fix integrate grains nve/sphere\n\
+         {balance}",
         g = spec.gravity_m_s2,
+        balance = balance_line(spec),
     );
     // force.txt and column.txt from the start, or appended to (the caller cut them at the
     // restart's step).
@@ -327,10 +340,14 @@ pub fn intrude_script(
     let from = resume.map_or(0, |r| r.step);
     let (mut end, mut dz) = (0, 0.0);
     let dt = spec.time_step_s();
+    let total: u64 = pieces.iter().map(|p| p.steps).sum();
     for (k, p) in pieces.iter().enumerate() {
         let start = end;
         end += p.steps;
-        if end > from && start < cap(end) {
+        // A restart written at the last step (the run killed before it was recorded done) runs
+        // the last piece for no step: its setup writes the last column row again.
+        let last_again = from >= total && k + 1 == pieces.len();
+        if (end > from && start < cap(end)) || last_again {
             // The regions follow the foot: its displacement along this piece, exact at every
             // step (the path is the pieces').
             let _ = write!(
@@ -400,21 +417,32 @@ mod tests {
             steps: spec.force_every() * 3,
             vz_m_s: -0.1,
         }];
-        let i = intrude_script(
-            &spec,
-            "abc",
-            0.06,
-            &p,
-            (0.03, 0.03),
-            0.0018,
-            0.03,
-            100,
-            None,
-        );
+        let deck = |resume| {
+            intrude_script(
+                &spec,
+                "abc",
+                0.06,
+                &p,
+                (0.03, 0.03),
+                0.0018,
+                0.03,
+                100,
+                resume,
+            )
+        };
+        let i = deck(None);
         assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
         assert!(i.contains("exclude type 2 2"));
         assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));
         assert!(i.contains("fix move_0 foot move linear 0 0 -1e-1\nrun 150 upto\n"));
         assert!(i.contains("restart 100 restart/intrude.*") && i.contains("file force.txt"));
+        // Resumed from the last step: the last piece again, for no step.
+        let end = spec.force_every() * 3;
+        let again = deck(Some(Resume {
+            file: "restart/intrude.150",
+            step: end,
+        }));
+        assert!(again.contains(&format!("run {end} upto")), "{again}");
+        assert!(again.contains("read_restart restart/intrude.150") && again.contains("append"));
     }
 }

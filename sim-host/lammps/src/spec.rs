@@ -23,7 +23,7 @@ pub enum Preset {
     /// The paper's regime at reduced scale: the small preset's 20 mm foot in 1.5 mm grains
     /// (6.7 per foot radius), a 50 mm x 35 mm bed poured to phi 0.57 (rolling friction),
     /// ~28,000 grains. With a jump's push-off scaled to this foot at the paper's Froude number
-    /// (`--scale-from-foot 0.076`), the paper's depth over radius and speeds.
+    /// (`--scale-from-foot 0.076`), the paper's depth over radius and Froude number.
     Regime,
 }
 

@@ -171,6 +171,22 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
     assert!(!work.path().join("a.unfinished").exists());
     assert!(!a.join("lammps/restart").exists(), "restart files removed");
 
+    // A periodic bed is refused for a run against a sidewall, before anything is made.
+    let walled = work.path().join("walled");
+    let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(args(
+            &lmp,
+            &trajectory,
+            &walled,
+            &["--bed", a.to_str().unwrap(), "--sidewall"],
+        ))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("settled without sidewalls"), "{e}");
+    assert!(!work.path().join("walled.unfinished").exists());
+
     // 2. The same intrusion on that bed, killed mid-way and resumed.
     let b = work.path().join("b");
     let bed = ["--bed", a.to_str().unwrap()];

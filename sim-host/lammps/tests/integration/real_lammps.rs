@@ -196,6 +196,17 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
     let flow = csv_rows(&out.join("flow.csv"));
     assert_eq!(flow.len(), 51);
     assert_eq!(s.frames, 51);
+    // The whole disc (without a sidewall): every sphere of the foot's lattice.
+    let spec = scaled_down(&out).spec();
+    let disc = sandjumper_lammps::foot::foot_atoms(
+        spec.foot_radius_m(),
+        spec.min_grain_diameter_m(),
+        (0.0, 0.0),
+        0.0,
+        1.0,
+        1,
+    );
+    assert_eq!(s.foot_spheres, disc.len() as u64);
     let deepest = flow.iter().map(|r| r["depth_m"]).fold(0.0, f64::max);
     assert!((deepest - DEPTH).abs() < 5e-4, "{deepest}");
 
@@ -486,6 +497,7 @@ fn the_paper_presets_deck_runs_in_a_cut_box() {
         let deck = read(&dir.join(input));
         assert!(deck.contains(&format!("timestep {dt}")), "{input}");
         assert!(deck.contains("processors * * 1"), "{input}");
+        assert!(deck.contains("fix balance all balance"), "{input}");
         let log = read(&dir.join(log));
         let grid: Vec<u64> = log
             .lines()
