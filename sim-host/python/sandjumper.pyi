@@ -294,6 +294,23 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
     ``cone``."""
 
+def lammps_slurm(
+    out: PathLike,
+    partition: Optional[str] = None,
+    time: str = "1:00:00",
+    nodes: Optional[int] = None,
+    wait: bool = True,
+    program: Optional[PathLike] = None,
+    progress: Optional[Progress] = None,
+    **options: Any,
+) -> Dict[str, Any]:
+    """``lammps`` as one Slurm job of ``ranks`` MPI tasks, as ``sandjumper dem lammps --slurm``
+    does: the job runs ``program`` (default: ``sandjumper`` on PATH) with the same options in
+    ``partition``, with the time limit ``time`` (restart files every quarter of it at most),
+    over ``nodes`` nodes. LAMMPS is looked for here first. With ``wait`` the call waits and
+    loads the folder; a job stopped at its limit keeps ``OUT.unfinished/`` and the same call
+    resumes it. Returns ``{"job_id", "dir", "result"}`` (``result`` None without wait)."""
+
 def lammps_read(
     run: PathLike,
     out: PathLike,

@@ -542,6 +542,76 @@ pub fn lammps(
     load_folder(py, &dir, None)
 }
 
+/// [`lammps`] as one Slurm job, as `sandjumper dem lammps --slurm --out OUT` does: a job of
+/// `ranks` MPI tasks (`ranks=` among the options, default 2) that runs `program` (the
+/// `sandjumper` binary on the cluster's shared file system; default: the one on `PATH`) with
+/// the same options, in `partition`, with the time limit `time` (Slurm's format; restart files
+/// every quarter of it at most) over `nodes` nodes. LAMMPS is looked for here first (a login
+/// node sees the shared file system). With `wait` (the default) the call waits for the job
+/// (the GIL released) and loads its folder; a job stopped at its time limit keeps
+/// `OUT.unfinished/`, and the same call resumes it. Returns `{"job_id": the id or None once
+/// waited for, "dir": the job's folder, "result": the folder loaded, or None without wait}`.
+#[pyfunction]
+#[pyo3(signature = (out, partition = None, time = "1:00:00".to_string(), nodes = None, wait = true, program = None, progress = None, **options))]
+#[allow(clippy::too_many_arguments)]
+pub fn lammps_slurm(
+    py: Python<'_>,
+    out: &Bound<'_, PyAny>,
+    partition: Option<String>,
+    time: String,
+    nodes: Option<u32>,
+    wait: bool,
+    program: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    use sandjumper_lammps::run::{Submitted, submit};
+    let mut request = LammpsRequest {
+        out: path_arg("out", out)?,
+        ..LammpsRequest::default()
+    };
+    apply(&mut request, options, &LAMMPS_OPTIONS, &mut options::none)?;
+    if nodes == Some(0) {
+        return Err(crate::errors::invalid_value(
+            "nodes",
+            0,
+            "a count, 1 or more",
+        ));
+    }
+    let program = crate::simulate::program_on_path(py, program)?;
+    let queue = sandjumper_slurm::QueueOptions {
+        partition,
+        time,
+        nodes,
+        no_wait: !wait,
+    };
+    let names = [
+        ("--slurm-partition", "partition"),
+        ("--slurm-time", "time"),
+        ("--slurm-nodes", "nodes"),
+    ];
+    let all: Vec<(&str, &str)> = LAMMPS_NAMES.iter().chain(names.iter()).copied().collect();
+    let submitted = long_call(py, progress, |progress| {
+        submit(&request, &program, &queue, progress)
+    })?
+    .map_err(|e| lib_err(e, &all))?;
+    let d = PyDict::new(py);
+    let dir = std::path::absolute(sandjumper_slurm::job_dir(&request.out))
+        .unwrap_or_else(|_| sandjumper_slurm::job_dir(&request.out));
+    d.set_item("dir", dir.display().to_string())?;
+    match submitted {
+        Submitted::Queued { id } => {
+            d.set_item("job_id", id)?;
+            d.set_item("result", py.None())?;
+        }
+        Submitted::Done { outcome } => {
+            d.set_item("job_id", py.None())?;
+            d.set_item("result", Py::new(py, load_folder(py, &outcome.out, None)?)?)?;
+        }
+    }
+    Ok(d.into_any().unbind())
+}
+
 /// Read a finished LAMMPS run's dumps back into a new folder `out`, as `sandjumper dem
 /// lammps-read RUN --out OUT` does (`run`: the run's folder or its `lammps/` folder; `out`
 /// apart from it): the column's momentum, added mass and cone again, e.g. with another

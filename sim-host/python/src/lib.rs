@@ -54,6 +54,7 @@ fn sandjumper_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dem::dem_bed, m)?)?;
     m.add_function(wrap_pyfunction!(dem::dem_intrude, m)?)?;
     m.add_function(wrap_pyfunction!(dem::lammps, m)?)?;
+    m.add_function(wrap_pyfunction!(dem::lammps_slurm, m)?)?;
     m.add_function(wrap_pyfunction!(dem::lammps_read, m)?)?;
     m.add_function(wrap_pyfunction!(studies::fit, m)?)?;
     m.add_function(wrap_pyfunction!(studies::optimize, m)?)?;

@@ -606,21 +606,7 @@ pub fn sweep_slurm(
         gain_lowering,
         None,
     )?;
-    let program = match program.filter(|p| !p.is_none()) {
-        Some(p) => crate::convert::path_arg("program", p)?,
-        None => {
-            let found = py
-                .import("shutil")?
-                .call_method1("which", ("sandjumper",))?;
-            if found.is_none() {
-                return Err(PyValueError::new_err(
-                    "program: no `sandjumper` on PATH for the tasks to run (give program= the \
-                     binary's path on the cluster's shared file system)",
-                ));
-            }
-            found.extract::<String>()?.into()
-        }
-    };
+    let program = program_on_path(py, program)?;
     let count = |name: &str, v: i64| {
         u32::try_from(v).map_err(|_| crate::errors::invalid_value(name, v, "a count, 1 or more"))
     };
@@ -670,6 +656,28 @@ pub fn sweep_slurm(
         }
     }
     Ok(d.into_any().unbind())
+}
+
+/// The `sandjumper` binary a Slurm job runs: `program` when given, else the one on `PATH`.
+pub fn program_on_path(
+    py: Python<'_>,
+    program: Option<&Bound<'_, PyAny>>,
+) -> PyResult<std::path::PathBuf> {
+    match program.filter(|p| !p.is_none()) {
+        Some(p) => crate::convert::path_arg("program", p),
+        None => {
+            let found = py
+                .import("shutil")?
+                .call_method1("which", ("sandjumper",))?;
+            if found.is_none() {
+                return Err(PyValueError::new_err(
+                    "program: no `sandjumper` on PATH for the tasks to run (give program= the \
+                     binary's path on the cluster's shared file system)",
+                ));
+            }
+            Ok(found.extract::<String>()?.into())
+        }
+    }
 }
 
 /// A sweep's rows and failures as [`SweepResult`] (`sweep.csv`'s and `failures.csv`'s

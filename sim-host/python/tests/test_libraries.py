@@ -554,6 +554,38 @@ def test_a_slurm_sweep_submits_its_job_array(tmp_path, monkeypatch):
     assert "/opt/sj/sandjumper" in script and "--shard" in script
 
 
+def test_a_lammps_run_is_submitted_to_slurm_as_one_job(tmp_path, monkeypatch):
+    """Submitted without waiting through a stand-in `sbatch` and a stand-in LAMMPS (the real
+    one-node cluster runs `dem lammps --slurm` in sim-host/cli's slurm test): one job of the
+    ranks' tasks over the nodes asked for, running the program given with the same options,
+    a restart file every quarter of the time limit at most. Bad values are refused first."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, text in [
+        ("sbatch", "[ \"$1\" = --version ] && { echo 'slurm 0'; exit 0; }\necho 4244"),
+        ("lmp", "printf '\\nLarge-scale Atomic/Molecular Massively Parallel Simulator - 1 Jan "
+                "2099 - fake\\n\\nInstalled packages:\\n\\nGRANULAR\\n\\nList of individual "
+                "style options\\n'"),
+    ]:
+        tool = bin_dir / name
+        tool.write_text(f"#!/bin/sh\n{text}\n")
+        tool.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_dir}:{os.environ['PATH']}")
+    with pytest.raises(ValueError, match="nodes"):
+        sandjumper.lammps_slurm(tmp_path / "l", nodes=0, speed=0.1, lmp=bin_dir / "lmp")
+    with pytest.raises(ValueError, match="speed"):
+        sandjumper.lammps_slurm(tmp_path / "l", speed=-0.1, lmp=bin_dir / "lmp")
+    job = sandjumper.lammps_slurm(tmp_path / "l", time="20", nodes=2, wait=False,
+                                  program="/opt/sj/sandjumper", preset="regime", speed=0.1,
+                                  depth=0.004, sidewall=True, ranks=4, lmp=bin_dir / "lmp")
+    assert job["job_id"] == "4244" and job["result"] is None
+    script = (pathlib.Path(job["dir"]) / "job.sbatch").read_text()
+    assert "#SBATCH --ntasks=4" in script and "#SBATCH --nodes=2" in script
+    assert "#SBATCH --time=20" in script
+    assert "/opt/sj/sandjumper" in script and "'--preset=regime'" in script
+    assert "'--sidewall'" in script and "'--restart-every=5'" in script
+
+
 def test_a_slurm_sweep_stops_waiting_on_ctrl_c(tmp_path, monkeypatch):
     """A job that runs on (stand-in `squeue` reporting it running until a marker file goes,
     15 s in): Ctrl-C ends the wait within a few seconds and raises KeyboardInterrupt. Tried:
