@@ -1,10 +1,12 @@
 //! One run, start to end, and its folder.
 //!
-//! [`run`] writes the LAMMPS run into `OUT/lammps/` (the inputs, the data files, the logs,
-//! `force.txt`, `dumps/`, and `run.toml`, the manifest the read-back checks against), runs
-//! the two stages, and [`analyse`] reads the dumps back into `flow.csv`, `force_depth.csv`,
-//! `cone.csv`, `summary.json` and `lammps.png`/`.svg`. [`analyse`] alone reads a finished run
-//! again (with another speed rule, or a run made elsewhere).
+//! [`simulate`] writes the LAMMPS run into its folder (the inputs, the data files, the logs,
+//! `force.txt`, `column.txt`, `dumps/`, restart files while it runs, and `run.toml`, the
+//! manifest the read-back checks against), resuming what an earlier attempt left there;
+//! [`analyse`] reads the dumps back into `flow.csv`, `force_depth.csv`, `cone.csv`,
+//! `summary.json` and `lammps.png`/`.svg` (and `sidewall.csv` against a sidewall).
+//! [`analyse`] alone reads a finished run again (with another speed rule, or a run made
+//! elsewhere). [`crate::run::run`] puts the two together in `OUT.unfinished/` and `OUT/`.
 
 use std::path::Path;
 

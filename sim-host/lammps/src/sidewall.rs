@@ -1,4 +1,5 @@
-//! The paper's PIV, done on a 3-D run against a sidewall ([`LammpsSpec::sidewall`]), beside
+//! The paper's PIV, done on a 3-D run against a sidewall
+//! ([`crate::spec::LammpsSpec::sidewall`]), beside
 //! the exact momentum of the same run.
 //!
 //! The paper filmed a half foot against a glass wall and measured the grains' velocity at the
