@@ -106,3 +106,68 @@ fn figures_dem_refuses_bad_input_with_status_2() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("0.5..=40"));
     assert!(!dir.path().join("bad").exists());
 }
+
+/// The full `sandjumper figures` set (~45 s) regenerates the summary committed beside
+/// REPRODUCTION.md (`docs/reproduction/figures-summary.txt`) to the last digit, and every
+/// height REPRODUCTION.md's sections 1-6 quote with its frequency (`49.9 mm @ 12.8 Hz`) is one
+/// of that summary's: a model change that moves a number fails here until both are
+/// regenerated (`sandjumper figures --out DIR`, then copy `DIR/summary.txt` there).
+#[test]
+fn the_full_figures_regenerate_the_committed_summary_and_the_heights_reproduction_quotes() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("figs");
+    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(["figures", "--out", out_dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary = std::fs::read_to_string(out_dir.join("summary.txt")).unwrap();
+    let committed =
+        std::fs::read_to_string(root.join("docs/reproduction/figures-summary.txt")).unwrap();
+    assert!(
+        summary == committed,
+        "the figures' summary is not the committed one: regenerate it (sandjumper figures --out \
+         DIR; cp DIR/summary.txt docs/reproduction/figures-summary.txt) and REPRODUCTION.md's \
+         numbers with it"
+    );
+    // "H mm at F Hz" in the summary, to REPRODUCTION.md's one decimal.
+    let mut heights = std::collections::HashSet::new();
+    for line in summary.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        for w in words.windows(5) {
+            let unit = w[4].trim_end_matches([')', ';', ',', '.']);
+            if w[1] == "mm" && w[2] == "at" && unit == "Hz" {
+                if let (Ok(h), Ok(f)) = (w[0].parse::<f64>(), w[3].parse::<f64>()) {
+                    heights.insert(format!("{h:.1} mm @ {f:.1} Hz"));
+                }
+            }
+        }
+    }
+    let text = std::fs::read_to_string(root.join("REPRODUCTION.md")).unwrap();
+    let sections = text.split("## 7.").next().unwrap();
+    let mut quoted = 0;
+    for (i, _) in sections.match_indices(" mm @ ") {
+        let before = sections[..i]
+            .rsplit(|c: char| c.is_whitespace() || c == '|')
+            .next();
+        let after = sections[i + 6..].split(" Hz").next();
+        let (Some(h), Some(f)) = (before, after) else {
+            continue;
+        };
+        let (Ok(h), Ok(f)) = (h.parse::<f64>(), f.parse::<f64>()) else {
+            continue;
+        };
+        let q = format!("{h:.1} mm @ {f:.1} Hz");
+        assert!(
+            heights.contains(&q),
+            "REPRODUCTION.md quotes {q}, not in the summary"
+        );
+        quoted += 1;
+    }
+    assert!(quoted >= 10, "{quoted} heights quoted");
+}
