@@ -519,8 +519,10 @@ pub fn submit(
     queue: &QueueOptions,
     progress: &dyn Progress,
 ) -> Result<Submitted, LammpsError> {
-    request.validate()?;
+    let (spec, traj) = request.checked()?;
     request.lammps()?;
+    // An unfinished run of other inputs in the output is refused now, not after the queue.
+    Unfinished::of(request, &spec, &traj)?.earlier_in(&unfinished_dir(&request.out))?;
     // A restart file at least four times within the job's time limit: a job killed at its
     // limit and submitted again loses at most a quarter of it.
     let mut in_job = request.clone();
@@ -578,6 +580,59 @@ struct Unfinished {
     bed_from: Option<String>,
 }
 
+/// The record's name in an unfinished folder.
+const UNFINISHED_RECORD: &str = "unfinished.toml";
+
+impl Unfinished {
+    /// What `request` (its run `spec` along `traj`) would start.
+    fn of(
+        request: &LammpsRequest,
+        spec: &LammpsSpec,
+        traj: &Trajectory,
+    ) -> Result<Self, LammpsError> {
+        Ok(Self {
+            run_id: outputs::run_id(spec, traj)?,
+            bed_from: request.bed.as_ref().map(|b| b.display().to_string()),
+        })
+    }
+
+    /// The unfinished run in `work` this one resumes (`Some`), or none there (`None`); an
+    /// unfinished run of other inputs, or LAMMPS files of no run that can be told, is refused
+    /// (exit 2).
+    fn earlier_in(&self, work: &Path) -> Result<Option<Self>, LammpsError> {
+        let record = work.join(UNFINISHED_RECORD);
+        let parsed = std::fs::read_to_string(&record)
+            .ok()
+            .and_then(|t| toml::from_str::<Unfinished>(&t).ok());
+        match parsed {
+            None if work.join("lammps").is_dir() => Err(LammpsError::input(format!(
+                "{} holds LAMMPS files whose run cannot be told ({} is missing or not a record \
+                 this tool wrote): look inside, and remove the folder to start again",
+                work.display(),
+                record.display()
+            ))),
+            None => Ok(None),
+            Some(earlier) if earlier == *self => Ok(Some(earlier)),
+            Some(earlier) => {
+                let on = |b: &Option<String>| {
+                    b.as_ref()
+                        .map_or(String::new(), |b| format!(" on the bed {b}"))
+                };
+                Err(LammpsError::input(format!(
+                    "{} holds an unfinished run of other inputs (run {}{}; this one is run {}{}): \
+                     resume it with its own command, or remove the folder (allowed: one run per \
+                     output)",
+                    work.display(),
+                    earlier.run_id,
+                    on(&earlier.bed_from),
+                    self.run_id,
+                    on(&self.bed_from)
+                )))
+            }
+        }
+    }
+}
+
 /// Run the intrusion `request` asks for with LAMMPS here, read its dumps back and write its
 /// folder. LAMMPS works in [`unfinished_dir`] (locked: one run at a time), writing restart
 /// files as it goes: a run that fails or is killed keeps it, and the same command resumes it
@@ -599,50 +654,18 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
         .map_err(|e| LammpsError::input(format!("cannot create {}: {e}", work.display())))?;
     let _lock = sandjumper_output::lock::WriterLock::take(&work.join(".lock"))
         .map_err(|e| LammpsError::input(e.to_string()))?;
-    let this = Unfinished {
-        run_id: outputs::run_id(&spec, &traj)?,
-        bed_from: request.bed.as_ref().map(|b| b.display().to_string()),
-    };
-    let record = work.join("unfinished.toml");
-    let earlier = std::fs::read_to_string(&record).ok();
-    let parsed = earlier
-        .as_deref()
-        .and_then(|t| toml::from_str::<Unfinished>(t).ok());
-    if parsed.is_none() && work.join("lammps").is_dir() {
-        return Err(LammpsError::input(format!(
-            "{} holds LAMMPS files whose run cannot be told ({} is missing or not a record \
-             this tool wrote): look inside, and remove the folder to start again",
-            work.display(),
-            record.display()
-        )));
-    }
-    match parsed {
-        Some(earlier) if earlier == this => progress.note(&format!(
+    let this = Unfinished::of(request, &spec, &traj)?;
+    match this.earlier_in(&work)? {
+        Some(_) => progress.note(&format!(
             "dem lammps: resuming the unfinished run in {}",
             work.display()
         )),
-        Some(earlier) => {
-            return Err(LammpsError::input(format!(
-                "{} holds an unfinished run of other inputs (run {}{}; this one is run {}{}): \
-                 resume it with its own command, or remove the folder (allowed: one run per \
-                 output)",
-                work.display(),
-                earlier.run_id,
-                earlier
-                    .bed_from
-                    .map_or(String::new(), |b| format!(" on the bed {b}")),
-                this.run_id,
-                this.bed_from
-                    .as_ref()
-                    .map_or(String::new(), |b| format!(" on the bed {b}"))
-            )));
-        }
         None => {
             // Written whole or not at all (a kill while it is written leaves no half record).
             let partial = work.join(".unfinished.toml.partial");
             std::fs::write(&partial, toml::to_string(&this).map_err(internal)?)
                 .map_err(internal)?;
-            std::fs::rename(&partial, &record).map_err(internal)?;
+            std::fs::rename(&partial, work.join(UNFINISHED_RECORD)).map_err(internal)?;
         }
     }
     let lammps_dir = work.join("lammps");

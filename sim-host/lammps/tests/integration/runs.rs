@@ -113,6 +113,26 @@ fn a_failed_lammps_keeps_its_files_beside_the_output_for_the_same_command_to_res
             .contains("holds an unfinished run of other inputs"),
         "{e}"
     );
+    // And as a Slurm job: refused before it is queued (no sbatch is looked for).
+    let e = run::submit(
+        &LammpsRequest {
+            ranks: 1,
+            seed: Some(7),
+            lmp: Some(work.path().join("lmp")),
+            ..small(&out)
+        },
+        Path::new("/opt/sandjumper"),
+        &sandjumper_slurm::QueueOptions::default(),
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert!(
+        e.to_string()
+            .contains("holds an unfinished run of other inputs"),
+        "{e}"
+    );
+    assert!(!work.path().join("run.slurm").exists());
 }
 
 #[test]
