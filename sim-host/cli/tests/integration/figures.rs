@@ -141,10 +141,12 @@ fn the_full_figures_regenerate_the_committed_summary_and_the_heights_reproductio
         let words: Vec<&str> = line.split_whitespace().collect();
         for w in words.windows(5) {
             let unit = w[4].trim_end_matches([')', ';', ',', '.']);
-            if w[1] == "mm" && w[2] == "at" && unit == "Hz" {
-                if let (Ok(h), Ok(f)) = (w[0].parse::<f64>(), w[3].parse::<f64>()) {
-                    heights.insert(format!("{h:.1} mm @ {f:.1} Hz"));
-                }
+            if w[1] == "mm"
+                && w[2] == "at"
+                && unit == "Hz"
+                && let (Ok(h), Ok(f)) = (w[0].parse::<f64>(), w[3].parse::<f64>())
+            {
+                heights.insert(format!("{h:.1} mm @ {f:.1} Hz"));
             }
         }
     }

@@ -96,42 +96,26 @@ fn a_failed_lammps_keeps_its_files_beside_the_output_for_the_same_command_to_res
     assert!(!sandjumper_output::WriterLock::is_held(
         &work.path().join("run.unfinished/.lock")
     ));
-    // Another run into the same output, of other inputs, is refused (exit 2).
-    let e = run::run(
-        &LammpsRequest {
-            ranks: 1,
-            seed: Some(7),
-            lmp: Some(work.path().join("lmp")),
-            ..small(&out)
-        },
-        &Silent,
-    )
-    .unwrap_err();
-    assert_eq!(e.blame(), Blame::Input, "{e}");
-    assert!(
-        e.to_string()
-            .contains("holds an unfinished run of other inputs"),
-        "{e}"
-    );
-    // And as a Slurm job: refused before it is queued (no sbatch is looked for).
-    let e = run::submit(
-        &LammpsRequest {
-            ranks: 1,
-            seed: Some(7),
-            lmp: Some(work.path().join("lmp")),
-            ..small(&out)
-        },
-        Path::new("/opt/sandjumper"),
-        &sandjumper_slurm::QueueOptions::default(),
-        &Silent,
-    )
-    .unwrap_err();
-    assert_eq!(e.blame(), Blame::Input, "{e}");
-    assert!(
-        e.to_string()
-            .contains("holds an unfinished run of other inputs"),
-        "{e}"
-    );
+    // Another run into the same output, of other inputs, is refused (exit 2), here and as a
+    // Slurm job before it is queued (no sbatch is looked for).
+    let other = LammpsRequest {
+        ranks: 1,
+        seed: Some(7),
+        lmp: Some(work.path().join("lmp")),
+        ..small(&out)
+    };
+    let queue = sandjumper_slurm::QueueOptions::default();
+    for e in [
+        run::run(&other, &Silent).unwrap_err(),
+        run::submit(&other, Path::new("/opt/sandjumper"), &queue, &Silent).unwrap_err(),
+    ] {
+        assert_eq!(e.blame(), Blame::Input, "{e}");
+        let text = e.to_string();
+        assert!(
+            text.contains("holds an unfinished run of other inputs"),
+            "{e}"
+        );
+    }
     assert!(!work.path().join("run.slurm").exists());
 }
 
