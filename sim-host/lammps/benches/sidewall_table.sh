@@ -44,6 +44,14 @@ for seed in $(seq 1 "$SEEDS"); do
     --ranks 2 --out "$WORK/seed-$seed" >/dev/null 2>"$WORK/seed-$seed.log" || {
       cat "$WORK/seed-$seed.log" >&2; exit 1; }
 done
+# Each seed's summary and sidewall table kept beside REPRODUCTION.md: the test command checks
+# the table quoted there against them (sim-host/lammps/tests/integration/reproduction.rs).
+SAVED=docs/reproduction/sidewall-$SCALE
+mkdir -p "$SAVED"
+for seed in $(seq 1 "$SEEDS"); do
+  cp "$WORK/seed-$seed/summary.json" "$SAVED/seed-$seed.summary.json"
+  cp "$WORK/seed-$seed/sidewall.csv" "$SAVED/seed-$seed.sidewall.csv"
+done
 COMMIT=$(git rev-parse --short HEAD)
 DIRTY=$(git diff --quiet && echo "" || echo " (with uncommitted changes)")
 python3 - "$WORK" "$SEEDS" "$SCALE" "$COMMIT$DIRTY" <<'PY'

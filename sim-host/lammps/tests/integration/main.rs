@@ -3,4 +3,5 @@
 //! the whole dependency tree once per file; nextest still runs each test in its own process.
 
 mod real_lammps;
+mod reproduction;
 mod runs;
