@@ -289,6 +289,7 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``,
     ``restart_every=15`` (wall minutes between restart files), ``launcher="srun"``,
     ``sidewall=True`` (the paper's PIV geometry: ``sidewall.csv``), ``scale_from_foot=0.076``,
+    ``dump_every=5`` (the grains dumped at every 5th frame; 0: none),
     ...). A run
     killed resumes from its newest restart file when called again the same way. Ctrl-C
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,

@@ -124,10 +124,18 @@ impl Manifest {
         Ok(())
     }
 
-    /// The dump steps this run wrote.
+    /// The frames' steps: the camera's rate, where `column.txt` has a row.
     pub fn frame_steps(&self) -> Vec<u64> {
         let de = self.spec.dump_every();
         (0..=self.intrusion_steps / de).map(|k| k * de).collect()
+    }
+
+    /// The frames LAMMPS dumped: every [`LammpsSpec::dump_every_frames`]th (none for 0).
+    pub fn dump_steps(&self) -> Vec<u64> {
+        match self.spec.dump_every_frames {
+            0 => Vec::new(),
+            n => self.frame_steps().into_iter().step_by(n as usize).collect(),
+        }
     }
 }
 
@@ -747,36 +755,19 @@ pub fn analyse(
         }
     };
     let steps = m.frame_steps();
-    stage(progress, "read", steps.len() as u64);
+    let dumped: std::collections::BTreeSet<u64> = m.dump_steps().into_iter().collect();
     let dumps = dir.join("dumps");
-    let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
     let dt = m.geometry.time_step_s;
-    for &s in &steps {
-        let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
-        let row = analysis::frame_row(&f, &g).map_err(LammpsError::input)?;
-        // The foot where this run's pieces put it: a frame of the same bed on another
-        // trajectory (or at another step) is not this run's.
-        let expected = script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s);
-        let got = g.surface_m - row.depth_m;
-        if (got - expected).is_nan() || (got - expected).abs() > FOOT_TOLERANCE_M {
-            return Err(LammpsError::input(format!(
-                "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at step \
-                 {s} (a dump of another run)",
-                dump::frame_path(&dumps, s).display(),
-                1e3 * got,
-                1e3 * expected
-            )));
-        }
-        rows.push(row);
-        progress.advance(1);
-    }
-    // LAMMPS's own measure of the column at the same steps, where the run has it.
+    // LAMMPS's own measure of the column at every frame, where the run has it.
     let column_path = dir.join("column.txt");
-    if column_path.is_file() {
+    let column = if column_path.is_file() {
         let column = analysis::read_column(&column_path).map_err(LammpsError::input)?;
         let by_step: std::collections::HashMap<u64, analysis::ColumnRow> =
             column.iter().map(|c| (c.step, *c)).collect();
-        if by_step.len() != column.len() || column.len() != steps.len() {
+        if by_step.len() != column.len()
+            || column.len() != steps.len()
+            || steps.iter().any(|s| !by_step.contains_key(s))
+        {
             return Err(LammpsError::input(format!(
                 "{}: {} rows ({} steps) where the run has {} frames (the file is cut short, holds \
                  a step twice, or is not of this run)",
@@ -786,19 +777,69 @@ pub fn analyse(
                 steps.len()
             )));
         }
-        for (row, s) in rows.iter_mut().zip(&steps) {
-            let c = by_step.get(s).ok_or_else(|| {
-                LammpsError::input(format!("{}: no row of step {s}", column_path.display()))
-            })?;
+        Some(by_step)
+    } else if dumped.len() != steps.len() {
+        return Err(LammpsError::input(format!(
+            "{}: missing, and the run dumped {} of its {} frames (allowed: a run that dumps \
+             every frame, or its column.txt)",
+            column_path.display(),
+            dumped.len(),
+            steps.len()
+        )));
+    } else {
+        None
+    };
+    stage(progress, "read", dumped.len() as u64);
+    let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
+    for &s in &steps {
+        let mut row = if dumped.contains(&s) {
+            let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
+            let row = analysis::frame_row(&f, &g).map_err(LammpsError::input)?;
+            // The foot where this run's pieces put it: a frame of the same bed on another
+            // trajectory (or at another step) is not this run's.
+            let expected = script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s);
+            let got = g.surface_m - row.depth_m;
+            if (got - expected).is_nan() || (got - expected).abs() > FOOT_TOLERANCE_M {
+                return Err(LammpsError::input(format!(
+                    "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at \
+                     step {s} (a dump of another run)",
+                    dump::frame_path(&dumps, s).display(),
+                    1e3 * got,
+                    1e3 * expected
+                )));
+            }
+            progress.advance(1);
+            row
+        } else {
+            // No dump: the column as LAMMPS measured it, the foot where its pieces put it.
+            let c = column
+                .as_ref()
+                .and_then(|c| c.get(&s))
+                .copied()
+                .ok_or_else(|| LammpsError::internal(format!("no column row of step {s}")))?;
+            FlowRow {
+                t_s: s as f64 * dt,
+                depth_m: g.surface_m - script::bottom_at(&m.pieces, dt, m.foot_start_bottom_m, s),
+                foot_speed_m_s: -script::velocity_at(&m.pieces, s),
+                momentum_under_foot_kg_m_s: g.symmetry_factor * c.momentum_kg_m_s,
+                grains_under_foot: c.grains,
+                momentum_ring_kg_m_s: g.symmetry_factor * c.ring_kg_m_s,
+                momentum_under_foot_lammps_kg_m_s: f64::NAN,
+                added_mass_kg: f64::NAN,
+                eq6_added_mass_kg: f64::NAN,
+            }
+        };
+        if let Some(c) = column.as_ref().and_then(|c| c.get(&s)) {
             row.momentum_under_foot_lammps_kg_m_s = g.symmetry_factor * c.momentum_kg_m_s;
         }
+        rows.push(row);
     }
     analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(LammpsError::internal)?;
     // The cone over the frames with the paper's added mass (read again: one frame in
     // memory at a time, whatever the bed's size).
     let mut view = SideView::new(&g);
     for (row, &s) in rows.iter().zip(&steps) {
-        if row.added_mass_kg.is_finite() {
+        if row.added_mass_kg.is_finite() && dumped.contains(&s) {
             let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
             view.add(&f, &g, row);
         }
@@ -956,6 +997,9 @@ fn summarise(
             .filter(|a| a.is_finite()),
         cone_rows: cone.as_ref().map_or(0, |c| c.rows.len()),
         cone_note: match cone {
+            None if m.spec.dump_every_frames == 0 => {
+                "no dumps (--dump-every 0): the cone needs the grains".into()
+            }
             None => "fewer than three rows below the foot where the co-moving region is \
                      narrower than the foot"
                 .into(),

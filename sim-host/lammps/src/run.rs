@@ -137,6 +137,14 @@ pub struct LammpsRequest {
     /// with the same preset and options (its box and grain sizes are checked).
     #[cfg_attr(feature = "clap", arg(long, value_name = "FILE"))]
     pub bed: Option<PathBuf>,
+    /// Frames between dumps of the grains near the axis: 1 every frame, N every Nth, 0 none
+    /// (the column's momentum comes from LAMMPS at every frame whatever this is; the cone
+    /// from the dumped frames). A paper-sized run's dumps at every frame are ~8 GB.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long = "dump-every", value_name = "FRAMES", default_value = "1")
+    )]
+    pub dump_every_frames: u64,
     /// Dump rate (the PIV camera's), frames/s.
     #[cfg_attr(feature = "clap", arg(long, value_name = "FPS", value_parser = sandjumper_output::parse::parse_positive))]
     pub fps: Option<f64>,
@@ -189,6 +197,7 @@ impl Default for LammpsRequest {
             friction: None,
             restitution: None,
             sidewall: false,
+            dump_every_frames: 1,
             bed: None,
             fps: None,
             seed: None,
@@ -279,6 +288,7 @@ impl LammpsRequest {
             s.seed = seed;
         }
         s.sidewall = self.sidewall;
+        s.dump_every_frames = self.dump_every_frames;
         s
     }
 
@@ -332,6 +342,7 @@ impl LammpsRequest {
             friction,
             restitution,
             sidewall,
+            dump_every_frames,
             bed,
             fps,
             seed,
@@ -392,6 +403,7 @@ impl LammpsRequest {
         if *sidewall {
             args.push("--sidewall".into());
         }
+        args.push(format!("--dump-every={dump_every_frames}"));
         path("--lmp", lmp, &mut args)?;
         path("--mpiexec", mpiexec, &mut args)?;
         args.push(format!("--launcher={}", launcher.name()));

@@ -65,6 +65,19 @@ pub fn bottom_at(pieces: &[Piece], dt: f64, start_m: f64, steps: u64) -> f64 {
     z
 }
 
+/// The foot's vertical velocity at the end of step `step` of `pieces` (the piece that step
+/// belongs to; 0 at step 0, when the foot has not yet moved), m/s (up positive).
+pub fn velocity_at(pieces: &[Piece], step: u64) -> f64 {
+    let mut end = 0;
+    for p in pieces {
+        end += p.steps;
+        if step > 0 && step <= end {
+            return p.vz_m_s;
+        }
+    }
+    0.0
+}
+
 /// The contact model's coefficients with friction `mu` (pair and wall alike), and rolling
 /// friction `rolling` (LAMMPS's `rolling sds`, no rolling damping) when given.
 fn contact(spec: &LammpsSpec, mu: f64, rolling: Option<f64>) -> String {
@@ -323,14 +336,23 @@ pub fn intrude_script(
          compute under_n grains reduce/region under sum v_one\n\
          compute ring_p grains reduce/region ring sum v_down_p\n\
          fix column all ave/time {de} 1 {de} c_under_p c_under_n c_ring_p {column_file} format \" %.12g\"\n\
-         region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
-         dump frames all custom {de} dumps/frame.*.txt id type x y z vx vy vz radius\n\
-         dump_modify frames region near sort id format float %.9g\n\
+         {dumps}\
          thermo_style custom step time atoms c_foot_fz c_foot_zmin\n\
          thermo {de}\n\
          thermo_modify lost error norm no\n\
          # the foot: {n} piece(s), {total} steps; its spheres are {fd:e} m across\n",
         restart = restart_line("intrude", restart_every),
+        dumps = match spec.dump_every_frames {
+            0 => "# no dumps: the column is LAMMPS's own (column.txt)\n".to_string(),
+            n => format!(
+                "region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
+                 dump frames all custom {every} dumps/frame.*.txt id type x y z vx vy vz radius\n\
+                 dump_modify frames region near sort id format float %.9g\n",
+                cx = centre.0,
+                cy = centre.1,
+                every = de * n
+            ),
+        },
         r2 = 2.0 * r,
         cx = centre.0,
         cy = centre.1,

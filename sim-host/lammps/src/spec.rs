@@ -9,6 +9,14 @@
 
 use serde::{Deserialize, Serialize};
 
+fn every_frame() -> u64 {
+    1
+}
+
+fn is_every_frame(n: &u64) -> bool {
+    *n == 1
+}
+
 /// A preset scale.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -85,6 +93,11 @@ pub struct LammpsSpec {
     pub relax_s: f64,
     /// Seed of the grains' sizes and start positions.
     pub seed: u64,
+    /// Frames between dumps (the grains near the axis, written by LAMMPS): 1 every frame, N
+    /// every Nth, 0 none. The column's momentum is LAMMPS's own at every frame whatever
+    /// this is (`column.txt`); the cone is measured over the dumped frames.
+    #[serde(default = "every_frame", skip_serializing_if = "is_every_frame")]
+    pub dump_every_frames: u64,
     /// The paper's PIV geometry: a flat frictional sidewall at `y = 0` (the bed periodic in x
     /// only, a second wall at `y = width`) and a half-disc foot against it, its axis on the
     /// wall; the camera looks through the wall. The column's momentum and the foot's force
@@ -123,6 +136,7 @@ impl LammpsSpec {
             max_settle_s: 1.0,
             relax_s: 0.01,
             seed: 1,
+            dump_every_frames: 1,
             sidewall: false,
             smoke_steps: None,
         };
@@ -328,6 +342,19 @@ impl LammpsSpec {
                 "the bed is {} mm deep (allowed: at least 5 grain diameters, {} mm)",
                 1e3 * self.bed_depth_m,
                 5e3 * self.grain_diameter_m
+            ));
+        }
+        if self.dump_every_frames > 100_000 {
+            return Err(format!(
+                "dumps every {} frames (allowed: 0, none, to 100000)",
+                self.dump_every_frames
+            ));
+        }
+        if self.sidewall && self.dump_every_frames != 1 {
+            return Err(format!(
+                "the sidewall PIV needs every frame at the camera's rate; dumps every {} frames \
+                 (allowed with --sidewall: 1)",
+                self.dump_every_frames
             ));
         }
         if self.fps > self.force_rate_hz {

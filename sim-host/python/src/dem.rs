@@ -381,7 +381,8 @@ pub fn dem_intrude(
 }
 
 /// `dem lammps`'s flags whose names differ from the Python arguments'.
-const LAMMPS_NAMES: [(&str, &str); 16] = [
+const LAMMPS_NAMES: [(&str, &str); 17] = [
+    ("--dump-every", "dump_every"),
     ("--scale-from-foot", "scale_from_foot"),
     ("--sidewall", "sidewall"),
     ("--restart-every", "restart_every"),
@@ -401,7 +402,11 @@ const LAMMPS_NAMES: [(&str, &str); 16] = [
 ];
 
 /// `lammps`'s options by name.
-const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 24] = [
+const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 25] = [
+    ("dump_every", |r, v| {
+        r.dump_every_frames = count("dump_every", v)?;
+        Ok(())
+    }),
     ("scale_from_foot", |r, v| {
         r.scale_from_foot_m = Some(number("scale_from_foot", v, parse_positive)?);
         Ok(())

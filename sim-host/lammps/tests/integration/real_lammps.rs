@@ -351,6 +351,55 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         read(&out.join("force_depth.csv"))
     );
     assert_eq!(read(&reused.join("flow.csv")), read(&out.join("flow.csv")));
+    // Thinned dumps (every 5th frame): the same intrusion, its column at every frame from
+    // LAMMPS's own measure, equal to the full dumps' to their printed digits; a fifth of the
+    // dump files.
+    let thinned = work.path().join("thinned");
+    let t = run::run(
+        &LammpsRequest {
+            bed: Some(out.clone()),
+            dump_every_frames: 5,
+            ..scaled_down(&thinned)
+        },
+        &Silent,
+    )
+    .unwrap();
+    let dumped = std::fs::read_dir(thinned.join("lammps/dumps"))
+        .unwrap()
+        .count();
+    assert_eq!(dumped, 11, "frames 0, 5, ..., 50");
+    let (full_rows, thin_rows) = (
+        csv_rows(&out.join("flow.csv")),
+        csv_rows(&thinned.join("flow.csv")),
+    );
+    assert_eq!(full_rows.len(), thin_rows.len());
+    let peak = s.grain_momentum_under_foot_kg_m_s;
+    for (a, b) in full_rows.iter().zip(&thin_rows) {
+        // The dumps print 9 digits: the foot's height to ~1e-11 m, its speed to ~1e-9.
+        let t = a["t_s"];
+        assert!((a["depth_m"] - b["depth_m"]).abs() <= 1e-9, "depth at {t}");
+        assert!(
+            (a["foot_speed_m_s"] - b["foot_speed_m_s"]).abs() <= 1e-8,
+            "speed at {t}"
+        );
+        assert_eq!(
+            a["grains_under_foot"], b["grains_under_foot"],
+            "grains at {t}"
+        );
+        let (p, q) = (
+            a["momentum_under_foot_kg_m_s"],
+            b["momentum_under_foot_kg_m_s"],
+        );
+        assert!(
+            (p - q).abs() <= 1e-7 * peak,
+            "{p} full, {q} thinned at {} s",
+            a["t_s"]
+        );
+    }
+    assert!(
+        (t.summary.added_mass_vs_eq6_median - s.added_mass_vs_eq6_median).abs()
+            <= 1e-6 * s.added_mass_vs_eq6_median
+    );
     // A bed of another width is refused before LAMMPS runs.
     let e = run::run(
         &LammpsRequest {
