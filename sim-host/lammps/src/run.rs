@@ -1,6 +1,7 @@
 //! `dem lammps` and `dem lammps-read` as calls: a typed request, `run`/`read` with a
 //! progress sink, and the run's summary as the outcome. LAMMPS itself stays a process
-//! (`mpiexec -n N lmp`); a failed run keeps its LAMMPS files in `OUT.failed/`.
+//! (`mpiexec -n N lmp`); a run works in `OUT.unfinished/` until it is done, and one that
+//! fails or is killed is resumed from there by the same request.
 
 use std::fmt;
 use std::path::{Path, PathBuf};

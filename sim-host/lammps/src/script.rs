@@ -228,7 +228,7 @@ pub fn settle_script(
         restart_line("settle", restart_every),
         balance = balance_line(spec),
     );
-    let cap = |step: u64| spec.smoke_steps.map_or(step, |n| step.min(n));
+    let cap = |step: u64| spec.capped_step(step);
     if at < fall {
         let _ = writeln!(
             s,
@@ -284,7 +284,7 @@ pub fn intrude_script(
     let total: u64 = pieces.iter().map(|p| p.steps).sum();
     let reach = spec.dump_radius_factor * spec.foot_radius_m();
     let relax = ((spec.relax_s / spec.time_step_s()).round() as u64).max(1);
-    let cap = |step: u64| spec.smoke_steps.map_or(step, |n| step.min(n));
+    let cap = |step: u64| spec.capped_step(step);
     let relax = cap(relax);
     let _ = write!(
         s,

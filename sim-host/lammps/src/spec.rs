@@ -178,6 +178,12 @@ impl LammpsSpec {
         if self.sidewall { 2.0 } else { 1.0 }
     }
 
+    /// The step a stage's `run` goes to: `step`, or [`Self::smoke_steps`] when a deck check
+    /// stops sooner.
+    pub fn capped_step(&self, step: u64) -> u64 {
+        self.smoke_steps.map_or(step, |n| step.min(n))
+    }
+
     /// Foot radius, m.
     pub fn foot_radius_m(&self) -> f64 {
         0.5 * self.foot_diameter_m

@@ -6,10 +6,7 @@
 use std::process::Command;
 
 use crate::common;
-
-fn summary(dir: &std::path::Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
+use common::summary_json as summary;
 
 /// The paper's regime at reduced scale against a sidewall: `--preset regime` poured to phi
 /// 0.57 (rolling friction), a stutter's push-off at phi 0.57 from `jump` scaled to the 20 mm

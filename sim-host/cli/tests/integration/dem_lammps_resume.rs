@@ -23,6 +23,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::common;
+use common::summary_json as summary;
 
 /// The run's arguments into `out` (and `extra`).
 fn args(lmp: &Path, trajectory: &Path, out: &Path, extra: &[&str]) -> Vec<String> {
@@ -131,10 +132,6 @@ fn force_rows(dir: &Path) -> Vec<(u64, Vec<String>)> {
             (w[0].parse().unwrap(), w[1..].to_vec())
         })
         .collect()
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
 fn run_toml(dir: &Path) -> toml::Value {

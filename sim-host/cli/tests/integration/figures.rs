@@ -13,19 +13,26 @@ const FIGURES: [&str; 6] = [
     "mechanism",
 ];
 
-#[test]
-fn quick_figures_write_png_svg_and_csv_for_every_figure() {
+/// `sandjumper figures` with `options` into a new folder, which must succeed: the folder's
+/// holder (removed when dropped) and the output's path.
+fn figures(options: &[&str]) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("figs");
-    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(["figures", "--quick", "--out", out_dir.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let mut args = vec!["figures"];
+    args.extend_from_slice(options);
+    args.extend(["--out", out_dir.to_str().unwrap()]);
+    let out = crate::common::sandjumper(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    (dir, out_dir)
+}
+
+#[test]
+fn quick_figures_write_png_svg_and_csv_for_every_figure() {
+    let (_dir, out_dir) = figures(&["--quick"]);
     for stem in FIGURES {
         for ext in ["png", "svg", "csv"] {
             let path = out_dir.join(format!("{stem}.{ext}"));
@@ -115,17 +122,7 @@ fn figures_dem_refuses_bad_input_with_status_2() {
 #[test]
 fn the_full_figures_regenerate_the_committed_summary_and_the_heights_reproduction_quotes() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let dir = tempfile::tempdir().unwrap();
-    let out_dir = dir.path().join("figs");
-    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(["figures", "--out", out_dir.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (_dir, out_dir) = figures(&[]);
     let summary = std::fs::read_to_string(out_dir.join("summary.txt")).unwrap();
     let committed =
         std::fs::read_to_string(root.join("docs/reproduction/figures-summary.txt")).unwrap();

@@ -134,6 +134,11 @@ pub fn virtual_board() -> Option<()> {
     None
 }
 
+/// A run folder's `summary.json`, parsed.
+pub fn summary_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 /// The LAMMPS executable the tests use: `$SANDJUMPER_LMP`, else `lmp` on PATH; `None` with a
 /// message when there is none (under CI it must be there: `.ci/run` installs it).
 pub fn lammps() -> Option<PathBuf> {
