@@ -268,7 +268,8 @@ def dem_intrude(
 ) -> FolderResult:
     """Run a DEM intrusion, as ``sandjumper dem intrude --bed BED --out OUT`` does. options:
     the CLI's flags by name (``speed=0.1`` (m/s) or ``trajectory="trajectory.csv"``,
-    ``depth=0.03`` (m), ``no_frames=True``, ``threads=2``, ``resume=True``, ...)."""
+    ``depth=0.03`` (m), ``scale_from_foot=0.076`` (a jump's trajectory Froude-scaled to
+    ``foot_width``), ``no_frames=True``, ``threads=2``, ``resume=True``, ...)."""
 
 def read_log(path: PathLike, allow_gaps: bool = False) -> Dict[str, Any]:
     """Read and check an acquisition log (CSV or binary) as ``sandjumper log check`` does:
@@ -289,8 +290,8 @@ def lammps(out: PathLike, progress: Optional[Progress] = None, **options: Any) -
     ``trajectory=...``, ``depth=0.02`` (m), ``bed_width=...``, ``ranks=2``,
     ``restart_every=15`` (wall minutes between restart files), ``launcher="srun"``,
     ``sidewall=True`` (the paper's PIV geometry: ``sidewall.csv``), ``scale_from_foot=0.076``,
-    ``dump_every=5`` (the grains dumped at every 5th frame; 0: none),
-    ...). A run
+    ``dump_every=5`` (the grains dumped at every 5th frame; 0: none), ``dump_format="text"``
+    (default: ``"gzip"`` where LAMMPS has COMPRESS), ...). A run
     killed resumes from its newest restart file when called again the same way. Ctrl-C
     stops LAMMPS. ``summary`` is ``summary.json``; ``tables``: ``flow``, ``force_depth``,
     ``cone``."""

@@ -54,6 +54,11 @@ pub struct IntrudeRequest {
         arg(long, value_name = "CSV", conflicts_with = "speed_m_s")
     )]
     pub trajectory: Option<PathBuf>,
+    /// Scale the trajectory from a foot this wide, m, to `--foot-width` at the same Froude
+    /// number (depths by the width ratio, times by its square root), so a smaller foot keeps
+    /// the jump's depth over radius and `v^2 / (g R)`: `0.076` for a jump of the robot.
+    #[cfg_attr(feature = "clap", arg(long = "scale-from-foot", value_name = "M", requires = "trajectory", value_parser = sandjumper_output::parse::parse_positive))]
+    pub scale_from_foot_m: Option<f64>,
     /// Take one episode of a jump's trajectory.csv, shifted to start at the surface:
     /// `push-off`, the foot's last intrusion before the jump's flight.
     #[cfg_attr(feature = "clap", arg(long, value_enum, value_name = "EPISODE", requires = "trajectory", conflicts_with_all = ["from_s", "to_s"]))]
@@ -131,6 +136,7 @@ impl Default for IntrudeRequest {
         Self {
             bed: None,
             trajectory: None,
+            scale_from_foot_m: None,
             episode: None,
             from_s: None,
             to_s: None,
@@ -231,6 +237,19 @@ impl IntrudeRequest {
             self.from_s.is_some() || self.to_s.is_some(),
         )
         .map_err(DemError::Input)?;
+        if self.scale_from_foot_m.is_some() && self.trajectory.is_none() {
+            return Err(DemError::input(
+                "--scale-from-foot scales a --trajectory CSV (a constant --speed is given for \
+                 this foot already)",
+            ));
+        }
+        if let Some(w0) = self.scale_from_foot_m
+            && !(w0.is_finite() && w0 > 0.0)
+        {
+            return Err(DemError::input(format!(
+                "--scale-from-foot {w0}: a foot's width, m (allowed: > 0)"
+            )));
+        }
         if !self.resume && self.trajectory.is_none() && self.speed_m_s.is_none() {
             return Err(DemError::input(
                 "give the intruder's motion: --trajectory CSV or --speed M_PER_S",
@@ -347,6 +366,10 @@ fn intruder_trajectory(
                 None => Trajectory::from_csv(p, (a.from_s, a.to_s)),
             }
             .map_err(DemError::Input)?;
+            let t = match a.scale_from_foot_m {
+                Some(w0) => t.froude_scaled(a.foot_width_m / w0),
+                None => t,
+            };
             t.check_starts_at_surface().map_err(DemError::Input)?;
             t
         }
@@ -523,5 +546,58 @@ pub fn snapshot_camera(cam: &SideCamera) -> SideCamera {
         width_px: ((f64::from(cam.width_px) / f) as u32).max(1),
         height_px: ((f64::from(cam.height_px) / f) as u32).max(1),
         ..*cam
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_trajectory_is_froude_scaled_to_the_foot_it_drives() {
+        let dir = std::env::temp_dir().join(format!("sj-scale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv = dir.join("trajectory.csv");
+        // Down from the surface at 0.5 m/s for 40 ms: 20 mm.
+        let rows: String = (0..=40)
+            .map(|k| format!("{},{}\n", 1e-3 * f64::from(k), 0.5e-3 * f64::from(k)))
+            .collect();
+        std::fs::write(&csv, format!("t_s,depth_m\n{rows}")).unwrap();
+        let params = ModelRequest::default().resolve().unwrap();
+        let request = IntrudeRequest {
+            trajectory: Some(csv.clone()),
+            foot_width_m: 0.019,
+            scale_from_foot_m: Some(0.076),
+            ..IntrudeRequest::default()
+        };
+        let scaled = intruder_trajectory(&request, &params, &sandjumper_output::Silent).unwrap();
+        // A quarter of the size: a quarter of the depth, in half the time, at half the speed.
+        assert!(
+            (scaled.duration_s() - 0.02).abs() < 1e-12,
+            "{}",
+            scaled.duration_s()
+        );
+        assert!((scaled.depth(0.02) - 0.005).abs() < 1e-12);
+        assert!(
+            (scaled.max_speed() - 0.25).abs() < 1e-9,
+            "{}",
+            scaled.max_speed()
+        );
+        // Unscaled without the flag; refused without a trajectory.
+        let plain = IntrudeRequest {
+            scale_from_foot_m: None,
+            ..request.clone()
+        };
+        let t = intruder_trajectory(&plain, &params, &sandjumper_output::Silent).unwrap();
+        assert!((t.depth(0.04) - 0.02).abs() < 1e-12);
+        let no_file = IntrudeRequest {
+            trajectory: None,
+            speed_m_s: Some(0.1),
+            bed: Some(dir.clone()),
+            ..request
+        };
+        let e = no_file.validate().unwrap_err().to_string();
+        assert!(e.contains("--scale-from-foot"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -42,6 +42,17 @@ pub struct Summary {
     /// Median over those samples of the DEM's added mass over the model's eq. 6 at the same
     /// depth, with `C` scaled by `(R / 38 mm)^2` for this foot.
     pub added_mass_vs_eq6_median: f64,
+    /// The headline comparison with eq. 6: the same ratio's median over the samples at the
+    /// depths where eq. 6's cone is forming ([`Summary::cone_forming_depths_m`]; NaN: no
+    /// sample there). Shallower samples set eq. 6 near zero against what the column carries
+    /// from contact and inflate the all-samples median.
+    pub added_mass_vs_eq6_cone_forming_median: f64,
+    /// The depths of that median: from where eq. 6 reaches a quarter of its complete cone's
+    /// value to where the cone completes (`R tan theta / mu`), m
+    /// ([`sandjumper_flow::momentum::cone_forming_depths`]).
+    pub cone_forming_depths_m: [f64; 2],
+    /// Samples in that median.
+    pub cone_forming_samples: usize,
     /// Largest momentum of the column under the foot (down positive), kg m/s.
     pub grain_momentum_under_foot_kg_m_s: f64,
     /// Median over the samples with the paper's added mass of the share of the column's
@@ -87,12 +98,13 @@ impl Summary {
     /// One line for the terminal.
     pub fn line(&self) -> String {
         format!(
-            "dem intrude: {} grains, {} steps, depth {:.2} mm, peak force {:.3} N, added mass {:.4} kg ({:.2}x the model's eq. 6), jammed region side {:.1} deg, hexatic order {:.2}; t_c v/d {:.2e}, Froude {:.2}; {:.1} M atom-steps/s; written to {}",
+            "dem intrude: {} grains, {} steps, depth {:.2} mm, peak force {:.3} N, added mass {:.4} kg ({:.2}x the model's eq. 6 where its cone forms, {:.2}x over all samples), jammed region side {:.1} deg, hexatic order {:.2}; t_c v/d {:.2e}, Froude {:.2}; {:.1} M atom-steps/s; written to {}",
             self.grains,
             self.steps,
             1e3 * self.max_depth_m,
             self.max_force_n,
             self.final_added_mass_kg,
+            self.added_mass_vs_eq6_cone_forming_median,
             self.added_mass_vs_eq6_median,
             self.jammed.side_angle_deg,
             self.hexatic_order,
@@ -175,14 +187,46 @@ pub fn model_penetration_force(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, 
 /// `foot_radius_m`.
 pub fn added_mass_vs_eq6_median(flow: &[FlowRow], phi: f64, foot_radius_m: f64) -> f64 {
     median(
-        flow.iter()
-            .filter(|r| r.depth_m > 0.0 && r.added_mass_kg.is_finite())
-            .filter_map(|r| {
-                let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
-                (m > 0.0).then(|| r.added_mass_kg / m)
-            })
+        added_mass_vs_eq6_by_depth(flow, phi, foot_radius_m)
+            .into_iter()
+            .map(|(.., ratio)| ratio)
             .collect(),
     )
+}
+
+/// The DEM/eq. 6 ratio of each sample with the paper's added mass, as (depth, DEM's added
+/// mass, eq. 6's, their ratio): the per-depth curve the headline median is taken from.
+pub fn added_mass_vs_eq6_by_depth(
+    flow: &[FlowRow],
+    phi: f64,
+    foot_radius_m: f64,
+) -> Vec<(f64, f64, f64, f64)> {
+    flow.iter()
+        .filter(|r| r.depth_m > 0.0 && r.added_mass_kg.is_finite())
+        .filter_map(|r| {
+            let m = model_added_mass(phi, foot_radius_m, r.depth_m).ok()?;
+            (m > 0.0).then(|| (r.depth_m, r.added_mass_kg, m, r.added_mass_kg / m))
+        })
+        .collect()
+}
+
+/// The headline DEM/eq. 6 ratio: its median over the samples at the depths where eq. 6's cone
+/// is forming, with those depths (m) and the samples counted.
+pub fn added_mass_vs_eq6_cone_forming(
+    flow: &[FlowRow],
+    phi: f64,
+    foot_radius_m: f64,
+) -> (f64, [f64; 2], usize) {
+    let Ok((from, to)) = sandjumper_flow::momentum::cone_forming_depths(phi, foot_radius_m) else {
+        return (f64::NAN, [f64::NAN; 2], 0);
+    };
+    let ratios: Vec<f64> = added_mass_vs_eq6_by_depth(flow, phi, foot_radius_m)
+        .into_iter()
+        .filter(|&(d, ..)| (from..=to).contains(&d))
+        .map(|(.., ratio)| ratio)
+        .collect();
+    let n = ratios.len();
+    (median(ratios), [from, to], n)
 }
 
 /// The middle value (the upper one of an even count), NaN for none.
@@ -400,6 +444,8 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, DemError> {
     let hex = hexatic_order(&run.world);
     let dl = p.dimensionless(spec.trajectory().max_speed());
     let ratio = added_mass_vs_eq6_median(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
+    let (forming, forming_depths, forming_samples) =
+        added_mass_vs_eq6_cone_forming(&run.state.flow, spec.phi_bulk, 0.5 * spec.foot_width_m);
     let bottom_share = bottom_share(&run.state.flow);
     let summary = Summary {
         out: out.display().to_string(),
@@ -424,6 +470,9 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, DemError> {
             .find(|r| r.added_mass_kg.is_finite())
             .map_or(f64::NAN, |r| r.added_mass_kg),
         added_mass_vs_eq6_median: ratio,
+        added_mass_vs_eq6_cone_forming_median: forming,
+        cone_forming_depths_m: forming_depths,
+        cone_forming_samples: forming_samples,
         momentum_beyond_cone_depth_share: beyond_cone_share(&run.state.flow),
         momentum_in_window_bottom_tenth_share: bottom_share,
         window_depth_warning: (bottom_share > WINDOW_BOTTOM_SHARE_LIMIT).then(|| {
@@ -685,5 +734,55 @@ mod tests {
             "R^3 scaling at similar depths: {}",
             m2 / m1
         );
+    }
+
+    #[test]
+    fn the_headline_ratio_is_taken_where_eq6_cone_forms_only() {
+        use super::{FlowRow, added_mass_vs_eq6_cone_forming, added_mass_vs_eq6_median};
+        let (phi, r) = (0.57, 0.038);
+        let (from, to) = sandjumper_flow::momentum::cone_forming_depths(phi, r).unwrap();
+        // A column carrying twice eq. 6 where the cone forms, plus a contact offset that makes
+        // the shallow samples' ratios huge, and samples past the cone's completion at 1x.
+        let row = |depth_m: f64, added_mass_kg: f64| FlowRow {
+            sample: 0,
+            t_s: 0.0,
+            depth_m,
+            foot_speed_m_s: 1.0,
+            momentum_left_kg_m_s: 0.0,
+            momentum_right_kg_m_s: 0.0,
+            momentum_kg_m_s: 0.0,
+            momentum_under_foot_kg_m_s: 0.0,
+            momentum_under_foot_to_cone_depth_kg_m_s: 0.0,
+            momentum_band_r_to_2r_kg_m_s: 0.0,
+            momentum_band_2r_to_3r_kg_m_s: 0.0,
+            momentum_elsewhere_kg_m_s: 0.0,
+            momentum_in_window_bottom_tenth_kg_m_s: 0.0,
+            added_mass_kg,
+            max_shear_rate_per_s: 0.0,
+            cells: 0,
+        };
+        let eq6 = |d: f64| model_added_mass(phi, r, d).unwrap();
+        let mut flow = Vec::new();
+        for k in 1..=8 {
+            let d = 0.1 * from * f64::from(k);
+            flow.push(row(d, eq6(d) + 0.05));
+        }
+        for k in 0..=4 {
+            let d = from + (to - from) * f64::from(k) / 4.0;
+            flow.push(row(d, 2.0 * eq6(d)));
+        }
+        for k in 1..=3 {
+            let d = to * (1.0 + 0.1 * f64::from(k));
+            flow.push(row(d, eq6(d)));
+        }
+        // A sample the speed rule drops.
+        flow.push(row(0.5 * (from + to), f64::NAN));
+        let (headline, depths, n) = added_mass_vs_eq6_cone_forming(&flow, phi, r);
+        assert_eq!(n, 5);
+        assert_eq!(depths, [from, to]);
+        assert!((headline - 2.0).abs() < 1e-12, "{headline}");
+        // Over all samples the shallow ones pull the median up.
+        let all = added_mass_vs_eq6_median(&flow, phi, r);
+        assert!(all > 2.0, "{all}");
     }
 }

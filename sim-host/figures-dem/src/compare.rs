@@ -20,6 +20,11 @@ pub struct Row {
     /// DEM added mass over eq. 6 (C scaled with R^2), median over the samples with the foot
     /// at >= 0.3 of its fastest, 1.
     pub added_mass_vs_eq6_median: f64,
+    /// The headline: the same ratio's median over the samples where eq. 6's cone is forming
+    /// (from a quarter of its complete value to its completion), 1 (NaN: none there).
+    pub added_mass_vs_eq6_cone_forming_median: f64,
+    /// Samples in that median.
+    pub cone_forming_samples: usize,
     /// Peak momentum of the column under the foot, kg m/s.
     pub grain_momentum_under_foot_kg_m_s: f64,
     /// Peak force on the foot, N.
@@ -68,6 +73,8 @@ impl Row {
             name: name.into(),
             what: what.into(),
             added_mass_vs_eq6_median: s.added_mass_vs_eq6_median,
+            added_mass_vs_eq6_cone_forming_median: s.added_mass_vs_eq6_cone_forming_median,
+            cone_forming_samples: s.cone_forming_samples,
             grain_momentum_under_foot_kg_m_s: s.grain_momentum_under_foot_kg_m_s,
             max_force_n: s.max_force_n,
             max_depth_m: s.max_depth_m,
@@ -91,8 +98,10 @@ impl Row {
     /// The line `figures dem` prints for this run.
     pub fn line(&self) -> String {
         format!(
-            "  {:<13} DEM/eq. 6 {:.2}, peak P under the foot {:.4} kg m/s, shear-band cone {}, co-moving cone {}",
+            "  {:<13} DEM/eq. 6 {:.2} where its cone forms ({} samples; {:.2} over all), peak P under the foot {:.4} kg m/s, shear-band cone {}, co-moving cone {}",
             self.name,
+            self.added_mass_vs_eq6_cone_forming_median,
+            self.cone_forming_samples,
             self.added_mass_vs_eq6_median,
             self.grain_momentum_under_foot_kg_m_s,
             if self.shear_band_cone_deg.is_finite() {
@@ -125,6 +134,8 @@ pub const ROW_HEADER: &[&str] = &[
     "name",
     "what",
     "added_mass_vs_eq6_median",
+    "added_mass_vs_eq6_cone_forming_median",
+    "cone_forming_samples",
     "grain_momentum_under_foot_kg_m_s",
     "max_force_n",
     "max_depth_m",

@@ -25,7 +25,18 @@ pub struct SeriesRow {
     pub momentum_under_foot_kg_m_s: f64,
     /// The paper's added mass, kg (NaN: the foot too slow).
     pub added_mass_kg: f64,
+    /// Eq. 6 at this depth for this foot (`C` scaled by `(R / 38 mm)^2`), kg.
+    pub eq6_added_mass_kg: f64,
+    /// The per-depth curve of the headline: the added mass over eq. 6's, 1 (NaN: no added
+    /// mass at this sample, or eq. 6 zero).
+    pub added_mass_vs_eq6: f64,
+    /// Whether this depth is where eq. 6's cone is forming (the headline's samples): 1 or 0.
+    pub in_cone_forming_depths: u8,
 }
+
+/// The highest DEM/eq. 6 ratio the per-depth figure draws (the first samples at contact,
+/// where eq. 6 is near zero, go far above it; `momentum_vs_time.csv` has them all).
+const RATIO_AXIS_TOP: f64 = 10.0;
 
 /// The figures: added mass against depth with eq. 6, momentum against time for the three
 /// jumps, PIV against the DEM, the sensitivity rows. Returns the momentum series.
@@ -40,18 +51,50 @@ pub fn figures(
     let mut series = Vec::new();
     let mut am_lines = Vec::new();
     let mut p_lines = Vec::new();
+    let mut ratio_lines = Vec::new();
     let mut zmax: f64 = 1e-4;
+    let (from, to) = sandjumper_flow::momentum::cone_forming_depths(phi, radius_m)
+        .map_err(FiguresDemError::internal)?;
     for (k, kind) in ["single", "stutter", "delayed"].iter().enumerate() {
         let t = read_table(&runs.join(kind).join("flow.csv"))?;
+        let first = series.len();
         for r in &t {
+            let depth_m = val(r, "depth_m");
+            let added_mass_kg = val(r, "added_mass_kg");
+            let eq6 = if depth_m > 0.0 {
+                sandjumper_flow::momentum::model_added_mass(phi, radius_m, depth_m)
+                    .map_err(FiguresDemError::internal)?
+            } else {
+                0.0
+            };
             series.push(SeriesRow {
                 jump: kind.to_string(),
                 t_s: val(r, "t_s"),
-                depth_m: val(r, "depth_m"),
+                depth_m,
                 momentum_under_foot_kg_m_s: val(r, "momentum_under_foot_kg_m_s"),
-                added_mass_kg: val(r, "added_mass_kg"),
+                added_mass_kg,
+                eq6_added_mass_kg: eq6,
+                added_mass_vs_eq6: if eq6 > 0.0 {
+                    added_mass_kg / eq6
+                } else {
+                    f64::NAN
+                },
+                in_cone_forming_depths: u8::from((from..=to).contains(&depth_m)),
             });
         }
+        ratio_lines.push(Line {
+            label: kind.to_string(),
+            points: series[first..]
+                .iter()
+                .filter(|q| {
+                    q.added_mass_vs_eq6.is_finite() && q.added_mass_vs_eq6 <= RATIO_AXIS_TOP
+                })
+                .map(|q| (1e3 * q.depth_m, q.added_mass_vs_eq6))
+                .collect(),
+            color: palette(k),
+            dashed: false,
+            markers: true,
+        });
         let am: Vec<(f64, f64)> = t
             .iter()
             .filter(|r| val(r, "added_mass_kg").is_finite() && val(r, "depth_m") > 0.0)
@@ -151,6 +194,53 @@ pub fn figures(
         &fig,
         &staged.file("added_mass_and_momentum.png"),
         Some(&staged.file("added_mass_and_momentum.svg")),
+    )?;
+    // The headline's per-depth curve: DEM over eq. 6 at each sample's depth, the depths
+    // where eq. 6's cone is forming marked.
+    let top = ratio_lines
+        .iter()
+        .flat_map(|l| l.points.iter().map(|p| p.1))
+        .fold(1.0f64, f64::max);
+    let off_scale = series
+        .iter()
+        .filter(|q| q.added_mass_vs_eq6 > RATIO_AXIS_TOP)
+        .count();
+    for (edge, label) in [
+        (from, "eq. 6 at a quarter of its complete cone"),
+        (to, "eq. 6's cone complete"),
+    ] {
+        if edge <= zmax {
+            ratio_lines.push(Line {
+                label: label.into(),
+                points: vec![(1e3 * edge, 0.0), (1e3 * edge, top)],
+                color: palette(7),
+                dashed: true,
+                markers: false,
+            });
+        }
+    }
+    let by_depth = LineFigure {
+        title: "DEM / eq. 6 by depth (the headline: its median between the dashed lines)".into(),
+        panels: vec![LinePanel {
+            caption: format!(
+                "eq. 6's cone forms from {:.1} mm (a quarter of its complete value) to {:.1} mm \
+                 (complete); phi {phi}, R {:.0} mm; {off_scale} shallow samples above \
+                 {RATIO_AXIS_TOP} not drawn",
+                1e3 * from,
+                1e3 * to,
+                1e3 * radius_m
+            ),
+            x_desc: "depth (mm)".into(),
+            y_desc: "DEM added mass / eq. 6".into(),
+            lines: ratio_lines,
+            y_from_zero: true,
+        }],
+        size: (900, 600),
+    };
+    save_figure(
+        &by_depth,
+        &staged.file("added_mass_vs_eq6_by_depth.png"),
+        Some(&staged.file("added_mass_vs_eq6_by_depth.svg")),
     )?;
     // The shear bands' positions below the foot per run, with the paper's 60 degree cone.
     let mut band_lines = Vec::new();

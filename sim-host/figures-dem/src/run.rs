@@ -444,6 +444,9 @@ fn write_comparison(
             "depth_m",
             "momentum_under_foot_kg_m_s",
             "added_mass_kg",
+            "eq6_added_mass_kg",
+            "added_mass_vs_eq6",
+            "in_cone_forming_depths",
         ],
     )
     .map_err(FiguresDemError::Internal)?;

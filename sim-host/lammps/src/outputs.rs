@@ -742,6 +742,7 @@ pub fn analyse(
     let check = RunCheck {
         width_m: bed_box.width_m,
         radius_by_id: atoms.iter().map(|a| (a.id, 0.5 * a.diameter_m)).collect(),
+        format: m.spec.dump_format,
     };
     let g = m.geometry;
     let phi = m.model_phi;
@@ -790,8 +791,8 @@ pub fn analyse(
         None
     };
     stage(progress, "read", dumped.len() as u64);
-    let mut rows: Vec<FlowRow> = Vec::with_capacity(steps.len());
-    for &s in &steps {
+    // The frames read and measured on every core (a frame in memory per thread).
+    let frame_row = |&s: &u64| -> Result<FlowRow, LammpsError> {
         let mut row = if dumped.contains(&s) {
             let f = dump::read_frame(&dumps, s, &check).map_err(LammpsError::input)?;
             let row = analysis::frame_row(&f, &g).map_err(LammpsError::input)?;
@@ -803,7 +804,7 @@ pub fn analyse(
                 return Err(LammpsError::input(format!(
                     "{}: the foot's bottom is at {:.6} mm where this run put it at {:.6} mm at \
                      step {s} (a dump of another run)",
-                    dump::frame_path(&dumps, s).display(),
+                    dump::frame_path(&dumps, s, check.format).display(),
                     1e3 * got,
                     1e3 * expected
                 )));
@@ -832,8 +833,12 @@ pub fn analyse(
         if let Some(c) = column.as_ref().and_then(|c| c.get(&s)) {
             row.momentum_under_foot_lammps_kg_m_s = g.symmetry_factor * c.momentum_kg_m_s;
         }
-        rows.push(row);
-    }
+        Ok(row)
+    };
+    let mut rows: Vec<FlowRow> = {
+        use rayon::prelude::*;
+        steps.par_iter().map(frame_row).collect::<Result<_, _>>()?
+    };
     analysis::added_mass(&mut rows, min_speed_ratio, &eq6).map_err(LammpsError::internal)?;
     // The cone over the frames with the paper's added mass (read again: one frame in
     // memory at a time, whatever the bed's size).

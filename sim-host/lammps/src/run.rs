@@ -16,7 +16,7 @@ use sandjumper_slurm::{CommandJobOutcome, QueueOptions};
 use crate::error::LammpsError;
 use crate::lammps::{Lammps, Launcher};
 use crate::outputs::{self, RestartEvery, Summary};
-use crate::spec::{LammpsSpec, Preset};
+use crate::spec::{DumpFormat, LammpsSpec, Preset};
 
 /// Grain-steps per core-second of the settle (pour and settle), measured on the small preset on
 /// 2 ranks split in x and y: 20,400 grains, 23,000 steps in 49.3-50.3 s (2026-11-29).
@@ -146,6 +146,14 @@ pub struct LammpsRequest {
         arg(long = "dump-every", value_name = "FRAMES", default_value = "1")
     )]
     pub dump_every_frames: u64,
+    /// How LAMMPS writes the dumps: `gzip` (`dump custom/gz`, about a third of the bytes,
+    /// read back as a stream) or `text`. Default: gzip where the LAMMPS found has the
+    /// COMPRESS package, else text.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long = "dump-format", value_enum, value_name = "FORMAT")
+    )]
+    pub dump_format: Option<DumpFormat>,
     /// Dump rate (the PIV camera's), frames/s.
     #[cfg_attr(feature = "clap", arg(long, value_name = "FPS", value_parser = sandjumper_output::parse::parse_positive))]
     pub fps: Option<f64>,
@@ -199,6 +207,7 @@ impl Default for LammpsRequest {
             restitution: None,
             sidewall: false,
             dump_every_frames: 1,
+            dump_format: None,
             bed: None,
             fps: None,
             seed: None,
@@ -290,6 +299,9 @@ impl LammpsRequest {
         }
         s.sidewall = self.sidewall;
         s.dump_every_frames = self.dump_every_frames;
+        if let Some(f) = self.dump_format {
+            s.dump_format = f;
+        }
         s
     }
 
@@ -344,6 +356,7 @@ impl LammpsRequest {
             restitution,
             sidewall,
             dump_every_frames,
+            dump_format,
             bed,
             fps,
             seed,
@@ -405,6 +418,9 @@ impl LammpsRequest {
             args.push("--sidewall".into());
         }
         args.push(format!("--dump-every={dump_every_frames}"));
+        if let Some(f) = dump_format {
+            args.push(format!("--dump-format={}", f.name()));
+        }
         path("--lmp", lmp, &mut args)?;
         path("--mpiexec", mpiexec, &mut args)?;
         args.push(format!("--launcher={}", launcher.name()));
@@ -494,6 +510,23 @@ impl LammpsRequest {
         }
     }
 
+    /// How `lammps` writes this run's dumps: `--dump-format`, else gzip where it has the
+    /// COMPRESS package and text where it has not. Gzip asked of a LAMMPS without it is
+    /// refused (bad input, before anything runs).
+    pub fn dump_format_for(&self, lammps: &Lammps) -> Result<DumpFormat, LammpsError> {
+        match self.dump_format {
+            Some(DumpFormat::Gzip) if !lammps.compressed_dumps => Err(LammpsError::input(format!(
+                "--dump-format gzip: {} ({}) has no COMPRESS package (dump custom/gz) \
+                 (allowed: --dump-format text, or a LAMMPS built with COMPRESS)",
+                lammps.lmp.display(),
+                lammps.version
+            ))),
+            Some(f) => Ok(f),
+            None if lammps.compressed_dumps => Ok(DumpFormat::Gzip),
+            None => Ok(DumpFormat::Text),
+        }
+    }
+
     /// The LAMMPS (and MPI launcher) this request names or finds.
     pub fn lammps(&self) -> Result<Lammps, LammpsError> {
         crate::lammps::find(self.lmp.as_deref(), self.mpiexec.as_deref(), self.launcher)
@@ -532,13 +565,16 @@ pub fn submit(
     queue: &QueueOptions,
     progress: &dyn Progress,
 ) -> Result<Submitted, LammpsError> {
-    let (spec, traj) = request.checked()?;
-    request.lammps()?;
+    let (mut spec, traj) = request.checked()?;
+    let lammps = request.lammps()?;
+    spec.dump_format = request.dump_format_for(&lammps)?;
     // An unfinished run of other inputs in the output is refused now, not after the queue.
     Unfinished::of(request, &spec, &traj)?.earlier_in(&unfinished_dir(&request.out))?;
     // A restart file at least four times within the job's time limit: a job killed at its
     // limit and submitted again loses at most a quarter of it.
     let mut in_job = request.clone();
+    // The job writes the dumps as checked here (the login node's LAMMPS is the nodes').
+    in_job.dump_format = Some(spec.dump_format);
     if let Some(limit) = queue.time_limit_min() {
         in_job.restart_every_min = in_job.restart_every_min.min(limit / 4.0);
     }
@@ -652,8 +688,9 @@ impl Unfinished {
 /// from its newest restart file; a finished run moves its LAMMPS files into the output and
 /// removes it.
 pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOutcome, LammpsError> {
-    let (spec, traj) = request.checked()?;
+    let (mut spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
+    spec.dump_format = request.dump_format_for(&lammps)?;
     // The output can be written, and a bed given fits (checked now, not after hours of
     // LAMMPS, and before an unfinished folder is made).
     drop(StagedDir::create(&request.out)?);

@@ -8,7 +8,7 @@
 //!    trajectory (pieces on the force windows' step grid, so the foot is exactly where the
 //!    trajectory says at every window's end); the contact force on the foot (the mean over
 //!    each window) and the foot's lowest centre go to `force.txt`; the grains within the
-//!    dump radius of the axis, and the foot, go to `dumps/frame.STEP.txt` at the camera's
+//!    dump radius of the axis, and the foot, go to `dumps/frame.STEP.txt[.gz]` at the camera's
 //!    rate.
 
 use std::fmt::Write as _;
@@ -346,11 +346,19 @@ pub fn intrude_script(
             0 => "# no dumps: the column is LAMMPS's own (column.txt)\n".to_string(),
             n => format!(
                 "region near cylinder z {cx:e} {cy:e} {reach:e} INF INF side in\n\
-                 dump frames all custom {every} dumps/frame.*.txt id type x y z vx vy vz radius\n\
+                 dump frames all {style} {every} dumps/frame.*.{ext} id type x y z vx vy vz radius\n\
                  dump_modify frames region near sort id format float %.9g\n",
                 cx = centre.0,
                 cy = centre.1,
-                every = de * n
+                every = de * n,
+                style = match spec.dump_format {
+                    crate::spec::DumpFormat::Text => "custom",
+                    crate::spec::DumpFormat::Gzip => "custom/gz",
+                },
+                ext = match spec.dump_format {
+                    crate::spec::DumpFormat::Text => "txt",
+                    crate::spec::DumpFormat::Gzip => "txt.gz",
+                },
             ),
         },
         r2 = 2.0 * r,
@@ -453,7 +461,10 @@ mod tests {
             )
         };
         let i = deck(None);
-        assert!(i.contains(&format!("custom {} dumps/frame", spec.dump_every())));
+        assert!(i.contains(&format!(
+            "custom/gz {} dumps/frame.*.txt.gz id",
+            spec.dump_every()
+        )));
         assert!(i.contains("exclude type 2 2"));
         assert!(i.contains("tangential mindlin NULL 1.0 0.5 damping coeff_restitution"));
         assert!(i.contains("fix move_0 foot move linear 0 0 -1e-1\nrun 150 upto\n"));

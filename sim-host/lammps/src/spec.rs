@@ -17,6 +17,33 @@ fn is_every_frame(n: &u64) -> bool {
     *n == 1
 }
 
+/// How LAMMPS writes the dumped frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum DumpFormat {
+    /// Text (`dump custom`, `frame.STEP.txt`): the format of runs before compressed dumps.
+    #[default]
+    Text,
+    /// Gzip-compressed text (`dump custom/gz`, `frame.STEP.txt.gz`, LAMMPS's COMPRESS
+    /// package): about a third of the bytes, read back as a stream.
+    Gzip,
+}
+
+impl DumpFormat {
+    /// The word the command line takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Text => "text",
+            Self::Gzip => "gzip",
+        }
+    }
+}
+
+fn is_text(f: &DumpFormat) -> bool {
+    *f == DumpFormat::Text
+}
+
 /// A preset scale.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -98,6 +125,9 @@ pub struct LammpsSpec {
     /// this is (`column.txt`); the cone is measured over the dumped frames.
     #[serde(default = "every_frame", skip_serializing_if = "is_every_frame")]
     pub dump_every_frames: u64,
+    /// How the frames are written (a run recorded before this field: text).
+    #[serde(default, skip_serializing_if = "is_text")]
+    pub dump_format: DumpFormat,
     /// The paper's PIV geometry: a flat frictional sidewall at `y = 0` (the bed periodic in x
     /// only, a second wall at `y = width`) and a half-disc foot against it, its axis on the
     /// wall; the camera looks through the wall. The column's momentum and the foot's force
@@ -137,6 +167,7 @@ impl LammpsSpec {
             relax_s: 0.01,
             seed: 1,
             dump_every_frames: 1,
+            dump_format: DumpFormat::Gzip,
             sidewall: false,
             smoke_steps: None,
         };

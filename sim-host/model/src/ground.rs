@@ -160,6 +160,12 @@ impl Sand {
         }
     }
 
+    /// Depth at which the jammed cone is complete (`R tan theta / mu`), m; infinite when the
+    /// jamming front does not grow. Below it eq. 6 keeps only its `C` term's growth.
+    pub fn cone_depth_m(&self) -> f64 {
+        self.cone_depth_m
+    }
+
     /// Area of the flat part of the jammed cone at depth `z`, m^2:
     /// `A_flat = pi (R - mu z / tan theta)^2`, 0 once `mu z >= R tan theta`.
     pub fn flat_area(&self, z_m: f64) -> f64 {

@@ -22,8 +22,9 @@ use crate::options::{self, Setter, apply, choice, count, flag, number, path};
 use crate::typed;
 
 /// The DEM's flags whose names differ from the Python arguments', for the libraries' messages.
-const DEM_NAMES: [(&str, &str); 14] = [
+const DEM_NAMES: [(&str, &str); 15] = [
     ("--trajectory", "trajectory"),
+    ("--scale-from-foot", "scale_from_foot"),
     ("--episode", "episode"),
     ("--from", "from_s"),
     ("--to", "to_s"),
@@ -246,9 +247,13 @@ pub fn dem_bed(
 }
 
 /// `dem intrude`'s options by name (besides the contact model's).
-const INTRUDE_OPTIONS: [(&str, Setter<IntrudeRequest>); 21] = [
+const INTRUDE_OPTIONS: [(&str, Setter<IntrudeRequest>); 22] = [
     ("trajectory", |r, v| {
         r.trajectory = Some(path("trajectory", v)?);
+        Ok(())
+    }),
+    ("scale_from_foot", |r, v| {
+        r.scale_from_foot_m = Some(number("scale_from_foot", v, parse_positive)?);
         Ok(())
     }),
     ("episode", |r, v| {
@@ -381,8 +386,9 @@ pub fn dem_intrude(
 }
 
 /// `dem lammps`'s flags whose names differ from the Python arguments'.
-const LAMMPS_NAMES: [(&str, &str); 17] = [
+const LAMMPS_NAMES: [(&str, &str); 18] = [
     ("--dump-every", "dump_every"),
+    ("--dump-format", "dump_format"),
     ("--scale-from-foot", "scale_from_foot"),
     ("--sidewall", "sidewall"),
     ("--restart-every", "restart_every"),
@@ -402,9 +408,13 @@ const LAMMPS_NAMES: [(&str, &str); 17] = [
 ];
 
 /// `lammps`'s options by name.
-const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 25] = [
+const LAMMPS_OPTIONS: [(&str, Setter<LammpsRequest>); 26] = [
     ("dump_every", |r, v| {
         r.dump_every_frames = count("dump_every", v)?;
+        Ok(())
+    }),
+    ("dump_format", |r, v| {
+        r.dump_format = Some(choice("dump_format", v)?);
         Ok(())
     }),
     ("scale_from_foot", |r, v| {

@@ -20,7 +20,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use sandjumper_lammps::run::{self, LammpsReadRequest, LammpsRequest};
-use sandjumper_lammps::spec::Preset;
+use sandjumper_lammps::spec::{DumpFormat, Preset};
 use sandjumper_output::{Blame, Blamed, Silent};
 
 /// How deep the foot goes, m: the depth windows below are shares of it.
@@ -51,6 +51,8 @@ fn scaled_down(out: &Path) -> LammpsRequest {
         depth_m: DEPTH,
         ranks: 2,
         out: out.to_path_buf(),
+        // Text, which the refusals below spoil line by line; the thinned run is gzip.
+        dump_format: Some(DumpFormat::Text),
         ..LammpsRequest::default()
     }
 }
@@ -351,23 +353,34 @@ fn the_scaled_down_3d_intrusion_runs_through_lammps_and_reads_back() {
         read(&out.join("force_depth.csv"))
     );
     assert_eq!(read(&reused.join("flow.csv")), read(&out.join("flow.csv")));
-    // Thinned dumps (every 5th frame): the same intrusion, its column at every frame from
-    // LAMMPS's own measure, equal to the full dumps' to their printed digits; a fifth of the
-    // dump files.
+    // Thinned dumps (every 5th frame), gzip-compressed (the default where LAMMPS has
+    // COMPRESS): the same intrusion, its column at every frame from LAMMPS's own measure or
+    // the compressed dumps read as a stream, equal to the full text dumps' to their printed
+    // digits; a fifth of the dump files, each a fraction of the text's bytes.
     let thinned = work.path().join("thinned");
     let t = run::run(
         &LammpsRequest {
             bed: Some(out.clone()),
             dump_every_frames: 5,
+            dump_format: None,
             ..scaled_down(&thinned)
         },
         &Silent,
     )
     .unwrap();
-    let dumped = std::fs::read_dir(thinned.join("lammps/dumps"))
+    let dumped: Vec<String> = std::fs::read_dir(thinned.join("lammps/dumps"))
         .unwrap()
-        .count();
-    assert_eq!(dumped, 11, "frames 0, 5, ..., 50");
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(dumped.len(), 11, "frames 0, 5, ..., 50: {dumped:?}");
+    assert!(dumped.iter().all(|n| n.ends_with(".txt.gz")), "{dumped:?}");
+    let bytes = |p: PathBuf| std::fs::metadata(&p).unwrap().len() as f64;
+    let last = dumped.iter().max_by_key(|n| n.len()).unwrap();
+    let (gz, text) = (
+        bytes(thinned.join("lammps/dumps").join(last)),
+        bytes(out.join("lammps/dumps").join(last.trim_end_matches(".gz"))),
+    );
+    assert!(gz < 0.6 * text, "{gz} bytes gzip against {text} text");
     let (full_rows, thin_rows) = (
         csv_rows(&out.join("flow.csv")),
         csv_rows(&thinned.join("flow.csv")),

@@ -1,5 +1,6 @@
 //! REPRODUCTION.md's sidewall table against the runs that made it: every number of every
-//! seed's row is recomputed from that seed's saved `summary.json` and `sidewall.csv`
+//! seed's row is recomputed from that seed's saved `summary.json` and `sidewall.csv`, and
+//! its 2-D DEM's `summary.json` and `bed.toml`
 //! (`docs/reproduction/sidewall-regime/`, written by `sim-host/lammps/benches/sidewall_table.sh`)
 //! with the table's rules, and the mean and spread row from the seeds' rows. A number quoted
 //! there that its run did not give fails here.
@@ -49,6 +50,10 @@ fn row_of(seed: usize) -> Vec<String> {
                 .collect(),
         )
     };
+    let dem2d: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("seed-{seed}.dem2d.summary.json"))).unwrap(),
+    )
+    .unwrap();
     let ratio = summary["sidewall_piv_vs_exact_median"].as_f64().unwrap();
     assert!((ratio - median(pairs.iter().map(|p| p[0] / p[1]).collect())).abs() < 1e-12);
     vec![
@@ -62,7 +67,18 @@ fn row_of(seed: usize) -> Vec<String> {
         format!("{:.2}", over_eq6(1)),
         format!("{:.2}", over_eq6(0)),
         format!("{ratio:.2}"),
+        format!("{:.3}", dem2d_area_fraction(&dir, seed)),
+        format!("{:.2}", dem2d["added_mass_vs_eq6_median"].as_f64().unwrap()),
     ]
+}
+
+/// The settled area fraction of the 2-D DEM's bed of `seed` (its saved `bed.toml`).
+fn dem2d_area_fraction(dir: &Path, seed: usize) -> f64 {
+    let bed: toml::Value = toml::from_str(
+        &std::fs::read_to_string(dir.join(format!("seed-{seed}.dem2d-bed.toml"))).unwrap(),
+    )
+    .unwrap();
+    bed["report"]["area_fraction"].as_float().unwrap()
 }
 
 #[test]
@@ -100,7 +116,7 @@ fn the_sidewall_table_is_its_runs() {
         .iter()
         .find(|r| r[0].starts_with("mean"))
         .expect("a mean row");
-    for (column, quoted) in [(4, &mean[4]), (5, &mean[5]), (6, &mean[6])] {
+    for (column, quoted) in [(4, &mean[4]), (5, &mean[5]), (6, &mean[6]), (8, &mean[8])] {
         let v: Vec<f64> = computed
             .iter()
             .map(|r| r[column].parse().unwrap())
