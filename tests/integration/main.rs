@@ -18,6 +18,7 @@ mod pil_campaign;
 mod pil_command_cost;
 mod pil_loop;
 mod readme_layout;
+mod reproduction_numbers;
 mod sweep_sil;
 mod track_sil;
 mod virtual_f407;

@@ -16,7 +16,7 @@ use crate::outputs::Summary;
 use crate::params::DemParams;
 use crate::render::SideCamera;
 use crate::request::{ModelRequest, with_threads};
-use sandjumper_output::{Progress, StagedDir};
+use sandjumper_output::{Progress, StagedDir, WriterLock};
 
 /// A part of a jump's trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -259,6 +259,27 @@ impl IntrudeRequest {
     }
 }
 
+/// The lock file in the work folder that the run writing it holds.
+const LOCK: &str = ".lock";
+
+/// Remove everything in `work` but its lock file.
+fn clear_except_lock(work: &Path) -> Result<(), DemError> {
+    let fail = |e: std::io::Error| DemError::input(format!("cannot clear {}: {e}", work.display()));
+    for entry in std::fs::read_dir(work).map_err(fail)? {
+        let entry = entry.map_err(fail)?;
+        if entry.file_name() == LOCK {
+            continue;
+        }
+        let path = entry.path();
+        if entry.file_type().map_err(fail)?.is_dir() {
+            std::fs::remove_dir_all(&path).map_err(fail)?;
+        } else {
+            std::fs::remove_file(&path).map_err(fail)?;
+        }
+    }
+    Ok(())
+}
+
 /// The work folder of a run writing to `out`: checkpoints and frames until it finishes.
 pub fn work_dir(out: &Path) -> PathBuf {
     let mut name = out.file_name().unwrap_or_default().to_os_string();
@@ -278,8 +299,10 @@ pub fn run(request: &IntrudeRequest, progress: &dyn Progress) -> Result<IntrudeO
 fn run_here(a: &IntrudeRequest, progress: &dyn Progress) -> Result<IntrudeOutcome, DemError> {
     let work = work_dir(&a.out);
     let ckpt = work.join("run.ckpt");
-    let mut run = if a.resume {
-        resume_intrusion(a, &ckpt)?
+    // One writer per output, held until this returns (the OS lets go however the process
+    // ends).
+    let (mut run, _lock) = if a.resume {
+        resume_intrusion(a, &work, &ckpt)?
     } else {
         start_intrusion(a, &work, &ckpt, progress)?
     };
@@ -313,16 +336,40 @@ fn run_here(a: &IntrudeRequest, progress: &dyn Progress) -> Result<IntrudeOutcom
     Ok(IntrudeOutcome::Finished(Box::new(summary)))
 }
 
-/// A stopped run of `--out`, from its checkpoint.
-fn resume_intrusion(a: &IntrudeRequest, ckpt: &Path) -> Result<Run, DemError> {
+/// The work folder `work` made and locked for this run: a second run into the same --out
+/// (fresh or resumed) is refused naming the first's process and machine, before it touches
+/// the first's work folder.
+fn lock_work(work: &Path) -> Result<WriterLock, DemError> {
+    std::fs::create_dir_all(work)
+        .map_err(|e| DemError::input(format!("cannot create {}: {e}", work.display())))?;
+    WriterLock::take_recorded(&work.join(LOCK)).map_err(|e| DemError::input(e.to_string()))
+}
+
+/// A stopped run of `--out`, from its checkpoint, with the lock on its work folder.
+fn resume_intrusion(
+    a: &IntrudeRequest,
+    work: &Path,
+    ckpt: &Path,
+) -> Result<(Run, WriterLock), DemError> {
+    let missing = |e: String| {
+        DemError::input(format!(
+            "--resume: {e} (a stopped `dem intrude --out {}` leaves it there)",
+            a.out.display()
+        ))
+    };
+    if !ckpt.is_file() {
+        return Err(missing(format!("{}: no checkpoint", ckpt.display())));
+    }
+    let lock = lock_work(work)?;
     let l = checkpoint::load(ckpt).map_err(|e| {
         DemError::input(format!(
             "--resume: {e} (a stopped `dem intrude --out {}` leaves it there)",
             a.out.display()
         ))
     })?;
-    intrude::resume(l.world, &l.record, &l.extra)
-        .map_err(|e| DemError::input(format!("checkpoint {}: {e}", ckpt.display())))
+    let run = intrude::resume(l.world, &l.record, &l.extra)
+        .map_err(|e| DemError::input(format!("checkpoint {}: {e}", ckpt.display())))?;
+    Ok((run, lock))
 }
 
 /// A bed checkpoint written by `dem bed`: its world and what it was made with.
@@ -469,26 +516,25 @@ fn start_intrusion(
     work: &Path,
     ckpt: &Path,
     progress: &dyn Progress,
-) -> Result<Run, DemError> {
+) -> Result<(Run, WriterLock), DemError> {
     let Some(bed_path) = &a.bed else {
         return Err(DemError::input("--bed BED is required (or --resume)"));
     };
     let bed = read_bed(bed_path)?;
     let spec = intrude_spec(a, &bed, progress)?;
     check_spec(&spec)?;
-    // A previous stopped run of the same --out is replaced by a fresh start.
-    if work.exists() {
-        std::fs::remove_dir_all(work)
-            .map_err(|e| DemError::input(format!("cannot clear {}: {e}", work.display())))?;
-    }
+    // A previous stopped run of the same --out is replaced by a fresh start (its files
+    // cleared; the lock this run now holds on it stays).
     StagedDir::create(&a.out)?; // checks the target now, before hours of work
+    let lock = lock_work(work)?;
+    clear_except_lock(work)?;
     let mut run = intrude::start(spec, bed.checkpoint.world).map_err(DemError::Input)?;
     std::fs::create_dir_all(work)
         .map_err(|e| DemError::input(format!("cannot create {}: {e}", work.display())))?;
     run.world.rebuild();
     checkpoint::save(ckpt, &run.world, &intrude::record(&run), &run.fields_flat())
         .map_err(DemError::Internal)?;
-    Ok(run)
+    Ok((run, lock))
 }
 
 /// Advance `run` to its end or to `--stop-after`: side-wall frames and speed snapshots at

@@ -206,7 +206,7 @@ pub fn figures(
         .filter(|q| q.added_mass_vs_eq6 > RATIO_AXIS_TOP)
         .count();
     for (edge, label) in [
-        (from, "eq. 6 at a quarter of its complete cone"),
+        (from, "eq. 6 a quarter formed"),
         (to, "eq. 6's cone complete"),
     ] {
         if edge <= zmax {
@@ -220,12 +220,11 @@ pub fn figures(
         }
     }
     let by_depth = LineFigure {
-        title: "DEM / eq. 6 by depth (the headline: its median between the dashed lines)".into(),
+        title: "DEM / eq. 6 by depth (the headline: the median between the dashed lines)".into(),
         panels: vec![LinePanel {
             caption: format!(
-                "eq. 6's cone forms from {:.1} mm (a quarter of its complete value) to {:.1} mm \
-                 (complete); phi {phi}, R {:.0} mm; {off_scale} shallow samples above \
-                 {RATIO_AXIS_TOP} not drawn",
+                "eq. 6's cone forms: {:.1} mm (a quarter) to {:.1} mm (complete); phi {phi}, R \
+                 {:.0} mm; {off_scale} samples above {RATIO_AXIS_TOP} not drawn",
                 1e3 * from,
                 1e3 * to,
                 1e3 * radius_m
@@ -235,7 +234,7 @@ pub fn figures(
             lines: ratio_lines,
             y_from_zero: true,
         }],
-        size: (900, 600),
+        size: (1400, 650),
     };
     save_figure(
         &by_depth,

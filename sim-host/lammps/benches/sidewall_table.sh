@@ -95,7 +95,7 @@ for s in range(1, seeds + 1):
     area = next(float(l.split("=")[1]) for l in open(f"{work}/dem2d-bed-{s}/bed.toml")
                 if l.startswith("area_fraction ="))
     rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio,
-                 area, dem2d["added_mass_vs_eq6_median"]))
+                 area, dem2d["summary"]["added_mass_vs_eq6_median"]))
 print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}.\n")
 print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact | 2-D area fraction | 2-D DEM / eq. 6 |")
 print("|---|---|---|---|---|---|---|---|---|")

@@ -146,7 +146,7 @@ pub struct LammpsRequest {
         arg(long = "dump-every", value_name = "FRAMES", default_value = "1")
     )]
     pub dump_every_frames: u64,
-    /// How LAMMPS writes the dumps: `gzip` (`dump custom/gz`, about a third of the bytes,
+    /// How LAMMPS writes the dumps: `gzip` (`dump custom/gz`, about 40 % of the bytes,
     /// read back as a stream) or `text`. Default: gzip where the LAMMPS found has the
     /// COMPRESS package, else text.
     #[cfg_attr(
@@ -702,7 +702,7 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
     let work = unfinished_dir(&request.out);
     std::fs::create_dir_all(&work)
         .map_err(|e| LammpsError::input(format!("cannot create {}: {e}", work.display())))?;
-    let _lock = sandjumper_output::lock::WriterLock::take(&work.join(".lock"))
+    let _lock = sandjumper_output::lock::WriterLock::take_recorded(&work.join(".lock"))
         .map_err(|e| LammpsError::input(e.to_string()))?;
     let this = Unfinished::of(request, &spec, &traj)?;
     match this.earlier_in(&work)? {

@@ -26,7 +26,7 @@ pub enum DumpFormat {
     #[default]
     Text,
     /// Gzip-compressed text (`dump custom/gz`, `frame.STEP.txt.gz`, LAMMPS's COMPRESS
-    /// package): about a third of the bytes, read back as a stream.
+    /// package): about 40 % of the bytes, read back as a stream.
     Gzip,
 }
 

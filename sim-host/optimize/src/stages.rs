@@ -99,7 +99,7 @@ fn lock_the_checkpoint(out: &Path) -> Result<WriterLock, OptimizeError> {
             OptimizeError::Checkpoint(format!("cannot create {}: {e}", parent.display()))
         })?;
     }
-    WriterLock::take(&checkpoint_lock_path(out))
+    WriterLock::take_recorded(&checkpoint_lock_path(out))
         .map_err(|e| OptimizeError::Checkpoint(e.to_string()))
 }
 

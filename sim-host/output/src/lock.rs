@@ -3,9 +3,12 @@
 //! ends (a kill, a Slurm time limit). A second run on the same state is refused with a message
 //! that names the process holding it, from Linux's `/proc/locks`, where it can be told.
 //!
-//! The campaign locks its journal with it, the optimiser its checkpoint's lock file
-//! (`checkpoint.jsonl.lock`: the checkpoint itself is rewritten by renaming a new file over it,
-//! which a lock on the old file would not follow).
+//! The campaign locks its journal with it ([`WriterLock::take`]: the state's own file, left
+//! as it is); the optimiser its checkpoint's lock file, `dem intrude` and `dem lammps` a lock
+//! file in their work folder ([`WriterLock::take_recorded`]: a file of its own that records
+//! the holder's process and machine, for a holder on another node of a shared file system).
+//! The optimiser's lock file is `checkpoint.jsonl.lock`: the checkpoint itself is rewritten by
+//! renaming a new file over it, which a lock on the old file would not follow.
 
 use std::fs::{File, OpenOptions, TryLockError};
 use std::path::{Path, PathBuf};
@@ -81,6 +84,41 @@ impl WriterLock {
         }
     }
 
+    /// Takes the lock on `path`, a lock file of its own (not the state itself), and records
+    /// in it who holds it: `process PID on HOST (COMMAND)`. A second writer is refused naming
+    /// the holder from `/proc/locks` where the kernel lists it, else from that record (a
+    /// holder on another machine of a shared file system, whose locks this kernel does not
+    /// list with a process).
+    pub fn take_recorded(path: &Path) -> Result<Self, LockError> {
+        match Self::take(path) {
+            Ok(lock) => {
+                use std::io::Write;
+                let record = format!("{}\n", describe(&std::process::id().to_string()));
+                let mut f = &lock._file;
+                f.set_len(0)
+                    .and_then(|()| f.write_all(record.as_bytes()))
+                    .map_err(|e| LockError::Io {
+                        path: path.to_path_buf(),
+                        reason: e.to_string(),
+                    })?;
+                Ok(lock)
+            }
+            Err(LockError::Held { path, holder }) if holder == "another process" => {
+                let record = std::fs::read_to_string(&path).unwrap_or_default();
+                let record = record.trim();
+                Err(LockError::Held {
+                    holder: if record.is_empty() {
+                        holder
+                    } else {
+                        format!("{record}, by its record")
+                    },
+                    path,
+                })
+            }
+            Err(e) => Err(e),
+        }
+    }
+
     /// The file locked.
     pub fn path(&self) -> &Path {
         &self.path
@@ -108,6 +146,21 @@ fn holder(file: &File) -> Option<String> {
         let id = fields.get(at + 4)?;
         (id.rsplit(':').next()?.parse::<u64>().ok()? == inode).then(|| pid.to_string())
     })?;
+    Some(describe(&pid))
+}
+
+/// This machine's name (Linux's `/proc/sys/kernel/hostname`, else `HOSTNAME`), `None` where
+/// neither tells it.
+fn host_name() -> Option<String> {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+}
+
+/// `process PID on HOST (COMMAND)` for a process of this machine.
+fn describe(pid: &str) -> String {
     let command = std::fs::read(format!("/proc/{pid}/cmdline"))
         .ok()
         .map(|c| {
@@ -118,10 +171,11 @@ fn holder(file: &File) -> Option<String> {
                 .join(" ")
         })
         .filter(|c| !c.is_empty());
-    Some(match command {
-        Some(c) => format!("process {pid} ({c})"),
-        None => format!("process {pid}"),
-    })
+    let host = host_name().map_or(String::new(), |h| format!(" on {h}"));
+    match command {
+        Some(c) => format!("process {pid}{host} ({c})"),
+        None => format!("process {pid}{host}"),
+    }
 }
 
 #[cfg(test)]
@@ -140,7 +194,7 @@ mod tests {
             Err(LockError::Held { holder, .. }) => {
                 if Path::new("/proc/locks").exists() {
                     assert!(
-                        holder.starts_with(&format!("process {} (", std::process::id())),
+                        holder.starts_with(&format!("process {} on ", std::process::id())),
                         "{holder}"
                     );
                 }
@@ -167,5 +221,24 @@ mod tests {
             WriterLock::take(&nowhere),
             Err(LockError::Io { .. })
         ));
+    }
+
+    #[test]
+    fn a_recorded_lock_names_its_holder_even_where_the_kernel_cannot() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.lock");
+        std::fs::write(&path, "a stale record of an earlier run\n").unwrap();
+        let first = WriterLock::take_recorded(&path).unwrap();
+        let record = std::fs::read_to_string(&path).unwrap();
+        let me = format!("process {} on ", std::process::id());
+        assert!(record.starts_with(&me), "{record}");
+        match WriterLock::take_recorded(&path) {
+            Err(LockError::Held { holder, .. }) => assert!(holder.starts_with(&me), "{holder}"),
+            other => panic!("{other:?}"),
+        }
+        drop(first);
+        // Free again: taken, and the record is the new holder's.
+        let _again = WriterLock::take_recorded(&path).unwrap();
+        assert!(std::fs::read_to_string(&path).unwrap().starts_with(&me));
     }
 }

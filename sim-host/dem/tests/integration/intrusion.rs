@@ -175,6 +175,41 @@ fn same_seed_gives_the_same_bits_on_one_or_two_threads_and_after_a_resume() {
     assert!(e.to_string().contains("--resume"), "{e}");
 }
 
+#[test]
+fn a_second_writer_is_refused_and_the_live_runs_work_is_left_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let b = bed(tmp.path());
+    let out = tmp.path().join("out");
+    let stopped = intrude_run::run(
+        &IntrudeRequest {
+            stop_after: Some(500),
+            frames: false,
+            ..intrusion(&b, &out)
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(
+        matches!(stopped, IntrudeOutcome::Stopped { .. }),
+        "{stopped}"
+    );
+    let work = intrude_run::work_dir(&out);
+    let ckpt = std::fs::read(work.join("run.ckpt")).unwrap();
+    // A live run holds the work folder (here: this test, as a run in another process would).
+    let live = sandjumper_output::WriterLock::take_recorded(&work.join(".lock")).unwrap();
+    let me = format!("process {} on ", std::process::id());
+    for second in [intrusion(&b, &out), resume(&out, None, 0)] {
+        let e = intrude_run::run(&second, &Silent).unwrap_err();
+        assert_eq!(e.blame(), Blame::Input, "{e}");
+        assert!(e.to_string().contains(&me), "{e}");
+        // Neither the fresh start nor the resume touched the live run's checkpoint.
+        assert_eq!(std::fs::read(work.join("run.ckpt")).unwrap(), ckpt);
+    }
+    drop(live);
+    finished(intrude_run::run(&resume(&out, None, 0), &Silent).unwrap());
+    assert!(!work.exists(), "the finished run's work folder is gone");
+}
+
 /// CSV rows as numbers (the header skipped; an empty cell is NaN).
 fn numbers(text: &str) -> Vec<Vec<f64>> {
     text.lines()

@@ -68,7 +68,12 @@ fn row_of(seed: usize) -> Vec<String> {
         format!("{:.2}", over_eq6(0)),
         format!("{ratio:.2}"),
         format!("{:.3}", dem2d_area_fraction(&dir, seed)),
-        format!("{:.2}", dem2d["added_mass_vs_eq6_median"].as_f64().unwrap()),
+        format!(
+            "{:.2}",
+            dem2d["summary"]["added_mass_vs_eq6_median"]
+                .as_f64()
+                .unwrap()
+        ),
     ]
 }
 
