@@ -11,18 +11,24 @@ use sandjumper_rig::live::{RigLiveView, parse_linger, parse_pace};
 /// The options every `--live` command shares.
 #[derive(Debug, Clone, clap::Args)]
 pub struct LiveArgs {
-    /// Serve a live view of the run at http://ADDR/ (e.g. 127.0.0.1:8080, or 8080 for
-    /// 127.0.0.1:8080; port 0: any free port), the same state at /state.json. The URL is
-    /// printed first, on stderr.
+    /// Serve a live view of the run at http://ADDR/ (PORT on 127.0.0.1, IP:PORT,
+    /// localhost:PORT or `[::1]:PORT`; port 0: any free port), the same state at /state.json.
+    /// The URL is printed first, on stderr. The page has no login: an address beyond this
+    /// machine needs --live-public.
     #[arg(long, value_name = "ADDR")]
     pub live: Option<String>,
+    /// With --live (and --foxglove), allow an address beyond this machine (0.0.0.0:PORT, a
+    /// network interface's IP): anyone who can reach it can read the page.
+    #[arg(long, requires = "live")]
+    pub live_public: bool,
     /// With --live, run a simulated link at this multiple of real time (default 1; 0: as
     /// fast as it can).
     #[arg(long, value_name = "X", requires = "live", value_parser = parse_pace)]
     pub pace: Option<f64>,
-    /// With --live, the same streams on a Foxglove WebSocket server at HOST:PORT (typed JSON
-    /// channels for Foxglove or Lichtblick panels; builds with `--features foxglove`).
-    #[arg(long, value_name = "HOST:PORT", requires = "live")]
+    /// With --live, the same streams on a Foxglove WebSocket server at ADDR (the forms of
+    /// --live; typed JSON channels for Foxglove or Lichtblick panels; builds with `--features
+    /// foxglove`). It has no Origin check: docs/live.md says who can read it.
+    #[arg(long, value_name = "ADDR", requires = "live")]
     pub foxglove: Option<String>,
     /// With --live, keep the page up this long after the run, s (default: until Ctrl-C).
     #[arg(long, value_name = "S", requires = "live", value_parser = parse_linger)]
@@ -41,6 +47,7 @@ impl LiveArgs {
             pace: self.pace.unwrap_or(1.0),
             foxglove: self.foxglove.clone(),
             linger: self.linger,
+            public: self.live_public,
         })
     }
 }

@@ -523,14 +523,14 @@ fn start_intrusion(
     let bed = read_bed(bed_path)?;
     let spec = intrude_spec(a, &bed, progress)?;
     check_spec(&spec)?;
-    // A previous stopped run of the same --out is replaced by a fresh start (its files
-    // cleared; the lock this run now holds on it stays).
     StagedDir::create(&a.out)?; // checks the target now, before hours of work
+    // Every refusal first (in memory): a bad input leaves a stopped run of the same --out as
+    // it was.
+    let mut run = intrude::start(spec, bed.checkpoint.world).map_err(DemError::Input)?;
+    // Then a previous stopped run of the same --out is replaced by this fresh start (its
+    // files cleared; the lock this run now holds on the folder stays).
     let lock = lock_work(work)?;
     clear_except_lock(work)?;
-    let mut run = intrude::start(spec, bed.checkpoint.world).map_err(DemError::Input)?;
-    std::fs::create_dir_all(work)
-        .map_err(|e| DemError::input(format!("cannot create {}: {e}", work.display())))?;
     run.world.rebuild();
     checkpoint::save(ckpt, &run.world, &intrude::record(&run), &run.fields_flat())
         .map_err(DemError::Internal)?;

@@ -654,7 +654,13 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, DemError> {
         &staged.file("snapshot.svg"),
     )?;
     let target = staged.commit()?;
-    let _ = std::fs::remove_dir_all(work);
+    // Renamed aside before it is removed: a new run of the same --out that starts the moment
+    // this run's lock goes makes a fresh folder of that name, which this never touches.
+    let mut gone = work.as_os_str().to_os_string();
+    gone.push(format!(".done-{}", std::process::id()));
+    if std::fs::rename(work, &gone).is_ok() {
+        let _ = std::fs::remove_dir_all(&gone);
+    }
     Ok(Summary {
         out: target.display().to_string(),
         ..summary

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# The paper's sidewall PIV against the exact 3-D column, over seeds: the table REPRODUCTION.md
-# quotes, printed as markdown with the commit and the command that made it.
+# The paper's sidewall PIV against the exact 3-D column, and the 2-D DEM at matched
+# conditions, over seeds: the table REPRODUCTION.md quotes, printed as markdown with the commit
+# and the command that made it, and (SCALE regime) written into REPRODUCTION.md between its
+# markers.
 #
 #   sim-host/lammps/benches/sidewall_table.sh [SEEDS] [SCALE]
 #
@@ -21,6 +23,13 @@ cd "$(dirname "$0")/../../.."
 SEEDS=${1:-3}
 SCALE=${2:-regime}
 WORK=target/bench-sidewall-$SCALE
+# The commit the runs are made with, taken before they start (edits made while they run do
+# not change the binary built here).
+COMMIT=$(git rev-parse --short HEAD)
+DIRTY=$(git diff --quiet HEAD -- sim-host shared Cargo.toml Cargo.lock && echo "" || echo " (with uncommitted changes)")
+# With TABLE_ONLY, RUNS_COMMIT names the commit the runs already in $WORK were made with.
+if [ -n "${TABLE_ONLY:-}" ] && [ -n "${RUNS_COMMIT:-}" ]; then COMMIT=$RUNS_COMMIT; DIRTY=""; fi
+STARTED=$(date -u +%Y-%m-%d)
 cargo build --profile fast -q -p sandjumper-cli --bin sandjumper
 BIN=target/fast/sandjumper
 if [ -z "${SANDJUMPER_LMP:-}" ]; then
@@ -39,6 +48,8 @@ case "$SCALE" in
   *) echo "SCALE is test or regime, not $SCALE" >&2; exit 2 ;;
 esac
 mkdir -p "$WORK"
+# TABLE_ONLY=1: the table again from the runs already in $WORK (no run).
+if [ -z "${TABLE_ONLY:-}" ]; then
 "$BIN" jump --kind stutter --freq 10 --model eq4 --phi 0.57 --out "$WORK/jump" >/dev/null
 for seed in $(seq 1 "$SEEDS"); do
   "$BIN" dem lammps --preset regime --sidewall "${CUT[@]}" --seed "$seed" \
@@ -62,6 +73,7 @@ for seed in $(seq 1 "$SEEDS"); do
     --phi "$PHI3" --no-frames --out "$WORK/dem2d-$seed" >/dev/null 2>"$WORK/dem2d-$seed.log" || {
       cat "$WORK/dem2d-$seed.log" >&2; exit 1; }
 done
+fi
 # Each seed's summary and sidewall table kept beside REPRODUCTION.md: the test command checks
 # the table quoted there against them (sim-host/lammps/tests/integration/reproduction.rs).
 SAVED=docs/reproduction/sidewall-$SCALE
@@ -72,11 +84,11 @@ for seed in $(seq 1 "$SEEDS"); do
   cp "$WORK/dem2d-$seed/summary.json" "$SAVED/seed-$seed.dem2d.summary.json"
   cp "$WORK/dem2d-bed-$seed/bed.toml" "$SAVED/seed-$seed.dem2d-bed.toml"
 done
-COMMIT=$(git rev-parse --short HEAD)
-DIRTY=$(git diff --quiet && echo "" || echo " (with uncommitted changes)")
-python3 - "$WORK" "$SEEDS" "$SCALE" "$COMMIT$DIRTY" <<'PY'
+python3 - "$WORK" "$SEEDS" "$SCALE" "$COMMIT$DIRTY" "$STARTED" <<'PY'
 import csv, json, statistics, sys
-work, seeds, scale, commit = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+work, seeds, scale, commit, started = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], sys.argv[5]
+out = []
+print = lambda *a: out.append(" ".join(str(x) for x in a))
 def med(v):
     # The tool's own median (sandjumper_dem::outputs::median): the upper middle of an even count.
     return sorted(v)[len(v) // 2] if v else float("nan")
@@ -96,7 +108,10 @@ for s in range(1, seeds + 1):
                 if l.startswith("area_fraction ="))
     rows.append((s, summary["settled_packing_fraction"], summary["max_depth_m"], len(pairs), exact, piv, ratio,
                  area, dem2d["summary"]["added_mass_vs_eq6_median"]))
-print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}.\n")
+first = json.load(open(f"{work}/seed-1/summary.json"))
+minutes = max(json.load(open(f"{work}/seed-{s}/summary.json"))["core_seconds"] for s in range(1, seeds + 1)) / 2 / 60
+print(f"Made by `sim-host/lammps/benches/sidewall_table.sh {seeds} {scale}` at commit {commit}, {started}, "
+      f"{first['lammps_version']} on 2 MPI ranks, up to {minutes:.0f} min a seed on this 2-core machine.\n")
 print("| seed | settled phi | depth (mm) | pairs | exact 3-D / eq. 6 | sidewall PIV / eq. 6 | sidewall PIV / exact | 2-D area fraction | 2-D DEM / eq. 6 |")
 print("|---|---|---|---|---|---|---|---|---|")
 for s, phi, depth, n, e, p, r, a, d in rows:
@@ -105,4 +120,14 @@ def spread(i):
     v = [r[i] for r in rows]
     return f"{statistics.mean(v):.2f} ({min(v):.2f}..{max(v):.2f})"
 print(f"| mean (min..max) | | | | {spread(4)} | {spread(5)} | {spread(6)} | | {spread(8)} |")
+table = "\n".join(out)
+sys.stdout.write(table + "\n")
+# The regime table is REPRODUCTION.md's: written there between its markers.
+if scale == "regime":
+    path = "REPRODUCTION.md"
+    text = open(path).read()
+    begin, end = "<!-- BEGIN sidewall_table.sh -->", "<!-- END sidewall_table.sh -->"
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    open(path, "w").write(f"{head}{begin}\n{table}\n{end}{tail}")
 PY

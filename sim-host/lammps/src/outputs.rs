@@ -465,6 +465,17 @@ pub fn simulate(
     progress: &dyn Progress,
 ) -> Result<(), LammpsError> {
     check_inputs(spec, trajectory)?;
+    if spec.dump_format == crate::spec::DumpFormat::Gzip
+        && spec.dump_every_frames != 0
+        && !lammps.compressed_dumps
+    {
+        return Err(LammpsError::input(format!(
+            "gzip dumps: {} ({}) has no COMPRESS package (dump custom/gz) (allowed: text dumps, \
+             or a LAMMPS built with COMPRESS)",
+            lammps.lmp.display(),
+            lammps.version
+        )));
+    }
     let pieces = script::pieces(spec, trajectory);
     let run_id = run_id(spec, trajectory)?;
     if dir.join("run.toml").is_file() {

@@ -515,12 +515,14 @@ impl LammpsRequest {
     /// refused (bad input, before anything runs).
     pub fn dump_format_for(&self, lammps: &Lammps) -> Result<DumpFormat, LammpsError> {
         match self.dump_format {
-            Some(DumpFormat::Gzip) if !lammps.compressed_dumps => Err(LammpsError::input(format!(
-                "--dump-format gzip: {} ({}) has no COMPRESS package (dump custom/gz) \
+            Some(DumpFormat::Gzip) if !lammps.compressed_dumps && self.dump_every_frames != 0 => {
+                Err(LammpsError::input(format!(
+                    "--dump-format gzip: {} ({}) has no COMPRESS package (dump custom/gz) \
                  (allowed: --dump-format text, or a LAMMPS built with COMPRESS)",
-                lammps.lmp.display(),
-                lammps.version
-            ))),
+                    lammps.lmp.display(),
+                    lammps.version
+                )))
+            }
             Some(f) => Ok(f),
             None if lammps.compressed_dumps => Ok(DumpFormat::Gzip),
             None => Ok(DumpFormat::Text),
@@ -568,6 +570,7 @@ pub fn submit(
     let (mut spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
     spec.dump_format = request.dump_format_for(&lammps)?;
+    resume_in_its_format(request, &mut spec, &traj)?;
     // An unfinished run of other inputs in the output is refused now, not after the queue.
     Unfinished::of(request, &spec, &traj)?.earlier_in(&unfinished_dir(&request.out))?;
     // A restart file at least four times within the job's time limit: a job killed at its
@@ -627,6 +630,37 @@ struct Unfinished {
     run_id: String,
     /// The settled bed it reuses, if any.
     bed_from: Option<String>,
+}
+
+/// With no `--dump-format`, an unfinished run in the output that wrote text dumps (one from
+/// before gzip was the default, or from a LAMMPS without COMPRESS) is resumed as text: the
+/// same command resumes it.
+fn resume_in_its_format(
+    request: &LammpsRequest,
+    spec: &mut LammpsSpec,
+    traj: &Trajectory,
+) -> Result<(), LammpsError> {
+    if request.dump_format.is_some() || spec.dump_format == DumpFormat::Text {
+        return Ok(());
+    }
+    let work = unfinished_dir(&request.out);
+    if Unfinished::of(request, spec, traj)?
+        .earlier_in(&work)
+        .is_ok()
+    {
+        return Ok(());
+    }
+    let text = LammpsSpec {
+        dump_format: DumpFormat::Text,
+        ..spec.clone()
+    };
+    if matches!(
+        Unfinished::of(request, &text, traj)?.earlier_in(&work),
+        Ok(Some(_))
+    ) {
+        *spec = text;
+    }
+    Ok(())
 }
 
 /// The record's name in an unfinished folder.
@@ -691,6 +725,7 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
     let (mut spec, traj) = request.checked()?;
     let lammps = request.lammps()?;
     spec.dump_format = request.dump_format_for(&lammps)?;
+    resume_in_its_format(request, &mut spec, &traj)?;
     // The output can be written, and a bed given fits (checked now, not after hours of
     // LAMMPS, and before an unfinished folder is made).
     drop(StagedDir::create(&request.out)?);

@@ -35,15 +35,12 @@ fn schema(name: &str, properties: serde_json::Value) -> Schema {
 }
 
 impl FoxgloveBridge {
-    /// Start a server at `addr` (HOST:PORT; port 0: any) for samples named `channels`. Must be
-    /// called outside an async context.
-    pub fn start(addr: &str, channels: &[String]) -> Result<Self, String> {
-        let (host, port) = addr
-            .rsplit_once(':')
-            .and_then(|(h, p)| p.parse::<u16>().ok().map(|p| (h.to_string(), p)))
-            .ok_or_else(|| {
-                format!("--foxglove {addr}: not an address HOST:PORT (e.g. 127.0.0.1:8765)")
-            })?;
+    /// Start a server at `addr` (port 0: any) for samples named `channels`. Must be called
+    /// outside an async context. The WebSocket has no `Origin` check (the `foxglove` crate
+    /// offers no hook): a page of any site the user visits meanwhile can subscribe to it, on
+    /// loopback too (docs/live.md says so).
+    pub fn start(addr: std::net::SocketAddr, channels: &[String]) -> Result<Self, String> {
+        let (host, port) = (addr.ip().to_string(), addr.port());
         let ctx = Context::new();
         let server = WebSocketServer::new()
             .name("sandjumper")

@@ -10,7 +10,10 @@
 //!   campaign table), as `state.json`.
 //! - [`server`]: the HTTP server (axum): the page with its chart library embedded (uPlot,
 //!   MIT), `state.json`, and Server-Sent Events of everything new.
+//! - [`address`]: the address forms `--live` and `--foxglove` take, the refusal of a bind
+//!   beyond this machine without `--live-public`, and the `Host` names a request may carry.
 //! - [`view`]: one run's view: its bus and page, the run's pace, the page kept up after.
+pub mod address;
 pub mod bus;
 #[cfg(feature = "foxglove")]
 pub mod foxglove_bridge;

@@ -28,6 +28,8 @@ const PUMP_MS: u64 = 25;
 
 #[derive(Clone)]
 struct Shared {
+    /// The `Host` names this server answers.
+    allowed: crate::address::AllowedHosts,
     state: Arc<Mutex<LiveState>>,
     updates: broadcast::Sender<String>,
     #[cfg(feature = "foxglove")]
@@ -38,6 +40,8 @@ struct Shared {
 pub struct LiveServer {
     /// The address it listens on (the port chosen when 0 was asked for).
     pub addr: SocketAddr,
+    /// The page's address for the user (the machine's name for a bind to every interface).
+    url: String,
     /// The Foxglove WebSocket server's port, if one runs.
     pub foxglove_port: Option<u16>,
     state: Arc<Mutex<LiveState>>,
@@ -48,7 +52,7 @@ pub struct LiveServer {
 impl LiveServer {
     /// The page's address.
     pub fn url(&self) -> String {
-        format!("http://{}/", self.addr)
+        self.url.clone()
     }
 
     /// A copy of what the page shows now (after the bus's latest was read).
@@ -71,32 +75,36 @@ impl Drop for LiveServer {
     }
 }
 
-/// Serve `feed` at `addr` (HOST:PORT, or a bare PORT on 127.0.0.1; port 0: any free port).
-/// Fails (a message saying what and where)
-/// if the address cannot be bound.
+/// Serve `feed` at `addr` on this machine only ([`crate::address::parse_listen`]'s forms: a
+/// bare PORT on 127.0.0.1, `localhost:PORT`, a loopback `IP:PORT`; port 0: any free port).
+/// Fails (a message saying what and where) if the address cannot be bound or is beyond this
+/// machine.
 pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
-    serve_with_foxglove(addr, feed, None)
+    serve_with_foxglove(addr, feed, None, false)
 }
 
 /// Whether this build can serve the streams to Foxglove (`--features foxglove`).
 pub const FOXGLOVE: bool = cfg!(feature = "foxglove");
 
-/// [`serve`], and the same streams on a Foxglove WebSocket server at `foxglove` (HOST:PORT),
-/// when given (this build must have the `foxglove` feature).
+/// [`serve`], and the same streams on a Foxglove WebSocket server at `foxglove` (the same
+/// address forms), when given (this build must have the `foxglove` feature). `public`: the
+/// user asked for an address beyond this machine (`--live-public`); without it such an
+/// address is refused. Requests whose `Host` is not this server's own name are refused (403).
 pub fn serve_with_foxglove(
     addr: &str,
     feed: LiveFeed,
     foxglove: Option<&str>,
+    public: bool,
 ) -> Result<LiveServer, String> {
     // A bare port binds the loopback interface (the page has no login).
-    let with_host = if addr.parse::<u16>().is_ok() {
-        format!("127.0.0.1:{addr}")
-    } else {
-        addr.to_string()
-    };
-    let sock: SocketAddr = with_host.parse().map_err(|e| {
-        format!("--live {addr}: not an address HOST:PORT ({e}; e.g. 127.0.0.1:8080)")
-    })?;
+    let sock = crate::address::parse_listen("--live", addr)?;
+    crate::address::check_exposure("--live", addr, sock, public)?;
+    let foxglove_sock = foxglove
+        .map(|a| {
+            let s = crate::address::parse_listen("--foxglove", a)?;
+            crate::address::check_exposure("--foxglove", a, s, public).map(|()| s)
+        })
+        .transpose()?;
     let std_listener = std::net::TcpListener::bind(sock)
         .map_err(|e| format!("--live {addr}: cannot listen there ({e})"))?;
     std_listener
@@ -108,9 +116,11 @@ pub fn serve_with_foxglove(
     let state = Arc::new(Mutex::new(LiveState::new(&feed)));
     let (updates, _) = broadcast::channel(4096);
     #[cfg(feature = "foxglove")]
-    let bridge = foxglove
+    let bridge = foxglove_sock
         .map(|a| super::foxglove_bridge::FoxgloveBridge::start(a, &feed.channels).map(Arc::new))
         .transpose()?;
+    #[cfg(not(feature = "foxglove"))]
+    let _ = foxglove_sock;
     #[cfg(not(feature = "foxglove"))]
     if let Some(a) = foxglove {
         return Err(format!(
@@ -127,7 +137,10 @@ pub fn serve_with_foxglove(
             None
         }
     };
+    let allowed = crate::address::AllowedHosts::for_bind(local);
+    let url = allowed.url(local);
     let shared = Shared {
+        allowed,
         state: state.clone(),
         updates,
         #[cfg(feature = "foxglove")]
@@ -153,6 +166,10 @@ pub fn serve_with_foxglove(
                     .route("/uPlot.css", get(uplot_css))
                     .route("/state.json", get(state_json))
                     .route("/events", get(events))
+                    .layer(axum::middleware::from_fn_with_state(
+                        shared.clone(),
+                        own_host_only,
+                    ))
                     .with_state(shared.clone());
                 let pump = {
                     let shared = shared.clone();
@@ -177,6 +194,7 @@ pub fn serve_with_foxglove(
         })
         .map_err(|e| format!("cannot start the live view's thread: {e}"))?;
     Ok(LiveServer {
+        url,
         addr: local,
         foxglove_port,
         state,
@@ -200,6 +218,33 @@ fn pump_once(shared: &Shared, feed: &LiveFeed) {
             // No subscriber is no error: the state keeps it for the next page load.
             let _ = shared.updates.send(text);
         }
+    }
+}
+
+/// Refuse (403) a request whose `Host` is not this server's own name: a page of another site
+/// whose name was rebound to this machine's address (DNS rebinding) gets nothing.
+async fn own_host_only(
+    State(shared): State<Shared>,
+    request: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> axum::response::Response {
+    let host = request
+        .headers()
+        .get(header::HOST)
+        .and_then(|h| h.to_str().ok())
+        .unwrap_or("");
+    if shared.allowed.allows(host) {
+        next.run(request).await
+    } else {
+        (
+            axum::http::StatusCode::FORBIDDEN,
+            [(header::CONTENT_TYPE, "text/plain")],
+            format!(
+                "403: this live view answers its own address only, not Host `{host}` (open the \
+                 URL the command printed)\n"
+            ),
+        )
+            .into_response()
     }
 }
 

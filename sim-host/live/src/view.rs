@@ -17,6 +17,9 @@ pub struct LiveConfig {
     pub foxglove: Option<String>,
     /// How long to keep the page up after the run, s (`None`: until the caller says stop).
     pub linger: Option<f64>,
+    /// The user asked for an address beyond this machine (`--live-public`): without it one is
+    /// refused, the page having no login.
+    pub public: bool,
 }
 
 impl Default for LiveConfig {
@@ -26,6 +29,7 @@ impl Default for LiveConfig {
             pace: 1.0,
             foxglove: None,
             linger: None,
+            public: false,
         }
     }
 }
@@ -37,6 +41,8 @@ pub struct LiveView {
     server: super::server::LiveServer,
     #[cfg(feature = "server")]
     foxglove: Option<String>,
+    #[cfg(feature = "server")]
+    public: bool,
     pace: f64,
     linger: Option<f64>,
     wall_start: Option<(Instant, f64)>,
@@ -48,12 +54,17 @@ impl LiveView {
     #[cfg(feature = "server")]
     pub fn start(config: &LiveConfig, channels: &[&str]) -> Result<Self, String> {
         let (bus, feed) = super::bus::channel(channels);
-        let server =
-            super::server::serve_with_foxglove(&config.addr, feed, config.foxglove.as_deref())?;
+        let server = super::server::serve_with_foxglove(
+            &config.addr,
+            feed,
+            config.foxglove.as_deref(),
+            config.public,
+        )?;
         Ok(Self {
             bus,
             server,
             foxglove: config.foxglove.clone(),
+            public: config.public,
             pace: config.pace,
             linger: config.linger,
             wall_start: None,
@@ -75,8 +86,15 @@ impl LiveView {
     pub fn addresses(&self) -> Vec<String> {
         let url = self.server.url();
         let mut lines = vec![format!("live view: {url} (state: {url}state.json)")];
+        if self.public {
+            lines.push(
+                "live view: the page has no login: anyone who can reach this machine's port can \
+                 read it (--live-public)"
+                    .into(),
+            );
+        }
         if let (Some(port), Some(fg)) = (self.server.foxglove_port, &self.foxglove) {
-            let host = fg.rsplit_once(':').map_or(fg.as_str(), |(h, _)| h);
+            let host = fg.rsplit_once(':').map_or("127.0.0.1", |(h, _)| h);
             lines.push(format!(
                 "foxglove: ws://{host}:{port} (Foxglove, or Lichtblick after 1.21)"
             ));

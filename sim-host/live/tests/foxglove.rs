@@ -43,7 +43,7 @@ fn send_text(s: &mut TcpStream, text: &str) {
 #[test]
 fn a_foxglove_client_sees_our_channels_and_receives_samples_and_states() {
     let (mut bus, feed) = channel(&["p_mm", "force_n"]);
-    let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0")).unwrap();
+    let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0"), false).unwrap();
     let port = server.foxglove_port.unwrap();
     let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();

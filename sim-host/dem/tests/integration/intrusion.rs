@@ -206,6 +206,17 @@ fn a_second_writer_is_refused_and_the_live_runs_work_is_left_alone() {
         assert_eq!(std::fs::read(work.join("run.ckpt")).unwrap(), ckpt);
     }
     drop(live);
+    // A fresh start refused for its input (a foot wider than the bed) leaves it as well.
+    let e = intrude_run::run(
+        &IntrudeRequest {
+            foot_width_m: 0.05,
+            ..intrusion(&b, &out)
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert_eq!(std::fs::read(work.join("run.ckpt")).unwrap(), ckpt);
     finished(intrude_run::run(&resume(&out, None, 0), &Silent).unwrap());
     assert!(!work.exists(), "the finished run's work folder is gone");
 }

@@ -1,7 +1,7 @@
 //! `dem lammps` and `dem lammps-read` as library calls: their refusals before anything runs,
 //! a LAMMPS that fails keeping its files, a read-back that refuses its own run as output.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use sandjumper_lammps::run::{self, LammpsReadRequest, LammpsRequest};
 use sandjumper_lammps::spec::Preset;
@@ -208,4 +208,82 @@ fn the_cost_counts_each_stage_at_its_rate_and_a_given_bed_saves_the_settle() {
         cost.settle_core_hours > 10.0 * cost.intrusion_core_hours,
         "{cost}"
     );
+}
+
+/// A stand-in LAMMPS in `dir` that answers `-h` (with the COMPRESS package when `compress`)
+/// and fails every run.
+fn failing_lammps(dir: &Path, compress: bool) -> PathBuf {
+    let fake = dir.join(if compress { "lmp-gz" } else { "lmp-text" });
+    std::fs::write(
+        &fake,
+        format!(
+            "#!/bin/sh\nif [ \"$1\" = \"-h\" ]; then\n  printf '\\nLarge-scale Atomic/Molecular \
+             Massively Parallel Simulator - 1 Jan 2099 - fake\\n\\nInstalled packages:\\n\\n{}GRANULAR\\n\\n\
+             List of individual style options\\n'\n  exit 0\nfi\necho 'ERROR: this LAMMPS fails \
+             every run (fake.cpp:1)'\nexit 1\n",
+            if compress { "COMPRESS " } else { "" }
+        ),
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    fake
+}
+
+#[test]
+fn gzip_dumps_need_compress_and_an_unfinished_text_run_resumes_as_text() {
+    use sandjumper_lammps::spec::DumpFormat;
+    let work = tempfile::tempdir().unwrap();
+    let (plain, gz) = (
+        failing_lammps(work.path(), false),
+        failing_lammps(work.path(), true),
+    );
+    let out = work.path().join("run");
+    // Gzip asked of a LAMMPS without COMPRESS: refused before anything is made (exit 2);
+    // with no dumps at all there is nothing to compress, and it is not.
+    let e = run::run(
+        &LammpsRequest {
+            ranks: 1,
+            lmp: Some(plain.clone()),
+            dump_format: Some(DumpFormat::Gzip),
+            ..small(&out)
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert!(e.to_string().contains("COMPRESS"), "{e}");
+    assert!(!run::unfinished_dir(&out).exists());
+    // A text run that failed (as a run before gzip was the default did) ...
+    let text = LammpsRequest {
+        ranks: 1,
+        lmp: Some(gz.clone()),
+        dump_format: Some(DumpFormat::Text),
+        ..small(&out)
+    };
+    let e = run::run(&text, &Silent).unwrap_err();
+    assert_eq!(e.blame(), Blame::Internal, "{e}");
+    // ... is resumed by the command without --dump-format on a LAMMPS with COMPRESS (whose
+    // default is gzip): the fake fails it again, but as a resume, not as other inputs.
+    let e = run::run(
+        &LammpsRequest {
+            dump_format: None,
+            ..text.clone()
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Internal, "{e}");
+    assert!(e.to_string().contains("the same command resumes it"), "{e}");
+    // Gzip asked for explicitly is another run.
+    let e = run::run(
+        &LammpsRequest {
+            dump_format: Some(DumpFormat::Gzip),
+            ..text
+        },
+        &Silent,
+    )
+    .unwrap_err();
+    assert_eq!(e.blame(), Blame::Input, "{e}");
+    assert!(e.to_string().contains("other inputs"), "{e}");
 }
