@@ -1,8 +1,9 @@
 //! REPRODUCTION.md's numbers in bold against the saved runs that gave them: every number in
-//! bold in sections 1-7b must be, at the precision it is quoted with, a number of the saved
+//! bold in sections 1-8 must be, at the precision it is quoted with, a number of the saved
 //! output of the run its section names (sections 1-6: the full `figures` set's
 //! `summary.txt`, which `sim-host/cli/tests/integration/figures.rs` regenerates; 7: the
-//! `figures dem` run's `summary.json` and `dem_runs.csv`; 7b: the small-preset LAMMPS run's
+//! `figures dem` run's `summary.json` and `dem_runs.csv`; 8: the optimiser's searches'
+//! summaries, heights also in mm; 7b: the small-preset LAMMPS run's
 //! `summary.json`, the sidewall seeds' 3-D summaries and the sidewall table, which
 //! `sim-host/lammps/tests/integration/reproduction.rs` checks against all their files). Bold
 //! verdicts (`**... — reproduced**`) are words, not numbers. Each section has its own pool of
@@ -174,6 +175,30 @@ fn the_bold_numbers_are_the_saved_runs_numbers() {
         "docs/reproduction/lammps-small/, sidewall-regime/ or the sidewall table",
     );
     assert!(n >= 3, "{n} bold numbers in section 7b");
+    // Section 8: the optimiser's answers (each search's `optimize --json` summary, kept by
+    // sim-host/optimize/benches/optimize_results.sh's run), heights also in mm.
+    let mut optimize = Vec::new();
+    let dir = root().join("docs/reproduction/optimize");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    for f in &files {
+        let rel = f
+            .strip_prefix(root())
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_string();
+        let values = json_numbers(&rel);
+        optimize.extend(values.iter().map(|v| 1e3 * v));
+        optimize.extend(values);
+    }
+    let n = check(&["8."], &optimize, "docs/reproduction/optimize/");
+    assert!(n >= 3, "{n} bold numbers in section 8");
 }
 
 #[test]

@@ -51,12 +51,33 @@ impl Default for RunRequest {
 }
 
 impl RunRequest {
-    /// Refuse a link other than `sil` and `pil` (a board is `port`).
+    /// Refuse a link other than `sil` and `pil` (a board is `port`), a campaign file that
+    /// cannot be read or does not fit the target, and an output that exists: everything a
+    /// caller can be told before it starts anything (a live page, a link).
     pub fn validate(&self) -> Result<(), CampaignError> {
         match &self.port {
-            Some(_) => Ok(()),
-            None => link_arg(self.link.as_deref().unwrap_or_default()).map(|_| ()),
+            Some(_) => {}
+            None => {
+                link_arg(self.link.as_deref().unwrap_or_default())?;
+            }
         }
+        let file = CampaignFile::read(&self.file).map_err(CampaignError::Input)?;
+        if self.port.is_some() {
+            file.check_for_board(&self.file.display().to_string())
+                .map_err(CampaignError::Input)?;
+        }
+        let work = work_dir(&self.out);
+        for d in [self.out.as_path(), work.as_path()] {
+            if d.exists() {
+                return Err(CampaignError::input(format!(
+                    "--out {}: {} exists (allowed: a new folder; `campaign resume {}` carries on a stopped campaign)",
+                    self.out.display(),
+                    d.display(),
+                    self.out.display()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The journal's name of the link and where the jumps happen.

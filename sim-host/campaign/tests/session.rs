@@ -73,7 +73,7 @@ fn a_one_point_campaign_stops_resumes_and_finishes_with_typed_outcomes() {
         "{e}"
     );
     if Path::new("/proc/locks").exists() {
-        let holder = format!("process {} (", std::process::id());
+        let holder = format!("process {} on ", std::process::id());
         assert!(e.to_string().contains(&holder), "{e}");
     }
     drop(held);

@@ -30,10 +30,14 @@ pub struct LiveArgs {
     /// foxglove`). It has no Origin check: docs/live.md says who can read it.
     #[arg(long, value_name = "ADDR", requires = "live")]
     pub foxglove: Option<String>,
-    /// With --live, keep the page up this long after the run, s (default: until Ctrl-C).
+    /// With --live, keep the page up this long after the run, s (default: until Ctrl-C at a
+    /// terminal; 5 s when standard input is not one, so a script or a batch job ends).
     #[arg(long, value_name = "S", requires = "live", value_parser = parse_linger)]
     pub linger: Option<f64>,
 }
+
+/// How long the page stays up after the run when no terminal can send Ctrl-C, s.
+pub const NO_TERMINAL_LINGER_S: f64 = 5.0;
 
 /// A live view for one command: [`RigLiveView`] (its bus, server, pacing, and the rig runs
 /// it shows).
@@ -46,7 +50,10 @@ impl LiveArgs {
             addr: addr.clone(),
             pace: self.pace.unwrap_or(1.0),
             foxglove: self.foxglove.clone(),
-            linger: self.linger,
+            linger: self.linger.or_else(|| {
+                use std::io::IsTerminal;
+                (!std::io::stdin().is_terminal()).then_some(NO_TERMINAL_LINGER_S)
+            }),
             public: self.live_public,
         })
     }

@@ -261,11 +261,13 @@ async fn uplot_css() -> impl IntoResponse {
 }
 
 async fn state_json(State(shared): State<Shared>) -> impl IntoResponse {
-    let text = match shared.state.lock() {
-        Ok(s) => serde_json::to_string(&*s),
-        Err(p) => serde_json::to_string(&*p.into_inner()),
-    }
-    .unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"));
+    // A copy taken under the lock (memory copies), serialised after it is released: a page
+    // load never holds the pump (and the run's view of the bus) for the JSON of the window.
+    let copy = match shared.state.lock() {
+        Ok(s) => s.clone(),
+        Err(p) => p.into_inner().clone(),
+    };
+    let text = serde_json::to_string(&copy).unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"));
     (
         [
             (header::CONTENT_TYPE, "application/json"),

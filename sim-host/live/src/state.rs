@@ -11,6 +11,11 @@ use super::bus::{Batch, CampaignRecord, Event, LiveFeed};
 /// Rig time the page's charts keep, s.
 pub const WINDOW_S: f64 = 30.0;
 
+/// The most events the state keeps (the newest; those dropped are counted): a `rig status
+/// --watch` left running for days, or a long campaign, does not grow the page without
+/// bound.
+pub const MAX_EVENTS: usize = 2000;
+
 /// The campaign as the page shows it.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct CampaignView {
@@ -49,8 +54,11 @@ pub struct LiveState {
     pub samples_dropped: u64,
     /// Batches dropped.
     pub batches_dropped: u64,
-    /// Every event (state transitions, faults, jump start and end, run start and end).
-    pub events: Vec<Event>,
+    /// The newest [`MAX_EVENTS`] events (state transitions, faults, jump start and end, run
+    /// start and end); campaign records are in [`LiveState::campaign`] only.
+    pub events: VecDeque<Event>,
+    /// Events dropped from [`LiveState::events`] (the oldest first).
+    pub events_dropped: u64,
     /// The latest controller state.
     pub controller_state: Option<String>,
     /// The first fault, for the banner.
@@ -159,9 +167,17 @@ impl LiveState {
             }
             Event::Jump { .. } => {}
             Event::RunEnded { outcome, .. } => self.ended = Some(outcome.clone()),
-            Event::Campaign(r) => self.apply_campaign(r),
+            Event::Campaign(r) => {
+                // Stored once, in the campaign's view.
+                self.apply_campaign(r);
+                return;
+            }
         }
-        self.events.push(e.clone());
+        self.events.push_back(e.clone());
+        while self.events.len() > MAX_EVENTS {
+            self.events.pop_front();
+            self.events_dropped += 1;
+        }
     }
 
     fn apply_campaign(&mut self, r: &CampaignRecord) {
@@ -236,6 +252,19 @@ mod tests {
         assert_eq!(st.fault.as_deref(), Some("TrackingError"));
         let c = st.campaign.as_ref().unwrap();
         assert_eq!((c.done, c.failed), (1, 1));
+        // The campaign record is in the campaign's view only.
+        assert_eq!(st.events.len(), 2);
+        // Events are bounded, the dropped counted.
+        for k in 0..MAX_EVENTS + 7 {
+            bus.event(Event::State {
+                t_s: 50.0 + k as f64,
+                state: "Running".into(),
+            });
+        }
+        bus.flush_now();
+        st.absorb(&feed);
+        assert_eq!(st.events.len(), MAX_EVENTS);
+        assert_eq!(st.events_dropped, 9);
         // state.json holds NaN as null, not as invalid JSON.
         let json = serde_json::to_string(&st).unwrap();
         assert!(json.contains("\"height_m\":null"), "{json}");

@@ -228,6 +228,13 @@ def test_figures_dem_and_lammps_refuse_bad_input(tmp_path):
         sandjumper.lammps(tmp_path / "l", speed=0.1, trajectory=tmp_path / "t.csv")
     with pytest.raises(ValueError, match="episode needs trajectory"):
         sandjumper.dem_intrude(tmp_path / "bed", tmp_path / "i", episode="push-off")
+    with pytest.raises(ValueError, match="scale_from_foot"):
+        sandjumper.dem_intrude(tmp_path / "bed", tmp_path / "i", speed=0.1, scale_from_foot=0.076)
+    with pytest.raises(ValueError, match="scale_from_foot"):
+        sandjumper.dem_intrude(tmp_path / "bed", tmp_path / "i",
+                               trajectory=tmp_path / "t.csv", scale_from_foot=-1)
+    with pytest.raises(ValueError, match="possible values: text, gzip"):
+        sandjumper.lammps(tmp_path / "l", speed=0.1, dump_format="zip")
     with pytest.raises(ValueError, match="tau_s"):
         sandjumper.rig_jump("delayed", 10.0)
     with pytest.raises(ValueError, match="every"):

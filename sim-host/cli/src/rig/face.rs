@@ -16,18 +16,23 @@ pub fn watch(live: &mut Option<LiveView>) -> Option<&mut dyn RunWatch> {
 }
 
 /// Run a rig program's `request` into `out` (`mcap`: also acquisition.mcap; `json`: print
-/// JSON) with the live view `live` asks for, started once the request is checked (its URL
-/// printed first; a bad address refused before a board or a virtual board is opened).
+/// JSON) with the live view `live` asks for, started once the request and the output are
+/// checked (its URL printed first; a bad address refused before a board or a virtual board is
+/// opened); a failure after that ends the page with it, kept for the linger.
 pub fn run_program<R: ProgramRequest>(
     request: &R,
     live: &LiveArgs,
     (out, mcap, json): (&Path, bool, bool),
 ) -> Result<(), CliError> {
     let checked = request.check()?;
-    let mut view = LiveView::start(live, &JUMP_CHANNELS)?;
+    // Bad input (an output that cannot be written) is refused before the page starts.
     let staged = StagedDir::create(out)?;
-    let outcome = request.run_checked(checked, &Bars::new(), watch(&mut view))?;
-    let result = conclude(&outcome, Some(staged), (mcap, json), false);
+    let mut view = LiveView::start(live, &JUMP_CHANNELS)?;
+    // Whatever fails once the page is up is shown on it, and the page kept for the linger.
+    let result = request
+        .run_checked(checked, &Bars::new(), watch(&mut view))
+        .map_err(CliError::from)
+        .and_then(|outcome| conclude(&outcome, Some(staged), (mcap, json), false));
     crate::live::finish_as(view, &result, "completed");
     result
 }

@@ -161,12 +161,14 @@ fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
 
 #[test]
 fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
-    for (addr, want) in [
-        ("nowhere", "not an address"),
-        ("8.8.8.8:80", "cannot listen"),
+    for (addr, public, want) in [
+        ("nowhere", false, "not an address"),
+        ("8.8.8.8:80", false, "--live-public"),
+        ("8.8.8.8:80", true, "cannot listen"),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
             .args(["hil", "--kind", "single", "--freq", "10", "--live", addr])
+            .args(if public { &["--live-public"][..] } else { &[] })
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
@@ -385,8 +387,8 @@ fn interrupt(child: &Child) {
 }
 
 #[test]
-fn ctrl_c_ends_a_kept_page_with_exit_status_0() {
-    // No --linger: the page stays up until Ctrl-C.
+fn with_no_terminal_the_page_stays_a_few_seconds_and_the_command_ends() {
+    // No --linger, standard input not a terminal (a script, a Slurm job): 5 s, not forever.
     let (child, rx) = start(&[
         "hil",
         "--kind",
@@ -398,9 +400,30 @@ fn ctrl_c_ends_a_kept_page_with_exit_status_0() {
         "--live",
         "127.0.0.1:0",
     ]);
+    wait_for(&rx, "stays up for 5 s");
+    let done = child.wait_with_output().unwrap();
+    assert_eq!(done.status.code(), Some(0));
+}
+
+#[test]
+fn ctrl_c_ends_a_kept_page_with_exit_status_0() {
+    // A long linger: Ctrl-C ends it sooner.
+    let (child, rx) = start(&[
+        "hil",
+        "--kind",
+        "single",
+        "--freq",
+        "10",
+        "--pace",
+        "0",
+        "--live",
+        "127.0.0.1:0",
+        "--linger",
+        "600",
+    ]);
     let url = wait_for(&rx, "live view: http://");
     let addr = addr_of(&url);
-    wait_for(&rx, "stays up until Ctrl-C");
+    wait_for(&rx, "stays up for 600 s");
     let (status, _, body) = get(&addr, "/state.json");
     assert!(status.contains("200"), "{status}");
     let st: serde_json::Value = serde_json::from_str(&body).unwrap();
@@ -569,4 +592,39 @@ fn a_failed_campaign_point_shows_its_reason_live() {
     // A point whose bed could not be prepared is skipped (on_failed_preparation = "skip"):
     // a failed point, not a failed campaign.
     assert_eq!(child.wait_with_output().unwrap().status.code(), Some(0));
+}
+
+#[test]
+fn bad_input_is_reported_before_the_page_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c");
+    let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(["campaign", "run", "nope.toml", "--link", "sil", "--out"])
+        .arg(&out)
+        .args(["--live", "127.0.0.1:0", "--linger", "600"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("nope.toml"), "{stderr}");
+    // No page was started to linger on (600 s): the error comes at once.
+    assert!(!stderr.contains("live view:"), "{stderr}");
+    // An address beyond this machine without --live-public: refused the same way.
+    let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args([
+            "hil",
+            "--kind",
+            "single",
+            "--freq",
+            "10",
+            "--live",
+            "0.0.0.0:0",
+        ])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--live-public"), "{stderr}");
 }

@@ -319,7 +319,7 @@ fn a_second_search_on_a_checkpoint_in_use_is_refused_naming_its_holder() {
     );
     if Path::new("/proc/locks").exists() {
         assert!(
-            m.contains(&format!("process {} (", std::process::id())),
+            m.contains(&format!("process {} on ", std::process::id())),
             "{m}"
         );
     }

@@ -101,6 +101,8 @@ pub fn start_with_stderr_lines(
     use std::io::{BufRead, BufReader};
     let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args)
+        // No terminal: as a script or a batch job runs it, whoever runs the tests.
+        .stdin(std::process::Stdio::null())
         .stdout(stdout)
         .stderr(std::process::Stdio::piped())
         .spawn()
