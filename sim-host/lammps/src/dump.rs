@@ -113,10 +113,23 @@ pub fn read_frame(dir: &Path, step: u64, check: &RunCheck) -> Result<Frame, Stri
     let file = std::fs::File::open(&path).map_err(|e| {
         format!("{name}: {e} (the run stopped before this frame, or this is not its directory)")
     })?;
+    parse_frame(file, &name, step, check)
+}
+
+/// The frame at `step` from `bytes` (the file's bytes as written, text or gzip as
+/// `check.format` says), checked against `check`; `name` names the source in errors. What
+/// [`read_frame`] reads a file with, and what the fuzzer drives.
+pub fn parse_frame(
+    bytes: impl Read + 'static,
+    name: &str,
+    step: u64,
+    check: &RunCheck,
+) -> Result<Frame, String> {
     let raw: Box<dyn Read> = match check.format {
-        DumpFormat::Text => Box::new(file),
-        DumpFormat::Gzip => Box::new(flate2::read::MultiGzDecoder::new(BufReader::new(file))),
+        DumpFormat::Text => Box::new(bytes),
+        DumpFormat::Gzip => Box::new(flate2::read::MultiGzDecoder::new(BufReader::new(bytes))),
     };
+    let name = name.to_string();
     let mut lines = Lines {
         name: name.clone(),
         reader: Box::new(BufReader::with_capacity(1 << 16, raw)),
