@@ -334,3 +334,97 @@ fn a_jump_trajectory_is_refused_below_the_surface_and_the_episode_takes_no_from(
     assert_eq!(c, 2, "{e}");
     assert!(!out.exists());
 }
+
+/// Two processes on one output: while a `dem intrude` runs, a second one into the same
+/// `--out` (fresh or `--resume`) is refused with exit 2 naming the first's process, and the
+/// first's checkpoint is left alone; `kill -9` of the first leaves no stale lock, and
+/// `--resume` finishes it to the same bits as an unbroken run.
+#[test]
+fn a_second_process_is_refused_and_a_killed_run_resumes_to_the_unbroken_bits() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let b = bed(dir.path(), &[]);
+    let words = |out: &Path| -> Vec<String> {
+        [
+            "dem",
+            "intrude",
+            "--bed",
+            &b,
+            "--speed",
+            "0.002",
+            "--depth",
+            "0.002",
+            "--foot-width",
+            "0.006",
+            "--overlap",
+            "0.02",
+            "--walls",
+            "--no-frames",
+            "--threads",
+            "1",
+            "--checkpoint-every",
+            "5000",
+            "--out",
+        ]
+        .iter()
+        .map(|w| w.to_string())
+        .chain([out.to_str().unwrap().to_string()])
+        .collect()
+    };
+    let out = dir.path().join("raced");
+    let mut first = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+        .args(words(&out))
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Running once its lock names it and it has written a regular checkpoint past step 0.
+    let work = dir.path().join("raced.incomplete");
+    let me = format!("process {} on ", first.id());
+    let mut waited = 0;
+    while !(std::fs::read_to_string(work.join(".lock")).is_ok_and(|r| r.starts_with(&me))
+        && std::fs::metadata(work.join("run.ckpt")).is_ok_and(|m| m.len() > 0))
+    {
+        assert!(
+            first.try_wait().unwrap().is_none(),
+            "the first run ended before the race"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        waited += 1;
+        assert!(waited < 30_000, "the first run never started");
+    }
+    for extra in [&[][..], &["--resume"][..]] {
+        let mut w = words(&out);
+        w.extend(extra.iter().map(|s| s.to_string()));
+        let refs: Vec<&str> = w.iter().map(String::as_str).collect();
+        let (code, _, err) = sandjumper_text(&refs);
+        assert!(
+            first.try_wait().unwrap().is_none(),
+            "the first run ended during the race (slow it down: a lower --speed)"
+        );
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(&me) && err.contains("one run writes"), "{err}");
+    }
+    // The live run's checkpoint is still there (a second fresh start would have cleared it).
+    assert!(work.join("run.ckpt").is_file());
+    first.kill().unwrap(); // SIGKILL
+    first.wait().unwrap();
+    let mut w = words(&out);
+    w.push("--resume".into());
+    let refs: Vec<&str> = w.iter().map(String::as_str).collect();
+    let (code, _, err) = sandjumper_text(&refs);
+    assert_eq!(code, 0, "{err}");
+    let straight = dir.path().join("straight");
+    let w = words(&straight);
+    let refs: Vec<&str> = w.iter().map(String::as_str).collect();
+    let (code, _, err) = sandjumper_text(&refs);
+    assert_eq!(code, 0, "{err}");
+    for f in ["force_depth.csv", "flow.csv"] {
+        assert_eq!(
+            std::fs::read_to_string(out.join(f)).unwrap(),
+            std::fs::read_to_string(straight.join(f)).unwrap(),
+            "{f}: killed and resumed against unbroken"
+        );
+    }
+}
