@@ -155,16 +155,14 @@ fn jump(a: &HilArgs, out: Option<PathBuf>) -> Result<(), CliError> {
     if request.uses_camera() {
         request.camera = read_camera(a.camera.as_deref())?;
     }
-    // A lockstep run claims its folder before the live view starts (as `hil` always has); the
-    // virtual board after it, as the rig tool does.
+    // Every run claims its folder before the live view starts, as the rig tool does: an
+    // output that cannot be written is refused before the page is up.
     let lockstep = request.link != LinkArg::F407;
-    let stage = || out.as_deref().map(StagedDir::create).transpose();
-    let early = if lockstep { stage()? } else { None };
+    let staged = out.as_deref().map(StagedDir::create).transpose()?;
     let mut live = LiveView::start(&a.live, &JUMP_CHANNELS)?;
     if let Some(v) = live.as_mut().filter(|_| request.keeps_own_time()) {
         v.unpaced();
     }
-    let staged = if lockstep { early } else { stage()? };
     let jump = match lib::run_checked(&request, &progress, watch(&mut live)) {
         Ok(jump) => jump,
         Err(e) => {
