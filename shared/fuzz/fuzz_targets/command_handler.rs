@@ -12,8 +12,8 @@
 use libfuzzer_sys::fuzz_target;
 use sandjumper_core::protocol::{MAX_FRAME, decode_frame, encode_payload_frame};
 use sandjumper_core::{
-    Command, HostMessage, JumpConfig, JumpKind, Rig, RigConfig, RigState, SensorFrame,
-    TickInput, TickOutput, TickTiming, TrajectorySpec,
+    Command, HostMessage, JumpConfig, JumpKind, Rig, RigConfig, RigState, SensorFrame, TickInput,
+    TickOutput, TickTiming, TrajectorySpec,
 };
 
 fn safe(out: &TickOutput) -> bool {
