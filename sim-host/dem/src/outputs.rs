@@ -654,13 +654,7 @@ pub fn write(run: &Run, work: &Path, out: &Path) -> Result<Summary, DemError> {
         &staged.file("snapshot.svg"),
     )?;
     let target = staged.commit()?;
-    // Renamed aside before it is removed: a new run of the same --out that starts the moment
-    // this run's lock goes makes a fresh folder of that name, which this never touches.
-    let mut gone = work.as_os_str().to_os_string();
-    gone.push(format!(".done-{}", std::process::id()));
-    if std::fs::rename(work, &gone).is_ok() {
-        let _ = std::fs::remove_dir_all(&gone);
-    }
+    sandjumper_output::remove_work_dir(work);
     Ok(Summary {
         out: target.display().to_string(),
         ..summary

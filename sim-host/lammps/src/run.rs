@@ -791,13 +791,8 @@ pub fn run(request: &LammpsRequest, progress: &dyn Progress) -> Result<LammpsOut
             )),
         )
     })?;
-    // Renamed before it is removed: its lock file goes with it, and a run started meanwhile
-    // makes a folder of its own.
-    let mut done = work.clone().into_os_string();
-    done.push(format!(".done-{}", std::process::id()));
-    if std::fs::rename(&work, &done).is_ok() {
-        let _ = std::fs::remove_dir_all(&done);
-    }
+    // Its lock file goes with it; a run started meanwhile makes a folder of its own.
+    sandjumper_output::remove_work_dir(&work);
     Ok(LammpsOutcome { summary, out })
 }
 

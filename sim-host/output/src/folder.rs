@@ -225,13 +225,30 @@ impl StagedDir {
     }
 }
 
-/// This machine's name (`/proc/sys/kernel/hostname`), or `unknown`.
-fn this_host() -> String {
+/// This machine's name as the kernel has it (`/proc/sys/kernel/hostname`), `None` where it
+/// cannot be read.
+pub(crate) fn kernel_host_name() -> Option<String> {
     fs::read_to_string("/proc/sys/kernel/hostname")
         .map(|h| h.trim().to_string())
         .ok()
         .filter(|h| !h.is_empty())
-        .unwrap_or_else(|| "unknown".into())
+}
+
+/// This machine's name (`/proc/sys/kernel/hostname`), or `unknown`.
+fn this_host() -> String {
+    kernel_host_name().unwrap_or_else(|| "unknown".into())
+}
+
+/// Remove a finished run's work folder `work` (its writer's lock file inside it): renamed
+/// aside first, so a new run of the same output that starts the moment the lock goes makes a
+/// fresh folder of that name, which this never touches. Best effort: a folder that cannot be
+/// renamed or removed is left.
+pub fn remove_work_dir(work: &Path) {
+    let mut done = work.as_os_str().to_os_string();
+    done.push(format!(".done-{}", std::process::id()));
+    if fs::rename(work, &done).is_ok() {
+        let _ = fs::remove_dir_all(&done);
+    }
 }
 
 /// The staging directories beside `target` (`.<name>.partial-*`) of earlier runs on this

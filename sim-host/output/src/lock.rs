@@ -152,11 +152,12 @@ fn holder(file: &File) -> Option<String> {
 /// This machine's name (Linux's `/proc/sys/kernel/hostname`, else `HOSTNAME`), `None` where
 /// neither tells it.
 fn host_name() -> Option<String> {
-    std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .ok()
-        .or_else(|| std::env::var("HOSTNAME").ok())
-        .map(|h| h.trim().to_string())
-        .filter(|h| !h.is_empty())
+    crate::folder::kernel_host_name().or_else(|| {
+        std::env::var("HOSTNAME")
+            .ok()
+            .map(|h| h.trim().to_string())
+            .filter(|h| !h.is_empty())
+    })
 }
 
 /// `process PID on HOST (COMMAND)` for a process of this machine.

@@ -62,22 +62,12 @@ fn bad_values_and_a_missing_lammps_are_refused_before_anything_runs() {
 #[test]
 fn a_failed_lammps_keeps_its_files_beside_the_output_for_the_same_command_to_resume() {
     let work = tempfile::tempdir().unwrap();
-    let fake = work.path().join("lmp");
-    std::fs::write(
-        &fake,
-        "#!/bin/sh\nif [ \"$1\" = \"-h\" ]; then\n  printf '\\nLarge-scale Atomic/Molecular \
-         Massively Parallel Simulator - 1 Jan 2099 - fake\\n\\nInstalled packages:\\n\\nGRANULAR\\n\\n\
-         List of individual style options\\n'\n  exit 0\nfi\necho 'ERROR: this LAMMPS fails every \
-         run (fake.cpp:1)'\nexit 1\n",
-    )
-    .unwrap();
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let fake = failing_lammps(work.path(), false);
     let out = work.path().join("run");
     let e = run::run(
         &LammpsRequest {
             ranks: 1,
-            lmp: Some(fake),
+            lmp: Some(fake.clone()),
             ..small(&out)
         },
         &Silent,
@@ -101,7 +91,7 @@ fn a_failed_lammps_keeps_its_files_beside_the_output_for_the_same_command_to_res
     let other = LammpsRequest {
         ranks: 1,
         seed: Some(7),
-        lmp: Some(work.path().join("lmp")),
+        lmp: Some(fake),
         ..small(&out)
     };
     let queue = sandjumper_slurm::QueueOptions::default();
