@@ -27,3 +27,4 @@ mod request_defaults;
 mod rig_f407_paced;
 mod rig_tool;
 mod slurm;
+mod soak;
