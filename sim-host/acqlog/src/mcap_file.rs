@@ -534,6 +534,10 @@ pub struct ReadBack {
     pub stopped: Option<String>,
 }
 
+/// The longest record [`read_messages`] reads, bytes: a longer one (a damaged length) stops
+/// the reading there.
+pub const MAX_RECORD_BYTES: usize = 64 << 20;
+
 /// Reads every complete message of an MCAP file with the crate's linear reader, in file order,
 /// recovering what a cut file holds: reading stops at the first incomplete or damaged record
 /// and keeps every message before it (in an uncompressed chunk, messages are records too, so a
@@ -544,7 +548,10 @@ pub fn read_messages(bytes: &[u8]) -> ReadBack {
         LinearReaderOptions::default()
             .with_validate_chunk_crcs(false)
             .with_validate_data_section_crc(false)
-            .with_validate_summary_section_crc(false),
+            .with_validate_summary_section_crc(false)
+            // A damaged length field must not size an allocation: no record sandjumper
+            // writes comes near it (messages are a few hundred bytes).
+            .with_record_length_limit(MAX_RECORD_BYTES),
     );
     let mut out = ReadBack::default();
     let mut topics: BTreeMap<u16, String> = BTreeMap::new();
@@ -594,4 +601,21 @@ pub fn read_messages(bytes: &[u8]) -> ReadBack {
     }
     out.complete = saw_footer;
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_messages;
+
+    /// The fuzzer's first find (`fuzz/corpus/mcap_reader/huge-record-length`): a chunk whose
+    /// record claims ~2.5e18 bytes. The reader stops there with a reason, where it once asked
+    /// for the whole length at once and the process died.
+    #[test]
+    fn a_damaged_record_length_stops_the_reading_instead_of_sizing_an_allocation() {
+        let bytes = include_bytes!("../fuzz/corpus/mcap_reader/huge-record-length");
+        let back = read_messages(bytes);
+        assert!(!back.complete);
+        let why = back.stopped.expect("it stops at the damaged record");
+        assert!(!why.is_empty());
+    }
 }

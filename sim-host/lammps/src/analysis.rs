@@ -176,7 +176,17 @@ pub fn read_force(
     g: &Geometry,
     fp: &dyn Fn(f64) -> Result<f64, String>,
 ) -> Result<Vec<ForceRow>, String> {
-    let rows = read_series(path, "step, time, force, lowest foot centre")?;
+    parse_force(&read_text(path)?, &path.display().to_string(), g, fp)
+}
+
+/// [`read_force`] of the file's text; `name` names it in errors.
+pub fn parse_force(
+    text: &str,
+    name: &str,
+    g: &Geometry,
+    fp: &dyn Fn(f64) -> Result<f64, String>,
+) -> Result<Vec<ForceRow>, String> {
+    let rows = parse_series(text, name, "step, time, force, lowest foot centre")?;
     rows.iter()
         .map(|f| {
             let depth = g.surface_m - (f[3] - g.foot_sphere_radius_m);
@@ -190,11 +200,14 @@ pub fn read_force(
         .collect()
 }
 
+/// A file's text; the error names it.
+fn read_text(path: &std::path::Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 /// The rows of a `fix ave/time` file of four columns (`what` names them for errors), its
-/// `#` lines skipped. Errors name the file and line.
-fn read_series(path: &std::path::Path, what: &str) -> Result<Vec<[f64; 4]>, String> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
+/// `#` lines skipped. Errors name the file (`name`) and line.
+fn parse_series(text: &str, name: &str, what: &str) -> Result<Vec<[f64; 4]>, String> {
     let mut rows = Vec::new();
     for (no, line) in text.lines().enumerate() {
         let l = line.trim();
@@ -234,15 +247,18 @@ pub struct ColumnRow {
 /// Read `column.txt` (`fix ave/time`: step, momentum, grains, ring). Errors name the file and
 /// line.
 pub fn read_column(path: &std::path::Path) -> Result<Vec<ColumnRow>, String> {
-    let rows = read_series(path, "step, momentum, grains, ring momentum")?;
+    parse_column(&read_text(path)?, &path.display().to_string())
+}
+
+/// [`read_column`] of the file's text; `name` names it in errors.
+pub fn parse_column(text: &str, name: &str) -> Result<Vec<ColumnRow>, String> {
+    let rows = parse_series(text, name, "step, momentum, grains, ring momentum")?;
     rows.iter()
         .map(|f| {
             if !(f[2] >= 0.0 && f[2].fract() == 0.0) {
                 return Err(format!(
-                    "{}: {} grains at step {} (allowed: a count)",
-                    path.display(),
-                    f[2],
-                    f[0]
+                    "{name}: {} grains at step {} (allowed: a count)",
+                    f[2], f[0]
                 ));
             }
             Ok(ColumnRow {

@@ -127,8 +127,12 @@ pub fn data_file(title: &str, bed: &BedBox, atoms: &[Atom]) -> String {
 /// diameter density x y z [ix iy iz]`, then `Velocities`): its box and atoms, positions
 /// unwrapped into the box. Errors name the file and line.
 pub fn read_data(path: &Path) -> Result<(BedBox, Vec<Atom>), String> {
-    let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    parse_data(&text, &path.display().to_string())
+}
+
+/// [`read_data`] of a data file's text; `name` names it in errors.
+pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String> {
     let mut width = None;
     let mut top = None;
     let mut count = None;

@@ -82,6 +82,14 @@ pub struct Manifest {
 }
 
 impl Manifest {
+    /// A `run.toml`'s text as a record whose spec is valid and agrees with it (errors without
+    /// the file's name; the caller adds it).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let m: Self = toml::from_str(text).map_err(|e| e.to_string())?;
+        m.spec.check().and_then(|()| m.check())?;
+        Ok(m)
+    }
+
     /// Check that the record agrees with its spec (a run.toml edited or cut by hand is
     /// refused, not read into nonsense).
     pub fn check(&self) -> Result<(), String> {
@@ -733,11 +741,7 @@ pub fn analyse(
             manifest_path.display()
         ))
     })?;
-    let m: Manifest = toml::from_str(&text)
-        .map_err(|e| LammpsError::input(format!("{}: {e}", manifest_path.display())))?;
-    m.spec
-        .check()
-        .and_then(|()| m.check())
+    let m = Manifest::parse(&text)
         .map_err(|e| LammpsError::input(format!("{}: {e}", manifest_path.display())))?;
     let data = dir.join("intrude.data");
     let (bed_box, atoms) = bed::read_data(&data).map_err(LammpsError::input)?;

@@ -236,3 +236,104 @@ fn bad_limits_and_bad_stroke_files_are_refused() {
         &["--stroke"],
     );
 }
+
+/// A search killed with `kill -9` (no clean-up runs) at random moments, in its kinematic
+/// search, its re-ranking or its refinement through sil, and run again with the same command
+/// each time, ends with the unbroken search's answer: the same stroke.csv, candidates and
+/// height. (The library's tests stop a search at chosen checkpoint lines; this kills the
+/// process wherever the clock says.)
+#[test]
+fn a_search_killed_with_kill_9_at_random_moments_resumes_to_the_unbroken_answer() {
+    use rand::{RngExt, SeedableRng};
+    use std::process::{Command, Stdio};
+    use std::time::Duration;
+
+    let dir = tempfile::tempdir().unwrap();
+    let search = |out: &Path| -> Vec<String> {
+        [
+            "optimize",
+            "--out",
+            s(out),
+            "--evaluations",
+            "6000",
+            "--population",
+            "8",
+            "--random-starts",
+            "1",
+            "--sweep-freq-step",
+            "5",
+            "--sweep-tau-step",
+            "0.5",
+            "--elites",
+            "2",
+            "--paper-candidates",
+            "1",
+            "--refine",
+            "48",
+            "--verify",
+            "sil",
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let whole = dir.path().join("whole");
+    let started = std::time::Instant::now();
+    ok(&search(&whole)
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>());
+    let whole_s = started.elapsed().as_secs_f64();
+
+    let out = dir.path().join("killed");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(54);
+    let (mut kills, mut sessions) = (0, 0);
+    const KILLS: usize = 6;
+    while !out.join("summary.json").is_file() {
+        assert!(sessions <= KILLS, "the search never finished");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+            .args(search(&out))
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        sessions += 1;
+        if kills == KILLS {
+            let o = child.wait_with_output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            break;
+        }
+        // A moment within the unbroken search's time (each session resumes where the last
+        // stopped, so later ones end sooner).
+        let wait = rng.random_range(0.03..0.45) * whole_s;
+        std::thread::sleep(Duration::from_secs_f64(wait));
+        if child.try_wait().unwrap().is_none() {
+            child.kill().unwrap(); // SIGKILL
+            child.wait().unwrap();
+            kills += 1;
+        } else {
+            let o = child.wait_with_output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        }
+    }
+    assert!(kills >= 3, "only {kills} kills: the test proved little");
+    for f in ["stroke.csv", "candidates.csv", "paper_sweep.csv"] {
+        assert_eq!(
+            read(&whole.join(f)),
+            read(&out.join(f)),
+            "{f}: killed {kills} times and resumed, another answer"
+        );
+    }
+    let (a, b) = (
+        json(&whole.join("summary.json")),
+        json(&out.join("summary.json")),
+    );
+    assert_eq!(a["best_height_m"], b["best_height_m"]);
+    assert!(
+        !dir.path().join("killed.checkpoint").exists(),
+        "the checkpoint is removed once the answer is written"
+    );
+    eprintln!(
+        "killed {kills} times over {sessions} sessions; the unbroken search took {whole_s:.1} s"
+    );
+}

@@ -18,14 +18,16 @@ pub fn read_calibration(path: &Path) -> Result<DriveCalibration, RigError> {
             path.display()
         ))
     })?;
-    let cal: DriveCalibration = toml::from_str(&text).map_err(|e| {
-        RigError::input(format!(
-            "drive calibration `{}`: {e} (allowed: zero_code = CODE, codes_per_newton = X)",
-            path.display()
-        ))
-    })?;
-    cal.validate()
-        .map_err(|e| RigError::input(format!("drive calibration `{}`: {e}", path.display())))?;
+    parse_calibration(&text)
+        .map_err(|e| RigError::input(format!("drive calibration `{}`: {e}", path.display())))
+}
+
+/// [`read_calibration`] of a file's text: a calibration the controller accepts, or why not
+/// (without the file's name).
+pub fn parse_calibration(text: &str) -> Result<DriveCalibration, String> {
+    let cal: DriveCalibration = toml::from_str(text)
+        .map_err(|e| format!("{e} (allowed: zero_code = CODE, codes_per_newton = X)"))?;
+    cal.validate().map_err(|e| e.to_string())?;
     Ok(cal)
 }
 

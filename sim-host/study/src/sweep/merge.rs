@@ -49,16 +49,8 @@ pub fn read_sweep_dir(dir: &Path) -> Result<ShardDir, MergeError> {
             files::META
         ))
     })?;
-    let meta: SweepMeta =
-        toml::from_str(&text).map_err(|e| MergeError(format!("`{}`: {e}", meta_path.display())))?;
-    if meta.format != SweepMeta::FORMAT {
-        return Err(MergeError(format!(
-            "`{}` has format `{}`; this sandjumper reads `{}`",
-            meta_path.display(),
-            meta.format,
-            SweepMeta::FORMAT
-        )));
-    }
+    let meta = SweepMeta::parse(&text)
+        .map_err(|e| MergeError(format!("`{}`: {e}", meta_path.display())))?;
     let rows = read_csv::<SweepRow>(&dir.join(files::ROWS)).map_err(MergeError)?;
     let failures = read_csv::<SweepFailure>(&dir.join(files::FAILURES)).map_err(MergeError)?;
     Ok(ShardDir {

@@ -374,6 +374,19 @@ pub struct SpecMeta {
 impl SweepMeta {
     /// Format tag of `sweep.toml`.
     pub const FORMAT: &'static str = "sandjumper-sweep/1";
+
+    /// A `sweep.toml`'s text, of this format (errors without the file's name).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let meta: Self = toml::from_str(text).map_err(|e| e.to_string())?;
+        if meta.format != Self::FORMAT {
+            return Err(format!(
+                "format `{}`; this sandjumper reads `{}`",
+                meta.format,
+                Self::FORMAT
+            ));
+        }
+        Ok(meta)
+    }
 }
 
 /// File names inside a sweep directory.

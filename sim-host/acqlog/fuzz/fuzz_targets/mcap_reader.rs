@@ -1,0 +1,31 @@
+//! The MCAP reader (`sandjumper_acqlog::read_messages`, which recovers what a cut file
+//! holds) on any bytes: it never panics; a file it calls complete did not stop early; and the
+//! file cut anywhere yields a prefix of the whole file's messages (a cut costs the messages
+//! after it, never changes one before it).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use sandjumper_acqlog::read_messages;
+
+fuzz_target!(|data: &[u8]| {
+    let whole = read_messages(data);
+    assert!(
+        !(whole.complete && whole.stopped.is_some()),
+        "complete, yet stopped: {:?}",
+        whole.stopped
+    );
+    if data.is_empty() {
+        return;
+    }
+    // Where to cut: the first byte's share of the file.
+    let at = data.len() * usize::from(data[0]) / 256;
+    let cut = read_messages(&data[..at]);
+    assert!(
+        cut.messages.len() <= whole.messages.len()
+            && cut.messages[..] == whole.messages[..cut.messages.len()],
+        "cut at {at} of {}: {} messages, not a prefix of the whole file's {}",
+        data.len(),
+        cut.messages.len(),
+        whole.messages.len()
+    );
+});
