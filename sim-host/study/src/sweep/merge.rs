@@ -97,12 +97,11 @@ fn same_combination(c: &Combination, kind: &str, model: &str, phi: f64, f: f64, 
         && c.tau_s == tau
 }
 
-/// Check that a shard's rows and failures are exactly the combinations `expected`, in order.
-fn check_contents(shard: &ShardDir, expected: &[Combination]) -> Result<(), MergeError> {
+/// Check that a shard holds `expected` rows and failures, as many as its `sweep.toml` says.
+fn check_counts(shard: &ShardDir, expected: usize) -> Result<(), MergeError> {
     let rows = &shard.outcome.rows;
     let fails = &shard.outcome.failures;
-    let got = rows.len() + fails.len();
-    if got != expected.len()
+    if rows.len() + fails.len() != expected
         || rows.len() != shard.meta.shard.rows
         || fails.len() != shard.meta.shard.failures
     {
@@ -117,9 +116,17 @@ fn check_contents(shard: &ShardDir, expected: &[Combination]) -> Result<(), Merg
             shard.meta.shard.rows,
             shard.meta.shard.failures,
             files::META,
-            expected.len()
+            expected
         )));
     }
+    Ok(())
+}
+
+/// Check that a shard's rows and failures are exactly the combinations `expected`, in order.
+fn check_contents(shard: &ShardDir, expected: &[Combination]) -> Result<(), MergeError> {
+    check_counts(shard, expected.len())?;
+    let rows = &shard.outcome.rows;
+    let fails = &shard.outcome.failures;
     let (mut r, mut f) = (0, 0);
     for (i, c) in expected.iter().enumerate() {
         if r < rows.len() {
@@ -193,19 +200,35 @@ pub fn merge_shards(mut shards: Vec<ShardDir>) -> Result<(SweepMeta, SweepOutcom
             )));
         }
     }
-    let missing: Vec<String> = (1..=count)
-        .filter(|i| !shards.iter().any(|s| s.meta.shard.index == *i))
-        .map(|i| format!("{i}/{count}"))
-        .collect();
-    if !missing.is_empty() {
+    // Shards are sorted and distinct: all are there when they are 1..=count. Only the first
+    // few missing are named (a damaged count could be huge).
+    if shards.len() != count
+        || shards
+            .iter()
+            .enumerate()
+            .any(|(k, s)| s.meta.shard.index != k + 1)
+    {
+        let missing: Vec<String> = (1..=count)
+            .filter(|i| !shards.iter().any(|s| s.meta.shard.index == *i))
+            .take(10)
+            .map(|i| format!("{i}/{count}"))
+            .collect();
+        let more = count
+            .saturating_sub(shards.len())
+            .saturating_sub(missing.len());
         return Err(MergeError(format!(
-            "missing shard(s) {}: give every shard 1/{count} .. {count}/{count} of the sweep",
-            missing.join(", ")
+            "missing shard(s) {}{}: give every shard 1/{count} .. {count}/{count} of the sweep",
+            missing.join(", "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            }
         )));
     }
     let spec = spec_of(&first.meta)?;
-    let combos = spec.combinations();
-    let total = combos.len();
+    // Counted before it is expanded: a damaged spec cannot make the merge run out of memory.
+    let total = spec.count().unwrap_or(usize::MAX);
     if total != first.meta.total_combinations {
         return Err(MergeError(format!(
             "`{}`: {} records {} combinations but its spec expands to {total}",
@@ -214,13 +237,15 @@ pub fn merge_shards(mut shards: Vec<ShardDir>) -> Result<(SweepMeta, SweepOutcom
             first.meta.total_combinations
         )));
     }
-    let mut outcome = SweepOutcome::default();
-    for s in shards {
-        let slice = ShardSpec {
+    let slice_of = |s: &ShardDir| {
+        ShardSpec {
             index: s.meta.shard.index,
             count,
         }
-        .slice(total);
+        .slice(total)
+    };
+    for s in &shards {
+        let slice = slice_of(s);
         if s.meta.shard.first != slice.start || s.meta.shard.end != slice.end {
             return Err(MergeError(format!(
                 "shard {}/{count} in `{}` covers combinations {}..{}, expected {}..{}",
@@ -232,7 +257,13 @@ pub fn merge_shards(mut shards: Vec<ShardDir>) -> Result<(SweepMeta, SweepOutcom
                 slice.end
             )));
         }
-        check_contents(&s, &combos[slice])?;
+        check_counts(s, slice.len())?;
+    }
+    // Each shard holds its slice's count: the expansion is no larger than what was read.
+    let combos = spec.combinations();
+    let mut outcome = SweepOutcome::default();
+    for s in shards {
+        check_contents(&s, &combos[slice_of(&s)])?;
         outcome.rows.extend(s.outcome.rows);
         outcome.failures.extend(s.outcome.failures);
     }
@@ -248,4 +279,39 @@ pub fn merge_shards(mut shards: Vec<ShardDir>) -> Result<(SweepMeta, SweepOutcom
         ..first.meta
     };
     Ok((meta, outcome))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{MergeError, ShardDir, merge_shards};
+    use crate::sweep::SweepMeta;
+
+    /// One shard of `sweep.toml` text with no rows, merged.
+    fn merge_alone(text: &str) -> MergeError {
+        let meta = SweepMeta::parse(text).expect("a sweep.toml");
+        let shard = ShardDir {
+            dir: "shard".into(),
+            meta,
+            outcome: Default::default(),
+        };
+        merge_shards(vec![shard]).expect_err("refused")
+    }
+
+    /// A damaged shard count (10^15) is refused naming ten missing shards and counting the
+    /// rest, where the list of every missing shard once ran out of memory.
+    #[test]
+    fn a_huge_shard_count_is_refused_without_listing_every_shard() {
+        let e = merge_alone(include_str!("../../fuzz/corpus/sweep_merge/huge-count"));
+        assert!(e.0.contains("missing shard(s) 1/1000000000000000"), "{e}");
+        assert!(e.0.contains("and 999999999999989 more"), "{e}");
+    }
+
+    /// A spec of 217 million combinations (216,720,000) whose shard holds none is refused before it is
+    /// expanded (8.7 GB of combinations): the shard's count is checked first.
+    #[test]
+    fn a_huge_spec_is_refused_before_it_is_expanded() {
+        let e = merge_alone(include_str!("../../fuzz/corpus/sweep_merge/huge-spec"));
+        assert!(e.0.contains("incomplete or altered"), "{e}");
+        assert!(e.0.contains("216720000 combinations expected"), "{e}");
+    }
 }

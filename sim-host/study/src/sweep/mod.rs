@@ -125,6 +125,22 @@ pub struct SweepSpec {
 
 impl SweepSpec {
     /// Every combination, in the deterministic sweep order (see the module docs).
+    /// How many combinations [`combinations`](Self::combinations) expands to, `None` past
+    /// `usize` (a spec read from a damaged file): checked before anything is expanded.
+    pub fn count(&self) -> Option<usize> {
+        let delayed = self
+            .kinds
+            .iter()
+            .filter(|&&k| k == JumpKind::DelayedStutter)
+            .count();
+        let per_freq =
+            (self.kinds.len() - delayed).checked_add(delayed.checked_mul(self.taus_s.len())?)?;
+        per_freq
+            .checked_mul(self.models.len())?
+            .checked_mul(self.phis.len())?
+            .checked_mul(self.freqs_hz.len())
+    }
+
     pub fn combinations(&self) -> Vec<Combination> {
         let mut out = Vec::new();
         for &kind in &self.kinds {
