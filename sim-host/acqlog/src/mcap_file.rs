@@ -534,6 +534,78 @@ pub struct ReadBack {
     pub stopped: Option<String>,
 }
 
+/// Whether [`read_messages`] parses records of `opcode`: channels, messages, metadata and the
+/// footer; the others it passes over.
+fn parsed_here(opcode: u8) -> bool {
+    use mcap::records::op;
+    matches!(
+        opcode,
+        op::CHANNEL | op::MESSAGE | op::METADATA | op::FOOTER
+    )
+}
+
+/// Check that every length prefix of a channel or metadata record (strings, the string map)
+/// lies within the record, before the parser allocates what the prefix says.
+fn prefixes_fit(opcode: u8, data: &[u8]) -> Result<(), String> {
+    use mcap::records::op;
+    let mut f = Fields { data, at: 0 };
+    match opcode {
+        op::CHANNEL => {
+            f.take(4)?; // id, schema id
+            f.string()?; // topic
+            f.string()?; // message encoding
+            f.map()
+        }
+        op::METADATA => {
+            f.string()?; // name
+            f.map()
+        }
+        _ => Ok(()),
+    }
+    .map_err(|e| format!("a record (opcode {opcode:#04x}, {} bytes): {e}", data.len()))
+}
+
+/// A record's fields read in order, each length checked against what is left.
+struct Fields<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Fields<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.data.len())
+            .ok_or_else(|| format!("a field claims {n} bytes at byte {}", self.at))?;
+        let s = &self.data[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+
+    fn prefix(&mut self) -> Result<usize, String> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    }
+
+    fn string(&mut self) -> Result<(), String> {
+        let n = self.prefix()?;
+        self.take(n).map(|_| ())
+    }
+
+    fn map(&mut self) -> Result<(), String> {
+        let n = self.prefix()?;
+        let mut entries = Fields {
+            data: self.take(n)?,
+            at: 0,
+        };
+        while entries.at < entries.data.len() {
+            entries.string()?;
+        }
+        Ok(())
+    }
+}
+
 /// The longest record [`read_messages`] reads, bytes: a longer one (a damaged length) stops
 /// the reading there.
 pub const MAX_RECORD_BYTES: usize = 64 << 20;
@@ -574,6 +646,15 @@ pub fn read_messages(bytes: &[u8]) -> ReadBack {
                 fed += take;
             }
             Ok(LinearReadEvent::Record { data, opcode }) => {
+                // Only the records read here are parsed, and only once their length prefixes
+                // fit in the record: the parser sizes a string's buffer from its prefix.
+                if !parsed_here(opcode) {
+                    continue;
+                }
+                if let Err(e) = prefixes_fit(opcode, data) {
+                    out.stopped = Some(e);
+                    return out;
+                }
                 match mcap::parse_record(opcode, data) {
                     Ok(mcap::records::Record::Channel(c)) => {
                         topics.insert(c.id, c.topic);
@@ -617,5 +698,24 @@ mod tests {
         assert!(!back.complete);
         let why = back.stopped.expect("it stops at the damaged record");
         assert!(!why.is_empty());
+    }
+
+    /// Its second (`fuzz/corpus/mcap_reader/huge-string-length`): a header record whose
+    /// string claims 3.8 GB. Records other than channels, messages, metadata and the footer
+    /// are passed over, and the strings of those are checked against their record first.
+    #[test]
+    fn a_damaged_string_length_never_sizes_an_allocation() {
+        let bytes = include_bytes!("../fuzz/corpus/mcap_reader/huge-string-length");
+        let _ = read_messages(bytes);
+        let mut channel = vec![1, 0, 0, 0];
+        channel.extend_from_slice(&u32::MAX.to_le_bytes());
+        assert!(super::prefixes_fit(mcap::records::op::CHANNEL, &channel).is_err());
+        let mut metadata = 4u32.to_le_bytes().to_vec();
+        metadata.extend_from_slice(b"name");
+        metadata.extend_from_slice(&8u32.to_le_bytes());
+        metadata.extend_from_slice(&(1u32 << 30).to_le_bytes());
+        metadata.extend_from_slice(b"abcd");
+        let e = super::prefixes_fit(mcap::records::op::METADATA, &metadata).unwrap_err();
+        assert!(e.contains("claims 1073741824 bytes"), "{e}");
     }
 }

@@ -266,3 +266,50 @@ fn a_browser_shows_a_jump_a_campaign_and_a_fault() {
         "the strip shows the Faulted state"
     );
 }
+
+/// DNS rebinding as a browser meets it: a site's name resolved to this machine's loopback
+/// (`--host-resolver-rules`), its page loaded from the live view's port. The browser sends
+/// the site's name as `Host`, and the page, its state and its stream answer 403 with nothing of
+/// the run; the same browser on the URL the command printed gets the page.
+#[test]
+fn a_page_under_a_foreign_host_name_gets_nothing_of_the_run() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let (mut jump, url) = run_live(&["hil", "--kind", "single", "--freq", "10"]);
+    let port = url
+        .trim_end_matches('/')
+        .rsplit(':')
+        .next()
+        .expect("a port in the URL")
+        .to_string();
+    let dump = |target: &str| {
+        let profile = tempfile::tempdir().unwrap();
+        let out = Command::new(&browser)
+            .args(HEADLESS)
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg("--host-resolver-rules=MAP rebound.example 127.0.0.1")
+            .args(["--timeout=3000", "--dump-dom", target])
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    for path in ["/", "/state.json", "/events"] {
+        let foreign = format!("http://rebound.example:{port}{path}");
+        let dom = dump(&foreign);
+        assert!(dom.contains("403"), "{foreign}: {dom}");
+        for leak in [
+            "id=\"status\"",
+            "samples_received",
+            "jump height",
+            "\"seq\"",
+        ] {
+            assert!(!dom.contains(leak), "{foreign} shows `{leak}`: {dom}");
+        }
+    }
+    // The control: the printed URL in the same browser.
+    let dom = dump(&url);
+    let _ = jump.kill();
+    let _ = jump.wait();
+    assert!(dom.contains("id=\"status\""), "{url}: {dom}");
+}
