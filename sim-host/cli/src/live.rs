@@ -17,8 +17,8 @@ pub struct LiveArgs {
     /// machine needs --live-public.
     #[arg(long, value_name = "ADDR")]
     pub live: Option<String>,
-    /// With --live, allow an address beyond this machine (0.0.0.0:PORT, a network
-    /// interface's IP): anyone who can reach it can read the page.
+    /// With --live (and --foxglove), allow an address beyond this machine (0.0.0.0:PORT, a
+    /// network interface's IP): anyone who can reach it can read the page.
     #[arg(long, requires = "live")]
     pub live_public: bool,
     /// With --live, run a simulated link at this multiple of real time (default 1; 0: as
@@ -27,7 +27,7 @@ pub struct LiveArgs {
     pub pace: Option<f64>,
     /// With --live, the same streams on a Foxglove WebSocket server at ADDR (the forms of
     /// --live; typed JSON channels for Foxglove or Lichtblick panels; builds with `--features
-    /// foxglove`). It checks no Origin, so it serves loopback only: docs/live.md says who
+    /// foxglove`). Pages of other sites are refused (their Origin): docs/live.md says who
     /// can read it.
     #[arg(long, value_name = "ADDR", requires = "live")]
     pub foxglove: Option<String>,

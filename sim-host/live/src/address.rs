@@ -55,20 +55,6 @@ pub fn check_exposure(
     ))
 }
 
-/// Refuse a Foxglove WebSocket address beyond this machine, whatever `--live-public` says: the
-/// `foxglove` crate's server checks no browser `Origin`, so it stays on loopback, where only
-/// this machine's programs (and its browser's pages: docs/live.md) reach it.
-pub fn check_foxglove_loopback(text: &str, addr: SocketAddr) -> Result<(), String> {
-    if addr.ip().is_loopback() {
-        return Ok(());
-    }
-    Err(format!(
-        "--foxglove {text} listens beyond this machine: the Foxglove WebSocket checks no Origin, \
-         so it serves loopback only, also with --live-public (allowed: PORT, 127.0.0.1:PORT, \
-         localhost:PORT, [::1]:PORT; reach it from elsewhere through an SSH tunnel)"
-    ))
-}
-
 /// This machine's name (Linux's `/proc/sys/kernel/hostname`, else `HOSTNAME`).
 pub fn host_name() -> Option<String> {
     std::fs::read_to_string("/proc/sys/kernel/hostname")
@@ -175,14 +161,6 @@ mod tests {
         check_exposure("--live", "0.0.0.0:8080", any, true).unwrap();
         check_exposure("--live", "8080", "127.0.0.1:8080".parse().unwrap(), false).unwrap();
         check_exposure("--live", "[::1]:1", "[::1]:1".parse().unwrap(), false).unwrap();
-        // The Foxglove WebSocket stays on loopback, --live-public or not.
-        let e = check_foxglove_loopback("0.0.0.0:8765", any).unwrap_err();
-        assert!(
-            e.contains("--foxglove 0.0.0.0:8765") && e.contains("loopback only"),
-            "{e}"
-        );
-        check_foxglove_loopback("8765", "127.0.0.1:8765".parse().unwrap()).unwrap();
-        check_foxglove_loopback("[::1]:8765", "[::1]:8765".parse().unwrap()).unwrap();
     }
 
     #[test]

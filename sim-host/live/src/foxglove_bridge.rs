@@ -12,12 +12,16 @@ use foxglove::{
 use serde_json::json;
 
 use super::bus::Event;
+use super::foxglove_gate::{Gate, OriginPolicy};
 use super::state::Update;
+use crate::address::AllowedHosts;
 
 /// A running Foxglove server and its channels.
 pub struct FoxgloveBridge {
-    /// The port it listens on.
+    /// The port it listens on (the gate's).
     pub port: u16,
+    /// Stops accepting when the bridge goes.
+    _gate: Gate,
     _server: WebSocketServerHandle,
     /// The server and the channels hold it weakly: it lives as long as the bridge.
     _context: Arc<Context>,
@@ -35,19 +39,27 @@ fn schema(name: &str, properties: serde_json::Value) -> Schema {
 }
 
 impl FoxgloveBridge {
-    /// Start a server at `addr` (port 0: any) for samples named `channels`. Must be called
-    /// outside an async context. The WebSocket has no `Origin` check (the `foxglove` crate
-    /// offers no hook): a page of any site the user visits meanwhile can subscribe to it, on
-    /// loopback too (docs/live.md says so).
-    pub fn start(addr: std::net::SocketAddr, channels: &[String]) -> Result<Self, String> {
-        let (host, port) = (addr.ip().to_string(), addr.port());
+    /// Start a server for samples named `channels`, reached at `addr` (port 0: any) through
+    /// the [`Gate`] that checks each connection's `Host` and `Origin` (the `foxglove` crate's
+    /// server checks neither, so it listens on a loopback port of its own); `page` is the live
+    /// page's bound address, whose pages may connect. Must be called outside an async context.
+    pub fn start(
+        addr: std::net::SocketAddr,
+        page: std::net::SocketAddr,
+        channels: &[String],
+    ) -> Result<Self, String> {
         let ctx = Context::new();
         let server = WebSocketServer::new()
             .name("sandjumper")
-            .bind(host, port)
+            .bind("127.0.0.1", 0)
             .context(&ctx)
             .start_blocking()
             .map_err(|e| format!("--foxglove {addr}: cannot start the server ({e})"))?;
+        let inner = std::net::SocketAddr::from(([127, 0, 0, 1], server.port()));
+        let gate = Gate::start(addr, inner, |bound| OriginPolicy {
+            hosts: AllowedHosts::for_bind(bound),
+            page: AllowedHosts::for_bind(page),
+        })?;
         let num = json!({"type": "number"});
         let text = json!({"type": "string"});
         let mut sample_props = serde_json::Map::new();
@@ -64,7 +76,8 @@ impl FoxgloveBridge {
                 .map_err(|e| format!("--foxglove: cannot open {topic} ({e})"))
         };
         Ok(Self {
-            port: server.port(),
+            port: gate.addr.port(),
+            _gate: gate,
             samples: build(
                 "/sandjumper/samples",
                 schema("sandjumper.Sample", serde_json::Value::Object(sample_props)),

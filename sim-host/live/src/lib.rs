@@ -17,6 +17,8 @@ pub mod address;
 pub mod bus;
 #[cfg(feature = "foxglove")]
 pub mod foxglove_bridge;
+#[cfg(feature = "foxglove")]
+pub mod foxglove_gate;
 #[cfg(feature = "server")]
 pub mod server;
 pub mod state;

@@ -87,9 +87,9 @@ pub fn serve(addr: &str, feed: LiveFeed) -> Result<LiveServer, String> {
 pub const FOXGLOVE: bool = cfg!(feature = "foxglove");
 
 /// [`serve`], and the same streams on a Foxglove WebSocket server at `foxglove` (the same
-/// address forms, loopback only), when given (this build must have the `foxglove` feature).
-/// `public`: the user asked for a page address beyond this machine (`--live-public`); without
-/// it such an address is refused. Requests whose `Host` is not this server's own name are refused (403).
+/// address forms, behind a gate that checks `Host` and `Origin`), when given (this build must
+/// have the `foxglove` feature). `public`: the user asked for an address beyond this machine
+/// (`--live-public`); without it such an address is refused. Requests whose `Host` is not this server's own name are refused (403).
 pub fn serve_with_foxglove(
     addr: &str,
     feed: LiveFeed,
@@ -102,7 +102,7 @@ pub fn serve_with_foxglove(
     let foxglove_sock = foxglove
         .map(|a| {
             let s = crate::address::parse_listen("--foxglove", a)?;
-            crate::address::check_foxglove_loopback(a, s).map(|()| s)
+            crate::address::check_exposure("--foxglove", a, s, public).map(|()| s)
         })
         .transpose()?;
     let std_listener = std::net::TcpListener::bind(sock)
@@ -117,7 +117,9 @@ pub fn serve_with_foxglove(
     let (updates, _) = broadcast::channel(4096);
     #[cfg(feature = "foxglove")]
     let bridge = foxglove_sock
-        .map(|a| super::foxglove_bridge::FoxgloveBridge::start(a, &feed.channels).map(Arc::new))
+        .map(|a| {
+            super::foxglove_bridge::FoxgloveBridge::start(a, local, &feed.channels).map(Arc::new)
+        })
         .transpose()?;
     #[cfg(not(feature = "foxglove"))]
     let _ = foxglove_sock;

@@ -136,3 +136,51 @@ fn a_foxglove_client_sees_our_channels_and_receives_samples_and_states() {
         }
     }
 }
+
+/// The WebSocket handshake with `host` and `origin` (if any): the response's status line.
+fn handshake(port: u16, host: &str, origin: Option<&str>) -> String {
+    let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    let origin = origin
+        .map(|o| format!("Origin: {o}\r\n"))
+        .unwrap_or_default();
+    write!(
+        s,
+        "GET / HTTP/1.1\r\nHost: {host}\r\n{origin}Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n"
+    )
+    .unwrap();
+    let mut head = Vec::new();
+    let mut b = [0u8; 1];
+    while !head.ends_with(b"\r\n") && s.read_exact(&mut b).is_ok() {
+        head.push(b[0]);
+    }
+    String::from_utf8_lossy(&head).trim().to_string()
+}
+
+/// DNS rebinding and cross-site pages, at the WebSocket: a page of another site (its browser
+/// `Origin`) or under another site's name (its `Host`) gets 403 before a byte reaches the
+/// Foxglove server; the live page's own pages, Foxglove's web app, a desktop app's own pages
+/// and programs (no `Origin`) connect.
+#[test]
+fn a_page_of_another_site_cannot_open_the_foxglove_websocket() {
+    let (_bus, feed) = channel(&["p_mm"]);
+    let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0"), false).unwrap();
+    let port = server.foxglove_port.unwrap();
+    let page = server.url().trim_end_matches('/').to_string();
+    let own = format!("127.0.0.1:{port}");
+    for origin in [
+        None,
+        Some(page.as_str()),
+        Some("https://app.foxglove.dev"),
+        Some("file://"),
+    ] {
+        let status = handshake(port, &own, origin);
+        assert!(status.starts_with("HTTP/1.1 101"), "{origin:?}: {status}");
+    }
+    for origin in ["https://evil.example", "null", "http://127.0.0.1:1"] {
+        let status = handshake(port, &own, Some(origin));
+        assert!(status.starts_with("HTTP/1.1 403"), "{origin}: {status}");
+    }
+    let status = handshake(port, &format!("rebound.example:{port}"), None);
+    assert!(status.starts_with("HTTP/1.1 403"), "{status}");
+}

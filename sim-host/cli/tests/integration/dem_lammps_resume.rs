@@ -3,9 +3,10 @@
 //! and run again with the same command: it resumes from the newest restart file and ends
 //! where the unbroken run ends, within LAMMPS's own reproducibility.
 //!
-//! 1. A run killed while its bed settles resumes the settle from its restart file.
-//! 2. That bed is reused (`--bed`) by a second run of the same intrusion, killed mid-way and
-//!    resumed; the first run's intrusion, unbroken on the same bed with the same restart
+//! 1. A run killed while its bed settles (at a random step, its seed printed) resumes the
+//!    settle from its restart file.
+//! 2. That bed is reused (`--bed`) by a second run of the same intrusion, killed at a random
+//!    step mid-way and resumed; the first run's intrusion, unbroken on the same bed with the same restart
 //!    cadence, is the reference. The foot's path and the clock are the same to the last
 //!    digit, the windows before the resume are the unbroken run's to the last digit, and the
 //!    force after it stays within what LAMMPS itself gives on another decomposition (the
@@ -149,9 +150,27 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
     writeln!(f, "t_s,depth_m\n0,0\n0.02,0.002\n0.06,0.004").unwrap();
     drop(f);
 
+    // Where each stage is killed: random steps, the seed printed (and taken from
+    // SANDJUMPER_KILL_SEED to repeat a failure).
+    let seed = std::env::var("SANDJUMPER_KILL_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(1, |d| d.as_nanos() as u64)
+        });
+    let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(seed);
+    let settle_kill = rand::RngExt::random_range(&mut rng, 3000..=6000u64);
+    let intrude_kill = rand::RngExt::random_range(&mut rng, 800..=2400u64);
+    eprintln!(
+        "SANDJUMPER_KILL_SEED={seed}: the settle killed past step {settle_kill}, the intrusion \
+         past step {intrude_kill}"
+    );
+
     // 1. Killed while the bed settles, resumed.
     let a = work.path().join("a");
-    run_and_kill(&args(&lmp, &trajectory, &a, &[]), &a, "settle", 5000);
+    run_and_kill(&args(&lmp, &trajectory, &a, &[]), &a, "settle", settle_kill);
     let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args(&lmp, &trajectory, &a, &[]))
         .output()
@@ -163,8 +182,12 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
         e.contains("the settle resumed from its restart file of step"),
         "{e}"
     );
-    let settle_from = run_toml(&a)["settle_resumed_from"].as_integer().unwrap();
-    assert!(settle_from >= 4000, "{settle_from}");
+    // From the newest whole restart file: at or past the kill's step, or the one before it.
+    let settle_from = run_toml(&a)["settle_resumed_from"].as_integer().unwrap() as u64;
+    assert!(
+        settle_from + 3000 >= settle_kill,
+        "{settle_from} (killed past {settle_kill}; restart files ~1,000 steps apart)"
+    );
     assert!(!work.path().join("a.unfinished").exists());
     assert!(!a.join("lammps/restart").exists(), "restart files removed");
 
@@ -187,7 +210,12 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
     // 2. The same intrusion on that bed, killed mid-way and resumed.
     let b = work.path().join("b");
     let bed = ["--bed", a.to_str().unwrap()];
-    run_and_kill(&args(&lmp, &trajectory, &b, &bed), &b, "intrude", 1200);
+    run_and_kill(
+        &args(&lmp, &trajectory, &b, &bed),
+        &b,
+        "intrude",
+        intrude_kill,
+    );
     // Another run into the same output is refused while it is unfinished.
     let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args(

@@ -175,7 +175,7 @@ fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
         assert_eq!(out.status.code(), Some(2), "{addr}: {err}");
         assert!(err.contains(want) && err.contains(addr), "{addr}: {err}");
     }
-    // The Foxglove WebSocket checks no Origin: loopback only, even with --live-public.
+    // The Foxglove WebSocket obeys the same rule: beyond this machine only with --live-public.
     let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args([
             "hil",
@@ -186,13 +186,13 @@ fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
             "--live",
             "127.0.0.1:0",
         ])
-        .args(["--live-public", "--foxglove", "0.0.0.0:0"])
+        .args(["--foxglove", "0.0.0.0:0"])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("--foxglove 0.0.0.0:0") && err.contains("loopback only"),
+        err.contains("--foxglove 0.0.0.0:0") && err.contains("--live-public"),
         "{err}"
     );
     // A build without the Foxglove server says so (`cargo build --features foxglove` has one;
