@@ -358,6 +358,25 @@ fn start(
         file.check_for_board(&file_path.display().to_string())
             .map_err(CampaignError::Input)?;
     }
+    // One session starts a campaign at a time: two started at once on one folder would
+    // clear and rename each other's plan. The loser is told who holds it.
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| {
+            CampaignError::input(format!(
+                "--out {}: cannot create {}: {e}",
+                out.display(),
+                parent.display()
+            ))
+        })?;
+    }
+    let start_lock_path = with_suffix(out, ".starting.lock");
+    let start_lock = WriterLock::take_recorded(&start_lock_path).map_err(|e| match e {
+        LockError::Held { holder, .. } => CampaignError::input(format!(
+            "--out {}: another session ({holder}) is starting a campaign there",
+            out.display()
+        )),
+        LockError::Io { .. } => CampaignError::internal(e.to_string()),
+    })?;
     let work = work_dir(out);
     for d in [out, work.as_path()] {
         if d.exists() {
@@ -372,6 +391,9 @@ fn start(
     plan(file_path, &file, out, &work, link_name)?;
     let jpath = work.join("journal.jsonl");
     let _lock = lock(&jpath)?;
+    // Started: the journal's lock holds the campaign from here.
+    let _ = std::fs::remove_file(&start_lock_path);
+    drop(start_lock);
     let journal = Journal::open(&jpath).map_err(CampaignError::Internal)?;
     drive(
         &file,

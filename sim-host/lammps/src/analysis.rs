@@ -216,9 +216,14 @@ fn parse_series(text: &str, name: &str, what: &str) -> Result<Vec<[f64; 4]>, Str
         }
         let f: Vec<f64> = l
             .split_whitespace()
-            .map(|w| w.parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| format!("{name}:{}: `{l}` is not four numbers", no + 1))?;
+            .map(|w| w.parse::<f64>().ok().filter(|v| v.is_finite()))
+            .collect::<Option<_>>()
+            .ok_or_else(|| {
+                format!(
+                    "{name}:{}: `{l}` is not four finite numbers (a run that diverged writes nan)",
+                    no + 1
+                )
+            })?;
         let whole = f.first().is_some_and(|s| *s >= 0.0 && s.fract() == 0.0);
         let row: [f64; 4] = f.try_into().ok().filter(|_| whole).ok_or_else(|| {
             format!(
@@ -351,6 +356,16 @@ mod tests {
     use super::*;
     use crate::bed::FOOT;
     use crate::dump::DumpAtom;
+
+    /// A diverged run's `nan` in LAMMPS's own measures is refused, naming the line.
+    #[test]
+    fn a_nan_in_force_or_column_is_refused() {
+        let e = parse_column("# c\n0 0.1 3 0.0\n50 nan 3 0.0\n", "column.txt").unwrap_err();
+        assert!(e.contains("column.txt:3") && e.contains("finite"), "{e}");
+        let e = parse_force("50 0.1 inf 0.04\n", "force.txt", &geometry(), &|d| Ok(d)).unwrap_err();
+        assert!(e.contains("force.txt:1") && e.contains("finite"), "{e}");
+        assert_eq!(parse_column("0 0.1 3 0.0\n", "c").unwrap().len(), 1);
+    }
 
     fn geometry() -> Geometry {
         Geometry {

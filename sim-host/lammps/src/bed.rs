@@ -148,7 +148,9 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
         let f: Vec<&str> = line.split_whitespace().collect();
         let num = |s: &str| {
             s.parse::<f64>()
-                .map_err(|_| format!("{}: `{s}` is not a number", at()))
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{}: `{s}` is not a finite number", at()))
         };
         if raw.trim_start().starts_with("Atoms") {
             section = "atoms";
@@ -181,7 +183,9 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                     ));
                 }
                 let id = num(f[0])? as u64;
-                index.insert(id, atoms.len());
+                if index.insert(id, atoms.len()).is_some() {
+                    return Err(format!("{}: atom {id} listed twice", at()));
+                }
                 atoms.push(Atom {
                     id,
                     kind: num(f[1])? as u8,
@@ -208,6 +212,11 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
             "{name}: not a LAMMPS data file (no atom count or box bounds)"
         ));
     };
+    if width <= 0.0 {
+        return Err(format!(
+            "{name}: a box {width} m wide (allowed: xhi above xlo)"
+        ));
+    }
     if atoms.len() != count {
         return Err(format!(
             "{name}: {} atoms listed where its header says {count} (the file is cut short)",
@@ -305,6 +314,25 @@ pub fn settled(spec: &LammpsSpec, bed: &BedBox, atoms: &[Atom]) -> Result<Settle
 mod tests {
     use super::*;
     use crate::spec::{LammpsSpec, Preset};
+
+    const TWO_ATOMS: &str = "title\n\n2 atoms\n0 0.04 xlo xhi\n0 0.04 ylo yhi\n0 0.03 zlo zhi\n\nAtoms # sphere\n\n1 1 0.002 1000 0.01 0.01 0.01\n2 1 0.002 1000 0.02 0.02 0.01\n";
+
+    /// A data file is read whole or refused naming the line: an atom listed twice (its
+    /// first line lost), a coordinate that is not finite, a box of no width.
+    #[test]
+    fn a_data_file_with_a_twice_listed_atom_or_nan_or_no_box_is_refused() {
+        let (bed, atoms) = parse_data(TWO_ATOMS, "t.data").unwrap();
+        assert_eq!((bed.width_m, atoms.len()), (0.04, 2));
+        let twice = TWO_ATOMS.replace("\n2 1 0.002", "\n1 1 0.002");
+        let e = parse_data(&twice, "t.data").unwrap_err();
+        assert!(e.contains("t.data:11: atom 1 listed twice"), "{e}");
+        let nan = TWO_ATOMS.replace("0.02 0.02 0.01", "nan 0.02 0.01");
+        let e = parse_data(&nan, "t.data").unwrap_err();
+        assert!(e.contains("`nan` is not a finite number"), "{e}");
+        let flat = TWO_ATOMS.replace("0 0.04 xlo xhi", "0.04 0.04 xlo xhi");
+        let e = parse_data(&flat, "t.data").unwrap_err();
+        assert!(e.contains("a box 0 m wide"), "{e}");
+    }
 
     #[test]
     fn the_loose_start_has_no_overlap_and_round_trips_through_a_data_file() {

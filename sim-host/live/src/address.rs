@@ -72,6 +72,7 @@ pub struct AllowedHosts {
     port: u16,
     public: bool,
     machine: Option<String>,
+    bound_ip: IpAddr,
 }
 
 impl AllowedHosts {
@@ -81,11 +82,24 @@ impl AllowedHosts {
             port: bound.port(),
             public: !bound.ip().is_loopback(),
             machine: host_name(),
+            bound_ip: bound.ip(),
         }
     }
 
     /// Whether a request with this `Host` header is this server's own.
     pub fn allows(&self, host: &str) -> bool {
+        self.own(host, false)
+    }
+
+    /// Whether `host` (of a browser `Origin`, `NAME:PORT`) names this server: as
+    /// [`allows`](Self::allows), except that an IP address must be a loopback one or the one
+    /// bound. A `Host` of any IP is no rebinding (a rebinding page sends its name), but an
+    /// `Origin` of any IP is any site served from an IP address.
+    pub fn names_this_server(&self, host: &str) -> bool {
+        self.own(host, true)
+    }
+
+    fn own(&self, host: &str, strict_ip: bool) -> bool {
         let host = host.trim().to_ascii_lowercase();
         // Split off the port: `[v6]:port`, `name:port`, or no port (80).
         let (name, port) = if let Some(rest) = host.strip_prefix('[') {
@@ -111,7 +125,7 @@ impl AllowedHosts {
             return true;
         }
         if let Ok(ip) = name.parse::<IpAddr>() {
-            return ip.is_loopback() || self.public;
+            return ip.is_loopback() || self.public && (!strict_ip || ip == self.bound_ip);
         }
         self.public
             && self
@@ -190,6 +204,7 @@ mod tests {
             port: 80,
             public: true,
             machine: Some("node07.cluster.example".into()),
+            bound_ip: "10.0.0.5".parse().unwrap(),
         };
         for ok in [
             "10.0.0.5",
@@ -199,6 +214,11 @@ mod tests {
         ] {
             assert!(public.allows(ok), "{ok}");
         }
+        // An Origin's address must be loopback or the one bound (any IP is any site).
+        assert!(public.names_this_server("10.0.0.5:80"));
+        assert!(public.names_this_server("node07:80"));
+        assert!(!public.names_this_server("10.0.0.6:80"));
+        assert!(public.allows("10.0.0.6:80"));
         assert!(!public.allows("evil.example"));
         assert!(!public.allows("node08:80"));
         assert!(!public.allows("node07.evil.example:80"));

@@ -12,7 +12,7 @@ use foxglove::{
 use serde_json::json;
 
 use super::bus::Event;
-use super::foxglove_gate::{Gate, OriginPolicy};
+use super::foxglove_gate::{BROWSER_BLOCKED_PORTS, Gate, OriginPolicy};
 use super::state::Update;
 use crate::address::AllowedHosts;
 
@@ -20,9 +20,13 @@ use crate::address::AllowedHosts;
 pub struct FoxgloveBridge {
     /// The port it listens on (the gate's).
     pub port: u16,
+    /// The Foxglove server's own loopback port, one of [`BROWSER_BLOCKED_PORTS`]: only the
+    /// gate connects to it.
+    pub server_port: u16,
     /// Stops accepting when the bridge goes.
     _gate: Gate,
-    _server: WebSocketServerHandle,
+    /// Stopped with the bridge (a dropped handle leaves the server running).
+    server: Option<WebSocketServerHandle>,
     /// The server and the channels hold it weakly: it lives as long as the bridge.
     _context: Arc<Context>,
     samples: Arc<RawChannel>,
@@ -49,17 +53,38 @@ impl FoxgloveBridge {
         channels: &[String],
     ) -> Result<Self, String> {
         let ctx = Context::new();
-        let server = WebSocketServer::new()
-            .name("sandjumper")
-            .bind("127.0.0.1", 0)
-            .context(&ctx)
-            .start_blocking()
-            .map_err(|e| format!("--foxglove {addr}: cannot start the server ({e})"))?;
+        // The server on loopback, on a port no browser opens: only the gate reaches it from a
+        // web page's side.
+        let mut started = None;
+        for port in BROWSER_BLOCKED_PORTS {
+            if let Ok(s) = WebSocketServer::new()
+                .name("sandjumper")
+                .bind("127.0.0.1", port)
+                .context(&ctx)
+                .start_blocking()
+            {
+                started = Some(s);
+                break;
+            }
+        }
+        let server = started.ok_or_else(|| {
+            format!(
+                "--foxglove {addr}: cannot start the Foxglove server: every loopback port no \
+                 browser opens is taken ({BROWSER_BLOCKED_PORTS:?}; another run's server holds \
+                 one)"
+            )
+        })?;
         let inner = std::net::SocketAddr::from(([127, 0, 0, 1], server.port()));
-        let gate = Gate::start(addr, inner, |bound| OriginPolicy {
+        let gate = match Gate::start(addr, inner, |bound| OriginPolicy {
             hosts: AllowedHosts::for_bind(bound),
             page: AllowedHosts::for_bind(page),
-        })?;
+        }) {
+            Ok(g) => g,
+            Err(e) => {
+                drop(server.stop());
+                return Err(e);
+            }
+        };
         let num = json!({"type": "number"});
         let text = json!({"type": "string"});
         let mut sample_props = serde_json::Map::new();
@@ -77,6 +102,7 @@ impl FoxgloveBridge {
         };
         Ok(Self {
             port: gate.addr.port(),
+            server_port: inner.port(),
             _gate: gate,
             samples: build(
                 "/sandjumper/samples",
@@ -98,7 +124,7 @@ impl FoxgloveBridge {
                 "/sandjumper/events",
                 schema("sandjumper.Event", json!({"kind": text})),
             )?,
-            _server: server,
+            server: Some(server),
             _context: ctx.clone(),
             channels: channels.to_vec(),
         })
@@ -137,6 +163,16 @@ impl FoxgloveBridge {
                     }
                 }
             }
+        }
+    }
+}
+
+impl Drop for FoxgloveBridge {
+    fn drop(&mut self) {
+        // The gate goes first (its own Drop, after this), the server now: its clients are
+        // closed at once (the shutdown handle dropped).
+        if let Some(s) = self.server.take() {
+            drop(s.stop());
         }
     }
 }

@@ -8,9 +8,9 @@
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::address::AllowedHosts;
 
@@ -20,6 +20,20 @@ pub const FOXGLOVE_APP_ORIGINS: [&str; 2] =
 
 /// The longest request head the gate reads, bytes.
 const MAX_HEAD: usize = 16 * 1024;
+
+/// How long a client has to send its whole request head.
+const HEAD_TIME: Duration = Duration::from_secs(10);
+
+/// Connections the gate holds at once (reading a head or relayed); more are refused (503).
+pub const MAX_CONNECTIONS: usize = 64;
+
+/// Ports every browser refuses to open (the Fetch standard's "bad ports", WebSocket
+/// included) that an unprivileged process may bind: the Foxglove server itself listens on
+/// one of them, on loopback, so that no web page can reach it around the gate.
+pub const BROWSER_BLOCKED_PORTS: [u16; 18] = [
+    10080, 6665, 6666, 6667, 6668, 6669, 6679, 6697, 6566, 6000, 5061, 5060, 4190, 4045, 3659,
+    2049, 1723, 1720,
+];
 
 /// Who may connect: by `Host` (the gate's own names) and by browser `Origin`.
 #[derive(Clone, Debug)]
@@ -49,7 +63,7 @@ impl OriginPolicy {
         };
         let own_page = origin
             .strip_prefix("http://")
-            .is_some_and(|h| self.page.allows(h));
+            .is_some_and(|h| self.page.names_this_server(h));
         let lower = origin.to_ascii_lowercase();
         let web = lower == "null" || lower.starts_with("http://") || lower.starts_with("https://");
         if own_page || !web && !lower.is_empty() || FOXGLOVE_APP_ORIGINS.contains(&origin) {
@@ -63,8 +77,7 @@ impl OriginPolicy {
     }
 }
 
-/// A running gate; dropping it stops accepting (connections relayed go on until either side
-/// closes).
+/// A running gate; dropping it stops accepting and closes the connections it relays.
 pub struct Gate {
     /// The address it listens on.
     pub addr: SocketAddr,
@@ -91,16 +104,34 @@ impl Gate {
         let policy = Arc::new(policy_for(addr));
         let stop = Arc::new(AtomicBool::new(false));
         let stopped = stop.clone();
+        let open = Arc::new(AtomicUsize::new(0));
         let thread = std::thread::Builder::new()
             .name("foxglove-gate".into())
             .spawn(move || {
                 while !stopped.load(Ordering::Relaxed) {
                     match listener.accept() {
-                        Ok((client, _)) => {
-                            let policy = policy.clone();
-                            let _ = std::thread::Builder::new()
+                        Ok((mut client, _)) => {
+                            if open.fetch_add(1, Ordering::SeqCst) >= MAX_CONNECTIONS {
+                                open.fetch_sub(1, Ordering::SeqCst);
+                                let _ = client.set_nonblocking(false);
+                                refuse(
+                                    &mut client,
+                                    "503 Service Unavailable",
+                                    "too many connections",
+                                );
+                                continue;
+                            }
+                            let (policy, held, stopped) =
+                                (policy.clone(), open.clone(), stopped.clone());
+                            let spawned = std::thread::Builder::new()
                                 .name("foxglove-conn".into())
-                                .spawn(move || serve(client, server, &policy));
+                                .spawn(move || {
+                                    serve(client, server, &policy, &stopped);
+                                    held.fetch_sub(1, Ordering::SeqCst);
+                                });
+                            if spawned.is_err() {
+                                open.fetch_sub(1, Ordering::SeqCst);
+                            }
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                             std::thread::sleep(Duration::from_millis(20));
@@ -135,13 +166,18 @@ fn header<'a>(head: &'a str, name: &str) -> Option<&'a str> {
     })
 }
 
-/// One connection: read its head, check it, refuse it or relay it.
-fn serve(mut client: TcpStream, server: SocketAddr, policy: &OriginPolicy) {
+/// One connection: read its head (within [`HEAD_TIME`] in all), check it, refuse it or
+/// relay it until either side closes or the gate stops.
+fn serve(mut client: TcpStream, server: SocketAddr, policy: &OriginPolicy, stopped: &AtomicBool) {
     let _ = client.set_nonblocking(false);
-    let _ = client.set_read_timeout(Some(Duration::from_secs(10)));
+    let deadline = Instant::now() + HEAD_TIME;
     let mut head = Vec::new();
     let mut buf = [0u8; 4096];
     let end = loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() || client.set_read_timeout(Some(left)).is_err() {
+            return;
+        }
         match client.read(&mut buf) {
             Ok(0) | Err(_) => return,
             Ok(n) => head.extend_from_slice(&buf[..n]),
@@ -178,13 +214,27 @@ fn serve(mut client: TcpStream, server: SocketAddr, policy: &OriginPolicy) {
     let (Ok(mut client_r), Ok(mut upstream_w)) = (client.try_clone(), upstream.try_clone()) else {
         return;
     };
+    let (Ok(client_end), Ok(upstream_end)) = (client.try_clone(), upstream.try_clone()) else {
+        return;
+    };
     let up = std::thread::spawn(move || {
         let _ = std::io::copy(&mut client_r, &mut upstream_w);
         let _ = upstream_w.shutdown(Shutdown::Write);
     });
-    let _ = std::io::copy(&mut upstream, &mut client);
-    let _ = client.shutdown(Shutdown::Both);
+    let down = std::thread::spawn(move || {
+        let _ = std::io::copy(&mut upstream, &mut client);
+        let _ = client.shutdown(Shutdown::Write);
+    });
+    // Both directions end when either side closes; the gate's stop closes both.
+    while !(up.is_finished() && down.is_finished()) {
+        if stopped.load(Ordering::Relaxed) {
+            let _ = client_end.shutdown(Shutdown::Both);
+            let _ = upstream_end.shutdown(Shutdown::Both);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let _ = up.join();
+    let _ = down.join();
 }
 
 fn refuse(client: &mut TcpStream, status: &str, why: &str) {
@@ -238,6 +288,26 @@ mod tests {
         let e = p.check(Some("rebound.example:8765"), None).unwrap_err();
         assert!(e.contains("not this server's own name"), "{e}");
         assert!(p.check(None, None).is_err());
+    }
+
+    /// Bound beyond this machine, a `Host` of any IP address is the server's own (no
+    /// rebinding sends one), but an `Origin` of any IP address is any site served from one:
+    /// only loopback, the bound address and the machine's name are the page's.
+    #[test]
+    fn on_a_public_bind_a_page_of_another_ip_address_may_not_connect() {
+        let p = OriginPolicy {
+            hosts: AllowedHosts::for_bind("0.0.0.0:8765".parse().unwrap()),
+            page: AllowedHosts::for_bind("192.0.2.10:8080".parse().unwrap()),
+        };
+        let host = Some("198.51.100.7:8765");
+        p.check(host, None).unwrap();
+        p.check(host, Some("http://192.0.2.10:8080")).unwrap();
+        p.check(host, Some("http://127.0.0.1:8080")).unwrap();
+        if let Some(m) = crate::address::host_name() {
+            p.check(host, Some(&format!("http://{m}:8080"))).unwrap();
+        }
+        let e = p.check(host, Some("http://198.51.100.7:8080")).unwrap_err();
+        assert!(e.contains("may not read this run"), "{e}");
     }
 
     #[test]

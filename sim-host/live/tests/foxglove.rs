@@ -184,3 +184,32 @@ fn a_page_of_another_site_cannot_open_the_foxglove_websocket() {
     let status = handshake(port, &format!("rebound.example:{port}"), None);
     assert!(status.starts_with("HTTP/1.1 403"), "{status}");
 }
+
+/// The Foxglove server behind the gate listens on a loopback port that every browser refuses
+/// to open (the Fetch standard's bad ports): a page cannot reach it around the gate. The
+/// bridge gone, neither port answers.
+#[test]
+fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_bridge() {
+    use sandjumper_live::foxglove_bridge::FoxgloveBridge;
+    use sandjumper_live::foxglove_gate::BROWSER_BLOCKED_PORTS;
+    let bridge = FoxgloveBridge::start(
+        "127.0.0.1:0".parse().unwrap(),
+        "127.0.0.1:8080".parse().unwrap(),
+        &["p_mm".to_string()],
+    )
+    .unwrap();
+    let (gate, server) = (bridge.port, bridge.server_port);
+    assert!(
+        BROWSER_BLOCKED_PORTS.contains(&server),
+        "the server listens on {server}"
+    );
+    assert!(handshake(gate, &format!("127.0.0.1:{gate}"), None).starts_with("HTTP/1.1 101"));
+    drop(bridge);
+    std::thread::sleep(Duration::from_millis(300));
+    for port in [gate, server] {
+        assert!(
+            TcpStream::connect(("127.0.0.1", port)).is_err(),
+            "port {port} still answers after the bridge is gone"
+        );
+    }
+}

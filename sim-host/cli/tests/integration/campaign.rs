@@ -393,3 +393,67 @@ fn bad_campaign_files_are_refused_with_file_and_line() {
     assert_eq!(c, 2, "{e}");
     assert!(e.contains("no campaign here"), "{e}");
 }
+
+/// Two sessions started at the same moment on one output: one runs the campaign, the other is
+/// refused with exit status 2 naming why (another session starting or running it, or the
+/// folder it made), and the campaign is the one a single session makes. Before the start lock,
+/// the loser cleared or renamed the winner's plan under it and failed with an internal error.
+#[test]
+fn two_sessions_started_at_once_on_one_output_leave_one_campaign() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = campaign_file(tmp.path(), |t| {
+        t.replace("track = true", "track = false")
+            .replace("fps = 200", "fps = 0")
+    });
+    let f = file.to_str().unwrap();
+    let straight = tmp.path().join("straight");
+    let (c, _, e) = sandjumper_text(&[
+        "campaign",
+        "run",
+        f,
+        "--link",
+        "sil",
+        "--out",
+        straight.to_str().unwrap(),
+    ]);
+    assert_eq!(c, 0, "{e}");
+    for round in 0..4 {
+        let out = tmp.path().join(format!("raced{round}"));
+        let o = out.to_str().unwrap();
+        let spawn = || {
+            Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+                .args(["campaign", "run", f, "--link", "sil", "--out", o])
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (spawn(), spawn());
+        let results: Vec<_> = [a, b]
+            .into_iter()
+            .map(|c| c.wait_with_output().unwrap())
+            .collect();
+        let codes: Vec<_> = results.iter().map(|r| r.status.code()).collect();
+        let errors: Vec<String> = results
+            .iter()
+            .map(|r| String::from_utf8_lossy(&r.stderr).into_owned())
+            .collect();
+        assert!(
+            codes.contains(&Some(0)) && codes.iter().all(|c| matches!(c, Some(0) | Some(2))),
+            "round {round}: exit statuses {codes:?}: {errors:?}"
+        );
+        if codes == [Some(2), Some(2)] || codes == [Some(0), Some(0)] {
+            panic!("round {round}: {codes:?}: {errors:?}");
+        }
+        let loser = &errors[codes.iter().position(|c| *c == Some(2)).unwrap()];
+        assert!(
+            loser.contains("another session") || loser.contains("exists"),
+            "round {round}: {loser}"
+        );
+        assert_eq!(
+            read(&straight.join("results.csv")),
+            read(&out.join("results.csv")),
+            "round {round}"
+        );
+    }
+}

@@ -81,10 +81,11 @@ fn last_window(out: &Path) -> u64 {
         .unwrap_or(0)
 }
 
-/// Run `args` in a process group of its own and `kill -9` the group once `stage` has written
-/// a restart file at or after `step` (and an older one: one whole file at least), and, in the
-/// intrusion, a force window past the newest restart file (what the resume must cut away).
-fn run_and_kill(args: &[String], out: &Path, stage: &str, step: u64) {
+/// Run `args` in a process group of its own and `kill -9` the group `then` after `stage` has
+/// written a restart file at or after `step` (and an older one: one whole file at least),
+/// and, in the intrusion, a force window past the newest restart file (what the resume must
+/// cut away). The restart files' steps seen just before the kill, oldest first.
+fn run_and_kill(args: &[String], out: &Path, stage: &str, step: u64, then: Duration) -> Vec<u64> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args)
         .stdout(Stdio::null())
@@ -110,6 +111,14 @@ fn run_and_kill(args: &[String], out: &Path, stage: &str, step: u64) {
         );
         std::thread::sleep(Duration::from_millis(50));
     }
+    // A random moment after it: mid-interval, or while the next file is being written.
+    std::thread::sleep(then);
+    let mut seen = restart_steps(out, stage);
+    seen.sort_unstable();
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before it was killed"
+    );
     let group = child.id().to_string();
     let killed = Command::new("kill")
         .args(["-s", "KILL", "--", &format!("-{group}")])
@@ -120,6 +129,7 @@ fn run_and_kill(args: &[String], out: &Path, stage: &str, step: u64) {
     assert_eq!(status.code(), None, "killed by a signal");
     // The ranks are gone with the group: nothing writes the folder any more.
     std::thread::sleep(Duration::from_millis(300));
+    seen
 }
 
 /// `force.txt` as rows of (step, [t, force, zmin] as text).
@@ -163,14 +173,22 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
     let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(seed);
     let settle_kill = rand::RngExt::random_range(&mut rng, 3000..=6000u64);
     let intrude_kill = rand::RngExt::random_range(&mut rng, 800..=2400u64);
+    let settle_then = Duration::from_millis(rand::RngExt::random_range(&mut rng, 0..1500u64));
+    let intrude_then = Duration::from_millis(rand::RngExt::random_range(&mut rng, 0..600u64));
     eprintln!(
-        "SANDJUMPER_KILL_SEED={seed}: the settle killed past step {settle_kill}, the intrusion \
-         past step {intrude_kill}"
+        "SANDJUMPER_KILL_SEED={seed}: the settle killed {settle_then:?} after a restart file \
+         past step {settle_kill}, the intrusion {intrude_then:?} after one past step {intrude_kill}"
     );
 
     // 1. Killed while the bed settles, resumed.
     let a = work.path().join("a");
-    run_and_kill(&args(&lmp, &trajectory, &a, &[]), &a, "settle", settle_kill);
+    let seen = run_and_kill(
+        &args(&lmp, &trajectory, &a, &[]),
+        &a,
+        "settle",
+        settle_kill,
+        settle_then,
+    );
     let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
         .args(args(&lmp, &trajectory, &a, &[]))
         .output()
@@ -182,11 +200,12 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
         e.contains("the settle resumed from its restart file of step"),
         "{e}"
     );
-    // From the newest whole restart file: at or past the kill's step, or the one before it.
+    // From the newest restart file seen before the kill, or the one before it (the newest
+    // may have been cut mid-write), or one written in the last moment before the kill.
     let settle_from = run_toml(&a)["settle_resumed_from"].as_integer().unwrap() as u64;
     assert!(
-        settle_from + 3000 >= settle_kill,
-        "{settle_from} (killed past {settle_kill}; restart files ~1,000 steps apart)"
+        seen.len() >= 2 && settle_from >= seen[seen.len() - 2],
+        "resumed from {settle_from}; restart files seen before the kill: {seen:?}"
     );
     assert!(!work.path().join("a.unfinished").exists());
     assert!(!a.join("lammps/restart").exists(), "restart files removed");
@@ -210,11 +229,12 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
     // 2. The same intrusion on that bed, killed mid-way and resumed.
     let b = work.path().join("b");
     let bed = ["--bed", a.to_str().unwrap()];
-    run_and_kill(
+    let seen = run_and_kill(
         &args(&lmp, &trajectory, &b, &bed),
         &b,
         "intrude",
         intrude_kill,
+        intrude_then,
     );
     // Another run into the same output is refused while it is unfinished.
     let o = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
@@ -263,7 +283,10 @@ fn a_run_killed_with_kill_9_resumes_from_its_restart_file_to_the_unbroken_result
         "{e}"
     );
     let from = run_toml(&b)["intrusion_resumed_from"].as_integer().unwrap() as u64;
-    assert!((600..=6000).contains(&from), "{from}");
+    assert!(
+        seen.len() >= 2 && from >= seen[seen.len() - 2],
+        "resumed from {from}; restart files seen before the kill: {seen:?}"
+    );
 
     // 3. The resumed intrusion against the unbroken one on the same bed, and LAMMPS's own
     // reproducibility: the same unbroken run on 1 rank instead of 2.

@@ -1,6 +1,6 @@
-//! The camera file reader (`CameraModel::from_toml`: `hil --camera FILE`, every frames
-//! folder's `camera.toml` read back by `track` and `figures dem`) on any text: it never
-//! panics; what it accepts is valid (`validate`) with a finite ball radius in pixels.
+//! The rod camera's file reader (`CameraModel::from_toml`: `hil --camera FILE`, the format
+//! of the `frames/camera.toml` that `hil` writes) on any text: it never panics; what it
+//! accepts is valid (`validate`) with a finite ball radius in pixels.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

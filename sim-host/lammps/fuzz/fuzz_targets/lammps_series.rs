@@ -1,6 +1,6 @@
 //! LAMMPS's own measures read back (`sandjumper_lammps::analysis::parse_force`, `force.txt`,
 //! and `parse_column`, `column.txt`) on any text: they never panic, and what they accept is
-//! rows of whole non-negative steps and, for the column, whole grain counts.
+//! one row per data line, every number finite (a diverged run's `nan` is refused).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -26,8 +26,20 @@ fuzz_target!(|data: &[u8]| {
         .count();
     if let Ok(rows) = parse_force(text, "force.txt", &g, &|d| Ok(2.0 * d)) {
         assert_eq!(rows.len(), lines, "one row per data line");
+        for r in &rows {
+            assert!(
+                r.t_s.is_finite() && r.force_n.is_finite() && r.depth_m.is_finite(),
+                "a non-finite row accepted: {r:?}"
+            );
+        }
     }
     if let Ok(rows) = parse_column(text, "column.txt") {
         assert_eq!(rows.len(), lines, "one row per data line");
+        for r in &rows {
+            assert!(
+                r.momentum_kg_m_s.is_finite() && r.ring_kg_m_s.is_finite(),
+                "a non-finite row accepted: {r:?}"
+            );
+        }
     }
 });

@@ -124,7 +124,6 @@ pub struct SweepSpec {
 }
 
 impl SweepSpec {
-    /// Every combination, in the deterministic sweep order (see the module docs).
     /// How many combinations [`combinations`](Self::combinations) expands to, `None` past
     /// `usize` (a spec read from a damaged file): checked before anything is expanded.
     pub fn count(&self) -> Option<usize> {
@@ -141,6 +140,7 @@ impl SweepSpec {
             .checked_mul(self.freqs_hz.len())
     }
 
+    /// Every combination, in the deterministic sweep order (see the module docs).
     pub fn combinations(&self) -> Vec<Combination> {
         let mut out = Vec::new();
         for &kind in &self.kinds {
