@@ -213,3 +213,42 @@ fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_b
         );
     }
 }
+
+/// A client that opens connections and sends nothing holds at most the gate's cap of them:
+/// the next connection is answered 503 at once, and the gate goes on serving once they close.
+#[test]
+fn the_gate_holds_a_bounded_number_of_connections() {
+    use sandjumper_live::foxglove_bridge::FoxgloveBridge;
+    use sandjumper_live::foxglove_gate::MAX_CONNECTIONS;
+    let bridge = FoxgloveBridge::start(
+        "127.0.0.1:0".parse().unwrap(),
+        "127.0.0.1:8080".parse().unwrap(),
+        &["p_mm".to_string()],
+    )
+    .unwrap();
+    let gate = bridge.port;
+    let idle: Vec<TcpStream> = (0..MAX_CONNECTIONS)
+        .map(|_| TcpStream::connect(("127.0.0.1", gate)).unwrap())
+        .collect();
+    // The gate takes them in turn (it polls its listener): wait until all are held.
+    let own = format!("127.0.0.1:{gate}");
+    let mut refused = String::new();
+    for _ in 0..100 {
+        refused = handshake(gate, &own, None);
+        if refused.starts_with("HTTP/1.1 503") {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(refused.starts_with("HTTP/1.1 503"), "{refused}");
+    drop(idle);
+    let mut again = String::new();
+    for _ in 0..100 {
+        again = handshake(gate, &own, None);
+        if again.starts_with("HTTP/1.1 101") {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(again.starts_with("HTTP/1.1 101"), "{again}");
+}
