@@ -369,14 +369,7 @@ fn start(
             ))
         })?;
     }
-    let start_lock_path = with_suffix(out, ".starting.lock");
-    let start_lock = WriterLock::take_recorded(&start_lock_path).map_err(|e| match e {
-        LockError::Held { holder, .. } => CampaignError::input(format!(
-            "--out {}: another session ({holder}) is starting a campaign there",
-            out.display()
-        )),
-        LockError::Io { .. } => CampaignError::internal(e.to_string()),
-    })?;
+    let _start_lock = StartLock::take(out)?;
     let work = work_dir(out);
     for d in [out, work.as_path()] {
         if d.exists() {
@@ -388,12 +381,10 @@ fn start(
             )));
         }
     }
-    plan(file_path, &file, out, &work, link_name)?;
+    // The journal's lock is taken in the plan, before the folder gets its resumable name:
+    // no `campaign resume` can take it in between. It holds the campaign from here.
+    let _lock = plan(file_path, &file, out, &work, link_name)?;
     let jpath = work.join("journal.jsonl");
-    let _lock = lock(&jpath)?;
-    // Started: the journal's lock holds the campaign from here.
-    let _ = std::fs::remove_file(&start_lock_path);
-    drop(start_lock);
     let journal = Journal::open(&jpath).map_err(CampaignError::Internal)?;
     drive(
         &file,
@@ -406,14 +397,43 @@ fn start(
     )
 }
 
-/// Write the plan (the campaign file and the journal's first record) into `work`.
+/// The lock a session holds while it starts a campaign (`<out>.starting.lock`), removed
+/// when the start is over, whether the campaign started or was refused: held when removed,
+/// and [`WriterLock::take`] refuses a lock whose file was removed as it was taken.
+struct StartLock {
+    path: PathBuf,
+    _lock: WriterLock,
+}
+
+impl StartLock {
+    fn take(out: &Path) -> Result<Self, CampaignError> {
+        let path = with_suffix(out, ".starting.lock");
+        let lock = WriterLock::take_recorded(&path).map_err(|e| match e {
+            LockError::Held { holder, .. } => CampaignError::input(format!(
+                "--out {}: another session ({holder}) is starting a campaign there",
+                out.display()
+            )),
+            LockError::Io { .. } => CampaignError::internal(e.to_string()),
+        })?;
+        Ok(Self { path, _lock: lock })
+    }
+}
+
+impl Drop for StartLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Write the plan (the campaign file and the journal's first record) into `work`; the
+/// journal's lock, taken before the folder is renamed to `work`.
 fn plan(
     file_path: &Path,
     file: &CampaignFile,
     out: &Path,
     work: &Path,
     link_name: &str,
-) -> Result<(), CampaignError> {
+) -> Result<WriterLock, CampaignError> {
     // The folder takes its `.incomplete` name only once its plan is on the disk, so a
     // campaign killed at its very start leaves no folder that looks resumable.
     let starting = with_suffix(out, ".starting");
@@ -440,13 +460,16 @@ fn plan(
             })
             .map_err(CampaignError::Internal)?;
     }
+    // A lock is on the file, not its name: it goes with the rename.
+    let journal_lock = lock(&starting.join("journal.jsonl"))?;
     std::fs::rename(&starting, work).map_err(|e| {
         CampaignError::internal(format!(
             "cannot rename {} to {}: {e}",
             starting.display(),
             work.display()
         ))
-    })
+    })?;
+    Ok(journal_lock)
 }
 
 /// A stopped campaign: its file, work folder, journal, the journal's lock and its link.

@@ -99,6 +99,14 @@ impl AllowedHosts {
         self.own(host, true)
     }
 
+    /// Bound on every interface (`0.0.0.0`, `[::]`): whether `ip` is one of this machine's
+    /// addresses (a socket can be bound to it).
+    fn any_own(&self, ip: IpAddr) -> bool {
+        self.bound_ip.is_unspecified()
+            && !ip.is_unspecified()
+            && std::net::UdpSocket::bind(SocketAddr::new(ip, 0)).is_ok()
+    }
+
     fn own(&self, host: &str, strict_ip: bool) -> bool {
         let host = host.trim().to_ascii_lowercase();
         // Split off the port: `[v6]:port`, `name:port`, or no port (80).
@@ -125,7 +133,8 @@ impl AllowedHosts {
             return true;
         }
         if let Ok(ip) = name.parse::<IpAddr>() {
-            return ip.is_loopback() || self.public && (!strict_ip || ip == self.bound_ip);
+            return ip.is_loopback()
+                || self.public && (!strict_ip || ip == self.bound_ip || self.any_own(ip));
         }
         self.public
             && self
@@ -219,6 +228,23 @@ mod tests {
         assert!(public.names_this_server("node07:80"));
         assert!(!public.names_this_server("10.0.0.6:80"));
         assert!(public.allows("10.0.0.6:80"));
+        // Bound on every interface: an address of this machine is the page's, another not.
+        let every = AllowedHosts {
+            bound_ip: "0.0.0.0".parse().unwrap(),
+            ..public.clone()
+        };
+        assert!(every.names_this_server("127.0.0.1:80"));
+        let own = std::net::UdpSocket::bind("0.0.0.0:0")
+            .and_then(|s| s.connect("192.0.2.1:9").map(|()| s))
+            .and_then(|s| s.local_addr())
+            .map(|a| a.ip());
+        if let Some(ip) = own
+            .ok()
+            .filter(|ip| !ip.is_loopback() && !ip.is_unspecified())
+        {
+            assert!(every.names_this_server(&format!("{ip}:80")), "{ip}");
+        }
+        assert!(!every.names_this_server("198.51.100.7:80"));
         assert!(!public.allows("evil.example"));
         assert!(!public.allows("node08:80"));
         assert!(!public.allows("node07.evil.example:80"));

@@ -23,8 +23,8 @@ pub struct FoxgloveBridge {
     /// The Foxglove server's own loopback port, one of [`BROWSER_BLOCKED_PORTS`]: only the
     /// gate connects to it.
     pub server_port: u16,
-    /// Stops accepting when the bridge goes.
-    _gate: Gate,
+    /// Stops accepting, and closes its relays, when the bridge goes (first).
+    gate: Option<Gate>,
     /// Stopped with the bridge (a dropped handle leaves the server running).
     server: Option<WebSocketServerHandle>,
     /// The server and the channels hold it weakly: it lives as long as the bridge.
@@ -53,38 +53,7 @@ impl FoxgloveBridge {
         channels: &[String],
     ) -> Result<Self, String> {
         let ctx = Context::new();
-        // The server on loopback, on a port no browser opens: only the gate reaches it from a
-        // web page's side.
-        let mut started = None;
-        for port in BROWSER_BLOCKED_PORTS {
-            if let Ok(s) = WebSocketServer::new()
-                .name("sandjumper")
-                .bind("127.0.0.1", port)
-                .context(&ctx)
-                .start_blocking()
-            {
-                started = Some(s);
-                break;
-            }
-        }
-        let server = started.ok_or_else(|| {
-            format!(
-                "--foxglove {addr}: cannot start the Foxglove server: every loopback port no \
-                 browser opens is taken ({BROWSER_BLOCKED_PORTS:?}; another run's server holds \
-                 one)"
-            )
-        })?;
-        let inner = std::net::SocketAddr::from(([127, 0, 0, 1], server.port()));
-        let gate = match Gate::start(addr, inner, |bound| OriginPolicy {
-            hosts: AllowedHosts::for_bind(bound),
-            page: AllowedHosts::for_bind(page),
-        }) {
-            Ok(g) => g,
-            Err(e) => {
-                drop(server.stop());
-                return Err(e);
-            }
-        };
+        // The channels first: a failure there leaves no server behind.
         let num = json!({"type": "number"});
         let text = json!({"type": "string"});
         let mut sample_props = serde_json::Map::new();
@@ -100,30 +69,67 @@ impl FoxgloveBridge {
                 .build_raw()
                 .map_err(|e| format!("--foxglove: cannot open {topic} ({e})"))
         };
+        let samples = build(
+            "/sandjumper/samples",
+            schema("sandjumper.Sample", serde_json::Value::Object(sample_props)),
+        )?;
+        let state = build(
+            "/sandjumper/state",
+            schema("sandjumper.State", json!({"t_s": num, "state": text})),
+        )?;
+        let fault = build(
+            "/sandjumper/fault",
+            schema("sandjumper.Fault", json!({"t_s": num, "fault": text})),
+        )?;
+        let campaign = build(
+            "/sandjumper/campaign",
+            schema("sandjumper.CampaignRecord", json!({"record": text})),
+        )?;
+        let events = build(
+            "/sandjumper/events",
+            schema("sandjumper.Event", json!({"kind": text})),
+        )?;
+        // The server on loopback, on a port browsers refuse to open: only the gate reaches
+        // it from a web page's side.
+        let mut started = None;
+        for port in BROWSER_BLOCKED_PORTS {
+            if let Ok(s) = WebSocketServer::new()
+                .name("sandjumper")
+                .bind("127.0.0.1", port)
+                .context(&ctx)
+                .start_blocking()
+            {
+                started = Some(s);
+                break;
+            }
+        }
+        let server = started.ok_or_else(|| {
+            format!(
+                "--foxglove {addr}: cannot start the Foxglove server: every loopback port \
+                 browsers refuse to open is taken ({BROWSER_BLOCKED_PORTS:?}; other runs' \
+                 servers hold them)"
+            )
+        })?;
+        let inner = std::net::SocketAddr::from(([127, 0, 0, 1], server.port()));
+        let gate = match Gate::start(addr, inner, |bound| OriginPolicy {
+            hosts: AllowedHosts::for_bind(bound),
+            page: AllowedHosts::for_bind(page),
+        }) {
+            Ok(g) => g,
+            Err(e) => {
+                drop(server.stop());
+                return Err(e);
+            }
+        };
         Ok(Self {
             port: gate.addr.port(),
             server_port: inner.port(),
-            _gate: gate,
-            samples: build(
-                "/sandjumper/samples",
-                schema("sandjumper.Sample", serde_json::Value::Object(sample_props)),
-            )?,
-            state: build(
-                "/sandjumper/state",
-                schema("sandjumper.State", json!({"t_s": num, "state": text})),
-            )?,
-            fault: build(
-                "/sandjumper/fault",
-                schema("sandjumper.Fault", json!({"t_s": num, "fault": text})),
-            )?,
-            campaign: build(
-                "/sandjumper/campaign",
-                schema("sandjumper.CampaignRecord", json!({"record": text})),
-            )?,
-            events: build(
-                "/sandjumper/events",
-                schema("sandjumper.Event", json!({"kind": text})),
-            )?,
+            gate: Some(gate),
+            samples,
+            state,
+            fault,
+            campaign,
+            events,
             server: Some(server),
             _context: ctx.clone(),
             channels: channels.to_vec(),
@@ -169,8 +175,9 @@ impl FoxgloveBridge {
 
 impl Drop for FoxgloveBridge {
     fn drop(&mut self) {
-        // The gate goes first (its own Drop, after this), the server now: its clients are
-        // closed at once (the shutdown handle dropped).
+        // The gate first (no new connection reaches the server), then the server: its
+        // clients are closed at once (the shutdown handle dropped).
+        drop(self.gate.take());
         if let Some(s) = self.server.take() {
             drop(s.stop());
         }

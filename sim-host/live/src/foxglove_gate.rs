@@ -27,12 +27,13 @@ const HEAD_TIME: Duration = Duration::from_secs(10);
 /// Connections the gate holds at once (reading a head or relayed); more are refused (503).
 pub const MAX_CONNECTIONS: usize = 64;
 
-/// Ports every browser refuses to open (the Fetch standard's "bad ports", WebSocket
-/// included) that an unprivileged process may bind: the Foxglove server itself listens on
-/// one of them, on loopback, so that no web page can reach it around the gate.
-pub const BROWSER_BLOCKED_PORTS: [u16; 18] = [
-    10080, 6665, 6666, 6667, 6668, 6669, 6679, 6697, 6566, 6000, 5061, 5060, 4190, 4045, 3659,
-    2049, 1723, 1720,
+/// Ports browsers refuse to open (the Fetch standard's "bad ports", WebSocket included) that
+/// an unprivileged process may bind: the Foxglove server itself listens on one of them, on
+/// loopback, so that no web page can reach it around the gate. Those on the list longest
+/// come first (10080 joined it in 2021, 4190 and 6679 in 2024: an older browser opens them).
+pub const BROWSER_BLOCKED_PORTS: [u16; 19] = [
+    6665, 6666, 6667, 6668, 6669, 6000, 2049, 4045, 1719, 1720, 1723, 3659, 5060, 5061, 6566, 6697,
+    10080, 4190, 6679,
 ];
 
 /// Who may connect: by `Host` (the gate's own names) and by browser `Origin`.
@@ -123,15 +124,14 @@ impl Gate {
                             }
                             let (policy, held, stopped) =
                                 (policy.clone(), open.clone(), stopped.clone());
-                            let spawned = std::thread::Builder::new()
+                            let slot = Slot(held);
+                            // A thread that cannot start drops its closure, and the slot.
+                            let _ = std::thread::Builder::new()
                                 .name("foxglove-conn".into())
                                 .spawn(move || {
+                                    let _slot = slot;
                                     serve(client, server, &policy, &stopped);
-                                    held.fetch_sub(1, Ordering::SeqCst);
                                 });
-                            if spawned.is_err() {
-                                open.fetch_sub(1, Ordering::SeqCst);
-                            }
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                             std::thread::sleep(Duration::from_millis(20));
@@ -155,6 +155,15 @@ impl Drop for Gate {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
+    }
+}
+
+/// One of the gate's [`MAX_CONNECTIONS`], given back when dropped (however its thread ends).
+struct Slot(Arc<AtomicUsize>);
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
     }
 }
 
@@ -194,6 +203,9 @@ fn serve(mut client: TcpStream, server: SocketAddr, policy: &OriginPolicy, stopp
             return;
         }
     };
+    if stopped.load(Ordering::Relaxed) {
+        return; // the gate is gone: its server's port may be another run's by now
+    }
     let text = String::from_utf8_lossy(&head[..end]);
     if let Err(why) = policy.check(header(&text, "host"), header(&text, "origin")) {
         refuse(&mut client, "403 Forbidden", &why);
@@ -217,14 +229,21 @@ fn serve(mut client: TcpStream, server: SocketAddr, policy: &OriginPolicy, stopp
     let (Ok(client_end), Ok(upstream_end)) = (client.try_clone(), upstream.try_clone()) else {
         return;
     };
-    let up = std::thread::spawn(move || {
+    let Ok(up) = std::thread::Builder::new().spawn(move || {
         let _ = std::io::copy(&mut client_r, &mut upstream_w);
         let _ = upstream_w.shutdown(Shutdown::Write);
-    });
-    let down = std::thread::spawn(move || {
+    }) else {
+        return;
+    };
+    let Ok(down) = std::thread::Builder::new().spawn(move || {
         let _ = std::io::copy(&mut upstream, &mut client);
         let _ = client.shutdown(Shutdown::Write);
-    });
+    }) else {
+        let _ = client_end.shutdown(Shutdown::Both);
+        let _ = upstream_end.shutdown(Shutdown::Both);
+        let _ = up.join();
+        return;
+    };
     // Both directions end when either side closes; the gate's stop closes both.
     while !(up.is_finished() && down.is_finished()) {
         if stopped.load(Ordering::Relaxed) {

@@ -9,6 +9,14 @@ use std::time::Duration;
 
 use sandjumper_live::{Event, channel, serve_with_foxglove};
 
+/// One bridge at a time in this binary: the servers share a pool of ports (those browsers
+/// refuse), and a test that checks a port is free after its bridge must not see another's.
+static ONE_BRIDGE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_bridge() -> std::sync::MutexGuard<'static, ()> {
+    ONE_BRIDGE.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Read one WebSocket frame sent by the server (unmasked): (opcode, payload).
 fn frame(s: &mut TcpStream) -> (u8, Vec<u8>) {
     let mut h = [0u8; 2];
@@ -42,6 +50,7 @@ fn send_text(s: &mut TcpStream, text: &str) {
 
 #[test]
 fn a_foxglove_client_sees_our_channels_and_receives_samples_and_states() {
+    let _one = one_bridge();
     let (mut bus, feed) = channel(&["p_mm", "force_n"]);
     let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0"), false).unwrap();
     let port = server.foxglove_port.unwrap();
@@ -163,6 +172,7 @@ fn handshake(port: u16, host: &str, origin: Option<&str>) -> String {
 /// and programs (no `Origin`) connect.
 #[test]
 fn a_page_of_another_site_cannot_open_the_foxglove_websocket() {
+    let _one = one_bridge();
     let (_bus, feed) = channel(&["p_mm"]);
     let server = serve_with_foxglove("127.0.0.1:0", feed, Some("127.0.0.1:0"), false).unwrap();
     let port = server.foxglove_port.unwrap();
@@ -190,6 +200,7 @@ fn a_page_of_another_site_cannot_open_the_foxglove_websocket() {
 /// bridge gone, neither port answers.
 #[test]
 fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_bridge() {
+    let _one = one_bridge();
     use sandjumper_live::foxglove_bridge::FoxgloveBridge;
     use sandjumper_live::foxglove_gate::BROWSER_BLOCKED_PORTS;
     let bridge = FoxgloveBridge::start(
@@ -218,6 +229,7 @@ fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_b
 /// the next connection is answered 503 at once, and the gate goes on serving once they close.
 #[test]
 fn the_gate_holds_a_bounded_number_of_connections() {
+    let _one = one_bridge();
     use sandjumper_live::foxglove_bridge::FoxgloveBridge;
     use sandjumper_live::foxglove_gate::MAX_CONNECTIONS;
     let bridge = FoxgloveBridge::start(

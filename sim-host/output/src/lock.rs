@@ -57,6 +57,15 @@ impl std::fmt::Display for LockError {
 
 impl std::error::Error for LockError {}
 
+/// Whether `file` is still the file at `path` (same device and inode).
+fn same_file(file: &std::fs::File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), std::fs::metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
 impl WriterLock {
     /// Takes the lock on `path`, creating the file (empty) when it does not exist; an existing
     /// file's contents are left as they are.
@@ -72,6 +81,13 @@ impl WriterLock {
             .open(path)
             .map_err(io)?;
         match file.try_lock() {
+            // Locked, but a holder that removes its lock file when done may have removed this
+            // one as it was opened: then the path is another file (or none), whose lock is
+            // what counts. Refused as held, so two writers never run on two files.
+            Ok(()) if !same_file(&file, path) => Err(LockError::Held {
+                path: path.to_path_buf(),
+                holder: "another process, which has just released it (try again)".into(),
+            }),
             Ok(()) => Ok(Self {
                 _file: file,
                 path: path.to_path_buf(),

@@ -1,5 +1,6 @@
 //! The MCAP reader (`sandjumper_acqlog::read_messages`, which recovers what a cut file
-//! holds) on any bytes: it never panics, never allocates what a damaged length says, and the
+//! holds) on any bytes: it never panics, never allocates more than a record's limit (64 MiB)
+//! whatever a damaged length says, and the
 //! file cut anywhere yields a prefix of the whole file's messages (a cut costs the messages
 //! after it, never changes one before it).
 #![no_main]
