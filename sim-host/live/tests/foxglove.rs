@@ -195,20 +195,38 @@ fn a_page_of_another_site_cannot_open_the_foxglove_websocket() {
     assert!(status.starts_with("HTTP/1.1 403"), "{status}");
 }
 
+/// A bridge of its own (no live page: its page's address is only for the Origin policy).
+fn bridge_alone() -> sandjumper_live::foxglove_bridge::FoxgloveBridge {
+    sandjumper_live::foxglove_bridge::FoxgloveBridge::start(
+        "127.0.0.1:0".parse().unwrap(),
+        "127.0.0.1:8080".parse().unwrap(),
+        &["p_mm".to_string()],
+    )
+    .unwrap()
+}
+
+/// [`handshake`] with `host` and no Origin, again every 50 ms (5 s at most) until its status
+/// line starts with `status`: the last status line.
+fn handshake_until(port: u16, host: &str, status: &str) -> String {
+    let mut last = String::new();
+    for _ in 0..100 {
+        last = handshake(port, host, None);
+        if last.starts_with(status) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    last
+}
+
 /// The Foxglove server behind the gate listens on a loopback port that every browser refuses
 /// to open (the Fetch standard's bad ports): a page cannot reach it around the gate. The
 /// bridge gone, neither port answers.
 #[test]
 fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_bridge() {
     let _one = one_bridge();
-    use sandjumper_live::foxglove_bridge::FoxgloveBridge;
     use sandjumper_live::foxglove_gate::BROWSER_BLOCKED_PORTS;
-    let bridge = FoxgloveBridge::start(
-        "127.0.0.1:0".parse().unwrap(),
-        "127.0.0.1:8080".parse().unwrap(),
-        &["p_mm".to_string()],
-    )
-    .unwrap();
+    let bridge = bridge_alone();
     let (gate, server) = (bridge.port, bridge.server_port);
     assert!(
         BROWSER_BLOCKED_PORTS.contains(&server),
@@ -230,37 +248,17 @@ fn the_server_behind_the_gate_is_on_a_port_no_browser_opens_and_stops_with_the_b
 #[test]
 fn the_gate_holds_a_bounded_number_of_connections() {
     let _one = one_bridge();
-    use sandjumper_live::foxglove_bridge::FoxgloveBridge;
     use sandjumper_live::foxglove_gate::MAX_CONNECTIONS;
-    let bridge = FoxgloveBridge::start(
-        "127.0.0.1:0".parse().unwrap(),
-        "127.0.0.1:8080".parse().unwrap(),
-        &["p_mm".to_string()],
-    )
-    .unwrap();
+    let bridge = bridge_alone();
     let gate = bridge.port;
     let idle: Vec<TcpStream> = (0..MAX_CONNECTIONS)
         .map(|_| TcpStream::connect(("127.0.0.1", gate)).unwrap())
         .collect();
     // The gate takes them in turn (it polls its listener): wait until all are held.
     let own = format!("127.0.0.1:{gate}");
-    let mut refused = String::new();
-    for _ in 0..100 {
-        refused = handshake(gate, &own, None);
-        if refused.starts_with("HTTP/1.1 503") {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let refused = handshake_until(gate, &own, "HTTP/1.1 503");
     assert!(refused.starts_with("HTTP/1.1 503"), "{refused}");
     drop(idle);
-    let mut again = String::new();
-    for _ in 0..100 {
-        again = handshake(gate, &own, None);
-        if again.starts_with("HTTP/1.1 101") {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let again = handshake_until(gate, &own, "HTTP/1.1 101");
     assert!(again.starts_with("HTTP/1.1 101"), "{again}");
 }

@@ -189,52 +189,23 @@ fn a_campaign_killed_at_random_moments_resumes_to_the_same_results() {
     let killed = tmp.path().join("killed");
     let k = killed.to_str().unwrap();
     let mut rng = rand::rngs::StdRng::seed_from_u64(11);
-    let mut kills = 0;
-    let mut sessions = 0;
     // Eight kills at random moments (on a slow machine a session may not finish a point
     // before its kill), then a last session runs to the end.
-    const KILLS: usize = 8;
-    loop {
-        if killed.is_dir() {
-            break; // finished, and killed before it could exit
-        }
-        assert!(sessions <= KILLS, "the campaign never finished");
-        let started = with_suffix(&killed, ".incomplete").is_dir();
-        let args: Vec<&str> = if started {
-            vec!["campaign", "resume", k]
-        } else {
-            vec!["campaign", "run", SMALL, "--link", "sil", "--out", k]
-        };
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-            .args(&args)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        sessions += 1;
-        if kills == KILLS {
-            let o = child.wait_with_output().unwrap();
-            let e = String::from_utf8_lossy(&o.stderr);
-            assert!(o.status.success(), "{args:?}: {}: {e}", o.status);
-            break;
-        }
-        let wait = Duration::from_millis(rng.random_range(20..600));
-        std::thread::sleep(wait);
-        match child.try_wait().unwrap() {
-            Some(status) => {
-                let mut e = String::new();
-                use std::io::Read;
-                child.stderr.take().unwrap().read_to_string(&mut e).unwrap();
-                assert!(status.success(), "{args:?}: {status}: {e}");
-                break;
-            }
-            None => {
-                child.kill().unwrap(); // SIGKILL: no clean-up runs
-                child.wait().unwrap();
-                kills += 1;
-            }
-        }
-    }
+    let common::Killed {
+        kills, sessions, ..
+    } = common::kill_at_random(
+        || {
+            let args: &[&str] = if with_suffix(&killed, ".incomplete").is_dir() {
+                &["campaign", "resume", k]
+            } else {
+                &["campaign", "run", SMALL, "--link", "sil", "--out", k]
+            };
+            args.iter().map(|a| a.to_string()).collect()
+        },
+        || Duration::from_millis(rng.random_range(20..600)),
+        || killed.is_dir(),
+        8,
+    );
     assert!(kills >= 3, "only {kills} kills: the test proved little");
     assert!(killed.is_dir(), "finished under its own name");
     assert_eq!(

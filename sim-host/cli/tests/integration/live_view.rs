@@ -13,19 +13,7 @@ use std::time::{Duration, Instant};
 
 /// A plain HTTP/1.1 GET: (status line, headers, body).
 fn get(addr: &str, path: &str) -> (String, String, String) {
-    let mut s = TcpStream::connect(addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
-    write!(
-        s,
-        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
-    )
-    .unwrap();
-    let mut raw = Vec::new();
-    let _ = s.read_to_end(&mut raw);
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    let (status, headers) = head.split_once("\r\n").unwrap_or((head, ""));
-    (status.to_string(), headers.to_lowercase(), body.to_string())
+    common::http_get(addr, path).unwrap_or_else(|e| panic!("GET {path} from {addr}: {e}"))
 }
 
 /// Start `sandjumper args`, returning the child and its stderr lines as they come.
@@ -161,66 +149,35 @@ fn a_jump_is_watched_live_then_kept_until_the_linger_ends() {
 
 #[test]
 fn a_live_address_that_cannot_be_used_is_refused_before_the_run() {
+    fn with<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        [&["hil", "--kind", "single", "--freq", "10"][..], extra].concat()
+    }
     for (addr, public, want) in [
         ("nowhere", false, "not an address"),
         ("8.8.8.8:80", false, "--live-public"),
         ("8.8.8.8:80", true, "cannot listen"),
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-            .args(["hil", "--kind", "single", "--freq", "10", "--live", addr])
-            .args(if public { &["--live-public"][..] } else { &[] })
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{addr}: {err}");
-        assert!(err.contains(want) && err.contains(addr), "{addr}: {err}");
+        let public: &[&str] = if public { &["--live-public"] } else { &[] };
+        common::refused(
+            &with(&[&["--live", addr][..], public].concat()),
+            &[want, addr],
+        );
     }
     // The Foxglove WebSocket obeys the same rule: beyond this machine only with --live-public.
-    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args([
-            "hil",
-            "--kind",
-            "single",
-            "--freq",
-            "10",
-            "--live",
-            "127.0.0.1:0",
-        ])
-        .args(["--foxglove", "0.0.0.0:0"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("--foxglove 0.0.0.0:0") && err.contains("--live-public"),
-        "{err}"
+    common::refused(
+        &with(&["--live", "127.0.0.1:0", "--foxglove", "0.0.0.0:0"]),
+        &["--foxglove 0.0.0.0:0", "--live-public"],
     );
     // A build without the Foxglove server says so (`cargo build --features foxglove` has one;
     // sim-host/live/tests/foxglove.rs tests it).
     if !sandjumper_live::FOXGLOVE {
-        let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-            .args([
-                "hil",
-                "--kind",
-                "single",
-                "--freq",
-                "10",
-                "--live",
-                "127.0.0.1:0",
-            ])
-            .args(["--foxglove", "127.0.0.1:0"])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{err}");
-        assert!(err.contains("--features foxglove"), "{err}");
+        common::refused(
+            &with(&["--live", "127.0.0.1:0", "--foxglove", "127.0.0.1:0"]),
+            &["--features foxglove"],
+        );
     }
     // --pace and --linger mean nothing without --live.
-    let out = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-        .args(["hil", "--kind", "single", "--freq", "10", "--pace", "2"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    common::refused(&with(&["--pace", "2"]), &[]);
 }
 
 #[test]

@@ -245,7 +245,6 @@ fn bad_limits_and_bad_stroke_files_are_refused() {
 #[test]
 fn a_search_killed_with_kill_9_at_random_moments_resumes_to_the_unbroken_answer() {
     use rand::{RngExt, SeedableRng};
-    use std::process::{Command, Stdio};
     use std::time::Duration;
 
     let dir = tempfile::tempdir().unwrap();
@@ -286,40 +285,18 @@ fn a_search_killed_with_kill_9_at_random_moments_resumes_to_the_unbroken_answer(
 
     let out = dir.path().join("killed");
     let mut rng = rand::rngs::StdRng::seed_from_u64(54);
-    let (mut kills, mut sessions) = (0, 0);
-    // Whether the last session ended by itself (not killed after its answer was written).
-    let mut finished = false;
-    const KILLS: usize = 6;
-    while !out.join("summary.json").is_file() {
-        assert!(sessions <= KILLS, "the search never finished");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
-            .args(search(&out))
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        sessions += 1;
-        if kills == KILLS {
-            let o = child.wait_with_output().unwrap();
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            finished = true;
-            break;
-        }
-        // A moment within the unbroken search's time (each session resumes where the last
-        // stopped, so later ones end sooner).
-        let wait = rng.random_range(0.03..0.45) * whole_s;
-        std::thread::sleep(Duration::from_secs_f64(wait));
-        if child.try_wait().unwrap().is_none() {
-            child.kill().unwrap(); // SIGKILL
-            child.wait().unwrap();
-            kills += 1;
-        } else {
-            let o = child.wait_with_output().unwrap();
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            finished = true;
-        }
-    }
+    // A moment within the unbroken search's time (each session resumes where the last
+    // stopped, so later ones end sooner).
+    let crate::common::Killed {
+        kills,
+        sessions,
+        finished,
+    } = crate::common::kill_at_random(
+        || search(&out),
+        || Duration::from_secs_f64(rng.random_range(0.03..0.45) * whole_s),
+        || out.join("summary.json").is_file(),
+        6,
+    );
     // Each kill is early in its session, but a slow machine may still finish a session first.
     assert!(kills >= 2, "only {kills} kills: the test proved little");
     for f in ["stroke.csv", "candidates.csv", "paper_sweep.csv"] {

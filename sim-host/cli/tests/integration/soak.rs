@@ -9,8 +9,7 @@
 //! (`sim-host/campaign/benches/soak.sh`, docs/performance.md), never asserted here.
 #![cfg(feature = "live")]
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -53,22 +52,11 @@ struct Polls {
 
 /// `GET /state.json` with the server's own `Host`: the body of a 200, or why not.
 fn state_json(addr: &str) -> Result<String, String> {
-    let mut s = TcpStream::connect(addr).map_err(|e| format!("connect: {e}"))?;
-    s.set_read_timeout(Some(Duration::from_secs(30)))
-        .map_err(|e| e.to_string())?;
-    write!(
-        s,
-        "GET /state.json HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
-    )
-    .map_err(|e| format!("write: {e}"))?;
-    let mut raw = Vec::new();
-    s.read_to_end(&mut raw).map_err(|e| format!("read: {e}"))?;
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, body) = text.split_once("\r\n\r\n").ok_or("no header end")?;
-    if !head.starts_with("HTTP/1.1 200") {
-        return Err(head.lines().next().unwrap_or("").to_string());
+    let (status, _, body) = crate::common::http_get(addr, "/state.json")?;
+    if !status.starts_with("HTTP/1.1 200") {
+        return Err(status);
     }
-    Ok(body.to_string())
+    Ok(body)
 }
 
 /// The page the clients poll: its generation (one per change) and address, `None` while no

@@ -79,6 +79,81 @@ pub fn refused(args: &[&str], culprits: &[&str]) -> String {
     stderr
 }
 
+/// What [`kill_at_random`] did.
+pub struct Killed {
+    /// Sessions killed while they ran.
+    pub kills: usize,
+    /// Sessions started.
+    pub sessions: usize,
+    /// Whether the last session ended by itself (with status 0), not by a kill.
+    pub finished: bool,
+}
+
+/// Run sessions of `sandjumper args()` (the next session's arguments, from what is on disk)
+/// until `done()`: each is killed with SIGKILL (no clean-up runs) `wait()` after it starts,
+/// unless it has ended by then, which it must have done with status 0; after `max_kills`
+/// kills the next session runs to its end. Asserts the work ends within `max_kills + 1`
+/// sessions.
+pub fn kill_at_random(
+    args: impl Fn() -> Vec<String>,
+    mut wait: impl FnMut() -> Duration,
+    done: impl Fn() -> bool,
+    max_kills: usize,
+) -> Killed {
+    let mut k = Killed {
+        kills: 0,
+        sessions: 0,
+        finished: false,
+    };
+    while !done() {
+        assert!(k.sessions <= max_kills, "the work never finished");
+        let args = args();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sandjumper"))
+            .args(&args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("the sandjumper binary starts");
+        k.sessions += 1;
+        if k.kills < max_kills {
+            std::thread::sleep(wait());
+            if child.try_wait().unwrap().is_none() {
+                child.kill().unwrap();
+                child.wait().unwrap();
+                k.kills += 1;
+                continue;
+            }
+        }
+        let o = child.wait_with_output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {}: {e}", o.status);
+        k.finished = true;
+        break;
+    }
+    k
+}
+
+/// A plain HTTP/1.1 GET of `path` from the server at `addr` (its own `Host`), read to the
+/// end (30 s at most): (status line, headers in lower case, body), or why not.
+pub fn http_get(addr: &str, path: &str) -> Result<(String, String, String), String> {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(addr).map_err(|e| format!("connect: {e}"))?;
+    s.set_read_timeout(Some(Duration::from_secs(30)))
+        .map_err(|e| e.to_string())?;
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+    )
+    .map_err(|e| format!("write: {e}"))?;
+    let mut raw = Vec::new();
+    s.read_to_end(&mut raw).map_err(|e| format!("read: {e}"))?;
+    let text = String::from_utf8_lossy(&raw).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").ok_or("no header end")?;
+    let (status, headers) = head.split_once("\r\n").unwrap_or((head, ""));
+    Ok((status.to_string(), headers.to_lowercase(), body.to_string()))
+}
+
 /// The text of the file at `p`; panics naming the file when it cannot be read.
 pub fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
