@@ -49,6 +49,7 @@ pub mod check;
 pub mod columns;
 pub mod convert;
 pub mod error;
+mod mcap_chunk_check;
 pub mod mcap_file;
 pub mod metadata;
 pub mod reader;

@@ -32,6 +32,7 @@
 
 use super::columns::Column;
 use super::error::{AcqLogError, AcqLogErrorKind};
+use super::mcap_chunk_check::first_overrun;
 use super::{AcqLog, ConvertReport};
 use mcap::records::MessageHeader;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
@@ -626,6 +627,9 @@ pub fn read_messages(bytes: &[u8]) -> ReadBack {
             .with_record_length_limit(MAX_RECORD_BYTES),
     );
     let mut out = ReadBack::default();
+    // The crate misreads a plain chunk whose inner record overruns it: read up to that record.
+    let overrun = first_overrun(bytes);
+    let bytes = &bytes[..overrun.as_ref().map_or(bytes.len(), |o| o.at)];
     let mut topics: BTreeMap<u16, String> = BTreeMap::new();
     let mut fed = 0usize;
     let mut saw_footer = false;
@@ -638,7 +642,10 @@ pub fn read_messages(bytes: &[u8]) -> ReadBack {
             Ok(LinearReadEvent::ReadRequest(n)) => {
                 let take = n.min(bytes.len() - fed);
                 if take == 0 {
-                    out.stopped = Some(format!("the file ends after {} bytes", bytes.len()));
+                    out.stopped = Some(match overrun {
+                        Some(o) => o.why,
+                        None => format!("the file ends after {} bytes", bytes.len()),
+                    });
                     return out;
                 }
                 reader.insert(take).copy_from_slice(&bytes[fed..fed + take]);
@@ -698,6 +705,18 @@ mod tests {
         assert!(!back.complete);
         let why = back.stopped.expect("it stops at the damaged record");
         assert!(!why.is_empty());
+    }
+
+    /// Found in CI (`fuzz/corpus/mcap_reader/chunk-record-overrun`): a plain chunk whose inner
+    /// record claims more than is left of the chunk. The crate subtracted past zero (a panic
+    /// with overflow checks on); the reading now stops at that record and says why.
+    #[test]
+    fn a_record_overrunning_its_plain_chunk_stops_the_reading_there() {
+        let bytes = include_bytes!("../fuzz/corpus/mcap_reader/chunk-record-overrun");
+        let back = read_messages(bytes);
+        assert!(!back.complete);
+        let why = back.stopped.expect("it stops at the overrunning record");
+        assert!(why.contains("chunk"), "{why}");
     }
 
     /// Its second (`fuzz/corpus/mcap_reader/huge-string-length`): a header record whose
