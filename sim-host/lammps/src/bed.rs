@@ -152,6 +152,12 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| format!("{}: `{s}` is not a finite number", at()))
         };
+        // Counts, ids and types are integers in LAMMPS's files: read as f64, ids past 2^53
+        // would merge and `1.5` would pass as atom 1.
+        let whole = |s: &str, what: &str| {
+            s.parse::<u64>()
+                .map_err(|_| format!("{}: `{s}` is not {what} (allowed: a whole number)", at()))
+        };
         if raw.trim_start().starts_with("Atoms") {
             section = "atoms";
             continue;
@@ -167,7 +173,7 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
         match section {
             "" => {
                 if f.len() == 2 && f[1] == "atoms" {
-                    count = Some(num(f[0])? as usize);
+                    count = Some(whole(f[0], "an atom count")?);
                 } else if f.len() == 4 && f[2] == "xlo" {
                     width = Some(num(f[1])? - num(f[0])?);
                 } else if f.len() == 4 && f[2] == "zlo" {
@@ -182,13 +188,19 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                         f.len()
                     ));
                 }
-                let id = num(f[0])? as u64;
+                let id = whole(f[0], "an atom id")?;
                 if index.insert(id, atoms.len()).is_some() {
                     return Err(format!("{}: atom {id} listed twice", at()));
                 }
                 atoms.push(Atom {
                     id,
-                    kind: num(f[1])? as u8,
+                    kind: f[1].parse().map_err(|_| {
+                        format!(
+                            "{}: `{}` is not an atom type (allowed: 0 to 255)",
+                            at(),
+                            f[1]
+                        )
+                    })?,
                     diameter_m: num(f[2])?,
                     density_kg_m3: num(f[3])?,
                     x: [num(f[4])?, num(f[5])?, num(f[6])?],
@@ -199,7 +211,7 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                 if f.len() < 4 {
                     return Err(format!("{}: a velocity line has {} fields", at(), f.len()));
                 }
-                let id = num(f[0])? as u64;
+                let id = whole(f[0], "an atom id")?;
                 if let Some(&k) = index.get(&id) {
                     atoms[k].v = [num(f[1])?, num(f[2])?, num(f[3])?];
                 }
@@ -217,7 +229,7 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
             "{name}: a box {width} m wide (allowed: xhi above xlo)"
         ));
     }
-    if atoms.len() != count {
+    if atoms.len() as u64 != count {
         return Err(format!(
             "{name}: {} atoms listed where its header says {count} (the file is cut short)",
             atoms.len()
@@ -332,6 +344,37 @@ mod tests {
         let flat = TWO_ATOMS.replace("0 0.04 xlo xhi", "0.04 0.04 xlo xhi");
         let e = parse_data(&flat, "t.data").unwrap_err();
         assert!(e.contains("a box 0 m wide"), "{e}");
+    }
+
+    /// Counts, ids and types are whole numbers: ids either side of 2^53 stay two atoms (as
+    /// f64 they were one), and `1.5` is not atom 1.
+    #[test]
+    fn atom_ids_types_and_counts_are_whole_numbers() {
+        let big = TWO_ATOMS
+            .replace("\n1 1 0.002", "\n9007199254740992 1 0.002")
+            .replace("\n2 1 0.002", "\n9007199254740993 1 0.002");
+        let (_, atoms) = parse_data(&big, "t.data").unwrap();
+        assert_eq!(atoms[1].id, 9007199254740993);
+        for (from, to, why) in [
+            (
+                "\n2 1 0.002",
+                "\n1.5 1 0.002",
+                "t.data:11: `1.5` is not an atom id",
+            ),
+            (
+                "\n2 1 0.002",
+                "\n2 300 0.002",
+                "t.data:11: `300` is not an atom type",
+            ),
+            (
+                "2 atoms",
+                "2.0 atoms",
+                "t.data:3: `2.0` is not an atom count",
+            ),
+        ] {
+            let e = parse_data(&TWO_ATOMS.replace(from, to), "t.data").unwrap_err();
+            assert!(e.contains(why), "{why}: {e}");
+        }
     }
 
     #[test]

@@ -209,16 +209,33 @@ pub fn parse_frame(
                 "{name}: {k} atom lines where its header counts {count} (the file is cut short)"
             ));
         };
+        // `id type` are integers (as f64, ids past 2^53 would merge), the rest numbers.
+        let mut id = 0u64;
+        let mut kind = 0u8;
         let mut f = [0.0f64; 9];
         let mut n = 0;
         for w in l.split_whitespace() {
-            if n == 9 {
-                n += 1;
-                break;
+            match n {
+                0 => {
+                    id = w.parse().map_err(|_| {
+                        format!("{name}:{no}: `{w}` is not an atom id (allowed: a whole number)")
+                    })?
+                }
+                1 => {
+                    kind = w.parse().map_err(|_| {
+                        format!("{name}:{no}: `{w}` is not an atom type (allowed: 0 to 255)")
+                    })?
+                }
+                9 => {
+                    n += 1;
+                    break;
+                }
+                _ => {
+                    f[n] = w
+                        .parse()
+                        .map_err(|_| format!("{name}:{no}: `{w}` is not a number"))?
+                }
             }
-            f[n] = w
-                .parse()
-                .map_err(|_| format!("{name}:{no}: `{w}` is not a number"))?;
             n += 1;
         }
         if n != 9 {
@@ -227,7 +244,6 @@ pub fn parse_frame(
                  or not of this run)"
             ));
         }
-        let id = f[0] as u64;
         let Some(&r) = check.radius_by_id.get(&id) else {
             return Err(format!(
                 "{name}:{no}: atom {id} is not in this run (a dump of another run)"
@@ -242,7 +258,7 @@ pub fn parse_frame(
         }
         atoms.push(DumpAtom {
             id,
-            kind: f[1] as u8,
+            kind,
             x: [f[2], f[3], f[4]],
             v: [f[5], f[6], f[7]],
             radius_m: f[8],
@@ -298,7 +314,7 @@ mod tests {
     fn cut_short_or_foreign_frames_are_refused_saying_why() {
         let dir = tempfile::tempdir().unwrap();
         let p = frame_path(dir.path(), 40, DumpFormat::Text);
-        let cases: [(String, &str); 6] = [
+        let cases: [(String, &str); 8] = [
             (frame_text(40, 0.0009, 3), "cut short"),
             (frame_text(40, 0.0009, 9), "another run"),
             (frame_text(40, 0.0012, 2), "another run"),
@@ -308,6 +324,14 @@ mod tests {
                 "box",
             ),
             (frame_text(40, 0.0009, 2)[..150].to_string(), "frame.40.txt"),
+            (
+                frame_text(40, 0.0009, 2).replace("\n2 2 0.01", "\n2.0 2 0.01"),
+                "`2.0` is not an atom id",
+            ),
+            (
+                frame_text(40, 0.0009, 2).replace("\n2 2 0.01", "\n2 256 0.01"),
+                "`256` is not an atom type",
+            ),
         ];
         for (text, why) in cases {
             std::fs::write(&p, &text).unwrap();
