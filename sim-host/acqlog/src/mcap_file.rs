@@ -600,7 +600,9 @@ impl<'a> Fields<'a> {
             data: self.take(n)?,
             at: 0,
         };
+        // The crate reads a key and its value while any of the map is left: both must fit.
         while entries.at < entries.data.len() {
+            entries.string()?;
             entries.string()?;
         }
         Ok(())
@@ -736,5 +738,17 @@ mod tests {
         metadata.extend_from_slice(b"abcd");
         let e = super::prefixes_fit(mcap::records::op::METADATA, &metadata).unwrap_err();
         assert!(e.contains("claims 1073741824 bytes"), "{e}");
+        // A map ending after a key: the crate reads the value past the map (found by the
+        // fuzzer, `fuzz/corpus/mcap_reader/map-key-without-value`, in a zstd chunk).
+        let mut metadata = 4u32.to_le_bytes().to_vec();
+        metadata.extend_from_slice(b"name");
+        metadata.extend_from_slice(&5u32.to_le_bytes());
+        metadata.extend_from_slice(&1u32.to_le_bytes());
+        metadata.extend_from_slice(b"k");
+        metadata.extend_from_slice(&u32::MAX.to_le_bytes());
+        let e = super::prefixes_fit(mcap::records::op::METADATA, &metadata).unwrap_err();
+        assert!(e.contains("claims 4 bytes"), "{e}");
+        let bytes = include_bytes!("../fuzz/corpus/mcap_reader/map-key-without-value");
+        assert!(read_messages(bytes).stopped.is_some());
     }
 }
