@@ -9,9 +9,11 @@
 //! file cut there, and the record is reported instead.
 //!
 //! The walk follows the MCAP framing (an 8-byte magic, then records of a 1-byte opcode, a
-//! little-endian `u64` length and the body). It stops, reporting nothing, wherever the file
-//! ends or is damaged in a way the crate itself reports (a top-level record longer than the
-//! file, a chunk header longer than its record): those need no help.
+//! little-endian `u64` length and the body). It stops, reporting nothing, where the file ends
+//! (a record's head or a chunk's header cut off), and passes over the chunks the crate refuses
+//! itself (compressed ones, whose records it checks as it decompresses them; a chunk whose
+//! header or record area is longer than the chunk): what the walk finds after those is never
+//! read, since the crate stops first.
 
 use mcap::records::op;
 
@@ -32,8 +34,9 @@ pub(crate) struct Overrun {
 }
 
 /// The first inner record of a plain chunk whose head or length overruns its chunk, if any.
-/// Only what lies within `bytes` is judged, so a file cut anywhere before that record reports
-/// nothing, and one cut after its head reports the same record.
+/// Only what lies within `bytes` is judged, so a file cut before that record reports nothing,
+/// and one cut after its head (or, for a chunk that ends inside the head, after its first byte)
+/// reports the same record.
 pub(crate) fn first_overrun(bytes: &[u8]) -> Option<Overrun> {
     let mut at = mcap::MAGIC.len();
     if bytes.get(..at)? != mcap::MAGIC {
@@ -99,7 +102,7 @@ fn chunk_overrun(bytes: &[u8], body: usize, end: usize) -> Option<Overrun> {
                 at,
                 why: format!(
                     "a record (opcode {opcode:#04x}) at byte {at} claims {len} bytes, but its \
-                     chunk (at byte {}) has {} bytes left",
+                     chunk (at byte {}) has {} bytes left after the record's head",
                     body - RECORD_HEAD,
                     left - RECORD_HEAD
                 ),

@@ -549,7 +549,11 @@ fn parsed_here(opcode: u8) -> bool {
 /// lies within the record, before the parser allocates what the prefix says.
 fn prefixes_fit(opcode: u8, data: &[u8]) -> Result<(), String> {
     use mcap::records::op;
-    let mut f = Fields { data, at: 0 };
+    let mut f = Fields {
+        data,
+        at: 0,
+        base: 0,
+    };
     match opcode {
         op::CHANNEL => {
             f.take(4)?; // id, schema id
@@ -570,6 +574,8 @@ fn prefixes_fit(opcode: u8, data: &[u8]) -> Result<(), String> {
 struct Fields<'a> {
     data: &'a [u8],
     at: usize,
+    /// Where `data` starts in the record, bytes (for the errors' offsets).
+    base: usize,
 }
 
 impl<'a> Fields<'a> {
@@ -578,7 +584,12 @@ impl<'a> Fields<'a> {
             .at
             .checked_add(n)
             .filter(|&e| e <= self.data.len())
-            .ok_or_else(|| format!("a field claims {n} bytes at byte {}", self.at))?;
+            .ok_or_else(|| {
+                format!(
+                    "a field claims {n} bytes at byte {} of the record",
+                    self.base + self.at
+                )
+            })?;
         let s = &self.data[self.at..end];
         self.at = end;
         Ok(s)
@@ -596,9 +607,11 @@ impl<'a> Fields<'a> {
 
     fn map(&mut self) -> Result<(), String> {
         let n = self.prefix()?;
+        let base = self.base + self.at;
         let mut entries = Fields {
             data: self.take(n)?,
             at: 0,
+            base,
         };
         // The crate reads a key and its value while any of the map is left: both must fit.
         while entries.at < entries.data.len() {
@@ -721,6 +734,55 @@ mod tests {
         assert!(why.contains("chunk"), "{why}");
     }
 
+    /// A plain chunk of three messages whose second claims more than the chunk holds: the
+    /// first is read, and the reading stops at the second, naming it.
+    #[test]
+    fn the_messages_before_a_record_overrunning_its_chunk_are_kept() {
+        let mut w = mcap::WriteOptions::new()
+            .compression(None)
+            .create(std::io::Cursor::new(Vec::new()))
+            .unwrap();
+        let schema = w.add_schema("s", "jsonschema", b"{}").unwrap();
+        let channel = w
+            .add_channel(schema, "/t", "json", &Default::default())
+            .unwrap();
+        for sequence in 0..3 {
+            let header = mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence,
+                log_time: u64::from(sequence),
+                publish_time: 0,
+            };
+            w.write_to_known_channel(&header, b"{\"v\":12345}").unwrap();
+        }
+        w.finish().unwrap();
+        let mut bytes = w.into_inner().into_inner();
+        assert_eq!(read_messages(&bytes).messages.len(), 3);
+        // The second message record's head and first fields: opcode, length (a 22-byte
+        // header: channel id, sequence, log and publish times; then the 11-byte payload),
+        // channel id, sequence 1. Its length is then damaged.
+        let message = |seq: u32| {
+            let mut m = vec![mcap::records::op::MESSAGE];
+            m.extend_from_slice(&(22u64 + 11).to_le_bytes());
+            m.extend_from_slice(&channel.to_le_bytes());
+            m.extend_from_slice(&seq.to_le_bytes());
+            m
+        };
+        let at = bytes
+            .windows(15)
+            .position(|w| w == message(1))
+            .expect("the second message record");
+        bytes[at + 1..at + 9].copy_from_slice(&4000u64.to_le_bytes());
+        let back = read_messages(&bytes);
+        assert_eq!(back.messages.len(), 1);
+        assert_eq!(back.messages[0].sequence, 0);
+        let why = back.stopped.expect("it stops at the damaged record");
+        assert!(
+            why.contains(&format!("at byte {at} claims 4000 bytes")),
+            "{why}"
+        );
+    }
+
     /// Its second (`fuzz/corpus/mcap_reader/huge-string-length`): a header record whose
     /// string claims 3.8 GB. Records other than channels, messages, metadata and the footer
     /// are passed over, and the strings of those are checked against their record first.
@@ -747,7 +809,7 @@ mod tests {
         metadata.extend_from_slice(b"k");
         metadata.extend_from_slice(&u32::MAX.to_le_bytes());
         let e = super::prefixes_fit(mcap::records::op::METADATA, &metadata).unwrap_err();
-        assert!(e.contains("claims 4 bytes"), "{e}");
+        assert!(e.contains("claims 4 bytes at byte 17 of the record"), "{e}");
         let bytes = include_bytes!("../fuzz/corpus/mcap_reader/map-key-without-value");
         assert!(read_messages(bytes).stopped.is_some());
     }
