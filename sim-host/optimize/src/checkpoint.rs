@@ -11,7 +11,9 @@
 //! File: a header line (`sandjumper-optimize-checkpoint 1` and the search's settings as
 //! JSON), then one line per evaluation, `KEY VALUE` as 16 hex digits each (the 64-bit FNV-1a
 //! hash of the point's f64 bits, the fitness's f64 bits). Lines are appended and flushed
-//! after every generation; a line cut short by a crash is ignored.
+//! after every generation; a line cut short by a crash is ignored. A search that is over
+//! appends `finished` ([`Checkpoint::finish`]) just before it writes its folder, then removes
+//! the file: one left with that line beside its folder was killed in between ([`finished`]).
 
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
@@ -19,6 +21,15 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &str = "sandjumper-optimize-checkpoint 1";
+
+/// The last line of a finished search's checkpoint ([`Checkpoint::finish`]).
+const FINISHED: &str = "finished";
+
+/// Whether the checkpoint at `path` ends with [`Checkpoint::finish`]'s line: its search was
+/// over and writing its folder. False for a missing or unreadable file.
+pub fn finished(path: &Path) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|t| t.lines().last() == Some(FINISHED))
+}
 
 /// The key of a point: FNV-1a over its coordinates' bits.
 pub fn point_key(x: &[f64]) -> u64 {
@@ -168,6 +179,16 @@ impl Checkpoint {
             })
     }
 
+    /// Mark the search over, just before its folder is written: a kill between the folder's
+    /// writing and the file's removal leaves a checkpoint [`finished`] tells apart. A search
+    /// resumed from it reads its evaluations as before (the line is not one).
+    pub fn finish(&mut self) -> Result<(), String> {
+        self.file
+            .write_all(format!("{FINISHED}\n").as_bytes())
+            .and_then(|()| self.file.sync_data())
+            .map_err(|e| format!("{}: cannot mark the checkpoint: {e}", self.path.display()))
+    }
+
     /// Evaluations recorded.
     pub fn len(&self) -> usize {
         self.recorded.len()
@@ -205,6 +226,16 @@ mod tests {
         assert_eq!(c.resumed_evaluations, 2);
         assert_eq!(c.recorded(k), Some(-0.0123));
         assert_eq!(c.recorded(0xab), None);
+        drop(c);
+        // Marked finished: told apart, and a resume still reads every evaluation.
+        assert!(!finished(&path));
+        let mut c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
+        c.finish().unwrap();
+        drop(c);
+        assert!(finished(&path));
+        let c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
+        assert_eq!(c.resumed_evaluations, 2);
+        assert!(!finished(&path), "a resumed search is not over");
         drop(c);
         let e = Checkpoint::open(&path, "{\"seed\":2}").unwrap_err();
         assert!(e.contains("other settings") && e.contains("`seed`"), "{e}");

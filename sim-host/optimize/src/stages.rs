@@ -14,7 +14,7 @@ use sandjumper_model::record::{JumpSummary, SeriesRow};
 use sandjumper_output::{Progress, StagedDir, WriterLock, unfinished_beside};
 use sandjumper_rig::hil::open::LinkArg;
 
-use crate::checkpoint::Checkpoint;
+use crate::checkpoint::{self, Checkpoint};
 use crate::error::OptimizeError;
 use crate::evaluate::{Evaluation, Problem};
 use crate::family::{Encoding, MoveChain};
@@ -51,6 +51,7 @@ pub fn run_with_board(
 ) -> Result<OptimizeOutcome, OptimizeError> {
     let cx = Context::new(request, progress)?;
     let lock = lock_the_checkpoint(&request.out)?;
+    discard_finished_checkpoint(&request.out, &cx);
     let staged = prepare_output(&request.out, &cx)?;
     let started = Instant::now();
     cx.say(format!(
@@ -81,6 +82,7 @@ pub fn run_with_board(
     cx.go_on("in the verification")?;
     let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
     outcome.write_into(&staged)?;
+    checkpoint.finish().map_err(OptimizeError::Checkpoint)?;
     outcome.dir = staged.commit()?;
     // The answer is safe in the folder: the checkpoint has done its job, and its lock.
     drop(checkpoint);
@@ -101,6 +103,21 @@ fn lock_the_checkpoint(out: &Path) -> Result<WriterLock, OptimizeError> {
     }
     WriterLock::take_recorded(&checkpoint_lock_path(out))
         .map_err(|e| OptimizeError::Checkpoint(e.to_string()))
+}
+
+/// A search killed after it marked its checkpoint finished and before it removed it (its
+/// folder written, or about to be) left a checkpoint no search needs: removed, saying so,
+/// when the folder is there. Called with the checkpoint's lock held.
+fn discard_finished_checkpoint(out: &Path, cx: &Context<'_>) {
+    let path = checkpoint_path(out);
+    if out.is_dir() && checkpoint::finished(&path) && std::fs::remove_file(&path).is_ok() {
+        cx.say(format!(
+            "  removed {}: the checkpoint of the finished search that wrote {} (killed before \
+             it removed it)",
+            path.display(),
+            out.display()
+        ));
+    }
 }
 
 /// A resumed search's killed run left its half-written output folder (`.DIR.partial-*` beside

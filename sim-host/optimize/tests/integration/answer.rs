@@ -274,6 +274,16 @@ fn a_search_killed_mid_way_resumes_to_the_same_answer() {
         m.contains("other settings") && m.contains("resumed.checkpoint"),
         "{m}"
     );
+    // The same checkpoint marked finished, beside its folder, is what a search killed after
+    // writing its folder and before removing its checkpoint leaves: removed, and the search
+    // runs.
+    std::fs::write(
+        &ckpt,
+        "sandjumper-optimize-checkpoint 1 {\"seed\":99}\nfinished\n",
+    )
+    .unwrap();
+    run(&small(&out), &Silent).unwrap();
+    assert!(!ckpt.exists());
 }
 
 /// Height per energy, and the final hop's height on hard ground: an answer, at least the
