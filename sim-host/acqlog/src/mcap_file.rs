@@ -630,7 +630,9 @@ pub const MAX_RECORD_BYTES: usize = 64 << 20;
 /// recovering what a cut file holds: reading stops at the first incomplete or damaged record
 /// and keeps every message before it (in an uncompressed chunk, messages are records too, so a
 /// chunk cut in the middle still yields its complete messages). Chunk CRCs are not checked (a
-/// cut chunk has no valid CRC to check against).
+/// cut chunk has no valid CRC to check against). Every message is kept in memory (64 bytes
+/// each beside its data): a compressed chunk of millions of tiny messages, a few kilobytes on
+/// disk, takes memory in proportion to what it holds, not to the file's size.
 pub fn read_messages(bytes: &[u8]) -> ReadBack {
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()

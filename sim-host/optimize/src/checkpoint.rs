@@ -12,8 +12,9 @@
 //! JSON), then one line per evaluation, `KEY VALUE` as 16 hex digits each (the 64-bit FNV-1a
 //! hash of the point's f64 bits, the fitness's f64 bits). Lines are appended and flushed
 //! after every generation; a line cut short by a crash is ignored. A search that is over
-//! appends `finished` ([`Checkpoint::finish`]) just before it writes its folder, then removes
-//! the file: one left with that line beside its folder was killed in between ([`finished`]).
+//! appends `finished` and its folder's writer (the folder's marker text, [`Checkpoint::finish`])
+//! just before it puts its folder in place, then removes the file: one left with that line
+//! beside a folder of that writer was killed in between ([`finished_by`]).
 
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
@@ -22,13 +23,18 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &str = "sandjumper-optimize-checkpoint 1";
 
-/// The last line of a finished search's checkpoint ([`Checkpoint::finish`]).
-const FINISHED: &str = "finished";
+/// The start of a finished search's last line ([`Checkpoint::finish`]), before its writer.
+const FINISHED: &str = "finished ";
 
-/// Whether the checkpoint at `path` ends with [`Checkpoint::finish`]'s line: its search was
-/// over and writing its folder. False for a missing or unreadable file.
-pub fn finished(path: &Path) -> bool {
-    std::fs::read_to_string(path).is_ok_and(|t| t.lines().last() == Some(FINISHED))
+/// The writer [`Checkpoint::finish`] recorded, if the checkpoint at `path` ends with its line:
+/// its search was over and putting its folder in place. `None` for a missing or unreadable
+/// file, or one that does not end so.
+pub fn finished_by(path: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    text.lines()
+        .last()?
+        .strip_prefix(FINISHED)
+        .map(str::to_string)
 }
 
 /// The key of a point: FNV-1a over its coordinates' bits.
@@ -179,12 +185,15 @@ impl Checkpoint {
             })
     }
 
-    /// Mark the search over, just before its folder is written: a kill between the folder's
-    /// writing and the file's removal leaves a checkpoint [`finished`] tells apart. A search
-    /// resumed from it reads its evaluations as before (the line is not one).
-    pub fn finish(&mut self) -> Result<(), String> {
+    /// Mark the search over, just before its folder is put in place, with `writer`, the text
+    /// of that folder's marker (its process and machine): a kill between the folder's rename
+    /// and the file's removal leaves a checkpoint [`finished_by`] that writer, beside a folder
+    /// whose marker says the same. A search resumed from it reads its evaluations as before
+    /// (the line is not one), and drops the line.
+    pub fn finish(&mut self, writer: &str) -> Result<(), String> {
+        let writer = writer.trim().replace('\n', " ");
         self.file
-            .write_all(format!("{FINISHED}\n").as_bytes())
+            .write_all(format!("{FINISHED}{writer}\n").as_bytes())
             .and_then(|()| self.file.sync_data())
             .map_err(|e| format!("{}: cannot mark the checkpoint: {e}", self.path.display()))
     }
@@ -228,14 +237,18 @@ mod tests {
         assert_eq!(c.recorded(0xab), None);
         drop(c);
         // Marked finished: told apart, and a resume still reads every evaluation.
-        assert!(!finished(&path));
+        assert_eq!(finished_by(&path), None);
         let mut c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
-        c.finish().unwrap();
+        c.finish("written by the sandjumper CLI (process 7 on h)\n")
+            .unwrap();
         drop(c);
-        assert!(finished(&path));
+        assert_eq!(
+            finished_by(&path).as_deref(),
+            Some("written by the sandjumper CLI (process 7 on h)")
+        );
         let c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
         assert_eq!(c.resumed_evaluations, 2);
-        assert!(!finished(&path), "a resumed search is not over");
+        assert_eq!(finished_by(&path), None, "a resumed search is not over");
         drop(c);
         let e = Checkpoint::open(&path, "{\"seed\":2}").unwrap_err();
         assert!(e.contains("other settings") && e.contains("`seed`"), "{e}");

@@ -11,7 +11,7 @@ use sandjumper_model::SimOptions;
 use sandjumper_model::jump::simulate_stroke;
 use sandjumper_model::params::Params;
 use sandjumper_model::record::{JumpSummary, SeriesRow};
-use sandjumper_output::{Progress, StagedDir, WriterLock, unfinished_beside};
+use sandjumper_output::{MARKER_FILE, Progress, StagedDir, WriterLock, unfinished_beside};
 use sandjumper_rig::hil::open::LinkArg;
 
 use crate::checkpoint::{self, Checkpoint};
@@ -82,8 +82,20 @@ pub fn run_with_board(
     cx.go_on("in the verification")?;
     let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
     outcome.write_into(&staged)?;
-    checkpoint.finish().map_err(OptimizeError::Checkpoint)?;
-    outcome.dir = staged.commit()?;
+    let writer = std::fs::read_to_string(staged.file(MARKER_FILE)).unwrap_or_default();
+    checkpoint
+        .finish(&writer)
+        .map_err(OptimizeError::Checkpoint)?;
+    outcome.dir = match staged.commit() {
+        Ok(dir) => dir,
+        Err(e) => {
+            // The folder did not take its place: the search resumes from its checkpoint,
+            // reopened without the mark (a rewrite drops it).
+            drop(checkpoint);
+            let _ = Checkpoint::open(&ckpt_path, &checkpoint_settings(&cx.setup, &starts)?);
+            return Err(e.into());
+        }
+    };
     // The answer is safe in the folder: the checkpoint has done its job, and its lock.
     drop(checkpoint);
     let _ = std::fs::remove_file(&ckpt_path);
@@ -105,12 +117,18 @@ fn lock_the_checkpoint(out: &Path) -> Result<WriterLock, OptimizeError> {
         .map_err(|e| OptimizeError::Checkpoint(e.to_string()))
 }
 
-/// A search killed after it marked its checkpoint finished and before it removed it (its
-/// folder written, or about to be) left a checkpoint no search needs: removed, saying so,
-/// when the folder is there. Called with the checkpoint's lock held.
+/// A search killed after its folder took its place and before it removed its checkpoint left
+/// a checkpoint no search needs: removed, saying so, when the folder's marker names the
+/// writer the checkpoint's `finished` line does. Killed before the folder took its place, the
+/// folder there (if any) is another search's and the checkpoint is resumed. Called with the
+/// checkpoint's lock held.
 fn discard_finished_checkpoint(out: &Path, cx: &Context<'_>) {
     let path = checkpoint_path(out);
-    if out.is_dir() && checkpoint::finished(&path) && std::fs::remove_file(&path).is_ok() {
+    let Some(writer) = checkpoint::finished_by(&path) else {
+        return;
+    };
+    let folder_by = std::fs::read_to_string(out.join(MARKER_FILE)).unwrap_or_default();
+    if folder_by.trim() == writer && std::fs::remove_file(&path).is_ok() {
         cx.say(format!(
             "  removed {}: the checkpoint of the finished search that wrote {} (killed before \
              it removed it)",

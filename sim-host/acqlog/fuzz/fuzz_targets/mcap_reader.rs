@@ -1,8 +1,10 @@
 //! The MCAP reader (`sandjumper_acqlog::read_messages`, which recovers what a cut file
 //! holds) on any bytes: it never panics; whatever a damaged length says, no allocation passes
 //! 160 MiB (a record's 64 MiB limit, zstd's window of 128 MiB at most: `.ci/fuzz` runs it with
-//! libFuzzer's `-malloc_limit_mb=160`); and the file cut anywhere yields a prefix of the whole
-//! file's messages (a cut costs the messages after it, never changes one before it).
+//! libFuzzer's `-malloc_limit_mb=160`; the list of messages read could pass it only past two
+//! million messages, which a valid zstd chunk of a few kilobytes can hold but mutation is not
+//! known to reach); and the file cut anywhere yields a prefix of the whole file's messages (a
+//! cut costs the messages after it, never changes one before it).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

@@ -274,14 +274,21 @@ fn a_search_killed_mid_way_resumes_to_the_same_answer() {
         m.contains("other settings") && m.contains("resumed.checkpoint"),
         "{m}"
     );
-    // The same checkpoint marked finished, beside its folder, is what a search killed after
-    // writing its folder and before removing its checkpoint leaves: removed, and the search
-    // runs.
-    std::fs::write(
-        &ckpt,
-        "sandjumper-optimize-checkpoint 1 {\"seed\":99}\nfinished\n",
-    )
-    .unwrap();
+    // The same checkpoint marked finished by another writer than the folder's: a search
+    // killed before its folder took its place (the folder there is another's). Still refused.
+    let finished_by = |writer: &str| {
+        std::fs::write(
+            &ckpt,
+            format!("sandjumper-optimize-checkpoint 1 {{\"seed\":99}}\nfinished {writer}\n"),
+        )
+        .unwrap()
+    };
+    finished_by("written by the sandjumper CLI (process 1 on elsewhere)");
+    let e = run(&args(&out), &Silent).unwrap_err();
+    assert!(e.to_string().contains("other settings"), "{e}");
+    // Marked finished by the folder's own writer: a search killed after its folder took its
+    // place and before it removed its checkpoint. Removed, and the search runs.
+    finished_by(read(&out.join(sandjumper_output::MARKER_FILE)).trim());
     run(&small(&out), &Silent).unwrap();
     assert!(!ckpt.exists());
 }
