@@ -131,6 +131,14 @@ pub fn read_data(path: &Path) -> Result<(BedBox, Vec<Atom>), String> {
     parse_data(&text, &path.display().to_string())
 }
 
+/// A count, an atom id or an atom type (`what`) of LAMMPS's files: integers there, read as
+/// such (as f64, ids past 2^53 would merge, `1.5` would pass as atom 1 and a type of 300 as
+/// 44); otherwise what `w` is not, and what is `allowed`. Shared with the dump reader.
+pub(crate) fn whole<T: std::str::FromStr>(w: &str, what: &str, allowed: &str) -> Result<T, String> {
+    w.parse()
+        .map_err(|_| format!("`{w}` is not {what} (allowed: {allowed})"))
+}
+
 /// [`read_data`] of a data file's text; `name` names it in errors.
 pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String> {
     let mut width = None;
@@ -152,12 +160,7 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| format!("{}: `{s}` is not a finite number", at()))
         };
-        // Counts, ids and types are integers in LAMMPS's files: read as f64, ids past 2^53
-        // would merge and `1.5` would pass as atom 1.
-        let whole = |s: &str, what: &str| {
-            s.parse::<u64>()
-                .map_err(|_| format!("{}: `{s}` is not {what} (allowed: a whole number)", at()))
-        };
+        let located = |e: String| format!("{}: {e}", at());
         if raw.trim_start().starts_with("Atoms") {
             section = "atoms";
             continue;
@@ -173,7 +176,9 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
         match section {
             "" => {
                 if f.len() == 2 && f[1] == "atoms" {
-                    count = Some(whole(f[0], "an atom count")?);
+                    count = Some(
+                        whole::<u64>(f[0], "an atom count", "a whole number").map_err(located)?,
+                    );
                 } else if f.len() == 4 && f[2] == "xlo" {
                     width = Some(num(f[1])? - num(f[0])?);
                 } else if f.len() == 4 && f[2] == "zlo" {
@@ -188,19 +193,13 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                         f.len()
                     ));
                 }
-                let id = whole(f[0], "an atom id")?;
+                let id: u64 = whole(f[0], "an atom id", "a whole number").map_err(located)?;
                 if index.insert(id, atoms.len()).is_some() {
                     return Err(format!("{}: atom {id} listed twice", at()));
                 }
                 atoms.push(Atom {
                     id,
-                    kind: f[1].parse().map_err(|_| {
-                        format!(
-                            "{}: `{}` is not an atom type (allowed: 0 to 255)",
-                            at(),
-                            f[1]
-                        )
-                    })?,
+                    kind: whole(f[1], "an atom type", "0 to 255").map_err(located)?,
                     diameter_m: num(f[2])?,
                     density_kg_m3: num(f[3])?,
                     x: [num(f[4])?, num(f[5])?, num(f[6])?],
@@ -211,7 +210,7 @@ pub fn parse_data(text: &str, name: &str) -> Result<(BedBox, Vec<Atom>), String>
                 if f.len() < 4 {
                     return Err(format!("{}: a velocity line has {} fields", at(), f.len()));
                 }
-                let id = whole(f[0], "an atom id")?;
+                let id: u64 = whole(f[0], "an atom id", "a whole number").map_err(located)?;
                 if let Some(&k) = index.get(&id) {
                     atoms[k].v = [num(f[1])?, num(f[2])?, num(f[3])?];
                 }

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use crate::bed::FOOT;
+use crate::bed::{FOOT, whole};
 pub use crate::spec::DumpFormat;
 
 /// One dumped atom.
@@ -209,23 +209,16 @@ pub fn parse_frame(
                 "{name}: {k} atom lines where its header counts {count} (the file is cut short)"
             ));
         };
-        // `id type` are integers (as f64, ids past 2^53 would merge), the rest numbers.
+        // `id type` are integers ([`whole`]), the rest numbers.
+        let located = |e: String| format!("{name}:{no}: {e}");
         let mut id = 0u64;
         let mut kind = 0u8;
         let mut f = [0.0f64; 9];
         let mut n = 0;
         for w in l.split_whitespace() {
             match n {
-                0 => {
-                    id = w.parse().map_err(|_| {
-                        format!("{name}:{no}: `{w}` is not an atom id (allowed: a whole number)")
-                    })?
-                }
-                1 => {
-                    kind = w.parse().map_err(|_| {
-                        format!("{name}:{no}: `{w}` is not an atom type (allowed: 0 to 255)")
-                    })?
-                }
+                0 => id = whole(w, "an atom id", "a whole number").map_err(located)?,
+                1 => kind = whole(w, "an atom type", "0 to 255").map_err(located)?,
                 9 => {
                     n += 1;
                     break;
