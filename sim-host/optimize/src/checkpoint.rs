@@ -80,6 +80,8 @@ pub struct Checkpoint {
     recorded: HashMap<u64, f64>,
     /// Evaluations recorded when it was opened.
     pub resumed_evaluations: usize,
+    /// The file's length before [`finish`](Self::finish)'s mark, while it is marked.
+    unmarked_len: Option<u64>,
 }
 
 impl Checkpoint {
@@ -158,6 +160,7 @@ impl Checkpoint {
             file,
             recorded,
             resumed_evaluations,
+            unmarked_len: None,
         })
     }
 
@@ -192,10 +195,27 @@ impl Checkpoint {
     /// (the line is not one), and drops the line.
     pub fn finish(&mut self, writer: &str) -> Result<(), String> {
         let writer = writer.trim().replace('\n', " ");
+        let fail =
+            |e: std::io::Error| format!("{}: cannot mark the checkpoint: {e}", self.path.display());
+        let before = self.file.metadata().map_err(fail)?.len();
         self.file
             .write_all(format!("{FINISHED}{writer}\n").as_bytes())
             .and_then(|()| self.file.sync_data())
-            .map_err(|e| format!("{}: cannot mark the checkpoint: {e}", self.path.display()))
+            .map_err(fail)?;
+        self.unmarked_len = Some(before);
+        Ok(())
+    }
+
+    /// Take back [`finish`](Self::finish)'s mark (the folder did not take its place): the
+    /// file is cut back to its evaluations, and a later search resumes from it.
+    pub fn unfinish(&mut self) -> Result<(), String> {
+        let Some(len) = self.unmarked_len.take() else {
+            return Ok(());
+        };
+        self.file
+            .set_len(len)
+            .and_then(|()| self.file.sync_data())
+            .map_err(|e| format!("{}: cannot unmark the checkpoint: {e}", self.path.display()))
     }
 
     /// Evaluations recorded.
@@ -246,10 +266,21 @@ mod tests {
             finished_by(&path).as_deref(),
             Some("written by the sandjumper CLI (process 7 on h)")
         );
-        let c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
+        let mut c = Checkpoint::open(&path, "{\"seed\":1}").unwrap();
         assert_eq!(c.resumed_evaluations, 2);
         assert_eq!(finished_by(&path), None, "a resumed search is not over");
+        // A mark taken back (the folder did not take its place): unmarked, and resumed whole.
+        c.finish("w").unwrap();
+        assert_eq!(finished_by(&path).as_deref(), Some("w"));
+        c.unfinish().unwrap();
+        assert_eq!(finished_by(&path), None);
         drop(c);
+        assert_eq!(
+            Checkpoint::open(&path, "{\"seed\":1}")
+                .unwrap()
+                .resumed_evaluations,
+            2
+        );
         let e = Checkpoint::open(&path, "{\"seed\":2}").unwrap_err();
         assert!(e.contains("other settings") && e.contains("`seed`"), "{e}");
         std::fs::write(&path, "hello\n").unwrap();

@@ -11,7 +11,7 @@ use sandjumper_model::SimOptions;
 use sandjumper_model::jump::simulate_stroke;
 use sandjumper_model::params::Params;
 use sandjumper_model::record::{JumpSummary, SeriesRow};
-use sandjumper_output::{MARKER_FILE, Progress, StagedDir, WriterLock, unfinished_beside};
+use sandjumper_output::{Progress, StagedDir, WriterLock, unfinished_beside, written_by};
 use sandjumper_rig::hil::open::LinkArg;
 
 use crate::checkpoint::{self, Checkpoint};
@@ -82,17 +82,14 @@ pub fn run_with_board(
     cx.go_on("in the verification")?;
     let mut outcome = cx.outcome(paper, searched, ranking, verified, started)?;
     outcome.write_into(&staged)?;
-    let writer = std::fs::read_to_string(staged.file(MARKER_FILE)).unwrap_or_default();
     checkpoint
-        .finish(&writer)
+        .finish(&written_by(staged.path()).unwrap_or_default())
         .map_err(OptimizeError::Checkpoint)?;
     outcome.dir = match staged.commit() {
         Ok(dir) => dir,
         Err(e) => {
-            // The folder did not take its place: the search resumes from its checkpoint,
-            // reopened without the mark (a rewrite drops it).
-            drop(checkpoint);
-            let _ = Checkpoint::open(&ckpt_path, &checkpoint_settings(&cx.setup, &starts)?);
+            // The folder did not take its place: the search resumes from its checkpoint.
+            let _ = checkpoint.unfinish();
             return Err(e.into());
         }
     };
@@ -127,8 +124,7 @@ fn discard_finished_checkpoint(out: &Path, cx: &Context<'_>) {
     let Some(writer) = checkpoint::finished_by(&path) else {
         return;
     };
-    let folder_by = std::fs::read_to_string(out.join(MARKER_FILE)).unwrap_or_default();
-    if folder_by.trim() == writer && std::fs::remove_file(&path).is_ok() {
+    if written_by(out).as_deref() == Some(writer.as_str()) && std::fs::remove_file(&path).is_ok() {
         cx.say(format!(
             "  removed {}: the checkpoint of the finished search that wrote {} (killed before \
              it removed it)",

@@ -251,6 +251,14 @@ pub fn remove_work_dir(work: &Path) {
     }
 }
 
+/// Who wrote the output folder (or staging folder) `dir`: its marker's text, `written by the
+/// sandjumper CLI (process PID on HOST)`; `None` where it has no readable marker.
+pub fn written_by(dir: &Path) -> Option<String> {
+    fs::read_to_string(dir.join(MARKER_FILE))
+        .ok()
+        .map(|t| t.trim().to_string())
+}
+
 /// The staging directories beside `target` (`.<name>.partial-*`) of earlier runs on this
 /// machine whose process is gone: a run killed before it could commit or clean up (a Slurm
 /// job past its time, `kill -9`). A staging directory of a live process, of another machine
@@ -282,7 +290,7 @@ pub fn unfinished_beside(target: &Path) -> Vec<PathBuf> {
                 .is_some_and(|n| n.starts_with(&prefix) && !n.ends_with(".old"))
         })
         .filter(|p| {
-            let Ok(marker) = fs::read_to_string(p.join(MARKER_FILE)) else {
+            let Some(marker) = written_by(p) else {
                 return false;
             };
             // "... (process PID on HOST)"
